@@ -1,0 +1,34 @@
+//! The `raypipe` command line: one file per subcommand.
+
+mod diff;
+mod info;
+mod render;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "raypipe", version, about = "Whitted ray tracing in the fragment shader")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to PNG (colour, normals) or EXR (colour, depth).
+    Render(render::RenderArgs),
+    /// Compare two images: mean and 99th-percentile error, a difference image, exit 1 above a threshold.
+    Diff(diff::DiffArgs),
+    /// List GPU adapters, their backends, drivers and the limits that matter here.
+    Info,
+}
+
+/// Runs the command line; errors are returned for `main` to print as one line with exit code 2.
+pub fn run() -> anyhow::Result<ExitCode> {
+    match Cli::parse().command {
+        Command::Render(args) => render::run(args),
+        Command::Diff(args) => diff::run(args),
+        Command::Info => info::run(),
+    }
+}

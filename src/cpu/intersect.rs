@@ -1,0 +1,95 @@
+//! Ray-primitive intersection: the twin of `shaders/intersect.wgsl`.
+
+use crate::scene::packed::{GpuPlane, GpuSphere};
+use glam::Vec3;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    /// Unit length: t is a distance.
+    pub dir: Vec3,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HitKind {
+    None,
+    Sphere,
+    Plane,
+}
+
+/// The closest hit found so far: `t` is t_max while `kind` is `None`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub kind: HitKind,
+    pub index: u32,
+}
+
+impl Hit {
+    pub fn none(t_max: f32) -> Self {
+        Self {
+            t: t_max,
+            kind: HitKind::None,
+            index: 0,
+        }
+    }
+}
+
+pub fn v3(a: [f32; 3]) -> Vec3 {
+    Vec3::from_array(a)
+}
+
+/// The nearest t in (0, t_max) where the ray meets the sphere, or t_max when there is none.
+pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
+    let oc = ray.origin - v3(sphere.center);
+    let b = oc.dot(ray.dir);
+    // Squared distance from the centre to the ray's line, without the cancellation in b*b - c.
+    let off_axis = oc - b * ray.dir;
+    let discriminant = sphere.radius * sphere.radius - off_axis.dot(off_axis);
+    if discriminant < 0.0 {
+        return t_max;
+    }
+    let root = discriminant.sqrt();
+    let t_near = -b - root;
+    if t_near > 0.0 && t_near < t_max {
+        return t_near;
+    }
+    let t_far = -b + root;
+    if t_far > 0.0 && t_far < t_max {
+        return t_far;
+    }
+    t_max
+}
+
+pub fn intersect_plane(plane: &GpuPlane, ray: &Ray, t_max: f32) -> f32 {
+    let normal = v3(plane.normal);
+    let denom = normal.dot(ray.dir);
+    if denom.abs() < 1e-8 {
+        return t_max;
+    }
+    let t = (v3(plane.point) - ray.origin).dot(normal) / denom;
+    if t > 0.0 && t < t_max {
+        return t;
+    }
+    t_max
+}
+
+/// Planes are unbounded, so they stay outside any acceleration structure and are always tested.
+pub fn closest_plane(planes: &[GpuPlane], ray: &Ray, best: Hit) -> Hit {
+    let mut hit = best;
+    for (i, plane) in planes.iter().enumerate() {
+        let t = intersect_plane(plane, ray, hit.t);
+        if t < hit.t {
+            hit = Hit {
+                t,
+                kind: HitKind::Plane,
+                index: i as u32,
+            };
+        }
+    }
+    hit
+}
+
+pub fn any_plane(planes: &[GpuPlane], ray: &Ray, t_max: f32) -> bool {
+    planes.iter().any(|plane| intersect_plane(plane, ray, t_max) < t_max)
+}

@@ -1,0 +1,57 @@
+//! The CPU reference tracer. Each file mirrors a shader file under the same function names, so that
+//! a difference between the GPU and CPU images points at one function. It is the oracle of the tests,
+//! the fallback where no adapter exists, and a baseline for benchmarks.
+
+pub mod accel;
+pub mod intersect;
+pub mod shade;
+pub mod trace;
+
+use crate::image::Frame;
+use crate::scene::packed::PackedScene;
+use glam::Vec2;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use trace::Tracer;
+
+/// Renders every pixel in parallel (rows across rayon's threads); the result does not depend on the
+/// thread count. `progress` shows a bar on a terminal.
+pub fn render(scene: &PackedScene, progress: bool) -> Frame {
+    let (width, height) = (scene.width(), scene.height());
+    let bar = if progress {
+        let bar = ProgressBar::new(height as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} CPU render {bar:40} {pos}/{len} rows, {eta} left")
+                .expect("the template is valid"),
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let rows: Vec<Vec<trace::PixelTrace>> = (0..height)
+        .into_par_iter()
+        .map(|j| {
+            let row = (0..width)
+                .map(|i| {
+                    let mut tracer = Tracer::new(scene);
+                    let ray = tracer.camera_ray(Vec2::new(i as f32 + 0.5, j as f32 + 0.5));
+                    tracer.trace_pixel(ray)
+                })
+                .collect();
+            bar.inc(1);
+            row
+        })
+        .collect();
+    bar.finish_and_clear();
+    let mut frame = Frame::new(width, height);
+    for (pixel, trace) in rows.into_iter().flatten().enumerate() {
+        frame.color[pixel] = [trace.color.x, trace.color.y, trace.color.z, trace.rays as f32];
+        frame.surface[pixel] = [
+            trace.normal.x,
+            trace.normal.y,
+            trace.normal.z,
+            trace.depth.unwrap_or(crate::image::DEPTH_MISS),
+        ];
+    }
+    frame
+}

@@ -1,0 +1,151 @@
+//! The Whitted tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
+
+use super::accel::{accel_closest, accel_occluded};
+use super::intersect::{Hit, HitKind, Ray, any_plane, closest_plane, v3};
+use super::shade::{fresnel_schlick, offset_origin, reflect};
+use crate::scene::packed::PackedScene;
+use glam::{Vec2, Vec3};
+
+pub const T_FAR: f32 = 1e30;
+/// A branch whose weight falls below this in every channel cannot change an 8-bit pixel; drop it.
+pub const MIN_WEIGHT: f32 = 1e-3;
+
+#[derive(Clone, Copy, Debug)]
+struct RayTask {
+    origin: Vec3,
+    dir: Vec3,
+    weight: Vec3,
+    depth: u32,
+}
+
+/// What one pixel's trace yields: the fragment shader's two outputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelTrace {
+    pub color: Vec3,
+    /// First-hit geometric normal; zero where the primary ray escapes.
+    pub normal: Vec3,
+    /// First-hit distance; `None` where the primary ray escapes.
+    pub depth: Option<f32>,
+    /// Primary, shadow and secondary rays traced for this pixel.
+    pub rays: u32,
+}
+
+/// The per-pixel state the shader keeps in private variables.
+pub struct Tracer<'a> {
+    pub scene: &'a PackedScene,
+    pub ray_count: u32,
+}
+
+impl<'a> Tracer<'a> {
+    pub fn new(scene: &'a PackedScene) -> Self {
+        Self { scene, ray_count: 0 }
+    }
+
+    /// The ray through a pixel position (pixel centres at +0.5, row 0 at the top).
+    pub fn camera_ray(&self, pixel: Vec2) -> Ray {
+        let g = &self.scene.globals;
+        let x = (2.0 * pixel.x / g.width - 1.0) * g.tan_half_fov * g.aspect;
+        let y = (1.0 - 2.0 * pixel.y / g.height) * g.tan_half_fov;
+        let dir = (v3(g.forward) + x * v3(g.right) + y * v3(g.up)).normalize();
+        Ray {
+            origin: v3(g.eye),
+            dir,
+        }
+    }
+
+    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Hit {
+        let planes = closest_plane(&self.scene.planes, ray, Hit::none(t_max));
+        accel_closest(&self.scene.spheres, ray, planes)
+    }
+
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        any_plane(&self.scene.planes, ray, t_max) || accel_occluded(&self.scene.spheres, ray, t_max)
+    }
+
+    pub fn trace_pixel(&mut self, primary: Ray) -> PixelTrace {
+        let max_depth = self.scene.max_depth;
+        let stack_size = max_depth as usize + 1;
+        let mut result = PixelTrace {
+            color: Vec3::ZERO,
+            normal: Vec3::ZERO,
+            depth: None,
+            rays: 0,
+        };
+        let mut stack = Vec::with_capacity(stack_size);
+        stack.push(RayTask {
+            origin: primary.origin,
+            dir: primary.dir,
+            weight: Vec3::ONE,
+            depth: 0,
+        });
+        while let Some(task) = stack.pop() {
+            let ray = Ray {
+                origin: task.origin,
+                dir: task.dir,
+            };
+            self.ray_count += 1;
+            let hit = self.closest_hit(&ray, T_FAR);
+            if hit.kind == HitKind::None {
+                result.color += task.weight * v3(self.scene.globals.background);
+                continue;
+            }
+            let surface = self.surface_at(&ray, &hit);
+            if task.depth == 0 {
+                result.normal = surface.normal;
+                result.depth = Some(hit.t);
+            }
+            let material = self.scene.materials[surface.material as usize];
+            let entering = surface.normal.dot(ray.dir) < 0.0;
+            let normal = if entering { surface.normal } else { -surface.normal };
+            let view = -ray.dir;
+            result.color += task.weight * self.direct_light(&surface, normal, view, &material);
+            if task.depth >= max_depth {
+                continue;
+            }
+
+            // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
+            let mut reflect_share = material.reflect;
+            let mut transmit_share = material.transmit;
+            let mut refracted = Vec3::ZERO;
+            if transmit_share > 0.0 {
+                let eta = if entering { 1.0 / material.ior } else { material.ior };
+                let cos_i = view.dot(normal);
+                let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+                if k < 0.0 {
+                    reflect_share += transmit_share;
+                    transmit_share = 0.0;
+                } else {
+                    let cos_t = k.sqrt();
+                    refracted = (eta * ray.dir + (eta * cos_i - cos_t) * normal).normalize();
+                    let fresnel = fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
+                    reflect_share += transmit_share * fresnel;
+                    transmit_share *= 1.0 - fresnel;
+                }
+            }
+            let transmit_weight = task.weight * transmit_share;
+            if worth_tracing(transmit_weight) && stack.len() < stack_size {
+                stack.push(RayTask {
+                    origin: offset_origin(surface.position, -normal),
+                    dir: refracted,
+                    weight: transmit_weight,
+                    depth: task.depth + 1,
+                });
+            }
+            let reflect_weight = task.weight * reflect_share;
+            if worth_tracing(reflect_weight) && stack.len() < stack_size {
+                stack.push(RayTask {
+                    origin: offset_origin(surface.position, normal),
+                    dir: reflect(ray.dir, normal),
+                    weight: reflect_weight,
+                    depth: task.depth + 1,
+                });
+            }
+        }
+        result.rays = self.ray_count;
+        result
+    }
+}
+
+fn worth_tracing(weight: Vec3) -> bool {
+    weight.max_element() >= MIN_WEIGHT
+}

@@ -1,0 +1,10 @@
+//! The GPU renderer: one full-screen triangle, all tracing in the fragment shader.
+
+pub mod context;
+pub mod readback;
+pub mod render;
+pub mod shader;
+pub mod upload;
+
+pub use context::GpuContext;
+pub use render::GpuRenderer;

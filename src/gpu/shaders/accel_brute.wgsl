@@ -1,0 +1,22 @@
+// Brute force: every ray against every sphere. Each acceleration mode defines these two functions.
+// Mirrored by src/cpu/accel.rs.
+
+fn accel_closest(ray: Ray, best: Hit) -> Hit {
+    var hit = best;
+    for (var i = 0u; i < globals.sphere_count; i++) {
+        let t = intersect_sphere(load_sphere(i), ray, hit.t);
+        if (t < hit.t) {
+            hit = Hit(t, HIT_SPHERE, i);
+        }
+    }
+    return hit;
+}
+
+fn accel_occluded(ray: Ray, t_max: f32) -> bool {
+    for (var i = 0u; i < globals.sphere_count; i++) {
+        if (intersect_sphere(load_sphere(i), ray, t_max) < t_max) {
+            return true;
+        }
+    }
+    return false;
+}

@@ -1,0 +1,73 @@
+// Ray-primitive intersection. Mirrored by src/cpu/intersect.rs.
+
+struct Ray {
+    origin: vec3<f32>,
+    // Unit length: t is a distance.
+    dir: vec3<f32>,
+}
+
+const HIT_NONE: u32 = 0u;
+const HIT_SPHERE: u32 = 1u;
+const HIT_PLANE: u32 = 2u;
+
+// The closest hit found so far: t is t_max while kind is HIT_NONE.
+struct Hit {
+    t: f32,
+    kind: u32,
+    index: u32,
+}
+
+// The nearest t in (0, t_max) where the ray meets the sphere, or t_max when there is none.
+fn intersect_sphere(sphere: Sphere, ray: Ray, t_max: f32) -> f32 {
+    let oc = ray.origin - sphere.center;
+    let b = dot(oc, ray.dir);
+    // Squared distance from the centre to the ray's line, without the cancellation in b*b - c.
+    let off_axis = oc - b * ray.dir;
+    let discriminant = sphere.radius * sphere.radius - dot(off_axis, off_axis);
+    if (discriminant < 0.0) {
+        return t_max;
+    }
+    let root = sqrt(discriminant);
+    let t_near = -b - root;
+    if (t_near > 0.0 && t_near < t_max) {
+        return t_near;
+    }
+    let t_far = -b + root;
+    if (t_far > 0.0 && t_far < t_max) {
+        return t_far;
+    }
+    return t_max;
+}
+
+fn intersect_plane(plane: Plane, ray: Ray, t_max: f32) -> f32 {
+    let denom = dot(plane.normal, ray.dir);
+    if (abs(denom) < 1e-8) {
+        return t_max;
+    }
+    let t = dot(plane.point - ray.origin, plane.normal) / denom;
+    if (t > 0.0 && t < t_max) {
+        return t;
+    }
+    return t_max;
+}
+
+// Planes are unbounded, so they stay outside any acceleration structure and are always tested.
+fn closest_plane(ray: Ray, best: Hit) -> Hit {
+    var hit = best;
+    for (var i = 0u; i < globals.plane_count; i++) {
+        let t = intersect_plane(load_plane(i), ray, hit.t);
+        if (t < hit.t) {
+            hit = Hit(t, HIT_PLANE, i);
+        }
+    }
+    return hit;
+}
+
+fn any_plane(ray: Ray, t_max: f32) -> bool {
+    for (var i = 0u; i < globals.plane_count; i++) {
+        if (intersect_plane(load_plane(i), ray, t_max) < t_max) {
+            return true;
+        }
+    }
+    return false;
+}

@@ -1,0 +1,22 @@
+// Decoders for the texture route: each record arrives as rgba32float texels, written on the host by
+// GpuRecord::push_texels (src/scene/packed.rs). Integer fields travel as exact float values.
+
+fn texel_coord(index: u32) -> vec2<u32> {
+    return vec2<u32>(index % TEXELS_PER_ROW, index / TEXELS_PER_ROW);
+}
+
+fn sphere_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Sphere {
+    return Sphere(t0.xyz, t0.w, u32(t1.x));
+}
+
+fn plane_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>) -> Plane {
+    return Plane(t0.xyz, u32(t0.w), t1.xyz, u32(t1.w), t2.xyz, t2.w, t3.xyz);
+}
+
+fn light_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Light {
+    return Light(t0.xyz, t1.xyz);
+}
+
+fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Material {
+    return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w);
+}

@@ -1,0 +1,49 @@
+// Twins of the host records in src/scene/packed.rs. tests/layout.rs parses this file with naga and
+// checks every struct's size and member offsets against the Rust ones. Tail padding is implicit here.
+
+struct Globals {
+    eye: vec3<f32>,
+    tan_half_fov: f32,
+    forward: vec3<f32>,
+    aspect: f32,
+    right: vec3<f32>,
+    width: f32,
+    up: vec3<f32>,
+    height: f32,
+    background: vec3<f32>,
+    ambient: f32,
+    sphere_count: u32,
+    plane_count: u32,
+    light_count: u32,
+    material_count: u32,
+}
+
+struct Sphere {
+    center: vec3<f32>,
+    radius: f32,
+    material: u32,
+}
+
+struct Plane {
+    point: vec3<f32>,
+    material: u32,
+    normal: vec3<f32>,
+    checker_material: u32,
+    tangent: vec3<f32>,
+    checker_size: f32,
+    bitangent: vec3<f32>,
+}
+
+struct Light {
+    position: vec3<f32>,
+    color: vec3<f32>,
+}
+
+struct Material {
+    color: vec3<f32>,
+    specular: f32,
+    shininess: f32,
+    reflect: f32,
+    transmit: f32,
+    ior: f32,
+}

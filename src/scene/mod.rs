@@ -1,0 +1,294 @@
+//! Scenes: what is rendered, independent of how it reaches a tracer.
+//!
+//! A [`Scene`] comes from a TOML file ([`file`]) or a built-in generator ([`builtin`]); [`load`] picks
+//! between them. [`packed`] turns it into the flat records that the GPU shader and the CPU reference read.
+
+pub mod builtin;
+pub mod file;
+pub mod packed;
+
+use glam::Vec3;
+use std::path::Path;
+
+/// A pinhole camera. The ray convention is documented in `docs/scene-format.md` and implemented in
+/// [`packed::GpuGlobals`] (basis) and `camera_ray` (per pixel), identically on CPU and GPU.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_degrees: f32,
+}
+
+/// Render settings a scene may carry; command-line flags override them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Maximum number of bounces (reflection or refraction) after the primary ray.
+    pub max_depth: u32,
+    pub background: Vec3,
+    /// Ambient light intensity, multiplied by a surface's diffuse colour.
+    pub ambient: f32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 480,
+            max_depth: 5,
+            background: Vec3::new(0.05, 0.05, 0.1),
+            ambient: 0.1,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub position: Vec3,
+    pub color: Vec3,
+}
+
+/// A Whitted material: Phong local shading plus mirror reflection and Fresnel-weighted refraction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Diffuse albedo.
+    pub color: Vec3,
+    /// Weight of the Phong highlight.
+    pub specular: f32,
+    pub shininess: f32,
+    /// Mirror reflectance, 0..1.
+    pub reflect: f32,
+    /// Transmittance, 0..1; split between reflection and refraction by Schlick's Fresnel term.
+    pub transmit: f32,
+    /// Index of refraction of the inside of the surface (the outside is vacuum, 1.0).
+    pub ior: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            color: Vec3::splat(0.8),
+            specular: 0.0,
+            shininess: 32.0,
+            reflect: 0.0,
+            transmit: 0.0,
+            ior: 1.5,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    pub center: Vec3,
+    pub radius: f32,
+    pub material: u32,
+}
+
+/// An infinite plane, optionally a checkerboard of two materials.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    pub point: Vec3,
+    /// Unit normal.
+    pub normal: Vec3,
+    pub material: u32,
+    pub checker: Option<Checker>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Checker {
+    /// The material of the odd squares.
+    pub material: u32,
+    /// Edge length of a square.
+    pub size: f32,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scene {
+    pub camera: Camera,
+    pub settings: RenderSettings,
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    pub spheres: Vec<Sphere>,
+    pub planes: Vec<Plane>,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self {
+            eye: Vec3::new(0.0, 1.0, -6.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_degrees: 40.0,
+        }
+    }
+}
+
+/// A scene that breaks an invariant the tracers rely on, naming the element at fault.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("{element}: {message}")]
+pub struct SceneError {
+    pub element: String,
+    pub message: String,
+}
+
+impl SceneError {
+    pub fn new(element: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            element: element.into(),
+            message: message.into(),
+        }
+    }
+}
+
+fn finite_vec(v: Vec3) -> bool {
+    v.is_finite()
+}
+
+impl Scene {
+    /// Loads a scene by built-in name (`whitted`, `random:100:7`, ...) or from a TOML file path.
+    pub fn load(spec: &str) -> anyhow::Result<Scene> {
+        if let Some(scene) = builtin::by_name(spec)? {
+            return Ok(scene);
+        }
+        let path = Path::new(spec);
+        if path.extension().is_some_and(|ext| ext == "toml") || path.exists() {
+            return file::load(path);
+        }
+        anyhow::bail!(
+            "unknown scene '{spec}': not a file, and not a built-in ({})",
+            builtin::NAMES.join(", ")
+        )
+    }
+
+    /// Checks every invariant the tracers rely on: finite numbers, positive radii, unit-length normals
+    /// that exist, material indices in range, a camera that can see.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let c = &self.camera;
+        if !(finite_vec(c.eye) && finite_vec(c.target) && finite_vec(c.up)) {
+            return Err(SceneError::new("camera", "eye, target and up must be finite"));
+        }
+        let forward = c.target - c.eye;
+        if forward.length_squared() == 0.0 {
+            return Err(SceneError::new("camera", "eye and target must differ"));
+        }
+        if forward.normalize().cross(c.up).length_squared() < 1e-12 {
+            return Err(SceneError::new("camera", "up must not be parallel to the view direction"));
+        }
+        if !(c.fov_degrees > 0.0 && c.fov_degrees < 180.0) {
+            return Err(SceneError::new(
+                "camera",
+                format!("fov must be in (0, 180) degrees (got {})", c.fov_degrees),
+            ));
+        }
+        self.settings.validate()?;
+        for (i, light) in self.lights.iter().enumerate() {
+            if !(finite_vec(light.position) && finite_vec(light.color)) {
+                return Err(SceneError::new(format!("light {i}"), "position and color must be finite"));
+            }
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            validate_material(m).map_err(|msg| SceneError::new(format!("material {i}"), msg))?;
+        }
+        let material_count = self.materials.len() as u32;
+        let check_material = |element: &dyn Fn() -> String, index: u32| {
+            if index >= material_count {
+                Err(SceneError::new(
+                    element(),
+                    format!("material index {index} out of range ({material_count} materials)"),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        for (i, s) in self.spheres.iter().enumerate() {
+            let element = || format!("sphere {i}");
+            if !finite_vec(s.center) {
+                return Err(SceneError::new(element(), "center must be finite"));
+            }
+            if !(s.radius > 0.0 && s.radius.is_finite()) {
+                return Err(SceneError::new(
+                    element(),
+                    format!("radius must be positive and finite (got {})", s.radius),
+                ));
+            }
+            check_material(&element, s.material)?;
+        }
+        for (i, p) in self.planes.iter().enumerate() {
+            let element = || format!("plane {i}");
+            if !(finite_vec(p.point) && finite_vec(p.normal)) {
+                return Err(SceneError::new(element(), "point and normal must be finite"));
+            }
+            if (p.normal.length() - 1.0).abs() > 1e-4 {
+                return Err(SceneError::new(element(), "normal must have unit length"));
+            }
+            check_material(&element, p.material)?;
+            if let Some(checker) = p.checker {
+                check_material(&element, checker.material)?;
+                if !(checker.size > 0.0 && checker.size.is_finite()) {
+                    return Err(SceneError::new(
+                        element(),
+                        format!("checker size must be positive and finite (got {})", checker.size),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The largest image side we accept; far beyond any adapter's texture limit is a typo, not a request.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// The deepest bounce count we accept; the shader keeps a ray stack of this many entries plus one.
+pub const MAX_DEPTH_LIMIT: u32 = 32;
+
+impl RenderSettings {
+    pub fn validate(&self) -> Result<(), SceneError> {
+        for (name, value) in [("width", self.width), ("height", self.height)] {
+            if value == 0 || value > MAX_IMAGE_SIDE {
+                return Err(SceneError::new(
+                    "render",
+                    format!("{name} must be in 1..={MAX_IMAGE_SIDE} (got {value})"),
+                ));
+            }
+        }
+        if self.max_depth > MAX_DEPTH_LIMIT {
+            return Err(SceneError::new(
+                "render",
+                format!("max_depth must be at most {MAX_DEPTH_LIMIT} (got {})", self.max_depth),
+            ));
+        }
+        if !finite_vec(self.background) {
+            return Err(SceneError::new("render", "background must be finite"));
+        }
+        if !(self.ambient.is_finite() && self.ambient >= 0.0) {
+            return Err(SceneError::new("render", "ambient must be finite and not negative"));
+        }
+        Ok(())
+    }
+}
+
+fn validate_material(m: &Material) -> Result<(), String> {
+    if !finite_vec(m.color) {
+        return Err("color must be finite".into());
+    }
+    for (name, value) in [
+        ("specular", m.specular),
+        ("shininess", m.shininess),
+        ("reflect", m.reflect),
+        ("transmit", m.transmit),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(format!("{name} must be finite and not negative (got {value})"));
+        }
+    }
+    if m.reflect > 1.0 || m.transmit > 1.0 {
+        return Err("reflect and transmit must be at most 1".into());
+    }
+    if !(m.ior.is_finite() && m.ior > 0.0) {
+        return Err(format!("ior must be positive and finite (got {})", m.ior));
+    }
+    Ok(())
+}

@@ -1,0 +1,298 @@
+//! The scene as flat GPU records: what the fragment shader reads, and what the CPU reference reads too,
+//! so both tracers see the same f32 numbers.
+//!
+//! Every record is `repr(C)` + `Pod`, a multiple of 16 bytes, with its WGSL twin in
+//! `src/gpu/shaders/types.wgsl`; `tests/layout.rs` checks sizes and member offsets against naga's.
+//! Fields named `_pad*` are padding the WGSL struct gets implicitly.
+
+use super::Scene;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Per-frame constants: the camera basis, image size, background and record counts.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuGlobals {
+    pub eye: [f32; 3],
+    /// tan(fov / 2), fov vertical.
+    pub tan_half_fov: f32,
+    /// normalize(target - eye).
+    pub forward: [f32; 3],
+    /// width / height.
+    pub aspect: f32,
+    /// normalize(cross(forward, up)).
+    pub right: [f32; 3],
+    pub width: f32,
+    /// cross(right, forward): the true up.
+    pub up: [f32; 3],
+    pub height: f32,
+    pub background: [f32; 3],
+    pub ambient: f32,
+    pub sphere_count: u32,
+    pub plane_count: u32,
+    pub light_count: u32,
+    pub material_count: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSphere {
+    pub center: [f32; 3],
+    pub radius: f32,
+    /// Index into the material records.
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+/// An infinite plane with its checkerboard frame precomputed, so no basis is derived in the shader.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPlane {
+    pub point: [f32; 3],
+    /// Material of the even squares (all of the plane when it has no checker).
+    pub material: u32,
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// Material of the odd squares; equal to `material` when the plane has no checker.
+    pub checker_material: u32,
+    /// First in-plane axis of the squares (unit).
+    pub tangent: [f32; 3],
+    /// Edge length of a square.
+    pub checker_size: f32,
+    /// Second in-plane axis: cross(normal, tangent).
+    pub bitangent: [f32; 3],
+    pub _pad: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    pub position: [f32; 3],
+    pub _pad0: f32,
+    pub color: [f32; 3],
+    pub _pad1: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub color: [f32; 3],
+    pub specular: f32,
+    pub shininess: f32,
+    pub reflect: f32,
+    pub transmit: f32,
+    pub ior: f32,
+}
+
+/// A record that can also travel as rgba32float texels (the texture memory route).
+///
+/// Integer fields travel as exact float values, not as reinterpreted bits: small integers would be
+/// denormal floats, which some drivers flush. The WGSL decoders in `texels.wgsl` undo this.
+pub trait GpuRecord: Pod {
+    /// The WGSL struct name in `types.wgsl`.
+    const WGSL_TYPE: &'static str;
+    /// Texels per record: the record's size over 16 bytes.
+    const TEXELS: usize = std::mem::size_of::<Self>() / 16;
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>);
+}
+
+/// Integers up to 2^24 are exact in f32; `PackedScene::new` keeps every index below this.
+pub const MAX_TEXEL_INTEGER: u32 = 1 << 24;
+
+impl GpuRecord for GpuSphere {
+    const WGSL_TYPE: &'static str = "Sphere";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        let [x, y, z] = self.center;
+        out.push([x, y, z, self.radius]);
+        out.push([self.material as f32, 0.0, 0.0, 0.0]);
+    }
+}
+
+impl GpuRecord for GpuPlane {
+    const WGSL_TYPE: &'static str = "Plane";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        let [px, py, pz] = self.point;
+        let [nx, ny, nz] = self.normal;
+        let [tx, ty, tz] = self.tangent;
+        let [bx, by, bz] = self.bitangent;
+        out.push([px, py, pz, self.material as f32]);
+        out.push([nx, ny, nz, self.checker_material as f32]);
+        out.push([tx, ty, tz, self.checker_size]);
+        out.push([bx, by, bz, 0.0]);
+    }
+}
+
+impl GpuRecord for GpuLight {
+    const WGSL_TYPE: &'static str = "Light";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        let [px, py, pz] = self.position;
+        let [r, g, b] = self.color;
+        out.push([px, py, pz, 0.0]);
+        out.push([r, g, b, 0.0]);
+    }
+}
+
+impl GpuRecord for GpuMaterial {
+    const WGSL_TYPE: &'static str = "Material";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        let [r, g, b] = self.color;
+        out.push([r, g, b, self.specular]);
+        out.push([self.shininess, self.reflect, self.transmit, self.ior]);
+    }
+}
+
+/// One host struct's layout, for the naga layout test.
+pub struct StructLayout {
+    pub wgsl_name: &'static str,
+    pub size: usize,
+    /// (member name, byte offset), padding excluded.
+    pub members: &'static [(&'static str, usize)],
+}
+
+macro_rules! layout {
+    ($ty:ty, $wgsl:literal, [$($field:ident),* $(,)?]) => {
+        StructLayout {
+            wgsl_name: $wgsl,
+            size: std::mem::size_of::<$ty>(),
+            members: &[$((stringify!($field), std::mem::offset_of!($ty, $field))),*],
+        }
+    };
+}
+
+/// Every struct that crosses to the GPU, with the WGSL name of its twin.
+pub const LAYOUTS: &[StructLayout] = &[
+    layout!(GpuGlobals, "Globals", [
+        eye, tan_half_fov, forward, aspect, right, width, up, height, background, ambient,
+        sphere_count, plane_count, light_count, material_count,
+    ]),
+    layout!(GpuSphere, "Sphere", [center, radius, material]),
+    layout!(GpuPlane, "Plane", [
+        point, material, normal, checker_material, tangent, checker_size, bitangent,
+    ]),
+    layout!(GpuLight, "Light", [position, color]),
+    layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior]),
+];
+
+/// The scene as the tracers read it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackedScene {
+    pub globals: GpuGlobals,
+    pub max_depth: u32,
+    pub spheres: Vec<GpuSphere>,
+    pub planes: Vec<GpuPlane>,
+    pub lights: Vec<GpuLight>,
+    pub materials: Vec<GpuMaterial>,
+}
+
+impl PackedScene {
+    /// Packs a validated scene with its final render settings.
+    pub fn new(scene: &Scene) -> Result<Self, super::SceneError> {
+        scene.validate()?;
+        for (what, count) in [
+            ("spheres", scene.spheres.len()),
+            ("planes", scene.planes.len()),
+            ("lights", scene.lights.len()),
+            ("materials", scene.materials.len()),
+        ] {
+            if count >= MAX_TEXEL_INTEGER as usize {
+                return Err(super::SceneError::new(
+                    "scene",
+                    format!("{count} {what} is more than the {MAX_TEXEL_INTEGER} a record index can hold"),
+                ));
+            }
+        }
+        let c = &scene.camera;
+        let s = &scene.settings;
+        let forward = (c.target - c.eye).normalize();
+        let right = forward.cross(c.up).normalize();
+        let up = right.cross(forward);
+        let globals = GpuGlobals {
+            eye: c.eye.to_array(),
+            tan_half_fov: (c.fov_degrees.to_radians() * 0.5).tan(),
+            forward: forward.to_array(),
+            aspect: s.width as f32 / s.height as f32,
+            right: right.to_array(),
+            width: s.width as f32,
+            up: up.to_array(),
+            height: s.height as f32,
+            background: s.background.to_array(),
+            ambient: s.ambient,
+            sphere_count: scene.spheres.len() as u32,
+            plane_count: scene.planes.len() as u32,
+            light_count: scene.lights.len() as u32,
+            material_count: scene.materials.len() as u32,
+        };
+        let spheres = scene
+            .spheres
+            .iter()
+            .map(|s| GpuSphere {
+                center: s.center.to_array(),
+                radius: s.radius,
+                material: s.material,
+                _pad: [0; 3],
+            })
+            .collect();
+        let planes = scene
+            .planes
+            .iter()
+            .map(|p| {
+                // Any axis not parallel to the normal spans the plane with it.
+                let helper = if p.normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+                let tangent = helper.cross(p.normal).normalize();
+                let bitangent = p.normal.cross(tangent);
+                let (checker_material, checker_size) = match p.checker {
+                    Some(checker) => (checker.material, checker.size),
+                    None => (p.material, 1.0),
+                };
+                GpuPlane {
+                    point: p.point.to_array(),
+                    material: p.material,
+                    normal: p.normal.to_array(),
+                    checker_material,
+                    tangent: tangent.to_array(),
+                    checker_size,
+                    bitangent: bitangent.to_array(),
+                    _pad: 0.0,
+                }
+            })
+            .collect();
+        let lights = scene
+            .lights
+            .iter()
+            .map(|l| GpuLight {
+                position: l.position.to_array(),
+                _pad0: 0.0,
+                color: l.color.to_array(),
+                _pad1: 0.0,
+            })
+            .collect();
+        let materials = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                color: m.color.to_array(),
+                specular: m.specular,
+                shininess: m.shininess,
+                reflect: m.reflect,
+                transmit: m.transmit,
+                ior: m.ior,
+            })
+            .collect();
+        Ok(Self {
+            globals,
+            max_depth: s.max_depth,
+            spheres,
+            planes,
+            lights,
+            materials,
+        })
+    }
+
+    pub fn width(&self) -> u32 {
+        self.globals.width as u32
+    }
+
+    pub fn height(&self) -> u32 {
+        self.globals.height as u32
+    }
+}
