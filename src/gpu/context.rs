@@ -59,6 +59,9 @@ impl GpuContext {
             return Ok(None);
         };
         let info = adapter.get_info();
+        if let Some(warning) = driver_warning(&info) {
+            eprintln!("warning: {warning}");
+        }
         let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("raypipe"),
@@ -110,6 +113,28 @@ impl GpuContext {
         }
         result
     }
+}
+
+/// The oldest Mesa whose llvmpipe (lavapipe, llvmpipe GL) was seen to run the tracer correctly.
+const MESA_TESTED_GOOD: (u32, u32) = (25, 0);
+
+/// Mesa 22.3.6's llvmpipe ends the fragment shader's ray loop early with rays still on the stack
+/// (reflections and refractions go missing on scenes with small glass spheres); 25.0.7 is correct.
+/// Versions in between were not tested.
+pub fn driver_warning(info: &wgpu::AdapterInfo) -> Option<String> {
+    if !info.name.contains("llvmpipe") {
+        return None;
+    }
+    let text = format!("{} {}", info.driver, info.driver_info);
+    let version = text.split("Mesa ").nth(1)?;
+    let mut numbers = version.split(|c: char| !c.is_ascii_digit()).filter_map(|n| n.parse::<u32>().ok());
+    let found = (numbers.next()?, numbers.next().unwrap_or(0));
+    (found < MESA_TESTED_GOOD).then(|| {
+        format!(
+            "Mesa {}.{} llvmpipe is older than the oldest Mesa seen to trace correctly ({}.{}); Mesa 22.3 drops reflected and refracted rays (on Debian 12, install Mesa from bookworm-backports)",
+            found.0, found.1, MESA_TESTED_GOOD.0, MESA_TESTED_GOOD.1
+        )
+    })
 }
 
 pub fn describe(info: &wgpu::AdapterInfo) -> String {

@@ -28,11 +28,13 @@ pub struct Tolerance {
 
 impl Tolerance {
     /// GPU against CPU colour, in display units (1.0 = black to white). Float rounding differs between
-    /// devices (fused multiply-add, `pow`, `sqrt`), so a ray that grazes an edge may hit on one and miss
-    /// on the other: a few pixels may differ a lot (the p99 allows 1 % of them), the mean stays tiny.
+    /// devices (fused multiply-add, `pow`, `sqrt`), and each bounce off a small sphere magnifies a
+    /// direction's rounding error by about distance / radius, so a deep ray may hit a different sphere on
+    /// each device: a few pixels may differ a lot (measured: at most 0.25 % at depth 5 on the built-in
+    /// sphere clouds), the mean stays tiny (measured: at most 1.5e-4).
     pub const COLOR: Tolerance = Tolerance {
-        mean: 2e-3,
-        p99: 0.05,
+        mean: 1e-3,
+        p99: 0.02,
     };
     /// First-hit distance between tracers or devices: relative float rounding, a few edge pixels.
     pub const DEPTH: Tolerance = Tolerance {

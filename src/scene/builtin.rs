@@ -288,7 +288,7 @@ pub fn random(n: usize, seed: u64) -> Scene {
                 3.0 * rng.next_f32() - 1.5,
             );
             let radius = base_radius * (0.5 + rng.next_f32());
-            let material = CLOUD_FIRST + (rng.next_u64() % (CLOUD_MATERIALS as u64 + 2)) as u32;
+            let material = CLOUD_FIRST + (rng.next_u64() % CLOUD_MATERIALS as u64) as u32;
             Sphere {
                 center,
                 radius,
