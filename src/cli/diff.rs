@@ -26,11 +26,19 @@ pub fn run(args: DiffArgs) -> anyhow::Result<ExitCode> {
     );
     if let Some(out) = &args.out {
         // Full scale at ten times the threshold, so a passing image stays dark.
-        let picture = diff::error_image(&errors, a.width, a.height, (10.0 * args.threshold).max(1e-6));
+        let picture = diff::error_image(
+            &errors,
+            a.width,
+            a.height,
+            (10.0 * args.threshold).max(1e-6),
+        );
         io::write(&picture, out)?;
     }
     if stats.mean > args.threshold {
-        println!("FAIL: mean error {:.6} is above the threshold {}", stats.mean, args.threshold);
+        println!(
+            "FAIL: mean error {:.6} is above the threshold {}",
+            stats.mean, args.threshold
+        );
         return Ok(ExitCode::from(1));
     }
     Ok(ExitCode::SUCCESS)

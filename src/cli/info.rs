@@ -16,17 +16,38 @@ pub fn run() -> anyhow::Result<ExitCode> {
                 .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
         };
         println!("{}", describe(&adapter.get_info()));
-        println!("  max texture 2D:             {}", limits.max_texture_dimension_2d);
-        println!("  max uniform binding:        {} bytes", limits.max_uniform_buffer_binding_size);
-        println!("  max storage binding:        {} bytes", limits.max_storage_buffer_binding_size);
-        println!("  storage buffers per stage:  {}", limits.max_storage_buffers_per_shader_stage);
-        println!("  sampled textures per stage: {}", limits.max_sampled_textures_per_shader_stage);
+        println!(
+            "  max texture 2D:             {}",
+            limits.max_texture_dimension_2d
+        );
+        println!(
+            "  max uniform binding:        {} bytes",
+            limits.max_uniform_buffer_binding_size
+        );
+        println!(
+            "  max storage binding:        {} bytes",
+            limits.max_storage_buffer_binding_size
+        );
+        println!(
+            "  storage buffers per stage:  {}",
+            limits.max_storage_buffers_per_shader_stage
+        );
+        println!(
+            "  sampled textures per stage: {}",
+            limits.max_sampled_textures_per_shader_stage
+        );
         println!(
             "  timestamp queries:          {}",
             adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
         );
-        println!("  rgba32uint render target:   {}", renders_to(wgpu::TextureFormat::Rgba32Uint));
-        println!("  rgba32float render target:  {}", renders_to(wgpu::TextureFormat::Rgba32Float));
+        println!(
+            "  rgba32uint render target:   {}",
+            renders_to(wgpu::TextureFormat::Rgba32Uint)
+        );
+        println!(
+            "  rgba32float render target:  {}",
+            renders_to(wgpu::TextureFormat::Rgba32Float)
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -56,13 +56,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         Aov::Depth => "depth.exr".into(),
         _ => "render.png".into(),
     });
-    let is_exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let is_png = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let is_exr = output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let is_png = output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
     if !(is_exr || is_png) {
         bail!("{}: output must end in .png or .exr", output.display());
     }
     if args.aov == Aov::Depth && !is_exr {
-        bail!("{}: --aov depth writes a float EXR; name the output *.exr", output.display());
+        bail!(
+            "{}: --aov depth writes a float EXR; name the output *.exr",
+            output.display()
+        );
     }
 
     let mut scene = Scene::load(&args.scene)?;
@@ -102,7 +109,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             packed.lights.len(),
             packed.max_depth
         );
-        println!("device: {}, memory {:?}, accel {:?}", outcome.device, args.memory, args.accel);
+        println!(
+            "device: {}, memory {:?}, accel {:?}",
+            outcome.device, args.memory, args.accel
+        );
         let (ms, clock) = match outcome.gpu_ms {
             Some(ms) => (ms, "GPU timestamps"),
             None => (outcome.wall_ms, "wall clock"),

@@ -91,5 +91,7 @@ pub fn closest_plane(planes: &[GpuPlane], ray: &Ray, best: Hit) -> Hit {
 }
 
 pub fn any_plane(planes: &[GpuPlane], ray: &Ray, t_max: f32) -> bool {
-    planes.iter().any(|plane| intersect_plane(plane, ray, t_max) < t_max)
+    planes
+        .iter()
+        .any(|plane| intersect_plane(plane, ray, t_max) < t_max)
 }

@@ -21,8 +21,10 @@ pub fn render(scene: &PackedScene, progress: bool) -> Frame {
     let bar = if progress {
         let bar = ProgressBar::new(height as u64);
         bar.set_style(
-            ProgressStyle::with_template("{spinner} CPU render {bar:40} {pos}/{len} rows, {eta} left")
-                .expect("the template is valid"),
+            ProgressStyle::with_template(
+                "{spinner} CPU render {bar:40} {pos}/{len} rows, {eta} left",
+            )
+            .expect("the template is valid"),
         );
         bar
     } else {
@@ -45,7 +47,12 @@ pub fn render(scene: &PackedScene, progress: bool) -> Frame {
     bar.finish_and_clear();
     let mut frame = Frame::new(width, height);
     for (pixel, trace) in rows.into_iter().flatten().enumerate() {
-        frame.color[pixel] = [trace.color.x, trace.color.y, trace.color.z, trace.rays as f32];
+        frame.color[pixel] = [
+            trace.color.x,
+            trace.color.y,
+            trace.color.z,
+            trace.rays as f32,
+        ];
         frame.surface[pixel] = [
             trace.normal.x,
             trace.normal.y,

@@ -38,7 +38,10 @@ pub struct Tracer<'a> {
 
 impl<'a> Tracer<'a> {
     pub fn new(scene: &'a PackedScene) -> Self {
-        Self { scene, ray_count: 0 }
+        Self {
+            scene,
+            ray_count: 0,
+        }
     }
 
     /// The ray through a pixel position (pixel centres at +0.5, row 0 at the top).
@@ -96,7 +99,11 @@ impl<'a> Tracer<'a> {
             }
             let material = self.scene.materials[surface.material as usize];
             let entering = surface.normal.dot(ray.dir) < 0.0;
-            let normal = if entering { surface.normal } else { -surface.normal };
+            let normal = if entering {
+                surface.normal
+            } else {
+                -surface.normal
+            };
             let view = -ray.dir;
             result.color += task.weight * self.direct_light(&surface, normal, view, &material);
             if task.depth >= max_depth {
@@ -108,7 +115,11 @@ impl<'a> Tracer<'a> {
             let mut transmit_share = material.transmit;
             let mut refracted = Vec3::ZERO;
             if transmit_share > 0.0 {
-                let eta = if entering { 1.0 / material.ior } else { material.ior };
+                let eta = if entering {
+                    1.0 / material.ior
+                } else {
+                    material.ior
+                };
                 let cos_i = view.dot(normal);
                 let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
                 if k < 0.0 {
@@ -117,7 +128,8 @@ impl<'a> Tracer<'a> {
                 } else {
                     let cos_t = k.sqrt();
                     refracted = (eta * ray.dir + (eta * cos_i - cos_t) * normal).normalize();
-                    let fresnel = fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
+                    let fresnel =
+                        fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
                     reflect_share += transmit_share * fresnel;
                     transmit_share *= 1.0 - fresnel;
                 }

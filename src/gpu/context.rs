@@ -53,7 +53,10 @@ impl GpuContext {
     /// The first adapter wgpu offers on the chosen backends, or `None` when there is none.
     pub fn new(backend: Option<Backend>) -> anyhow::Result<Option<Self>> {
         let found = backend_order(backend).into_iter().find_map(|backends| {
-            pollster::block_on(instance(backends).request_adapter(&wgpu::RequestAdapterOptions::default())).ok()
+            pollster::block_on(
+                instance(backends).request_adapter(&wgpu::RequestAdapterOptions::default()),
+            )
+            .ok()
         });
         let Some(adapter) = found else {
             return Ok(None);
@@ -70,10 +73,18 @@ impl GpuContext {
             required_limits: adapter.limits(),
             ..Default::default()
         }))
-        .with_context(|| format!("cannot open a device on adapter {} ({:?})", info.name, info.backend))?;
+        .with_context(|| {
+            format!(
+                "cannot open a device on adapter {} ({:?})",
+                info.name, info.backend
+            )
+        })?;
         // Errors are caught by error scopes around each operation; anything else is reported, not a panic.
         device.on_uncaptured_error(std::sync::Arc::new(|error| {
-            eprintln!("warning: GPU error outside an operation: {}", one_line(&error.to_string()));
+            eprintln!(
+                "warning: GPU error outside an operation: {}",
+                one_line(&error.to_string())
+            );
         }));
         Ok(Some(Self {
             timestamps: required_features.contains(wgpu::Features::TIMESTAMP_QUERY),
@@ -88,7 +99,9 @@ impl GpuContext {
     pub fn require(backend: Option<Backend>) -> anyhow::Result<Self> {
         Self::new(backend)?.ok_or_else(|| match backend {
             Some(b) => anyhow!("no GPU adapter found on the {b:?} backend"),
-            None => anyhow!("no GPU adapter found (install a driver, for example mesa-vulkan-drivers)"),
+            None => {
+                anyhow!("no GPU adapter found (install a driver, for example mesa-vulkan-drivers)")
+            }
         })
     }
 
@@ -102,14 +115,21 @@ impl GpuContext {
     }
 
     /// Runs `f` inside validation and out-of-memory error scopes; a wgpu error becomes an `Err`.
-    pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> anyhow::Result<T>) -> anyhow::Result<T> {
+    pub fn checked<T>(
+        &self,
+        what: &str,
+        f: impl FnOnce() -> anyhow::Result<T>,
+    ) -> anyhow::Result<T> {
         let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let result = f();
         let validation = pollster::block_on(validation.pop());
         let memory = pollster::block_on(memory.pop());
         if let Some(error) = validation.or(memory) {
-            return Err(anyhow!("{what} failed on the GPU: {}", one_line(&error.to_string())));
+            return Err(anyhow!(
+                "{what} failed on the GPU: {}",
+                one_line(&error.to_string())
+            ));
         }
         result
     }
@@ -127,7 +147,9 @@ pub fn driver_warning(info: &wgpu::AdapterInfo) -> Option<String> {
     }
     let text = format!("{} {}", info.driver, info.driver_info);
     let version = text.split("Mesa ").nth(1)?;
-    let mut numbers = version.split(|c: char| !c.is_ascii_digit()).filter_map(|n| n.parse::<u32>().ok());
+    let mut numbers = version
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|n| n.parse::<u32>().ok());
     let found = (numbers.next()?, numbers.next().unwrap_or(0));
     (found < MESA_TESTED_GOOD).then(|| {
         format!(
@@ -144,7 +166,10 @@ pub fn describe(info: &wgpu::AdapterInfo) -> String {
         .copied()
         .collect::<Vec<_>>()
         .join(" ");
-    format!("{} ({:?}, {:?}, driver: {})", info.name, info.backend, info.device_type, driver)
+    format!(
+        "{} ({:?}, {:?}, driver: {})",
+        info.name, info.backend, info.device_type, driver
+    )
 }
 
 /// wgpu's messages span lines; ours are one.

@@ -39,7 +39,12 @@ pub struct ShaderConfig<'a> {
 pub fn compose(config: &ShaderConfig) -> String {
     let mut source = String::new();
     let w = &mut source;
-    writeln!(w, "// Generated preamble: memory {:?}, accel {:?}.", config.memory, config.accel).unwrap();
+    writeln!(
+        w,
+        "// Generated preamble: memory {:?}, accel {:?}.",
+        config.memory, config.accel
+    )
+    .unwrap();
     writeln!(w, "const MAX_DEPTH: u32 = {}u;", config.max_depth).unwrap();
     // Depth-first with two branches keeps at most one waiting sibling per level, plus the pair just pushed.
     writeln!(w, "const RAY_STACK_SIZE: u32 = {}u;", config.max_depth + 1).unwrap();
@@ -49,16 +54,32 @@ pub fn compose(config: &ShaderConfig) -> String {
         let (name, ty, binding) = (array.name, array.wgsl_type, array.binding);
         match config.memory {
             MemoryMode::Storage => {
-                writeln!(w, "@group(0) @binding({binding}) var<storage, read> {name}_records: array<{ty}>;").unwrap();
-                writeln!(w, "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}").unwrap();
+                writeln!(
+                    w,
+                    "@group(0) @binding({binding}) var<storage, read> {name}_records: array<{ty}>;"
+                )
+                .unwrap();
+                writeln!(
+                    w,
+                    "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}"
+                )
+                .unwrap();
             }
             MemoryMode::Uniform => {
                 let capacity = array.capacity.max(1);
                 writeln!(w, "@group(0) @binding({binding}) var<uniform> {name}_records: array<{ty}, {capacity}>;").unwrap();
-                writeln!(w, "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}").unwrap();
+                writeln!(
+                    w,
+                    "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}"
+                )
+                .unwrap();
             }
             MemoryMode::Texture => {
-                writeln!(w, "@group(0) @binding({binding}) var {name}_texels: texture_2d<f32>;").unwrap();
+                writeln!(
+                    w,
+                    "@group(0) @binding({binding}) var {name}_texels: texture_2d<f32>;"
+                )
+                .unwrap();
                 let loads: Vec<String> = (0..array.texels)
                     .map(|t| format!("textureLoad({name}_texels, texel_coord(base + {t}u), 0)"))
                     .collect();

@@ -21,7 +21,7 @@ pub enum MemoryMode {
 }
 
 /// Texture rows are 2048 texels wide: the smallest maximum texture size WebGL2 guarantees.
-const TEXELS_PER_ROW: u32 = 2048;
+pub const TEXELS_PER_ROW: u32 = 2048;
 
 /// The scene's arrays on the GPU, ready to bind.
 pub struct SceneResources {
@@ -52,7 +52,11 @@ impl SceneResources {
     }
 }
 
-pub fn upload(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode) -> anyhow::Result<SceneResources> {
+pub fn upload(
+    ctx: &GpuContext,
+    scene: &PackedScene,
+    memory: MemoryMode,
+) -> anyhow::Result<SceneResources> {
     let limits = ctx.limits();
     let texels_per_row = TEXELS_PER_ROW.min(limits.max_texture_dimension_2d);
     let mut out = SceneResources {
@@ -61,15 +65,8 @@ pub fn upload(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode) -> anyh
         resources: Vec::new(),
         texels_per_row,
     };
-    let mut add = |name: &'static str, records: &dyn RecordSlice| -> anyhow::Result<()> {
-        let binding = out.arrays.len() as u32 + 1;
-        let array = RecordArray {
-            name,
-            wgsl_type: records.wgsl_type(),
-            texels: records.texels(),
-            binding,
-            capacity: records.len(),
-        };
+    for (array, (_, records)) in record_arrays(scene).into_iter().zip(scene_records(scene)) {
+        let (name, binding) = (array.name, array.binding);
         let (ty, resource) = match memory {
             MemoryMode::Uniform | MemoryMode::Storage => {
                 let uniform = memory == MemoryMode::Uniform;
@@ -79,12 +76,22 @@ pub fn upload(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode) -> anyh
                     bytes.resize(records.record_size(), 0);
                 }
                 let (limit, usage) = if uniform {
-                    (limits.max_uniform_buffer_binding_size as u64, wgpu::BufferUsages::UNIFORM)
+                    (
+                        limits.max_uniform_buffer_binding_size,
+                        wgpu::BufferUsages::UNIFORM,
+                    )
                 } else {
-                    (limits.max_storage_buffer_binding_size as u64, wgpu::BufferUsages::STORAGE)
+                    (
+                        limits.max_storage_buffer_binding_size,
+                        wgpu::BufferUsages::STORAGE,
+                    )
                 };
                 if bytes.len() as u64 > limit {
-                    let hint = if uniform { "; use --memory storage" } else { "" };
+                    let hint = if uniform {
+                        "; use --memory storage"
+                    } else {
+                        ""
+                    };
                     bail!(
                         "scene too big for --memory {}: {} {name} records need {} bytes, the adapter allows {limit}{hint}",
                         if uniform { "uniform" } else { "storage" },
@@ -92,11 +99,13 @@ pub fn upload(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode) -> anyh
                         bytes.len()
                     );
                 }
-                let buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(name),
-                    contents: &bytes,
-                    usage,
-                });
+                let buffer = ctx
+                    .device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(name),
+                        contents: &bytes,
+                        usage,
+                    });
                 let ty = wgpu::BindingType::Buffer {
                     ty: if uniform {
                         wgpu::BufferBindingType::Uniform
@@ -144,7 +153,10 @@ pub fn upload(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode) -> anyh
                     view_dimension: wgpu::TextureViewDimension::D2,
                     multisampled: false,
                 };
-                (ty, Resource::Texture(texture.create_view(&Default::default())))
+                (
+                    ty,
+                    Resource::Texture(texture.create_view(&Default::default())),
+                )
             }
         };
         out.layout_entries.push(wgpu::BindGroupLayoutEntry {
@@ -155,13 +167,33 @@ pub fn upload(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode) -> anyh
         });
         out.resources.push(resource);
         out.arrays.push(array);
-        Ok(())
-    };
-    add("sphere", &scene.spheres)?;
-    add("plane", &scene.planes)?;
-    add("light", &scene.lights)?;
-    add("material", &scene.materials)?;
+    }
     Ok(out)
+}
+
+/// The scene's record arrays in binding order (binding 0 is the globals).
+fn scene_records(scene: &PackedScene) -> [(&'static str, &dyn RecordSlice); 4] {
+    [
+        ("sphere", &scene.spheres),
+        ("plane", &scene.planes),
+        ("light", &scene.lights),
+        ("material", &scene.materials),
+    ]
+}
+
+/// What the shader declares for each of the scene's arrays.
+pub fn record_arrays(scene: &PackedScene) -> Vec<RecordArray> {
+    scene_records(scene)
+        .iter()
+        .enumerate()
+        .map(|(i, (name, records))| RecordArray {
+            name,
+            wgsl_type: records.wgsl_type(),
+            texels: records.texels(),
+            binding: i as u32 + 1,
+            capacity: records.len(),
+        })
+        .collect()
 }
 
 /// A slice of records of one type, seen without its type so `upload` can loop over arrays.

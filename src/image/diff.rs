@@ -42,7 +42,10 @@ impl Tolerance {
         p99: 1e-4,
     };
     /// Identical up to float rounding: for images of one device in different memory modes.
-    pub const EXACT: Tolerance = Tolerance { mean: 0.0, p99: 0.0 };
+    pub const EXACT: Tolerance = Tolerance {
+        mean: 0.0,
+        p99: 0.0,
+    };
 
     pub fn check(&self, stats: &DiffStats) -> Result<(), String> {
         if stats.mean <= self.mean && stats.p99 <= self.p99 {
@@ -50,7 +53,13 @@ impl Tolerance {
         } else {
             Err(format!(
                 "images differ: mean error {:.3e} (allowed {:.1e}), p99 {:.3e} (allowed {:.1e}), max {:.3e}, {} of {} pixels differ",
-                stats.mean, self.mean, stats.p99, self.p99, stats.max, stats.differing, stats.pixels
+                stats.mean,
+                self.mean,
+                stats.p99,
+                self.p99,
+                stats.max,
+                stats.differing,
+                stats.pixels
             ))
         }
     }
@@ -128,7 +137,11 @@ pub fn error_image(errors: &[f64], width: u32, height: u32, full_scale: f64) -> 
         .iter()
         .flat_map(|&e| {
             let x = (e / full_scale).clamp(0.0, 1.0) as f32;
-            [(3.0 * x).min(1.0), (3.0 * x - 1.0).clamp(0.0, 1.0), (3.0 * x - 2.0).clamp(0.0, 1.0)]
+            [
+                (3.0 * x).min(1.0),
+                (3.0 * x - 1.0).clamp(0.0, 1.0),
+                (3.0 * x - 2.0).clamp(0.0, 1.0),
+            ]
         })
         .collect();
     FloatImage {

@@ -6,23 +6,39 @@ use exr::prelude::{self as exrs, ReadChannels, ReadLayers, WritableImage};
 use std::path::Path;
 
 fn is_exr(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
 /// Writes a PNG (values in [0, 1], rounded to 8 bits) or, by extension, a float EXR.
 pub fn write(image: &FloatImage, path: &Path) -> anyhow::Result<()> {
-    if is_exr(path) { write_exr(image, path) } else { write_png(image, path) }
+    if is_exr(path) {
+        write_exr(image, path)
+    } else {
+        write_png(image, path)
+    }
 }
 
 pub fn write_png(image: &FloatImage, path: &Path) -> anyhow::Result<()> {
     let channels = image.channels.len();
     let to_byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
     let result = match channels {
-        1 => image::GrayImage::from_raw(image.width, image.height, image.data.iter().map(|&v| to_byte(v)).collect())
-            .map(|img| img.save(path)),
-        3 => image::RgbImage::from_raw(image.width, image.height, image.data.iter().map(|&v| to_byte(v)).collect())
-            .map(|img| img.save(path)),
-        n => bail!("{}: cannot write a {n}-channel image as PNG", path.display()),
+        1 => image::GrayImage::from_raw(
+            image.width,
+            image.height,
+            image.data.iter().map(|&v| to_byte(v)).collect(),
+        )
+        .map(|img| img.save(path)),
+        3 => image::RgbImage::from_raw(
+            image.width,
+            image.height,
+            image.data.iter().map(|&v| to_byte(v)).collect(),
+        )
+        .map(|img| img.save(path)),
+        n => bail!(
+            "{}: cannot write a {n}-channel image as PNG",
+            path.display()
+        ),
     };
     result
         .expect("the buffer size matches the image size")

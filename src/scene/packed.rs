@@ -161,16 +161,46 @@ macro_rules! layout {
 
 /// Every struct that crosses to the GPU, with the WGSL name of its twin.
 pub const LAYOUTS: &[StructLayout] = &[
-    layout!(GpuGlobals, "Globals", [
-        eye, tan_half_fov, forward, aspect, right, width, up, height, background, ambient,
-        sphere_count, plane_count, light_count, material_count,
-    ]),
+    layout!(
+        GpuGlobals,
+        "Globals",
+        [
+            eye,
+            tan_half_fov,
+            forward,
+            aspect,
+            right,
+            width,
+            up,
+            height,
+            background,
+            ambient,
+            sphere_count,
+            plane_count,
+            light_count,
+            material_count,
+        ]
+    ),
     layout!(GpuSphere, "Sphere", [center, radius, material]),
-    layout!(GpuPlane, "Plane", [
-        point, material, normal, checker_material, tangent, checker_size, bitangent,
-    ]),
+    layout!(
+        GpuPlane,
+        "Plane",
+        [
+            point,
+            material,
+            normal,
+            checker_material,
+            tangent,
+            checker_size,
+            bitangent,
+        ]
+    ),
     layout!(GpuLight, "Light", [position, color]),
-    layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior]),
+    layout!(
+        GpuMaterial,
+        "Material",
+        [color, specular, shininess, reflect, transmit, ior]
+    ),
 ];
 
 /// The scene as the tracers read it.
@@ -197,7 +227,9 @@ impl PackedScene {
             if count >= MAX_TEXEL_INTEGER as usize {
                 return Err(super::SceneError::new(
                     "scene",
-                    format!("{count} {what} is more than the {MAX_TEXEL_INTEGER} a record index can hold"),
+                    format!(
+                        "{count} {what} is more than the {MAX_TEXEL_INTEGER} a record index can hold"
+                    ),
                 ));
             }
         }
@@ -237,7 +269,11 @@ impl PackedScene {
             .iter()
             .map(|p| {
                 // Any axis not parallel to the normal spans the plane with it.
-                let helper = if p.normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+                let helper = if p.normal.x.abs() < 0.9 {
+                    Vec3::X
+                } else {
+                    Vec3::Y
+                };
                 let tangent = helper.cross(p.normal).normalize();
                 let bitangent = p.normal.cross(tangent);
                 let (checker_material, checker_size) = match p.checker {

@@ -1,0 +1,87 @@
+//! Host structs against their WGSL twins, and every shader variant through naga's validator: both
+//! run without an adapter.
+
+use raypipe::gpu::shader::{ShaderConfig, compose};
+use raypipe::gpu::upload::{MemoryMode, TEXELS_PER_ROW, record_arrays};
+use raypipe::render::Accel;
+use raypipe::scene::packed::{LAYOUTS, PackedScene};
+use raypipe::scene::{Scene, builtin};
+
+fn parse(source: &str) -> naga::Module {
+    naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
+}
+
+#[test]
+fn every_host_struct_matches_its_wgsl_twin() {
+    let module = parse(include_str!("../src/gpu/shaders/types.wgsl"));
+    let mut seen = Vec::new();
+    for (_, ty) in module.types.iter() {
+        let (Some(name), naga::TypeInner::Struct { members, span }) = (&ty.name, &ty.inner) else {
+            continue;
+        };
+        let host = LAYOUTS
+            .iter()
+            .find(|l| l.wgsl_name == name)
+            .unwrap_or_else(|| panic!("WGSL struct {name} has no host twin in LAYOUTS"));
+        assert_eq!(
+            *span as usize, host.size,
+            "{name}: WGSL size {span}, Rust size {}",
+            host.size
+        );
+        let wgsl: Vec<(String, usize)> = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap(), m.offset as usize))
+            .collect();
+        let rust: Vec<(String, usize)> = host
+            .members
+            .iter()
+            .map(|(n, o)| (n.to_string(), *o))
+            .collect();
+        assert_eq!(wgsl, rust, "{name}: members (name, offset) differ");
+        seen.push(name.clone());
+    }
+    for layout in LAYOUTS {
+        assert!(
+            seen.iter().any(|s| s == layout.wgsl_name),
+            "{} is missing from types.wgsl",
+            layout.wgsl_name
+        );
+    }
+}
+
+#[test]
+fn every_shader_variant_validates() {
+    let scene = PackedScene::new(&builtin::whitted()).unwrap();
+    let mut empty = Scene::default();
+    empty.lights.clear();
+    let empty = PackedScene::new(&empty).unwrap();
+    for scene in [&scene, &empty] {
+        for memory in [
+            MemoryMode::Uniform,
+            MemoryMode::Storage,
+            MemoryMode::Texture,
+        ] {
+            for max_depth in [0, 5] {
+                let source = compose(&ShaderConfig {
+                    memory,
+                    accel: Accel::Brute,
+                    max_depth,
+                    arrays: &record_arrays(scene),
+                    texels_per_row: TEXELS_PER_ROW,
+                });
+                let module = parse(&source);
+                naga::valid::Validator::new(
+                    naga::valid::ValidationFlags::all(),
+                    naga::valid::Capabilities::empty(),
+                )
+                .validate(&module)
+                .unwrap_or_else(|e| {
+                    panic!(
+                        "{memory:?}, depth {max_depth}: {}",
+                        e.emit_to_string(&source)
+                    )
+                });
+            }
+        }
+    }
+}
