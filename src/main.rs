@@ -5,10 +5,7 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(error) => {
             // One line, whatever the chain of causes: `error: FILE:LINE: what went wrong`.
-            eprintln!(
-                "error: {}",
-                raypipe::gpu::context::one_line(&format!("{error:#}"))
-            );
+            eprintln!("error: {}", raypipe::gpu::context::one_line(&format!("{error:#}")));
             ExitCode::from(2)
         }
     }

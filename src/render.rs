@@ -15,6 +15,14 @@ pub enum Accel {
     /// Every ray against every primitive.
     #[default]
     Brute,
+    /// The linear BVH, walked with a per-pixel stack, nearer child first.
+    Stack,
+}
+
+impl Accel {
+    pub fn uses_bvh(self) -> bool {
+        self != Accel::Brute
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
@@ -34,6 +42,9 @@ pub struct RenderOptions {
     pub accel: Accel,
     /// Show a progress bar for CPU renders (only drawn on a terminal).
     pub progress: bool,
+    /// Draw a frame before the timed one: drivers may compile the pipeline at its first draw
+    /// (llvmpipe does), which would otherwise count as render time.
+    pub warm_up: bool,
 }
 
 pub struct RenderOutcome {
@@ -61,6 +72,9 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
     match ctx {
         Some(ctx) => {
             let renderer = GpuRenderer::new(&ctx, scene, options.memory, options.accel)?;
+            if options.warm_up {
+                renderer.render()?;
+            }
             let start = Instant::now();
             let timed = renderer.render()?;
             Ok(RenderOutcome {
@@ -72,7 +86,7 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
         }
         None => {
             let start = Instant::now();
-            let frame = cpu::render(scene, options.progress);
+            let frame = cpu::render(scene, options.accel, options.progress);
             Ok(RenderOutcome {
                 frame,
                 device: format!("CPU reference ({} threads)", rayon::current_num_threads()),

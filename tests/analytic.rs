@@ -54,7 +54,7 @@ fn check_silhouette_and_depth(frame: &Frame, device: &str) {
 
 #[test]
 fn cpu_sphere_silhouette_and_depth() {
-    check_silhouette_and_depth(&raypipe::cpu::render(&one_sphere(), false), "cpu");
+    check_silhouette_and_depth(&raypipe::cpu::render(&one_sphere(), Accel::Brute, false), "cpu");
 }
 
 #[test]
@@ -67,11 +67,11 @@ fn gpu_sphere_silhouette_and_depth() {
 #[test]
 fn cpu_renders_do_not_depend_on_the_thread_count() {
     let scene = packed("random:300:5", 48, 32, 5);
-    let many = raypipe::cpu::render(&scene, false);
+    let many = raypipe::cpu::render(&scene, Accel::Brute, false);
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap()
-        .install(|| raypipe::cpu::render(&scene, false));
+        .install(|| raypipe::cpu::render(&scene, Accel::Brute, false));
     assert_eq!(many, one);
 }

@@ -5,10 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn raypipe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raypipe"))
-        .args(args)
-        .output()
-        .unwrap()
+    Command::new(env!("CARGO_BIN_EXE_raypipe")).args(args).output().unwrap()
 }
 
 fn temp(name: &str) -> PathBuf {
@@ -31,11 +28,7 @@ fn assert_clean_error(output: &Output, needles: &[&str]) {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(lines.len(), 1, "one error line expected: {stderr}");
     for needle in needles {
-        assert!(
-            lines[0].contains(needle),
-            "{needle:?} not in {:?}",
-            lines[0]
-        );
+        assert!(lines[0].contains(needle), "{needle:?} not in {:?}", lines[0]);
     }
 }
 
@@ -79,18 +72,12 @@ fn a_good_scene_renders_every_output() {
             out.to_str().unwrap(),
             "--stats",
         ]);
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
         let image = raypipe::image::io::read(&out).unwrap();
         assert_eq!((image.width, image.height), (40, 30));
         if aov == "depth" {
             assert_eq!(image.channels, ["Z"]);
-            assert!(
-                image.data.iter().any(|z| z.is_finite()) && image.data.contains(&f32::INFINITY)
-            );
+            assert!(image.data.iter().any(|z| z.is_finite()) && image.data.contains(&f32::INFINITY));
         }
         assert!(String::from_utf8_lossy(&output.stdout).contains("Mrays/s"));
     }
@@ -141,18 +128,12 @@ fn diff_exits_by_threshold_and_writes_a_difference_image() {
 
 #[test]
 fn missing_file() {
-    assert_clean_error(
-        &render_cpu(Path::new("no/such/scene.toml")),
-        &["no/such/scene.toml"],
-    );
+    assert_clean_error(&render_cpu(Path::new("no/such/scene.toml")), &["no/such/scene.toml"]);
 }
 
 #[test]
 fn malformed_toml_names_the_line() {
-    let path = write(
-        "malformed.toml",
-        "[camera]\neye = [0, 1, -6]]\ntarget = [0, 0, 0]\n",
-    );
+    let path = write("malformed.toml", "[camera]\neye = [0, 1, -6]]\ntarget = [0, 0, 0]\n");
     assert_clean_error(&render_cpu(&path), &["malformed.toml:2"]);
 }
 
@@ -174,14 +155,8 @@ fn unknown_material() {
 
 #[test]
 fn negative_and_nan_radius() {
-    let path = write(
-        "negative.toml",
-        &GOOD.replace("radius = 1.0", "radius = -1.0"),
-    );
-    assert_clean_error(
-        &render_cpu(&path),
-        &["negative.toml:11", "sphere 0", "radius"],
-    );
+    let path = write("negative.toml", &GOOD.replace("radius = 1.0", "radius = -1.0"));
+    assert_clean_error(&render_cpu(&path), &["negative.toml:11", "sphere 0", "radius"]);
     let path = write("nan.toml", &GOOD.replace("radius = 1.0", "radius = nan"));
     assert_clean_error(&render_cpu(&path), &["nan.toml:11", "radius"]);
 }
@@ -203,10 +178,7 @@ fn zero_width() {
 
 #[test]
 fn unknown_scene_name() {
-    assert_clean_error(
-        &render_cpu(Path::new("wonderland")),
-        &["wonderland", "whitted"],
-    );
+    assert_clean_error(&render_cpu(Path::new("wonderland")), &["wonderland", "whitted"]);
     assert_clean_error(&render_cpu(Path::new("random:abc")), &["random:abc"]);
 }
 

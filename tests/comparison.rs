@@ -5,9 +5,10 @@ mod common;
 use common::packed;
 use raypipe::image::FloatImage;
 use raypipe::image::diff::{Tolerance, compare};
+use raypipe::render::Accel;
 
 fn reference() -> FloatImage {
-    raypipe::cpu::render(&packed("whitted", 80, 60, 5), false).display()
+    raypipe::cpu::render(&packed("whitted", 80, 60, 5), Accel::Brute, false).display()
 }
 
 #[test]
@@ -66,7 +67,7 @@ fn one_different_pixel_fails_exact_but_not_color() {
 
 #[test]
 fn a_depth_image_with_a_lost_hit_fails() {
-    let depth = raypipe::cpu::render(&packed("whitted", 80, 60, 0), false).depth();
+    let depth = raypipe::cpu::render(&packed("whitted", 80, 60, 0), Accel::Brute, false).depth();
     let mut perturbed = depth.clone();
     let hits: Vec<usize> = (0..perturbed.data.len())
         .filter(|&i| perturbed.data[i].is_finite())

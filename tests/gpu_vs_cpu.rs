@@ -9,15 +9,12 @@ fn check(spec: &str, width: u32, height: u32) {
     let Some(ctx) = gpu() else { return };
     let scene = packed(spec, width, height, 5);
     let gpu_frame = render_gpu(&ctx, &scene, MemoryMode::Storage, Accel::Brute);
-    let cpu_frame = raypipe::cpu::render(&scene, false);
+    let cpu_frame = raypipe::cpu::render(&scene, Accel::Brute, false);
     let name = format!("gpu-vs-cpu-{}", spec.replace(':', "-"));
     assert_frames_match(&name, &gpu_frame, &cpu_frame);
     // The shader counts its rays; on stable scenes the counts agree but for the few divergent pixels.
     let (g, c) = (gpu_frame.rays() as f64, cpu_frame.rays() as f64);
-    assert!(
-        (g - c).abs() <= 0.01 * c,
-        "{spec}: GPU traced {g} rays, CPU {c}"
-    );
+    assert!((g - c).abs() <= 0.01 * c, "{spec}: GPU traced {g} rays, CPU {c}");
 }
 
 #[test]
@@ -64,6 +61,6 @@ fn coincident_spheres() {
     assert_frames_match(
         "gpu-vs-cpu-coincident",
         &gpu_frame,
-        &raypipe::cpu::render(&scene, false),
+        &raypipe::cpu::render(&scene, Accel::Brute, false),
     );
 }

@@ -32,11 +32,7 @@ fn every_host_struct_matches_its_wgsl_twin() {
             .iter()
             .map(|m| (m.name.clone().unwrap(), m.offset as usize))
             .collect();
-        let rust: Vec<(String, usize)> = host
-            .members
-            .iter()
-            .map(|(n, o)| (n.to_string(), *o))
-            .collect();
+        let rust: Vec<(String, usize)> = host.members.iter().map(|(n, o)| (n.to_string(), *o)).collect();
         assert_eq!(wgsl, rust, "{name}: members (name, offset) differ");
         seen.push(name.clone());
     }
@@ -56,31 +52,28 @@ fn every_shader_variant_validates() {
     empty.lights.clear();
     let empty = PackedScene::new(&empty).unwrap();
     for scene in [&scene, &empty] {
-        for memory in [
-            MemoryMode::Uniform,
-            MemoryMode::Storage,
-            MemoryMode::Texture,
-        ] {
-            for max_depth in [0, 5] {
-                let source = compose(&ShaderConfig {
-                    memory,
-                    accel: Accel::Brute,
-                    max_depth,
-                    arrays: &record_arrays(scene),
-                    texels_per_row: TEXELS_PER_ROW,
-                });
-                let module = parse(&source);
-                naga::valid::Validator::new(
-                    naga::valid::ValidationFlags::all(),
-                    naga::valid::Capabilities::empty(),
-                )
-                .validate(&module)
-                .unwrap_or_else(|e| {
-                    panic!(
-                        "{memory:?}, depth {max_depth}: {}",
-                        e.emit_to_string(&source)
-                    )
-                });
+        for memory in [MemoryMode::Uniform, MemoryMode::Storage, MemoryMode::Texture] {
+            for accel in [Accel::Brute, Accel::Stack] {
+                for max_depth in [0, 5] {
+                    let source = compose(&ShaderConfig {
+                        memory,
+                        accel,
+                        max_depth,
+                        bvh_depth: 12,
+                        arrays: &record_arrays(scene, accel),
+                        texels_per_row: TEXELS_PER_ROW,
+                    });
+                    let module = parse(&source);
+                    let flags = naga::valid::ValidationFlags::all();
+                    naga::valid::Validator::new(flags, naga::valid::Capabilities::empty())
+                        .validate(&module)
+                        .unwrap_or_else(|e| {
+                            panic!(
+                                "{memory:?}, {accel:?}, depth {max_depth}: {}",
+                                e.emit_to_string(&source)
+                            )
+                        });
+                }
             }
         }
     }

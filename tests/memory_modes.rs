@@ -14,12 +14,7 @@ fn check(spec: &str) {
         let frame = render_gpu(&ctx, &scene, memory, Accel::Brute);
         let name = format!("memory-{memory:?}-{}", spec.replace(':', "-"));
         // Same shader arithmetic on the same data: equal bit for bit, rays included.
-        assert_images_match(
-            &name,
-            &frame.display(),
-            &storage.display(),
-            Tolerance::EXACT,
-        );
+        assert_images_match(&name, &frame.display(), &storage.display(), Tolerance::EXACT);
         assert_images_match(&name, &frame.depth(), &storage.depth(), Tolerance::EXACT);
         assert_eq!(frame.rays(), storage.rays(), "{name}: ray counts differ");
     }

@@ -26,12 +26,7 @@ pub fn run(args: DiffArgs) -> anyhow::Result<ExitCode> {
     );
     if let Some(out) = &args.out {
         // Full scale at ten times the threshold, so a passing image stays dark.
-        let picture = diff::error_image(
-            &errors,
-            a.width,
-            a.height,
-            (10.0 * args.threshold).max(1e-6),
-        );
+        let picture = diff::error_image(&errors, a.width, a.height, (10.0 * args.threshold).max(1e-6));
         io::write(&picture, out)?;
     }
     if stats.mean > args.threshold {

@@ -16,10 +16,7 @@ pub fn run() -> anyhow::Result<ExitCode> {
                 .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
         };
         println!("{}", describe(&adapter.get_info()));
-        println!(
-            "  max texture 2D:             {}",
-            limits.max_texture_dimension_2d
-        );
+        println!("  max texture 2D:             {}", limits.max_texture_dimension_2d);
         println!(
             "  max uniform binding:        {} bytes",
             limits.max_uniform_buffer_binding_size

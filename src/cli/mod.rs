@@ -8,11 +8,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(
-    name = "raypipe",
-    version,
-    about = "Whitted ray tracing in the fragment shader"
-)]
+#[command(name = "raypipe", version, about = "Whitted ray tracing in the fragment shader")]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -1,3 +1,4 @@
+use crate::bvh::morton::MortonBits;
 use crate::gpu::context::Backend;
 use crate::gpu::upload::MemoryMode;
 use crate::image::io;
@@ -56,12 +57,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         Aov::Depth => "depth.exr".into(),
         _ => "render.png".into(),
     });
-    let is_exr = output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let is_png = output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let is_exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let is_png = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
     if !(is_exr || is_png) {
         bail!("{}: output must end in .png or .exr", output.display());
     }
@@ -77,7 +74,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     settings.width = args.width.unwrap_or(settings.width);
     settings.height = args.height.unwrap_or(settings.height);
     settings.max_depth = args.depth.unwrap_or(settings.max_depth);
-    let packed = PackedScene::new(&scene).with_context(|| args.scene.clone())?;
+    let mut packed = PackedScene::new(&scene).with_context(|| args.scene.clone())?;
+    if args.accel.uses_bvh() {
+        packed.build_bvh(MortonBits::default());
+    }
 
     let options = RenderOptions {
         device: args.device,
@@ -85,6 +85,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         memory: args.memory,
         accel: args.accel,
         progress: std::io::stderr().is_terminal(),
+        warm_up: args.stats,
     };
     let outcome = render(&packed, &options)?;
     let frame = &outcome.frame;

@@ -39,7 +39,11 @@ pub fn v3(a: [f32; 3]) -> Vec3 {
     Vec3::from_array(a)
 }
 
-/// The nearest t in (0, t_max) where the ray meets the sphere, or t_max when there is none.
+/// What `intersect_sphere` and `intersect_box` return for a miss.
+pub const NO_HIT: f32 = -1.0;
+
+/// The nearest t in (0, t_max] where the ray meets the sphere, or [`NO_HIT`]. t_max itself counts, so
+/// that a sphere as near as the best hit so far can still win the tie (see [`closer_sphere`]).
 pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
     let oc = ray.origin - v3(sphere.center);
     let b = oc.dot(ray.dir);
@@ -47,18 +51,24 @@ pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
     let off_axis = oc - b * ray.dir;
     let discriminant = sphere.radius * sphere.radius - off_axis.dot(off_axis);
     if discriminant < 0.0 {
-        return t_max;
+        return NO_HIT;
     }
     let root = discriminant.sqrt();
     let t_near = -b - root;
-    if t_near > 0.0 && t_near < t_max {
+    if t_near > 0.0 && t_near <= t_max {
         return t_near;
     }
     let t_far = -b + root;
-    if t_far > 0.0 && t_far < t_max {
+    if t_far > 0.0 && t_far <= t_max {
         return t_far;
     }
-    t_max
+    NO_HIT
+}
+
+/// Whether sphere `index`, met at t (or [`NO_HIT`]), beats the best hit: nearer, or as near with a
+/// lower index, so that coincident spheres resolve the same whatever order a traversal visits them in.
+pub fn closer_sphere(t: f32, index: u32, best: &Hit) -> bool {
+    t > 0.0 && (t < best.t || (t == best.t && best.kind == HitKind::Sphere && index < best.index))
 }
 
 pub fn intersect_plane(plane: &GpuPlane, ray: &Ray, t_max: f32) -> f32 {
@@ -91,7 +101,5 @@ pub fn closest_plane(planes: &[GpuPlane], ray: &Ray, best: Hit) -> Hit {
 }
 
 pub fn any_plane(planes: &[GpuPlane], ray: &Ray, t_max: f32) -> bool {
-    planes
-        .iter()
-        .any(|plane| intersect_plane(plane, ray, t_max) < t_max)
+    planes.iter().any(|plane| intersect_plane(plane, ray, t_max) < t_max)
 }

@@ -8,6 +8,7 @@ pub mod shade;
 pub mod trace;
 
 use crate::image::Frame;
+use crate::render::Accel;
 use crate::scene::packed::PackedScene;
 use glam::Vec2;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -15,16 +16,18 @@ use rayon::prelude::*;
 use trace::Tracer;
 
 /// Renders every pixel in parallel (rows across rayon's threads); the result does not depend on the
-/// thread count. `progress` shows a bar on a terminal.
-pub fn render(scene: &PackedScene, progress: bool) -> Frame {
+/// thread count. `progress` shows a bar on a terminal. BVH modes need `scene.nodes` built.
+pub fn render(scene: &PackedScene, accel: Accel, progress: bool) -> Frame {
+    assert!(
+        accel == Accel::Brute || scene.spheres.is_empty() || !scene.nodes.is_empty(),
+        "{accel:?} traversal needs the scene's BVH: call PackedScene::build_bvh first"
+    );
     let (width, height) = (scene.width(), scene.height());
     let bar = if progress {
         let bar = ProgressBar::new(height as u64);
         bar.set_style(
-            ProgressStyle::with_template(
-                "{spinner} CPU render {bar:40} {pos}/{len} rows, {eta} left",
-            )
-            .expect("the template is valid"),
+            ProgressStyle::with_template("{spinner} CPU render {bar:40} {pos}/{len} rows, {eta} left")
+                .expect("the template is valid"),
         );
         bar
     } else {
@@ -35,7 +38,7 @@ pub fn render(scene: &PackedScene, progress: bool) -> Frame {
         .map(|j| {
             let row = (0..width)
                 .map(|i| {
-                    let mut tracer = Tracer::new(scene);
+                    let mut tracer = Tracer::new(scene, accel);
                     let ray = tracer.camera_ray(Vec2::new(i as f32 + 0.5, j as f32 + 0.5));
                     tracer.trace_pixel(ray)
                 })
@@ -47,12 +50,7 @@ pub fn render(scene: &PackedScene, progress: bool) -> Frame {
     bar.finish_and_clear();
     let mut frame = Frame::new(width, height);
     for (pixel, trace) in rows.into_iter().flatten().enumerate() {
-        frame.color[pixel] = [
-            trace.color.x,
-            trace.color.y,
-            trace.color.z,
-            trace.rays as f32,
-        ];
+        frame.color[pixel] = [trace.color.x, trace.color.y, trace.color.z, trace.rays as f32];
         frame.surface[pixel] = [
             trace.normal.x,
             trace.normal.y,

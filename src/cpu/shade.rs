@@ -49,13 +49,7 @@ impl Tracer<'_> {
 
     /// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
     /// Phong. `normal` faces the viewer; `view` points from the surface to the viewer.
-    pub fn direct_light(
-        &mut self,
-        surface: &Surface,
-        normal: Vec3,
-        view: Vec3,
-        material: &GpuMaterial,
-    ) -> Vec3 {
+    pub fn direct_light(&mut self, surface: &Surface, normal: Vec3, view: Vec3, material: &GpuMaterial) -> Vec3 {
         let globals = &self.scene.globals;
         let albedo = v3(material.color);
         let mut color = globals.ambient * albedo;

@@ -1,8 +1,9 @@
 //! The Whitted tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
 
-use super::accel::{accel_closest, accel_occluded};
+use super::accel::{brute_closest, brute_occluded, traverse_stack};
 use super::intersect::{Hit, HitKind, Ray, any_plane, closest_plane, v3};
 use super::shade::{fresnel_schlick, offset_origin, reflect};
+use crate::render::Accel;
 use crate::scene::packed::PackedScene;
 use glam::{Vec2, Vec3};
 
@@ -33,14 +34,38 @@ pub struct PixelTrace {
 /// The per-pixel state the shader keeps in private variables.
 pub struct Tracer<'a> {
     pub scene: &'a PackedScene,
+    pub accel: Accel,
     pub ray_count: u32,
 }
 
 impl<'a> Tracer<'a> {
-    pub fn new(scene: &'a PackedScene) -> Self {
+    /// A tracer for one pixel. BVH modes need `scene.nodes` built.
+    pub fn new(scene: &'a PackedScene, accel: Accel) -> Self {
         Self {
             scene,
+            accel,
             ray_count: 0,
+        }
+    }
+
+    /// The acceleration mode's closest sphere hit (the shader's `accel_closest`).
+    fn accel_closest(&self, ray: &Ray, best: Hit) -> Hit {
+        let scene = self.scene;
+        match self.accel {
+            Accel::Brute => brute_closest(&scene.spheres, ray, best),
+            Accel::Stack => traverse_stack(&scene.nodes, &scene.spheres, ray, best, false),
+        }
+    }
+
+    /// The acceleration mode's shadow query (the shader's `accel_occluded`).
+    fn accel_occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        let scene = self.scene;
+        match self.accel {
+            Accel::Brute => brute_occluded(&scene.spheres, ray, t_max),
+            Accel::Stack => {
+                let hit = traverse_stack(&scene.nodes, &scene.spheres, ray, Hit::none(t_max), true);
+                hit.kind != HitKind::None
+            }
         }
     }
 
@@ -50,19 +75,16 @@ impl<'a> Tracer<'a> {
         let x = (2.0 * pixel.x / g.width - 1.0) * g.tan_half_fov * g.aspect;
         let y = (1.0 - 2.0 * pixel.y / g.height) * g.tan_half_fov;
         let dir = (v3(g.forward) + x * v3(g.right) + y * v3(g.up)).normalize();
-        Ray {
-            origin: v3(g.eye),
-            dir,
-        }
+        Ray { origin: v3(g.eye), dir }
     }
 
     pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Hit {
         let planes = closest_plane(&self.scene.planes, ray, Hit::none(t_max));
-        accel_closest(&self.scene.spheres, ray, planes)
+        self.accel_closest(ray, planes)
     }
 
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        any_plane(&self.scene.planes, ray, t_max) || accel_occluded(&self.scene.spheres, ray, t_max)
+        any_plane(&self.scene.planes, ray, t_max) || self.accel_occluded(ray, t_max)
     }
 
     pub fn trace_pixel(&mut self, primary: Ray) -> PixelTrace {
@@ -99,11 +121,7 @@ impl<'a> Tracer<'a> {
             }
             let material = self.scene.materials[surface.material as usize];
             let entering = surface.normal.dot(ray.dir) < 0.0;
-            let normal = if entering {
-                surface.normal
-            } else {
-                -surface.normal
-            };
+            let normal = if entering { surface.normal } else { -surface.normal };
             let view = -ray.dir;
             result.color += task.weight * self.direct_light(&surface, normal, view, &material);
             if task.depth >= max_depth {
@@ -115,11 +133,7 @@ impl<'a> Tracer<'a> {
             let mut transmit_share = material.transmit;
             let mut refracted = Vec3::ZERO;
             if transmit_share > 0.0 {
-                let eta = if entering {
-                    1.0 / material.ior
-                } else {
-                    material.ior
-                };
+                let eta = if entering { 1.0 / material.ior } else { material.ior };
                 let cos_i = view.dot(normal);
                 let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
                 if k < 0.0 {
@@ -128,8 +142,7 @@ impl<'a> Tracer<'a> {
                 } else {
                     let cos_t = k.sqrt();
                     refracted = (eta * ray.dir + (eta * cos_i - cos_t) * normal).normalize();
-                    let fresnel =
-                        fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
+                    let fresnel = fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
                     reflect_share += transmit_share * fresnel;
                     transmit_share *= 1.0 - fresnel;
                 }

@@ -53,10 +53,7 @@ impl GpuContext {
     /// The first adapter wgpu offers on the chosen backends, or `None` when there is none.
     pub fn new(backend: Option<Backend>) -> anyhow::Result<Option<Self>> {
         let found = backend_order(backend).into_iter().find_map(|backends| {
-            pollster::block_on(
-                instance(backends).request_adapter(&wgpu::RequestAdapterOptions::default()),
-            )
-            .ok()
+            pollster::block_on(instance(backends).request_adapter(&wgpu::RequestAdapterOptions::default())).ok()
         });
         let Some(adapter) = found else {
             return Ok(None);
@@ -73,12 +70,7 @@ impl GpuContext {
             required_limits: adapter.limits(),
             ..Default::default()
         }))
-        .with_context(|| {
-            format!(
-                "cannot open a device on adapter {} ({:?})",
-                info.name, info.backend
-            )
-        })?;
+        .with_context(|| format!("cannot open a device on adapter {} ({:?})", info.name, info.backend))?;
         // Errors are caught by error scopes around each operation; anything else is reported, not a panic.
         device.on_uncaptured_error(std::sync::Arc::new(|error| {
             eprintln!(
@@ -115,21 +107,14 @@ impl GpuContext {
     }
 
     /// Runs `f` inside validation and out-of-memory error scopes; a wgpu error becomes an `Err`.
-    pub fn checked<T>(
-        &self,
-        what: &str,
-        f: impl FnOnce() -> anyhow::Result<T>,
-    ) -> anyhow::Result<T> {
+    pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> anyhow::Result<T>) -> anyhow::Result<T> {
         let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let result = f();
         let validation = pollster::block_on(validation.pop());
         let memory = pollster::block_on(memory.pop());
         if let Some(error) = validation.or(memory) {
-            return Err(anyhow!(
-                "{what} failed on the GPU: {}",
-                one_line(&error.to_string())
-            ));
+            return Err(anyhow!("{what} failed on the GPU: {}", one_line(&error.to_string())));
         }
         result
     }

@@ -35,12 +35,7 @@ pub struct TimedFrame {
 }
 
 impl<'a> GpuRenderer<'a> {
-    pub fn new(
-        ctx: &'a GpuContext,
-        scene: &PackedScene,
-        memory: MemoryMode,
-        accel: Accel,
-    ) -> anyhow::Result<Self> {
+    pub fn new(ctx: &'a GpuContext, scene: &PackedScene, memory: MemoryMode, accel: Accel) -> anyhow::Result<Self> {
         let (width, height) = (scene.width(), scene.height());
         let limits = ctx.limits();
         if width > limits.max_texture_dimension_2d || height > limits.max_texture_dimension_2d {
@@ -49,40 +44,34 @@ impl<'a> GpuRenderer<'a> {
                 limits.max_texture_dimension_2d
             );
         }
+        if accel.uses_bvh() && !scene.spheres.is_empty() && scene.nodes.is_empty() {
+            bail!("--accel {accel:?} needs the scene's BVH: build it before rendering");
+        }
         let features = ctx.adapter.get_texture_format_features(TARGET_FORMAT);
-        if !features
-            .allowed_usages
-            .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
-        {
-            bail!(
-                "adapter {} cannot render to rgba32uint targets",
-                ctx.describe()
-            );
+        if !features.allowed_usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT) {
+            bail!("adapter {} cannot render to rgba32uint targets", ctx.describe());
         }
         ctx.checked("uploading the scene and building the pipeline", || {
-            let resources = upload(ctx, scene, memory)?;
-            let globals = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("globals"),
-                    contents: bytemuck::bytes_of(&scene.globals),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
+            let resources = upload(ctx, scene, memory, accel)?;
+            let globals = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("globals"),
+                contents: bytemuck::bytes_of(&scene.globals),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
             let source = compose(&ShaderConfig {
                 memory,
                 accel,
                 max_depth: scene.max_depth,
+                bvh_depth: scene.bvh_depth,
                 arrays: &resources.arrays,
                 texels_per_row: resources.texels_per_row,
             });
             let (pipeline, bind_group) = build_pipeline(ctx, &source, &resources, &globals);
-            let vertices = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("fullscreen triangle"),
-                    contents: bytemuck::cast_slice(&FULLSCREEN_TRIANGLE),
-                    usage: wgpu::BufferUsages::VERTEX,
-                });
+            let vertices = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("fullscreen triangle"),
+                contents: bytemuck::cast_slice(&FULLSCREEN_TRIANGLE),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
             let targets = ["color target", "surface target"].map(|label| {
                 ctx.device.create_texture(&wgpu::TextureDescriptor {
                     label: Some(label),
@@ -115,9 +104,10 @@ impl<'a> GpuRenderer<'a> {
         let ctx = self.ctx;
         ctx.checked("rendering", || {
             let size = self.targets[0].size();
-            let readbacks = self.targets.each_ref().map(|_| {
-                Readback::new(&ctx.device, size.width, size.height, TARGET_BYTES_PER_PIXEL)
-            });
+            let readbacks = self
+                .targets
+                .each_ref()
+                .map(|_| Readback::new(&ctx.device, size.width, size.height, TARGET_BYTES_PER_PIXEL));
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             self.encode_pass(&mut encoder);
             for (readback, target) in readbacks.iter().zip(&self.targets) {
@@ -140,10 +130,7 @@ impl<'a> GpuRenderer<'a> {
     }
 
     fn encode_pass(&self, encoder: &mut wgpu::CommandEncoder) {
-        let views = self
-            .targets
-            .each_ref()
-            .map(|t| t.create_view(&Default::default()));
+        let views = self.targets.each_ref().map(|t| t.create_view(&Default::default()));
         let attachments = views.each_ref().map(|view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,

@@ -13,6 +13,7 @@ const TEXELS: &str = include_str!("shaders/texels.wgsl");
 const FULLSCREEN: &str = include_str!("shaders/fullscreen.wgsl");
 const INTERSECT: &str = include_str!("shaders/intersect.wgsl");
 const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
+const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
 const SHADE: &str = include_str!("shaders/shade.wgsl");
 const TRACE: &str = include_str!("shaders/trace.wgsl");
 
@@ -31,6 +32,8 @@ pub struct ShaderConfig<'a> {
     pub memory: MemoryMode,
     pub accel: Accel,
     pub max_depth: u32,
+    /// Longest root-to-leaf path of the BVH: the traversal stack's size.
+    pub bvh_depth: u32,
     pub arrays: &'a [RecordArray],
     /// Width of the scene textures, in texels.
     pub texels_per_row: u32,
@@ -49,6 +52,7 @@ pub fn compose(config: &ShaderConfig) -> String {
     // Depth-first with two branches keeps at most one waiting sibling per level, plus the pair just pushed.
     writeln!(w, "const RAY_STACK_SIZE: u32 = {}u;", config.max_depth + 1).unwrap();
     writeln!(w, "const TEXELS_PER_ROW: u32 = {}u;", config.texels_per_row).unwrap();
+    writeln!(w, "const BVH_STACK_SIZE: u32 = {}u;", config.bvh_depth.max(1)).unwrap();
     writeln!(w, "@group(0) @binding(0) var<uniform> globals: Globals;").unwrap();
     for array in config.arrays {
         let (name, ty, binding) = (array.name, array.wgsl_type, array.binding);
@@ -59,27 +63,19 @@ pub fn compose(config: &ShaderConfig) -> String {
                     "@group(0) @binding({binding}) var<storage, read> {name}_records: array<{ty}>;"
                 )
                 .unwrap();
-                writeln!(
-                    w,
-                    "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}"
-                )
-                .unwrap();
+                writeln!(w, "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}").unwrap();
             }
             MemoryMode::Uniform => {
                 let capacity = array.capacity.max(1);
-                writeln!(w, "@group(0) @binding({binding}) var<uniform> {name}_records: array<{ty}, {capacity}>;").unwrap();
                 writeln!(
                     w,
-                    "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}"
+                    "@group(0) @binding({binding}) var<uniform> {name}_records: array<{ty}, {capacity}>;"
                 )
                 .unwrap();
+                writeln!(w, "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}").unwrap();
             }
             MemoryMode::Texture => {
-                writeln!(
-                    w,
-                    "@group(0) @binding({binding}) var {name}_texels: texture_2d<f32>;"
-                )
-                .unwrap();
+                writeln!(w, "@group(0) @binding({binding}) var {name}_texels: texture_2d<f32>;").unwrap();
                 let loads: Vec<String> = (0..array.texels)
                     .map(|t| format!("textureLoad({name}_texels, texel_coord(base + {t}u), 0)"))
                     .collect();
@@ -95,6 +91,7 @@ pub fn compose(config: &ShaderConfig) -> String {
     }
     let accel = match config.accel {
         Accel::Brute => ACCEL_BRUTE,
+        Accel::Stack => ACCEL_STACK,
     };
     for part in [TYPES, TEXELS, FULLSCREEN, INTERSECT, accel, SHADE, TRACE] {
         source.push('\n');

@@ -2,6 +2,7 @@
 
 use super::GpuContext;
 use super::shader::RecordArray;
+use crate::render::Accel;
 use crate::scene::packed::{GpuRecord, PackedScene};
 use anyhow::bail;
 use clap::ValueEnum;
@@ -56,6 +57,7 @@ pub fn upload(
     ctx: &GpuContext,
     scene: &PackedScene,
     memory: MemoryMode,
+    accel: Accel,
 ) -> anyhow::Result<SceneResources> {
     let limits = ctx.limits();
     let texels_per_row = TEXELS_PER_ROW.min(limits.max_texture_dimension_2d);
@@ -65,7 +67,7 @@ pub fn upload(
         resources: Vec::new(),
         texels_per_row,
     };
-    for (array, (_, records)) in record_arrays(scene).into_iter().zip(scene_records(scene)) {
+    for (array, (_, records)) in record_arrays(scene, accel).into_iter().zip(scene_records(scene, accel)) {
         let (name, binding) = (array.name, array.binding);
         let (ty, resource) = match memory {
             MemoryMode::Uniform | MemoryMode::Storage => {
@@ -76,22 +78,12 @@ pub fn upload(
                     bytes.resize(records.record_size(), 0);
                 }
                 let (limit, usage) = if uniform {
-                    (
-                        limits.max_uniform_buffer_binding_size,
-                        wgpu::BufferUsages::UNIFORM,
-                    )
+                    (limits.max_uniform_buffer_binding_size, wgpu::BufferUsages::UNIFORM)
                 } else {
-                    (
-                        limits.max_storage_buffer_binding_size,
-                        wgpu::BufferUsages::STORAGE,
-                    )
+                    (limits.max_storage_buffer_binding_size, wgpu::BufferUsages::STORAGE)
                 };
                 if bytes.len() as u64 > limit {
-                    let hint = if uniform {
-                        "; use --memory storage"
-                    } else {
-                        ""
-                    };
+                    let hint = if uniform { "; use --memory storage" } else { "" };
                     bail!(
                         "scene too big for --memory {}: {} {name} records need {} bytes, the adapter allows {limit}{hint}",
                         if uniform { "uniform" } else { "storage" },
@@ -99,13 +91,11 @@ pub fn upload(
                         bytes.len()
                     );
                 }
-                let buffer = ctx
-                    .device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some(name),
-                        contents: &bytes,
-                        usage,
-                    });
+                let buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(name),
+                    contents: &bytes,
+                    usage,
+                });
                 let ty = wgpu::BindingType::Buffer {
                     ty: if uniform {
                         wgpu::BufferBindingType::Uniform
@@ -153,10 +143,7 @@ pub fn upload(
                     view_dimension: wgpu::TextureViewDimension::D2,
                     multisampled: false,
                 };
-                (
-                    ty,
-                    Resource::Texture(texture.create_view(&Default::default())),
-                )
+                (ty, Resource::Texture(texture.create_view(&Default::default())))
             }
         };
         out.layout_entries.push(wgpu::BindGroupLayoutEntry {
@@ -171,19 +158,23 @@ pub fn upload(
     Ok(out)
 }
 
-/// The scene's record arrays in binding order (binding 0 is the globals).
-fn scene_records(scene: &PackedScene) -> [(&'static str, &dyn RecordSlice); 4] {
-    [
+/// The scene's record arrays in binding order (binding 0 is the globals); BVH modes add the nodes.
+fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn RecordSlice)> {
+    let mut records: Vec<(&'static str, &dyn RecordSlice)> = vec![
         ("sphere", &scene.spheres),
         ("plane", &scene.planes),
         ("light", &scene.lights),
         ("material", &scene.materials),
-    ]
+    ];
+    if accel.uses_bvh() {
+        records.push(("node", &scene.nodes));
+    }
+    records
 }
 
 /// What the shader declares for each of the scene's arrays.
-pub fn record_arrays(scene: &PackedScene) -> Vec<RecordArray> {
-    scene_records(scene)
+pub fn record_arrays(scene: &PackedScene, accel: Accel) -> Vec<RecordArray> {
+    scene_records(scene, accel)
         .iter()
         .enumerate()
         .map(|(i, (name, records))| RecordArray {

@@ -32,20 +32,11 @@ impl Tolerance {
     /// direction's rounding error by about distance / radius, so a deep ray may hit a different sphere on
     /// each device: a few pixels may differ a lot (measured: at most 0.25 % at depth 5 on the built-in
     /// sphere clouds), the mean stays tiny (measured: at most 1.5e-4).
-    pub const COLOR: Tolerance = Tolerance {
-        mean: 1e-3,
-        p99: 0.02,
-    };
+    pub const COLOR: Tolerance = Tolerance { mean: 1e-3, p99: 0.02 };
     /// First-hit distance between tracers or devices: relative float rounding, a few edge pixels.
-    pub const DEPTH: Tolerance = Tolerance {
-        mean: 1e-3,
-        p99: 1e-4,
-    };
+    pub const DEPTH: Tolerance = Tolerance { mean: 1e-3, p99: 1e-4 };
     /// Identical up to float rounding: for images of one device in different memory modes.
-    pub const EXACT: Tolerance = Tolerance {
-        mean: 0.0,
-        p99: 0.0,
-    };
+    pub const EXACT: Tolerance = Tolerance { mean: 0.0, p99: 0.0 };
 
     pub fn check(&self, stats: &DiffStats) -> Result<(), String> {
         if stats.mean <= self.mean && stats.p99 <= self.p99 {
@@ -53,13 +44,7 @@ impl Tolerance {
         } else {
             Err(format!(
                 "images differ: mean error {:.3e} (allowed {:.1e}), p99 {:.3e} (allowed {:.1e}), max {:.3e}, {} of {} pixels differ",
-                stats.mean,
-                self.mean,
-                stats.p99,
-                self.p99,
-                stats.max,
-                stats.differing,
-                stats.pixels
+                stats.mean, self.mean, stats.p99, self.p99, stats.max, stats.differing, stats.pixels
             ))
         }
     }

@@ -6,8 +6,7 @@ use exr::prelude::{self as exrs, ReadChannels, ReadLayers, WritableImage};
 use std::path::Path;
 
 fn is_exr(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
 /// Writes a PNG (values in [0, 1], rounded to 8 bits) or, by extension, a float EXR.
@@ -35,10 +34,7 @@ pub fn write_png(image: &FloatImage, path: &Path) -> anyhow::Result<()> {
             image.data.iter().map(|&v| to_byte(v)).collect(),
         )
         .map(|img| img.save(path)),
-        n => bail!(
-            "{}: cannot write a {n}-channel image as PNG",
-            path.display()
-        ),
+        n => bail!("{}: cannot write a {n}-channel image as PNG", path.display()),
     };
     result
         .expect("the buffer size matches the image size")

@@ -24,9 +24,9 @@ pub fn by_name(name: &str) -> anyhow::Result<Option<Scene>> {
     let family = parts.next().unwrap_or_default();
     let params: Vec<&str> = parts.collect();
     let count = |index: usize| -> anyhow::Result<usize> {
-        let text = params.get(index).ok_or_else(|| {
-            anyhow::anyhow!("scene '{name}': {family} needs a count, as in {family}:1000")
-        })?;
+        let text = params
+            .get(index)
+            .ok_or_else(|| anyhow::anyhow!("scene '{name}': {family} needs a count, as in {family}:1000"))?;
         match text.parse::<usize>() {
             Ok(n) if (1..=MAX_COUNT).contains(&n) => Ok(n),
             _ => anyhow::bail!("scene '{name}': count must be an integer in 1..={MAX_COUNT}"),
@@ -63,9 +63,9 @@ pub fn by_name(name: &str) -> anyhow::Result<Option<Scene>> {
         "random" => {
             expect_params(1..=2)?;
             let seed = match params.get(1) {
-                Some(text) => text.parse::<u64>().map_err(|_| {
-                    anyhow::anyhow!("scene '{name}': seed must be an unsigned integer")
-                })?,
+                Some(text) => text
+                    .parse::<u64>()
+                    .map_err(|_| anyhow::anyhow!("scene '{name}': seed must be an unsigned integer"))?,
                 None => 1,
             };
             random(count(0)?, seed)

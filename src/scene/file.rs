@@ -86,8 +86,7 @@ const DEFAULT_MATERIAL: &str = "default";
 
 /// Reads and parses a scene file; every error is one line that starts with the path.
 pub fn load(path: &Path) -> anyhow::Result<Scene> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read scene file", path.display()))?;
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read scene file", path.display()))?;
     parse(&text).map_err(|e| anyhow!("{}:{e}", path.display()))
 }
 
@@ -163,20 +162,19 @@ fn build(def: SceneDef, text: &str) -> Result<Scene, String> {
         });
     }
     // Resolves a material name; an element without one gets the default material, added on first use.
-    let mut resolve =
-        |name: &Option<String>, element: &str, at: Option<usize>| -> Result<u32, String> {
-            let name = name.as_deref().unwrap_or(DEFAULT_MATERIAL);
-            if let Some(&index) = material_index.get(name) {
-                return Ok(index);
-            }
-            if name == DEFAULT_MATERIAL {
-                let index = scene.materials.len() as u32;
-                scene.materials.push(Material::default());
-                material_index.insert(DEFAULT_MATERIAL, index);
-                return Ok(index);
-            }
-            Err(at_line(at, format!("{element}: unknown material '{name}'")))
-        };
+    let mut resolve = |name: &Option<String>, element: &str, at: Option<usize>| -> Result<u32, String> {
+        let name = name.as_deref().unwrap_or(DEFAULT_MATERIAL);
+        if let Some(&index) = material_index.get(name) {
+            return Ok(index);
+        }
+        if name == DEFAULT_MATERIAL {
+            let index = scene.materials.len() as u32;
+            scene.materials.push(Material::default());
+            material_index.insert(DEFAULT_MATERIAL, index);
+            return Ok(index);
+        }
+        Err(at_line(at, format!("{element}: unknown material '{name}'")))
+    };
 
     let mut sphere_lines = Vec::new();
     for (i, s) in def.sphere.iter().enumerate() {
@@ -203,18 +201,12 @@ fn build(def: SceneDef, text: &str) -> Result<Scene, String> {
                 size: r.checker_size.unwrap_or(1.0),
             }),
             (None, Some(_)) => {
-                return Err(at_line(
-                    at,
-                    format!("{element}: checker_size needs checker_material"),
-                ));
+                return Err(at_line(at, format!("{element}: checker_size needs checker_material")));
             }
         };
         let normal = vec3(r.normal);
         if normal.length_squared() == 0.0 || !normal.is_finite() {
-            return Err(at_line(
-                at,
-                format!("{element}: normal must be finite and not zero"),
-            ));
+            return Err(at_line(at, format!("{element}: normal must be finite and not zero")));
         }
         plane_lines.push(at);
         scene.planes.push(Plane {
@@ -227,11 +219,7 @@ fn build(def: SceneDef, text: &str) -> Result<Scene, String> {
 
     // Semantic checks run on the finished scene; map the element they name back to its line.
     scene.validate().map_err(|e| {
-        let index = |prefix: &str| {
-            e.element
-                .strip_prefix(prefix)
-                .and_then(|n| n.parse::<usize>().ok())
-        };
+        let index = |prefix: &str| e.element.strip_prefix(prefix).and_then(|n| n.parse::<usize>().ok());
         let at = if let Some(i) = index("sphere ") {
             sphere_lines.get(i).copied().flatten()
         } else if let Some(i) = index("plane ") {
@@ -260,11 +248,7 @@ mod tests {
     fn minimal_scene_parses_with_defaults() {
         let scene = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\n").unwrap();
         assert_eq!(scene.spheres.len(), 1);
-        assert_eq!(
-            scene.materials.len(),
-            1,
-            "the default material is added on use"
-        );
+        assert_eq!(scene.materials.len(), 1, "the default material is added on use");
     }
 
     #[test]
@@ -276,8 +260,7 @@ mod tests {
         let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\nradus = 2.0\n").unwrap_err();
         assert!(err.starts_with("4: unknown field `radus`"), "{err}");
 
-        let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\nmaterial = \"gold\"\n")
-            .unwrap_err();
+        let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\nmaterial = \"gold\"\n").unwrap_err();
         assert!(err.contains("unknown material 'gold'"), "{err}");
 
         let err = parse("[camera\n").unwrap_err();

@@ -168,10 +168,7 @@ impl Scene {
     pub fn validate(&self) -> Result<(), SceneError> {
         let c = &self.camera;
         if !(finite_vec(c.eye) && finite_vec(c.target) && finite_vec(c.up)) {
-            return Err(SceneError::new(
-                "camera",
-                "eye, target and up must be finite",
-            ));
+            return Err(SceneError::new("camera", "eye, target and up must be finite"));
         }
         let forward = c.target - c.eye;
         if forward.length_squared() == 0.0 {
@@ -228,10 +225,7 @@ impl Scene {
         for (i, p) in self.planes.iter().enumerate() {
             let element = || format!("plane {i}");
             if !(finite_vec(p.point) && finite_vec(p.normal)) {
-                return Err(SceneError::new(
-                    element(),
-                    "point and normal must be finite",
-                ));
+                return Err(SceneError::new(element(), "point and normal must be finite"));
             }
             if (p.normal.length() - 1.0).abs() > 1e-4 {
                 return Err(SceneError::new(element(), "normal must have unit length"));
@@ -242,10 +236,7 @@ impl Scene {
                 if !(checker.size > 0.0 && checker.size.is_finite()) {
                     return Err(SceneError::new(
                         element(),
-                        format!(
-                            "checker size must be positive and finite (got {})",
-                            checker.size
-                        ),
+                        format!("checker size must be positive and finite (got {})", checker.size),
                     ));
                 }
             }
@@ -272,20 +263,14 @@ impl RenderSettings {
         if self.max_depth > MAX_DEPTH_LIMIT {
             return Err(SceneError::new(
                 "render",
-                format!(
-                    "max_depth must be at most {MAX_DEPTH_LIMIT} (got {})",
-                    self.max_depth
-                ),
+                format!("max_depth must be at most {MAX_DEPTH_LIMIT} (got {})", self.max_depth),
             ));
         }
         if !finite_vec(self.background) {
             return Err(SceneError::new("render", "background must be finite"));
         }
         if !(self.ambient.is_finite() && self.ambient >= 0.0) {
-            return Err(SceneError::new(
-                "render",
-                "ambient must be finite and not negative",
-            ));
+            return Err(SceneError::new("render", "ambient must be finite and not negative"));
         }
         Ok(())
     }
@@ -302,9 +287,7 @@ fn validate_material(m: &Material) -> Result<(), String> {
         ("transmit", m.transmit),
     ] {
         if !(value.is_finite() && value >= 0.0) {
-            return Err(format!(
-                "{name} must be finite and not negative (got {value})"
-            ));
+            return Err(format!("{name} must be finite and not negative (got {value})"));
         }
     }
     if m.reflect > 1.0 || m.transmit > 1.0 {

@@ -6,6 +6,10 @@
 //! Fields named `_pad*` are padding the WGSL struct gets implicitly.
 
 use super::Scene;
+use crate::bvh::aabb::Aabb;
+use crate::bvh::layout::GpuNode;
+use crate::bvh::morton::MortonBits;
+use crate::bvh::{BuildTimings, Bvh};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -141,6 +145,22 @@ impl GpuRecord for GpuMaterial {
     }
 }
 
+/// Links travel as exact floats, with `NONE` and `LEAF` (u32::MAX) as -1.
+fn link_texel(link: u32) -> f32 {
+    if link == u32::MAX { -1.0 } else { link as f32 }
+}
+
+impl GpuRecord for GpuNode {
+    const WGSL_TYPE: &'static str = "BvhNode";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        let [ax, ay, az] = self.min;
+        let [bx, by, bz] = self.max;
+        out.push([ax, ay, az, link_texel(self.left)]);
+        out.push([bx, by, bz, link_texel(self.right)]);
+        out.push([link_texel(self.parent), link_texel(self.escape), 0.0, 0.0]);
+    }
+}
+
 /// One host struct's layout, for the naga layout test.
 pub struct StructLayout {
     pub wgsl_name: &'static str,
@@ -160,47 +180,17 @@ macro_rules! layout {
 }
 
 /// Every struct that crosses to the GPU, with the WGSL name of its twin.
+#[rustfmt::skip]
 pub const LAYOUTS: &[StructLayout] = &[
-    layout!(
-        GpuGlobals,
-        "Globals",
-        [
-            eye,
-            tan_half_fov,
-            forward,
-            aspect,
-            right,
-            width,
-            up,
-            height,
-            background,
-            ambient,
-            sphere_count,
-            plane_count,
-            light_count,
-            material_count,
-        ]
-    ),
+    layout!(GpuGlobals, "Globals", [
+        eye, tan_half_fov, forward, aspect, right, width, up, height, background, ambient,
+        sphere_count, plane_count, light_count, material_count,
+    ]),
     layout!(GpuSphere, "Sphere", [center, radius, material]),
-    layout!(
-        GpuPlane,
-        "Plane",
-        [
-            point,
-            material,
-            normal,
-            checker_material,
-            tangent,
-            checker_size,
-            bitangent,
-        ]
-    ),
+    layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
     layout!(GpuLight, "Light", [position, color]),
-    layout!(
-        GpuMaterial,
-        "Material",
-        [color, specular, shininess, reflect, transmit, ior]
-    ),
+    layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior]),
+    layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
 ];
 
 /// The scene as the tracers read it.
@@ -212,6 +202,10 @@ pub struct PackedScene {
     pub planes: Vec<GpuPlane>,
     pub lights: Vec<GpuLight>,
     pub materials: Vec<GpuMaterial>,
+    /// The BVH over `spheres`, once [`PackedScene::build_bvh`] ran; empty otherwise.
+    pub nodes: Vec<GpuNode>,
+    /// Longest root-to-leaf path of `nodes`, in edges: the traversal stack's size.
+    pub bvh_depth: u32,
 }
 
 impl PackedScene {
@@ -227,9 +221,7 @@ impl PackedScene {
             if count >= MAX_TEXEL_INTEGER as usize {
                 return Err(super::SceneError::new(
                     "scene",
-                    format!(
-                        "{count} {what} is more than the {MAX_TEXEL_INTEGER} a record index can hold"
-                    ),
+                    format!("{count} {what} is more than the {MAX_TEXEL_INTEGER} a record index can hold"),
                 ));
             }
         }
@@ -269,11 +261,7 @@ impl PackedScene {
             .iter()
             .map(|p| {
                 // Any axis not parallel to the normal spans the plane with it.
-                let helper = if p.normal.x.abs() < 0.9 {
-                    Vec3::X
-                } else {
-                    Vec3::Y
-                };
+                let helper = if p.normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
                 let tangent = helper.cross(p.normal).normalize();
                 let bitangent = p.normal.cross(tangent);
                 let (checker_material, checker_size) = match p.checker {
@@ -321,7 +309,29 @@ impl PackedScene {
             planes,
             lights,
             materials,
+            nodes: Vec::new(),
+            bvh_depth: 0,
         })
+    }
+
+    pub fn sphere_boxes(&self) -> Vec<Aabb> {
+        self.spheres
+            .iter()
+            .map(|s| Aabb::around_sphere(glam::Vec3::from_array(s.center), s.radius))
+            .collect()
+    }
+
+    /// Builds the linear BVH over the spheres on the CPU.
+    pub fn build_bvh(&mut self, bits: MortonBits) -> BuildTimings {
+        let (bvh, timings) = Bvh::build_lbvh(&self.sphere_boxes(), bits);
+        self.set_bvh(bvh);
+        timings
+    }
+
+    pub fn set_bvh(&mut self, bvh: Bvh) {
+        assert_eq!(bvh.primitive_count, self.spheres.len());
+        self.bvh_depth = bvh.max_depth();
+        self.nodes = bvh.nodes;
     }
 
     pub fn width(&self) -> u32 {

@@ -20,9 +20,7 @@ pub fn gpu() -> Option<GpuContext> {
             std::env::var("RAYPIPE_REQUIRE_GPU").as_deref() != Ok("1"),
             "RAYPIPE_REQUIRE_GPU=1 but no GPU adapter was found (install mesa-vulkan-drivers)"
         );
-        eprintln!(
-            "SKIPPED: no GPU adapter found; set RAYPIPE_REQUIRE_GPU=1 to make this a failure"
-        );
+        eprintln!("SKIPPED: no GPU adapter found; set RAYPIPE_REQUIRE_GPU=1 to make this a failure");
     }
     ctx
 }
@@ -36,12 +34,7 @@ pub fn packed(spec: &str, width: u32, height: u32, max_depth: u32) -> PackedScen
     PackedScene::new(&scene).unwrap()
 }
 
-pub fn render_gpu(
-    ctx: &GpuContext,
-    scene: &PackedScene,
-    memory: MemoryMode,
-    accel: Accel,
-) -> Frame {
+pub fn render_gpu(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode, accel: Accel) -> Frame {
     GpuRenderer::new(ctx, scene, memory, accel)
         .and_then(|r| r.render())
         .unwrap_or_else(|e| panic!("GPU render failed on {}: {e:#}", ctx.describe()))
@@ -56,22 +49,16 @@ fn output_dir() -> PathBuf {
 
 /// Asserts that `actual` matches `expected` within `tolerance`. On failure writes
 /// `NAME-expected.*`, `NAME-actual.*` and `NAME-difference.png` and names them in the panic.
-pub fn assert_images_match(
-    name: &str,
-    actual: &FloatImage,
-    expected: &FloatImage,
-    tolerance: Tolerance,
-) {
+pub fn assert_images_match(name: &str, actual: &FloatImage, expected: &FloatImage, tolerance: Tolerance) {
     let errors = diff::pixel_errors(actual, expected).unwrap();
     let stats = diff::stats(&errors);
     if let Err(message) = tolerance.check(&stats) {
         let dir = output_dir();
-        let ext =
-            if actual.channels.len() == 3 && actual.data.iter().all(|v| (0.0..=1.0).contains(v)) {
-                "png"
-            } else {
-                "exr"
-            };
+        let ext = if actual.channels.len() == 3 && actual.data.iter().all(|v| (0.0..=1.0).contains(v)) {
+            "png"
+        } else {
+            "exr"
+        };
         io::write(actual, &dir.join(format!("{name}-actual.{ext}"))).unwrap();
         io::write(expected, &dir.join(format!("{name}-expected.{ext}"))).unwrap();
         let picture = diff::error_image(&errors, actual.width, actual.height, 0.1);

@@ -5,7 +5,7 @@ fn accel_closest(ray: Ray, best: Hit) -> Hit {
     var hit = best;
     for (var i = 0u; i < globals.sphere_count; i++) {
         let t = intersect_sphere(load_sphere(i), ray, hit.t);
-        if (t < hit.t) {
+        if (closer_sphere(t, i, hit)) {
             hit = Hit(t, HIT_SPHERE, i);
         }
     }
@@ -14,7 +14,8 @@ fn accel_closest(ray: Ray, best: Hit) -> Hit {
 
 fn accel_occluded(ray: Ray, t_max: f32) -> bool {
     for (var i = 0u; i < globals.sphere_count; i++) {
-        if (intersect_sphere(load_sphere(i), ray, t_max) < t_max) {
+        let t = intersect_sphere(load_sphere(i), ray, t_max);
+        if (t > 0.0 && t < t_max) {
             return true;
         }
     }

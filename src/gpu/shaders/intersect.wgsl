@@ -17,7 +17,11 @@ struct Hit {
     index: u32,
 }
 
-// The nearest t in (0, t_max) where the ray meets the sphere, or t_max when there is none.
+// What intersect_sphere and intersect_box return for a miss.
+const NO_HIT: f32 = -1.0;
+
+// The nearest t in (0, t_max] where the ray meets the sphere, or NO_HIT. t_max itself counts, so that
+// a sphere as near as the best hit so far can still win the tie (see closer_sphere).
 fn intersect_sphere(sphere: Sphere, ray: Ray, t_max: f32) -> f32 {
     let oc = ray.origin - sphere.center;
     let b = dot(oc, ray.dir);
@@ -25,18 +29,24 @@ fn intersect_sphere(sphere: Sphere, ray: Ray, t_max: f32) -> f32 {
     let off_axis = oc - b * ray.dir;
     let discriminant = sphere.radius * sphere.radius - dot(off_axis, off_axis);
     if (discriminant < 0.0) {
-        return t_max;
+        return NO_HIT;
     }
     let root = sqrt(discriminant);
     let t_near = -b - root;
-    if (t_near > 0.0 && t_near < t_max) {
+    if (t_near > 0.0 && t_near <= t_max) {
         return t_near;
     }
     let t_far = -b + root;
-    if (t_far > 0.0 && t_far < t_max) {
+    if (t_far > 0.0 && t_far <= t_max) {
         return t_far;
     }
-    return t_max;
+    return NO_HIT;
+}
+
+// Whether sphere `index`, met at t (or NO_HIT), beats the best hit: nearer, or as near with a lower
+// index, so that coincident spheres resolve the same whatever order a traversal visits them in.
+fn closer_sphere(t: f32, index: u32, best: Hit) -> bool {
+    return t > 0.0 && (t < best.t || (t == best.t && best.kind == HIT_SPHERE && index < best.index));
 }
 
 fn intersect_plane(plane: Plane, ray: Ray, t_max: f32) -> f32 {

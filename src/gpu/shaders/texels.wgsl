@@ -20,3 +20,12 @@ fn light_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Light {
 fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Material {
     return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w);
 }
+
+// Node links travel as exact floats, with NONE and LEAF as -1.
+fn link_from_texel(value: f32) -> u32 {
+    return select(u32(value), NONE, value < 0.0);
+}
+
+fn node_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> BvhNode {
+    return BvhNode(t0.xyz, link_from_texel(t0.w), t1.xyz, link_from_texel(t1.w), link_from_texel(t2.x), link_from_texel(t2.y));
+}

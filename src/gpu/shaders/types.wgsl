@@ -47,3 +47,20 @@ struct Material {
     transmit: f32,
     ior: f32,
 }
+
+// A BVH node (src/bvh/layout.rs): internal nodes first, then leaves; the root is node 0.
+struct BvhNode {
+    min: vec3<f32>,
+    // Internal: left child. Leaf: primitive.
+    left: u32,
+    max: vec3<f32>,
+    // Internal: right child. Leaf: LEAF.
+    right: u32,
+    // NONE for the root.
+    parent: u32,
+    // The next node after this subtree in depth-first order; NONE at the end.
+    escape: u32,
+}
+
+const LEAF: u32 = 0xffffffffu;
+const NONE: u32 = 0xffffffffu;

@@ -1,0 +1,54 @@
+//! Axis-aligned bounding boxes.
+
+use glam::Vec3;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The box that contains nothing: the identity of `union`.
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    pub fn new(min: Vec3, max: Vec3) -> Self {
+        Self { min, max }
+    }
+
+    pub fn around_sphere(center: Vec3, radius: f32) -> Self {
+        Self::new(center - Vec3::splat(radius), center + Vec3::splat(radius))
+    }
+
+    /// Exact: min and max never round, so unions agree bit for bit on every device in any order.
+    pub fn union(self, other: Aabb) -> Aabb {
+        Aabb::new(self.min.min(other.min), self.max.max(other.max))
+    }
+
+    pub fn grow(self, point: Vec3) -> Aabb {
+        Aabb::new(self.min.min(point), self.max.max(point))
+    }
+
+    pub fn centroid(self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    pub fn surface_area(self) -> f32 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let e = self.max - self.min;
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+
+    pub fn contains(self, other: Aabb) -> bool {
+        self.min.cmple(other.min).all() && self.max.cmpge(other.max).all()
+    }
+}

@@ -1,0 +1,116 @@
+//! Morton codes: primitive centroids quantized in the scene's centroid bounds, their bits interleaved
+//! (x highest), so that sorting by code orders primitives along a Z-order curve.
+
+use super::aabb::Aabb;
+use clap::ValueEnum;
+use glam::Vec3;
+use rayon::prelude::*;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum MortonBits {
+    /// 10 bits per axis, in the low 30 bits.
+    #[default]
+    #[value(name = "30")]
+    Bits30,
+    /// 21 bits per axis, in the low 63 bits.
+    #[value(name = "63")]
+    Bits63,
+}
+
+impl MortonBits {
+    pub fn bits_per_axis(self) -> u32 {
+        match self {
+            MortonBits::Bits30 => 10,
+            MortonBits::Bits63 => 21,
+        }
+    }
+
+    pub fn total_bits(self) -> u32 {
+        3 * self.bits_per_axis()
+    }
+}
+
+/// Spreads the low 10 bits of `v` so that two zero bits separate each.
+pub fn spread_bits_10(v: u32) -> u32 {
+    let mut x = v & 0x3ff;
+    x = (x | (x << 16)) & 0x0300_00ff;
+    x = (x | (x << 8)) & 0x0300_f00f;
+    x = (x | (x << 4)) & 0x030c_30c3;
+    x = (x | (x << 2)) & 0x0924_9249;
+    x
+}
+
+/// Spreads the low 21 bits of `v` so that two zero bits separate each.
+pub fn spread_bits_21(v: u64) -> u64 {
+    let mut x = v & 0x1f_ffff;
+    x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
+    x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
+    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
+    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
+    x
+}
+
+/// The grid cell of `value` along one axis: `cells` cells over [lo, lo + extent]. The GPU computes
+/// the same expression (`lbvh_morton.wgsl`); a fused multiply-add there can move a centroid that lies
+/// within one rounding of a cell boundary into the neighbouring cell, which changes the tree but not
+/// its validity.
+pub fn quantize(value: f32, lo: f32, scale: f32, cells: u32) -> u32 {
+    let cell = ((value - lo) * scale).floor();
+    cell.clamp(0.0, (cells - 1) as f32) as u32
+}
+
+/// Per-axis scale that maps the bounds' extent to `cells` cells; a flat axis maps to cell 0.
+pub fn scales(bounds: Aabb, cells: u32) -> Vec3 {
+    let extent = bounds.max - bounds.min;
+    Vec3::select(extent.cmpgt(Vec3::ZERO), Vec3::splat(cells as f32) / extent, Vec3::ZERO)
+}
+
+pub fn morton_code(centroid: Vec3, bounds: Aabb, scale: Vec3, bits: MortonBits) -> u64 {
+    let cells = 1u32 << bits.bits_per_axis();
+    let q = |axis: usize| quantize(centroid[axis], bounds.min[axis], scale[axis], cells);
+    match bits {
+        MortonBits::Bits30 => ((spread_bits_10(q(0)) << 2) | (spread_bits_10(q(1)) << 1) | spread_bits_10(q(2))) as u64,
+        MortonBits::Bits63 => {
+            (spread_bits_21(q(0) as u64) << 2) | (spread_bits_21(q(1) as u64) << 1) | spread_bits_21(q(2) as u64)
+        }
+    }
+}
+
+/// Codes of every centroid, in parallel; `bounds` are the centroids' bounds.
+pub fn morton_codes(centroids: &[Vec3], bounds: Aabb, bits: MortonBits) -> Vec<u64> {
+    let scale = scales(bounds, 1 << bits.bits_per_axis());
+    centroids
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&c| morton_code(c, bounds, scale, bits))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spreading_interleaves() {
+        assert_eq!(spread_bits_10(0b111), 0b1001001);
+        assert_eq!(spread_bits_10(0x3ff), 0x0924_9249);
+        assert_eq!(spread_bits_21(0x1f_ffff), 0x1249_2492_4924_9249);
+        for v in [0u32, 1, 5, 0x155, 0x3ff] {
+            assert_eq!(spread_bits_21(v as u64), spread_bits_10(v) as u64);
+        }
+    }
+
+    #[test]
+    fn corners_get_extreme_codes() {
+        let bounds = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let codes = morton_codes(
+            &[Vec3::ZERO, Vec3::ONE, Vec3::new(1.0, 0.0, 0.0)],
+            bounds,
+            MortonBits::Bits30,
+        );
+        assert_eq!(codes[0], 0);
+        assert_eq!(codes[1], (1 << 30) - 1);
+        assert_eq!(codes[2], 0x0924_9249 << 2);
+    }
+}

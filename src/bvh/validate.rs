@@ -1,0 +1,105 @@
+//! Structural checks of a BVH: what every traversal relies on.
+
+use super::aabb::Aabb;
+use super::layout::NONE;
+use super::{Bvh, node_box};
+
+impl Bvh {
+    /// Checks that every primitive is in exactly one leaf, that parent and child links agree, that
+    /// every internal box is exactly the union of its children's and every leaf box contains its
+    /// primitive's (`primitive_boxes`), and that escape links follow depth-first order (left child
+    /// first). Returns the first violation found.
+    pub fn validate(&self, primitive_boxes: &[Aabb]) -> Result<(), String> {
+        let n = self.primitive_count;
+        if primitive_boxes.len() != n {
+            return Err(format!("{} primitive boxes for {n} primitives", primitive_boxes.len()));
+        }
+        if n == 0 {
+            return if self.nodes.is_empty() {
+                Ok(())
+            } else {
+                Err("nodes without primitives".into())
+            };
+        }
+        if self.nodes.len() != 2 * n - 1 {
+            return Err(format!(
+                "{} nodes for {n} primitives, expected {}",
+                self.nodes.len(),
+                2 * n - 1
+            ));
+        }
+        if self.nodes[0].parent != NONE {
+            return Err("the root has a parent".into());
+        }
+        let mut seen = vec![false; n];
+        let mut is_child = vec![false; self.nodes.len()];
+        for (i, node) in self.nodes.iter().enumerate() {
+            let b = node_box(node);
+            if node.is_leaf() {
+                let p = node.left as usize;
+                if p >= n {
+                    return Err(format!("leaf {i} names primitive {p} of {n}"));
+                }
+                if std::mem::replace(&mut seen[p], true) {
+                    return Err(format!("primitive {p} is in two leaves"));
+                }
+                if !b.contains(primitive_boxes[p]) {
+                    return Err(format!("leaf {i} does not contain primitive {p}"));
+                }
+                continue;
+            }
+            let mut union = Aabb::EMPTY;
+            for child in [node.left, node.right] {
+                let c = child as usize;
+                if c >= self.nodes.len() || c == 0 {
+                    return Err(format!("node {i} has child {child}"));
+                }
+                if std::mem::replace(&mut is_child[c], true) {
+                    return Err(format!("node {c} has two parents"));
+                }
+                if self.nodes[c].parent != i as u32 {
+                    return Err(format!(
+                        "node {c} is a child of {i} but names parent {}",
+                        self.nodes[c].parent
+                    ));
+                }
+                union = union.union(node_box(&self.nodes[c]));
+            }
+            if union != b {
+                return Err(format!(
+                    "node {i}'s box {b:?} is not the union of its children's {union:?}"
+                ));
+            }
+        }
+        if let Some(p) = seen.iter().position(|&s| !s) {
+            return Err(format!("primitive {p} is in no leaf"));
+        }
+        if let Some(c) = (1..self.nodes.len()).find(|&c| !is_child[c]) {
+            return Err(format!("node {c} is unreachable"));
+        }
+        // Depth-first order, left child first; each node's escape is the next node after its subtree.
+        let mut order = Vec::with_capacity(self.nodes.len());
+        let mut subtree_end = vec![0usize; self.nodes.len()];
+        let mut stack = vec![(0u32, false)];
+        while let Some((node, done)) = stack.pop() {
+            let i = node as usize;
+            if done {
+                subtree_end[i] = order.len();
+                continue;
+            }
+            order.push(node);
+            stack.push((node, true));
+            if !self.nodes[i].is_leaf() {
+                stack.push((self.nodes[i].right, false));
+                stack.push((self.nodes[i].left, false));
+            }
+        }
+        for (i, node) in self.nodes.iter().enumerate() {
+            let expected = order.get(subtree_end[i]).copied().unwrap_or(NONE);
+            if node.escape != expected {
+                return Err(format!("node {i} escapes to {} instead of {expected}", node.escape));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,97 @@
+// BVH traversal with a per-pixel stack (the paper's local array), sized to the tree's depth, nearer
+// child first. Mirrored by src/cpu/accel.rs.
+
+// 1 / dir, with near-zero components replaced so the slab test never computes 0 * inf.
+fn safe_inverse(dir: vec3<f32>) -> vec3<f32> {
+    return 1.0 / select(dir, vec3<f32>(1e-20), abs(dir) < vec3<f32>(1e-20));
+}
+
+// Where the ray enters the box (0 if it starts inside), if it does so by t_max; else NO_HIT.
+fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    let t_enter = max(max(near.x, near.y), max(near.z, 0.0));
+    let t_exit = min(min(far.x, far.y), min(far.z, t_max));
+    if (t_enter <= t_exit) {
+        return t_enter;
+    }
+    return NO_HIT;
+}
+
+// The closest sphere hit that beats `best`; with `shadow`, the first hit nearer than best.t.
+fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
+    var hit = best;
+    if (globals.sphere_count == 0u) {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    var node = load_node(0u);
+    if (intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) < 0.0) {
+        return hit;
+    }
+    // Nodes waiting to be visited, with the distance where the ray enters them.
+    var stack: array<u32, BVH_STACK_SIZE>;
+    var stack_t: array<f32, BVH_STACK_SIZE>;
+    var size = 0u;
+    loop {
+        if (node.right == LEAF) {
+            let t = intersect_sphere(load_sphere(node.left), ray, hit.t);
+            if (closer_sphere(t, node.left, hit)) {
+                hit = Hit(t, HIT_SPHERE, node.left);
+                if (shadow) {
+                    return hit;
+                }
+            }
+        } else {
+            let left = load_node(node.left);
+            let right = load_node(node.right);
+            let t_left = intersect_box(left.min, left.max, ray.origin, inv_dir, hit.t);
+            let t_right = intersect_box(right.min, right.max, ray.origin, inv_dir, hit.t);
+            if (t_left >= 0.0 && t_right >= 0.0) {
+                // Both: go to the nearer (left on a tie), the other waits.
+                if (t_right < t_left) {
+                    stack[size] = node.left;
+                    stack_t[size] = t_left;
+                    node = right;
+                } else {
+                    stack[size] = node.right;
+                    stack_t[size] = t_right;
+                    node = left;
+                }
+                size += 1u;
+                continue;
+            }
+            if (t_left >= 0.0) {
+                node = left;
+                continue;
+            }
+            if (t_right >= 0.0) {
+                node = right;
+                continue;
+            }
+        }
+        // Resume at the next waiting node that the ray enters no farther than the best hit.
+        var resumed = false;
+        while (size > 0u && !resumed) {
+            size -= 1u;
+            if (stack_t[size] <= hit.t) {
+                node = load_node(stack[size]);
+                resumed = true;
+            }
+        }
+        if (!resumed) {
+            break;
+        }
+    }
+    return hit;
+}
+
+fn accel_closest(ray: Ray, best: Hit) -> Hit {
+    return traverse_stack(ray, best, false);
+}
+
+fn accel_occluded(ray: Ray, t_max: f32) -> bool {
+    return traverse_stack(ray, Hit(t_max, HIT_NONE, 0u), true).kind != HIT_NONE;
+}
