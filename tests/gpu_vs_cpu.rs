@@ -1,20 +1,40 @@
-//! The fragment shader against the CPU reference, on every built-in scene, at full depth.
+//! The fragment shader against the CPU reference, on every built-in scene, at full depth, in every
+//! acceleration mode; and every BVH mode against brute force on both devices.
 
 mod common;
 use common::*;
+use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::upload::MemoryMode;
 use raypipe::render::Accel;
+use raypipe::scene::packed::PackedScene;
+
+const BVH_MODES: [Accel; 1] = [Accel::Stack];
 
 fn check(spec: &str, width: u32, height: u32) {
+    let mut scene = packed(spec, width, height, 5);
+    scene.build_bvh(MortonBits::Bits30);
+    check_scene(&spec.replace(':', "-"), &scene);
+}
+
+fn check_scene(name: &str, scene: &PackedScene) {
+    // The CPU needs no adapter: its BVH modes are checked against brute force everywhere.
+    let cpu_brute = raypipe::cpu::render(scene, Accel::Brute, false);
+    for accel in BVH_MODES {
+        let cpu = raypipe::cpu::render(scene, accel, false);
+        assert_frames_match(&format!("cpu-{accel:?}-vs-brute-{name}"), &cpu, &cpu_brute);
+    }
     let Some(ctx) = gpu() else { return };
-    let scene = packed(spec, width, height, 5);
-    let gpu_frame = render_gpu(&ctx, &scene, MemoryMode::Storage, Accel::Brute);
-    let cpu_frame = raypipe::cpu::render(&scene, Accel::Brute, false);
-    let name = format!("gpu-vs-cpu-{}", spec.replace(':', "-"));
-    assert_frames_match(&name, &gpu_frame, &cpu_frame);
-    // The shader counts its rays; on stable scenes the counts agree but for the few divergent pixels.
-    let (g, c) = (gpu_frame.rays() as f64, cpu_frame.rays() as f64);
-    assert!((g - c).abs() <= 0.01 * c, "{spec}: GPU traced {g} rays, CPU {c}");
+    let gpu_brute = render_gpu(&ctx, scene, MemoryMode::Storage, Accel::Brute);
+    assert_frames_match(&format!("gpu-vs-cpu-{name}"), &gpu_brute, &cpu_brute);
+    // The shader counts its rays; they agree but for the few pixels where devices diverge.
+    let (g, c) = (gpu_brute.rays() as f64, cpu_brute.rays() as f64);
+    assert!((g - c).abs() <= 0.01 * c, "{name}: GPU traced {g} rays, CPU {c}");
+    for accel in BVH_MODES {
+        let gpu = render_gpu(&ctx, scene, MemoryMode::Storage, accel);
+        assert_frames_match(&format!("gpu-{accel:?}-vs-brute-{name}"), &gpu, &gpu_brute);
+        let cpu = raypipe::cpu::render(scene, accel, false);
+        assert_frames_match(&format!("gpu-vs-cpu-{accel:?}-{name}"), &gpu, &cpu);
+    }
 }
 
 #[test]
@@ -44,8 +64,23 @@ fn odd_image_sizes_read_back_whole_rows() {
 }
 
 #[test]
+fn random_spheres_with_duplicates() {
+    // A tenth of the spheres twice, the copy in another material: ties resolve by index everywhere.
+    let mut scene = raypipe::scene::builtin::random(1500, 4);
+    for i in 0..150 {
+        let mut copy = scene.spheres[i * 10];
+        copy.material = 2 + (copy.material - 2 + 1) % 6;
+        scene.spheres.push(copy);
+    }
+    scene.settings.width = 64;
+    scene.settings.height = 48;
+    let mut scene = PackedScene::new(&scene).unwrap();
+    scene.build_bvh(MortonBits::Bits30);
+    check_scene("random-duplicates", &scene);
+}
+
+#[test]
 fn coincident_spheres() {
-    let Some(ctx) = gpu() else { return };
     let text = "[camera]\neye = [0, 0.5, -4]\ntarget = [0, 0, 0]\n[material.glass]\ntransmit = 0.9\nior = 1.5\n\
         [material.red]\ncolor = [0.9, 0.1, 0.1]\n[[light]]\nposition = [3, 5, -4]\n\
         [[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"glass\"\n\
@@ -56,11 +91,7 @@ fn coincident_spheres() {
     let mut scene = raypipe::scene::file::parse(text).unwrap();
     scene.settings.width = 64;
     scene.settings.height = 48;
-    let scene = raypipe::scene::packed::PackedScene::new(&scene).unwrap();
-    let gpu_frame = render_gpu(&ctx, &scene, MemoryMode::Storage, Accel::Brute);
-    assert_frames_match(
-        "gpu-vs-cpu-coincident",
-        &gpu_frame,
-        &raypipe::cpu::render(&scene, Accel::Brute, false),
-    );
+    let mut scene = PackedScene::new(&scene).unwrap();
+    scene.build_bvh(MortonBits::Bits30);
+    check_scene("coincident", &scene);
 }

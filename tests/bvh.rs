@@ -1,0 +1,201 @@
+//! The linear BVH: structure on awkward inputs (property tests), and traversal against brute force.
+
+use glam::Vec3;
+use proptest::prelude::*;
+use raypipe::bvh::aabb::Aabb;
+use raypipe::bvh::morton::MortonBits;
+use raypipe::bvh::sah::{build_binned_sah, sah_cost};
+use raypipe::bvh::{Bvh, centroid_codes};
+use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack};
+use raypipe::cpu::intersect::{Hit, HitKind, Ray};
+use raypipe::scene::builtin::SplitMix64;
+use raypipe::scene::packed::GpuSphere;
+
+fn spheres_to_boxes(spheres: &[(Vec3, f32)]) -> Vec<Aabb> {
+    spheres.iter().map(|&(c, r)| Aabb::around_sphere(c, r)).collect()
+}
+
+fn check_all_builders(boxes: &[Aabb]) -> Result<(), TestCaseError> {
+    for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+        let (bvh, _) = Bvh::build_lbvh(boxes, bits);
+        prop_assert_eq!(
+            bvh.validate(boxes),
+            Ok(()),
+            "LBVH {:?} over {} boxes",
+            bits,
+            boxes.len()
+        );
+    }
+    let sah = build_binned_sah(boxes);
+    prop_assert_eq!(sah.validate(boxes), Ok(()), "binned SAH over {} boxes", boxes.len());
+    Ok(())
+}
+
+fn vec3(range: std::ops::Range<f32>) -> impl Strategy<Value = Vec3> {
+    (range.clone(), range.clone(), range).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+}
+
+/// Random spheres, clustered spheres, spheres on a line, coincident spheres, and tiny spheres.
+fn scenes() -> impl Strategy<Value = Vec<(Vec3, f32)>> {
+    let random = prop::collection::vec((vec3(-100.0..100.0), 0.001f32..5.0), 0..400);
+    let clustered = (
+        prop::collection::vec(vec3(-50.0..50.0), 1..5),
+        prop::collection::vec((0usize..5, vec3(-0.01..0.01), 0.001f32..0.01), 1..400),
+    )
+        .prop_map(|(centres, members)| {
+            members
+                .into_iter()
+                .map(|(c, offset, r)| (centres[c % centres.len()] + offset, r))
+                .collect()
+        });
+    let collinear = (vec3(-1.0..1.0), prop::collection::vec(-10.0f32..10.0, 1..300))
+        .prop_map(|(dir, ts)| ts.into_iter().map(|t| (dir * t, 0.05)).collect());
+    let coincident = (
+        vec3(-5.0..5.0),
+        1usize..300,
+        prop::collection::vec(vec3(-1.0..1.0), 0..20),
+    )
+        .prop_map(|(c, n, others)| {
+            let mut v: Vec<(Vec3, f32)> = (0..n).map(|_| (c, 0.5)).collect();
+            v.extend(others.into_iter().map(|o| (o, 0.1)));
+            v
+        });
+    let tiny = prop::collection::vec((vec3(-1e-4..1e-4), 1e-7f32..1e-6), 1..200);
+    prop_oneof![random, clustered, collinear, coincident, tiny]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(96))]
+
+    #[test]
+    fn builders_give_valid_trees(spheres in scenes()) {
+        check_all_builders(&spheres_to_boxes(&spheres))?;
+    }
+}
+
+#[test]
+fn zero_one_and_two_primitives() {
+    for n in 0usize..=2 {
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|i| Aabb::around_sphere(Vec3::splat(i as f32), 0.5))
+            .collect();
+        let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+        assert_eq!(bvh.nodes.len(), (2 * n).saturating_sub(1));
+        bvh.validate(&boxes).unwrap();
+    }
+}
+
+#[test]
+fn a_corrupted_tree_fails_validation() {
+    let boxes = spheres_to_boxes(
+        &(0..50)
+            .map(|i| (Vec3::new(i as f32, 0.0, 0.0), 0.4))
+            .collect::<Vec<_>>(),
+    );
+    let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+    bvh.validate(&boxes).unwrap();
+    let mut corruptions: Vec<(&str, Bvh)> = Vec::new();
+    let mut b = bvh.clone();
+    b.nodes[3].min[0] += 0.5;
+    corruptions.push(("a loose box", b));
+    let mut b = bvh.clone();
+    b.nodes[5].escape = 0;
+    corruptions.push(("a wrong escape", b));
+    let mut b = bvh.clone();
+    let last = b.nodes.len() - 1;
+    b.nodes[last].left = b.nodes[last - 1].left;
+    corruptions.push(("a primitive in two leaves", b));
+    let mut b = bvh.clone();
+    b.nodes[7].parent = 1;
+    corruptions.push(("a wrong parent", b));
+    for (what, corrupted) in corruptions {
+        assert!(corrupted.validate(&boxes).is_err(), "{what} passed validation");
+    }
+}
+
+#[test]
+fn equal_codes_keep_primitive_order_and_build_a_balanced_tree() {
+    // 1,024 coincident centroids: one Morton code, so the split falls back to the index bits.
+    let boxes = vec![Aabb::around_sphere(Vec3::ZERO, 1.0); 1024];
+    let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+    bvh.validate(&boxes).unwrap();
+    assert_eq!(bvh.max_depth(), 10, "index bits split a power of two evenly");
+    let leaves: Vec<u32> = bvh.nodes[1023..].iter().map(|n| n.left).collect();
+    assert_eq!(leaves, (0..1024).collect::<Vec<_>>(), "stable sort keeps input order");
+}
+
+#[test]
+fn lbvh_sah_cost_is_close_to_binned_sah() {
+    let mut rng = SplitMix64::new(11);
+    let boxes: Vec<Aabb> = (0..20_000)
+        .map(|_| Aabb::around_sphere(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()), 0.002))
+        .collect();
+    let (lbvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+    let ratio = sah_cost(&lbvh) / sah_cost(&build_binned_sah(&boxes));
+    assert!((1.0..1.5).contains(&ratio), "LBVH / SAH cost ratio {ratio}");
+}
+
+#[test]
+fn given_codes_give_the_same_tree() {
+    let mut rng = SplitMix64::new(5);
+    let boxes: Vec<Aabb> = (0..5000)
+        .map(|_| Aabb::around_sphere(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()), 0.01))
+        .collect();
+    let codes = centroid_codes(&boxes, MortonBits::Bits30);
+    let (a, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+    let (b, _) = Bvh::build_from_codes(&boxes, &codes, MortonBits::Bits30);
+    assert_eq!(a, b);
+}
+
+/// Random rays from random points: the stack traversal finds exactly brute force's hit (t and sphere)
+/// and the same shadow answer, also among coincident spheres.
+#[test]
+fn stack_traversal_equals_brute_force() {
+    let mut rng = SplitMix64::new(99);
+    let mut spheres: Vec<GpuSphere> = (0..3000)
+        .map(|i| GpuSphere {
+            center: [
+                rng.next_f32() * 4.0 - 2.0,
+                rng.next_f32() * 4.0 - 2.0,
+                rng.next_f32() * 4.0 - 2.0,
+            ],
+            radius: 0.02 + 0.1 * rng.next_f32(),
+            material: i % 7,
+            _pad: [0; 3],
+        })
+        .collect();
+    // Duplicates of a tenth of them, each with another material: ties must resolve by index.
+    for i in 0..300 {
+        let mut copy = spheres[i * 10];
+        copy.material += 1;
+        spheres.push(copy);
+    }
+    let boxes: Vec<Aabb> = spheres
+        .iter()
+        .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius))
+        .collect();
+    let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+    let mut hits = 0;
+    for _ in 0..20_000 {
+        let origin = Vec3::new(
+            rng.next_f32() * 6.0 - 3.0,
+            rng.next_f32() * 6.0 - 3.0,
+            rng.next_f32() * 6.0 - 3.0,
+        );
+        let dir = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5).normalize();
+        let ray = Ray { origin, dir };
+        let brute = brute_closest(&spheres, &ray, Hit::none(1e30));
+        let stack = traverse_stack(&bvh.nodes, &spheres, &ray, Hit::none(1e30), false);
+        assert_eq!(stack, brute, "ray {ray:?}");
+        hits += (brute.kind == HitKind::Sphere) as u32;
+        for t_max in [0.5, 2.0] {
+            let blocked = traverse_stack(&bvh.nodes, &spheres, &ray, Hit::none(t_max), true).kind != HitKind::None;
+            assert_eq!(
+                blocked,
+                brute_occluded(&spheres, &ray, t_max),
+                "shadow ray {ray:?} to {t_max}"
+            );
+        }
+    }
+    assert!(hits > 5000, "the test rays should hit often ({hits} hits)");
+}
