@@ -1,34 +1,60 @@
 //! Karras (2012): the binary radix tree over sorted Morton codes, every internal node found
-//! independently, then bounds bottom-up and the traversal links. Each step is parallel over nodes;
-//! `lbvh_*.wgsl` runs the same steps on the GPU.
+//! independently, then bounds bottom-up and the traversal links. Each phase runs in parallel over
+//! nodes and writes the final node array in place; `LbvhBuilder` keeps its buffers from one build to
+//! the next, as a per-frame rebuild wants.
 
 use super::aabb::Aabb;
 use super::layout::{GpuNode, LEAF, NONE};
-use super::sort::DisjointWrites;
+use super::morton::{self, MortonBits};
+use super::sort::radix_sort_by_key;
+use super::{BuildTimings, Bvh};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::Instant;
 
-/// Rayon splits below this many nodes cost more than they save.
+/// Rayon splits below this many items cost more than they save.
 const MIN_TASK: usize = 4096;
 
-/// The hierarchy of n sorted keys: children and key ranges of the n - 1 internal nodes, parents of
-/// all 2n - 1 nodes.
-pub struct Hierarchy {
-    pub left: Vec<u32>,
-    pub right: Vec<u32>,
-    /// First and last sorted position that internal node i covers; one of them is i.
-    pub first: Vec<u32>,
-    pub last: Vec<u32>,
-    pub parent: Vec<u32>,
+/// A sort key: the Morton code above the primitive index, so that one stable radix sort of the code
+/// bits orders primitives by code and keeps equal codes in primitive order. 30-bit codes fit a u64
+/// with the index (half the sort's memory traffic); 63-bit codes need a u128.
+pub trait Key: Copy + Default + Send + Sync + 'static {
+    fn new(code: u64, primitive: u32) -> Self;
+    fn code(self) -> u64;
+    fn primitive(self) -> u32;
 }
 
-/// Length of the common prefix of sorted keys i and j; -1 outside the array. Equal keys compare
+impl Key for u64 {
+    fn new(code: u64, primitive: u32) -> Self {
+        (code << 32) | primitive as u64
+    }
+    fn code(self) -> u64 {
+        self >> 32
+    }
+    fn primitive(self) -> u32 {
+        self as u32
+    }
+}
+
+impl Key for u128 {
+    fn new(code: u64, primitive: u32) -> Self {
+        ((code as u128) << 32) | primitive as u128
+    }
+    fn code(self) -> u64 {
+        (self >> 32) as u64
+    }
+    fn primitive(self) -> u32 {
+        self as u32
+    }
+}
+
+/// Length of the common prefix of sorted keys i and j; -1 outside the array. Equal codes compare
 /// their positions instead, so every key is distinct (Karras, section 4).
-pub fn delta(codes: &[u64], i: usize, j: i64) -> i32 {
-    if j < 0 || j >= codes.len() as i64 {
+pub fn delta<K: Key>(keys: &[K], i: usize, j: i64) -> i32 {
+    if j < 0 || j >= keys.len() as i64 {
         return -1;
     }
-    let (a, b) = (codes[i], codes[j as usize]);
+    let (a, b) = (keys[i].code(), keys[j as usize].code());
     if a != b {
         (a ^ b).leading_zeros() as i32
     } else {
@@ -36,39 +62,40 @@ pub fn delta(codes: &[u64], i: usize, j: i64) -> i32 {
     }
 }
 
-/// Internal node i: (left child, right child, first, last), children as node indices.
-pub fn internal_node(codes: &[u64], i: usize) -> (u32, u32, u32, u32) {
-    let n = codes.len();
+/// Internal node i over n sorted keys: (left child, right child, first, last), children as node
+/// indices (internal nodes 0..n-1, then leaves).
+pub fn internal_node<K: Key>(keys: &[K], i: usize) -> (u32, u32, u32, u32) {
+    let n = keys.len();
     let leaf_base = (n - 1) as u32;
     let ii = i as i64;
     // Direction of the range: towards the neighbour that shares the longer prefix.
-    let d: i64 = if delta(codes, i, ii + 1) > delta(codes, i, ii - 1) {
+    let d: i64 = if delta(keys, i, ii + 1) > delta(keys, i, ii - 1) {
         1
     } else {
         -1
     };
     // Upper bound of the range's length by doubling, then its exact length by binary search.
-    let delta_min = delta(codes, i, ii - d);
+    let delta_min = delta(keys, i, ii - d);
     let mut l_max: i64 = 2;
-    while delta(codes, i, ii + l_max * d) > delta_min {
+    while delta(keys, i, ii + l_max * d) > delta_min {
         l_max *= 2;
     }
     let mut l: i64 = 0;
     let mut t = l_max / 2;
     while t >= 1 {
-        if delta(codes, i, ii + (l + t) * d) > delta_min {
+        if delta(keys, i, ii + (l + t) * d) > delta_min {
             l += t;
         }
         t /= 2;
     }
     let j = ii + l * d;
     // The split: the last position that shares more than the node's prefix with i.
-    let delta_node = delta(codes, i, j);
+    let delta_node = delta(keys, i, j);
     let mut s: i64 = 0;
     let mut divisor: i64 = 2;
     loop {
         let t = (l + divisor - 1) / divisor;
-        if delta(codes, i, ii + (s + t) * d) > delta_node {
+        if delta(keys, i, ii + (s + t) * d) > delta_node {
             s += t;
         }
         if t == 1 {
@@ -87,115 +114,253 @@ pub fn internal_node(codes: &[u64], i: usize) -> (u32, u32, u32, u32) {
     (left, right, first, last)
 }
 
-/// Builds the radix tree over sorted codes (at least two).
-pub fn hierarchy(codes: &[u64]) -> Hierarchy {
-    let n = codes.len();
-    debug_assert!(n >= 2);
-    let internal: Vec<(u32, u32, u32, u32)> = (0..n - 1)
-        .into_par_iter()
-        .with_min_len(MIN_TASK)
-        .map(|i| internal_node(codes, i))
-        .collect();
-    let mut parent = vec![NONE; 2 * n - 1];
-    let writes = DisjointWrites::new(&mut parent);
-    internal
-        .par_iter()
-        .enumerate()
-        .with_min_len(MIN_TASK)
-        .for_each(|(i, &(l, r, _, _))| {
-            // SAFETY: every node is the child of exactly one internal node.
-            unsafe {
-                writes.write(l as usize, i as u32);
-                writes.write(r as usize, i as u32);
-            }
-        });
-    Hierarchy {
-        left: internal.iter().map(|x| x.0).collect(),
-        right: internal.iter().map(|x| x.1).collect(),
-        first: internal.iter().map(|x| x.2).collect(),
-        last: internal.iter().map(|x| x.3).collect(),
-        parent,
+/// The node array, written field by field from many tasks: each phase writes every field of its
+/// own nodes, and reads only fields written in an earlier phase or ordered by an atomic.
+#[derive(Clone, Copy)]
+struct Nodes(*mut GpuNode, usize);
+
+// SAFETY: tasks write disjoint fields; see each use.
+unsafe impl Send for Nodes {}
+unsafe impl Sync for Nodes {}
+
+impl Nodes {
+    fn at(&self, i: usize) -> *mut GpuNode {
+        assert!(i < self.1, "node {i} out of bounds {}", self.1);
+        // SAFETY: in bounds.
+        unsafe { self.0.add(i) }
     }
 }
 
-/// Bounds of every node: leaves from their primitives, internal nodes bottom-up. Each leaf climbs
-/// towards the root; at each internal node an atomic visit counter stops the first child to arrive,
-/// and the second, which then knows both children's boxes, writes the union and climbs on.
-pub fn bounds(h: &Hierarchy, sorted_boxes: &[Aabb]) -> Vec<Aabb> {
-    let n = sorted_boxes.len();
-    let leaf_base = n - 1;
-    let mut boxes = vec![Aabb::EMPTY; 2 * n - 1];
-    boxes[leaf_base..].copy_from_slice(sorted_boxes);
-    let visits: Vec<AtomicU32> = (0..n - 1).map(|_| AtomicU32::new(0)).collect();
-    let out = DisjointWrites::new(&mut boxes);
-    (0..n).into_par_iter().with_min_len(MIN_TASK).for_each(|k| {
-        let mut node = h.parent[leaf_base + k];
-        while node != NONE {
-            let i = node as usize;
-            // AcqRel: the second arrival sees the box its sibling's climber wrote before arriving.
-            if visits[i].fetch_add(1, Ordering::AcqRel) == 0 {
-                return;
-            }
-            // SAFETY: the counter admits exactly one task per internal node, after both children
-            // were written; children are read only after their own single writer finished.
-            unsafe {
-                let union = out.read(h.left[i] as usize).union(out.read(h.right[i] as usize));
-                out.write(i, union);
-            }
-            node = h.parent[i];
+/// A reusable LBVH builder: build after build, its buffers keep their capacity. `K` is `u64` for
+/// 30-bit Morton codes and `u128` for 63-bit ones.
+#[derive(Default)]
+pub struct LbvhBuilder<K: Key> {
+    keys: Vec<K>,
+    scratch: Vec<K>,
+    /// First and last sorted position covered by each internal node; one of them is its index.
+    ranges: Vec<[u32; 2]>,
+    visits: Vec<AtomicU32>,
+    nodes: Vec<GpuNode>,
+}
+
+impl<K: Key> LbvhBuilder<K> {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Builds over `boxes`, computing Morton codes of their centroids; the tree is in [`Self::nodes`].
+    pub fn build(&mut self, boxes: &[Aabb], bits: MortonBits) -> BuildTimings {
+        let start = Instant::now();
+        self.morton_keys(boxes, bits, None);
+        let morton = ms_since(start);
+        let mut timings = self.build_from_keys(boxes, bits);
+        timings.morton = morton;
+        timings
+    }
+
+    /// Builds over `boxes` with the given Morton codes (so devices can be compared on identical input).
+    pub fn build_with_codes(&mut self, boxes: &[Aabb], codes: &[u64], bits: MortonBits) -> BuildTimings {
+        assert_eq!(boxes.len(), codes.len());
+        self.morton_keys(boxes, bits, Some(codes));
+        self.build_from_keys(boxes, bits)
+    }
+
+    /// Builds once and hands the tree over.
+    pub fn build_into(mut self, boxes: &[Aabb], bits: MortonBits) -> (Bvh, BuildTimings) {
+        let timings = self.build(boxes, bits);
+        (self.into_bvh(), timings)
+    }
+
+    /// The tree of the last build, taking the node array.
+    pub fn into_bvh(self) -> Bvh {
+        Bvh {
+            primitive_count: self.keys.len(),
+            nodes: self.nodes,
         }
-    });
-    boxes
-}
+    }
 
-/// The escape link of every node, each found on its own: a node that covers sorted positions
-/// [.., b] is followed in depth-first order by the right child of the internal node that splits at
-/// b. That child starts at b + 1: it is internal node b + 1 when that node's range starts there,
-/// and otherwise leaf b + 1. Nothing follows a subtree that ends at n - 1.
-pub fn escapes(h: &Hierarchy, n: usize) -> Vec<u32> {
-    let leaf_base = (n - 1) as u32;
-    (0..2 * n - 1)
-        .into_par_iter()
-        .with_min_len(MIN_TASK)
-        .map(|node| {
-            let last = if node < n - 1 {
-                h.last[node]
-            } else {
-                node as u32 - leaf_base
-            };
-            let next = last + 1;
-            if next as usize == n {
-                NONE
-            } else if (next as usize) < n - 1 && h.first[next as usize] == next {
-                next
-            } else {
-                leaf_base + next
-            }
-        })
-        .collect()
-}
+    /// The tree of the last build, copied.
+    pub fn to_bvh(&self) -> Bvh {
+        Bvh {
+            primitive_count: self.keys.len(),
+            nodes: self.nodes.clone(),
+        }
+    }
 
-/// Assembles the node array from the build's parts.
-pub fn assemble(h: &Hierarchy, boxes: &[Aabb], escapes: &[u32], sorted_primitives: &[u32]) -> Vec<GpuNode> {
-    let n = sorted_primitives.len();
-    (0..2 * n - 1)
-        .into_par_iter()
-        .with_min_len(MIN_TASK)
-        .map(|node| {
-            let (left, right) = if node < n - 1 {
-                (h.left[node], h.right[node])
-            } else {
-                (sorted_primitives[node - (n - 1)], LEAF)
-            };
-            GpuNode {
-                min: boxes[node].min.to_array(),
-                left,
-                max: boxes[node].max.to_array(),
-                right,
-                parent: h.parent[node],
-                escape: escapes[node],
+    // Compute Morton codes of primitive centroids, paired with primitive indices
+    fn morton_keys(&mut self, boxes: &[Aabb], bits: MortonBits, codes: Option<&[u64]>) {
+        let n = boxes.len();
+        self.keys.resize(n, K::default());
+        if let Some(codes) = codes {
+            self.keys
+                .par_iter_mut()
+                .with_min_len(MIN_TASK)
+                .zip(codes)
+                .enumerate()
+                .for_each(|(i, (key, &code))| *key = K::new(code, i as u32));
+            return;
+        }
+        let bounds = boxes
+            .par_iter()
+            .with_min_len(MIN_TASK)
+            .fold(|| Aabb::EMPTY, |b, p| b.grow(p.centroid()))
+            .reduce(|| Aabb::EMPTY, Aabb::union);
+        let scale = morton::scales(bounds, 1 << bits.bits_per_axis());
+        self.keys
+            .par_iter_mut()
+            .with_min_len(MIN_TASK)
+            .zip(boxes)
+            .enumerate()
+            .for_each(|(i, (key, b))| {
+                let code = morton::morton_code(b.centroid(), bounds, scale, bits);
+                *key = K::new(code, i as u32);
+            });
+    }
+
+    fn build_from_keys(&mut self, boxes: &[Aabb], bits: MortonBits) -> BuildTimings {
+        let n = boxes.len();
+        let mut timings = BuildTimings::default();
+
+        // Sort the keys by code; the index below keeps equal codes in primitive order
+        let start = Instant::now();
+        radix_sort_by_key(&mut self.keys, &mut self.scratch, bits.total_bits(), |k| k.code());
+        timings.sort = ms_since(start);
+
+        self.nodes.resize((2 * n).saturating_sub(1), GpuNode::default());
+        if n == 0 {
+            return timings;
+        }
+        if n == 1 {
+            self.nodes[0] = GpuNode {
+                min: boxes[0].min.to_array(),
+                left: 0,
+                max: boxes[0].max.to_array(),
+                right: LEAF,
+                parent: NONE,
+                escape: NONE,
                 _pad: [0; 2],
+            };
+            return timings;
+        }
+
+        let start = Instant::now();
+        self.hierarchy();
+        timings.hierarchy = ms_since(start);
+        let start = Instant::now();
+        self.bounds(boxes);
+        timings.bounds = ms_since(start);
+        let start = Instant::now();
+        self.links();
+        timings.links = ms_since(start);
+        timings
+    }
+
+    /// The nodes of the last build, without copying them.
+    pub fn nodes(&self) -> &[GpuNode] {
+        &self.nodes
+    }
+
+    // Find every internal node's children and range, and every node's parent
+    fn hierarchy(&mut self) {
+        let n = self.keys.len();
+        let keys = &self.keys;
+        self.ranges.resize(n - 1, [0, 0]);
+        let nodes = Nodes(self.nodes.as_mut_ptr(), self.nodes.len());
+        // SAFETY (field writes below): task i alone writes node i's children and the parent field
+        // of those two children; every node is the child of exactly one internal node.
+        unsafe { (*nodes.at(0)).parent = NONE };
+        self.ranges
+            .par_iter_mut()
+            .with_min_len(MIN_TASK)
+            .enumerate()
+            .for_each(|(i, range)| {
+                let (left, right, first, last) = internal_node(keys, i);
+                *range = [first, last];
+                unsafe {
+                    let node = nodes.at(i);
+                    (*node).left = left;
+                    (*node).right = right;
+                    (*nodes.at(left as usize)).parent = i as u32;
+                    (*nodes.at(right as usize)).parent = i as u32;
+                }
+            });
+    }
+
+    // Bound leaves by their primitives, then internal nodes bottom-up
+    fn bounds(&mut self, boxes: &[Aabb]) {
+        let n = self.keys.len();
+        let leaf_base = n - 1;
+        self.visits.resize_with(n - 1, || AtomicU32::new(0));
+        self.visits
+            .par_iter()
+            .with_min_len(MIN_TASK)
+            .for_each(|v| v.store(0, Ordering::Relaxed));
+        let (keys, visits) = (&self.keys, &self.visits);
+        let nodes = Nodes(self.nodes.as_mut_ptr(), self.nodes.len());
+        (0..n).into_par_iter().with_min_len(MIN_TASK).for_each(|k| {
+            // SAFETY: task k alone writes leaf k. An internal node's box is written by the second
+            // of its two children's climbers only, after both children's boxes were written; the
+            // AcqRel visit counter orders those writes before its reads. Links (left, right,
+            // parent) were written in the hierarchy phase and are only read here.
+            unsafe {
+                let primitive = keys[k].primitive();
+                let b = boxes[primitive as usize];
+                let leaf = nodes.at(leaf_base + k);
+                (*leaf).min = b.min.to_array();
+                (*leaf).max = b.max.to_array();
+                (*leaf).left = primitive;
+                (*leaf).right = LEAF;
+                let mut node = (*leaf).parent;
+                while node != NONE {
+                    let i = node as usize;
+                    // The first child to arrive stops; the second knows both boxes.
+                    if visits[i].fetch_add(1, Ordering::AcqRel) == 0 {
+                        return;
+                    }
+                    let parent = nodes.at(i);
+                    let (l, r) = (nodes.at((*parent).left as usize), nodes.at((*parent).right as usize));
+                    for axis in 0..3 {
+                        (*parent).min[axis] = (*l).min[axis].min((*r).min[axis]);
+                        (*parent).max[axis] = (*l).max[axis].max((*r).max[axis]);
+                    }
+                    node = (*parent).parent;
+                }
             }
-        })
-        .collect()
+        });
+    }
+
+    // Link every node to the node after its subtree in depth-first order (the escape link)
+    //
+    // A node that covers sorted positions [.., b] is followed by the right child of the internal
+    // node that splits at b. That child starts at b + 1: it is internal node b + 1 when that node's
+    // range starts there, and otherwise leaf b + 1. Nothing follows a subtree that ends at n - 1.
+    fn links(&mut self) {
+        let n = self.keys.len();
+        let leaf_base = (n - 1) as u32;
+        let ranges = &self.ranges;
+        self.nodes
+            .par_iter_mut()
+            .with_min_len(MIN_TASK)
+            .enumerate()
+            .for_each(|(node, out)| {
+                let last = if node < n - 1 {
+                    ranges[node][1]
+                } else {
+                    node as u32 - leaf_base
+                };
+                let next = last + 1;
+                out.escape = if next as usize == n {
+                    NONE
+                } else if (next as usize) < n - 1 && ranges[next as usize][0] == next {
+                    next
+                } else {
+                    leaf_base + next
+                };
+                out._pad = [0; 2];
+            });
+    }
+}
+
+fn ms_since(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
 }

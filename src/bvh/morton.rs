@@ -51,13 +51,13 @@ pub fn spread_bits_21(v: u64) -> u64 {
     x
 }
 
-/// The grid cell of `value` along one axis: `cells` cells over [lo, lo + extent]. The GPU computes
-/// the same expression (`lbvh_morton.wgsl`); a fused multiply-add there can move a centroid that lies
-/// within one rounding of a cell boundary into the neighbouring cell, which changes the tree but not
-/// its validity.
+/// The grid cell of `value` along one axis: `cells` cells over [lo, lo + extent], clamped, then
+/// truncated (the same as floor on the clamped, non-negative value, without a libm call where the CPU
+/// lacks SSE4.1). A GPU port must compute the same expression; a fused multiply-add there can move a
+/// centroid that lies within one rounding of a cell boundary into the neighbouring cell, which changes
+/// the tree but not its validity.
 pub fn quantize(value: f32, lo: f32, scale: f32, cells: u32) -> u32 {
-    let cell = ((value - lo) * scale).floor();
-    cell.clamp(0.0, (cells - 1) as f32) as u32
+    ((value - lo) * scale).clamp(0.0, (cells - 1) as f32) as u32
 }
 
 /// Per-axis scale that maps the bounds' extent to `cells` cells; a flat axis maps to cell 0.

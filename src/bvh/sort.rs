@@ -21,17 +21,6 @@ impl<T> DisjointWrites<T> {
     }
 
     /// # Safety
-    /// No task may write `index` while this reads it, and the write must happen-before this read.
-    pub(crate) unsafe fn read(&self, index: usize) -> T
-    where
-        T: Copy,
-    {
-        assert!(index < self.1, "index {index} out of bounds {}", self.1);
-        // SAFETY: in bounds (checked above); the caller orders the read after the write.
-        unsafe { self.0.add(index).read() }
-    }
-
-    /// # Safety
     /// No other task may access `index` until the parallel section ends.
     pub(crate) unsafe fn write(&self, index: usize, value: T) {
         assert!(index < self.1, "index {index} out of bounds {}", self.1);
@@ -40,11 +29,12 @@ impl<T> DisjointWrites<T> {
     }
 }
 
-/// Sorts `items` by the `bits` low bits of `key(item) >> shift_base`, stably.
-pub fn radix_sort_by_key<T, K>(items: &mut Vec<T>, shift_base: u32, bits: u32, key: K)
+/// Sorts `items` by the `bits` low bits of `key(item)`, stably. `scratch` is resized to match and
+/// keeps its capacity for the next sort.
+pub fn radix_sort_by_key<T, K>(items: &mut Vec<T>, scratch: &mut Vec<T>, bits: u32, key: K)
 where
-    T: Copy + Send + Sync,
-    K: Fn(&T) -> u64 + Sync,
+    T: Copy + Default + Send + Sync,
+    K: Fn(T) -> u64 + Sync,
 {
     let n = items.len();
     if n < 2 {
@@ -52,10 +42,10 @@ where
     }
     let threads = rayon::current_num_threads();
     let chunk = n.div_ceil(threads * 4).max(1 << 14);
-    let mut scratch = items.clone();
-    let mut shift = shift_base;
-    while shift < shift_base + bits {
-        let digit = |item: &T| ((key(item) >> shift) as usize) & (BUCKETS - 1);
+    scratch.resize(n, T::default());
+    let mut shift = 0;
+    while shift < bits {
+        let digit = |item: &T| ((key(*item) >> shift) as usize) & (BUCKETS - 1);
         let histograms: Vec<[usize; BUCKETS]> = items
             .par_chunks(chunk)
             .map(|c| {
@@ -78,7 +68,7 @@ where
                     running += h[d];
                 }
             }
-            let out = DisjointWrites::new(&mut scratch);
+            let out = DisjointWrites::new(scratch);
             items.par_chunks(chunk).zip(offsets).for_each(|(c, mut offset)| {
                 for &item in c {
                     let d = digit(&item);
@@ -87,7 +77,7 @@ where
                     offset[d] += 1;
                 }
             });
-            std::mem::swap(items, &mut scratch);
+            std::mem::swap(items, scratch);
         }
         shift += DIGIT_BITS;
     }
@@ -104,7 +94,7 @@ mod tests {
         let mut items: Vec<(u64, u32)> = (0..100_000).map(|i| (rng.next_u64() % 1000, i)).collect();
         let mut expected = items.clone();
         expected.sort_by_key(|&(k, _)| k);
-        radix_sort_by_key(&mut items, 0, 10, |&(k, _)| k);
+        radix_sort_by_key(&mut items, &mut Vec::new(), 10, |(k, _)| k);
         assert_eq!(items, expected);
     }
 }

@@ -1,5 +1,6 @@
 //! The `raypipe` command line: one file per subcommand.
 
+mod bvh;
 mod diff;
 mod info;
 mod render;
@@ -20,6 +21,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Compare two images: mean and 99th-percentile error, a difference image, exit 1 above a threshold.
     Diff(diff::DiffArgs),
+    /// Build a BVH over a scene's spheres and print its size, depth, SAH cost and build time per phase.
+    Bvh(bvh::BvhArgs),
     /// List GPU adapters, their backends, drivers and the limits that matter here.
     Info,
 }
@@ -29,6 +32,7 @@ pub fn run() -> anyhow::Result<ExitCode> {
     match Cli::parse().command {
         Command::Render(args) => render::run(args),
         Command::Diff(args) => diff::run(args),
+        Command::Bvh(args) => bvh::run(args),
         Command::Info => info::run(),
     }
 }

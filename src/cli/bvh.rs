@@ -1,0 +1,156 @@
+use crate::bvh::aabb::Aabb;
+use crate::bvh::lbvh::{Key, LbvhBuilder};
+use crate::bvh::morton::MortonBits;
+use crate::bvh::sah::{build_binned_sah, sah_cost};
+use crate::bvh::{BuildTimings, Bvh};
+use crate::scene::Scene;
+use crate::scene::packed::PackedScene;
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use serde::Serialize;
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum Builder {
+    /// The linear BVH (Karras 2012), parallel.
+    #[default]
+    Lbvh,
+    /// Top-down binned SAH, serial: the quality reference.
+    Sah,
+}
+
+#[derive(Args)]
+pub struct BvhArgs {
+    /// A built-in scene or a TOML file; the BVH is built over its spheres.
+    scene: String,
+    #[arg(long, value_enum, default_value_t)]
+    builder: Builder,
+    /// Morton code width of the LBVH.
+    #[arg(long, value_enum, default_value_t)]
+    morton_bits: MortonBits,
+    /// Timed builds after one warm-up build; the run with the median total is reported.
+    #[arg(long, default_value_t = 5)]
+    runs: usize,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct BuildMs {
+    morton: f64,
+    sort: f64,
+    hierarchy: f64,
+    bounds: f64,
+    links: f64,
+    total: f64,
+}
+
+#[derive(Serialize)]
+struct Report {
+    scene: String,
+    builder: String,
+    device: String,
+    primitives: usize,
+    nodes: usize,
+    max_depth: u32,
+    mean_leaf_depth: f64,
+    sah_cost: f64,
+    build_ms: BuildMs,
+    mprims_per_s: f64,
+}
+
+/// One builder, built once to warm up (allocations, page faults), then `runs` timed rebuilds: the
+/// per-frame situation.
+fn time_lbvh<K: Key>(boxes: &[Aabb], bits: MortonBits, runs: usize) -> (Bvh, Vec<BuildTimings>) {
+    let mut builder = LbvhBuilder::<K>::new();
+    builder.build(boxes, bits);
+    let timings = (0..runs).map(|_| builder.build(boxes, bits)).collect();
+    (builder.into_bvh(), timings)
+}
+
+pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
+    let scene = Scene::load(&args.scene)?;
+    let packed = PackedScene::new(&scene).with_context(|| args.scene.clone())?;
+    let boxes = packed.sphere_boxes();
+    let runs = args.runs.max(1);
+    let (bvh, mut runs) = match (args.builder, args.morton_bits) {
+        (Builder::Lbvh, MortonBits::Bits30) => time_lbvh::<u64>(&boxes, args.morton_bits, runs),
+        (Builder::Lbvh, MortonBits::Bits63) => time_lbvh::<u128>(&boxes, args.morton_bits, runs),
+        (Builder::Sah, _) => {
+            let timed = (0..runs)
+                .map(|_| {
+                    let start = Instant::now();
+                    let bvh = build_binned_sah(&boxes);
+                    // The SAH builder has no LBVH phases: its whole time counts as hierarchy.
+                    let hierarchy = start.elapsed().as_secs_f64() * 1e3;
+                    (
+                        bvh,
+                        BuildTimings {
+                            hierarchy,
+                            ..BuildTimings::default()
+                        },
+                    )
+                })
+                .collect::<Vec<_>>();
+            let bvh = timed[0].0.clone();
+            (bvh, timed.into_iter().map(|(_, t)| t).collect())
+        }
+    };
+    runs.sort_by(|a, b| a.total().total_cmp(&b.total()));
+    let t = runs[runs.len() / 2];
+    bvh.validate(&boxes)
+        .map_err(|e| anyhow::anyhow!("the built BVH is invalid: {e}"))?;
+
+    let depths = bvh.leaf_depths();
+    let report = Report {
+        scene: args.scene.clone(),
+        builder: match args.builder {
+            Builder::Lbvh => format!("lbvh ({}-bit Morton codes)", args.morton_bits.total_bits()),
+            Builder::Sah => "binned SAH (16 bins)".into(),
+        },
+        device: format!("cpu ({} threads)", rayon::current_num_threads()),
+        primitives: bvh.primitive_count,
+        nodes: bvh.nodes.len(),
+        max_depth: depths.iter().copied().max().unwrap_or(0),
+        mean_leaf_depth: depths.iter().map(|&d| d as f64).sum::<f64>() / depths.len().max(1) as f64,
+        sah_cost: sah_cost(&bvh),
+        build_ms: BuildMs {
+            morton: t.morton,
+            sort: t.sort,
+            hierarchy: t.hierarchy,
+            bounds: t.bounds,
+            links: t.links,
+            total: t.total(),
+        },
+        mprims_per_s: bvh.primitive_count as f64 / (t.total() * 1e3),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    let b = &report.build_ms;
+    println!("scene: {}, {} primitives", report.scene, report.primitives);
+    println!("builder: {}, device {}", report.builder, report.device);
+    println!(
+        "nodes: {}, depth: max {}, mean leaf {:.1}",
+        report.nodes, report.max_depth, report.mean_leaf_depth
+    );
+    println!(
+        "SAH cost: {:.2} (traversal and intersection cost 1, relative to the root's area)",
+        report.sah_cost
+    );
+    println!(
+        "build (median of {} runs): morton {:.2} ms, sort {:.2} ms, hierarchy {:.2} ms, bounds {:.2} ms, links {:.2} ms, total {:.2} ms, {:.1} Mprims/s",
+        runs.len(),
+        b.morton,
+        b.sort,
+        b.hierarchy,
+        b.bounds,
+        b.links,
+        b.total,
+        report.mprims_per_s
+    );
+    Ok(ExitCode::SUCCESS)
+}
