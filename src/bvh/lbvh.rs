@@ -9,7 +9,6 @@ use super::morton::{self, MortonBits};
 use super::sort::radix_sort_by_key;
 use super::{BuildTimings, Bvh};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 /// Rayon splits below this many items cost more than they save.
@@ -91,17 +90,18 @@ pub fn internal_node<K: Key>(keys: &[K], i: usize) -> (u32, u32, u32, u32) {
     let j = ii + l * d;
     // The split: the last position that shares more than the node's prefix with i.
     let delta_node = delta(keys, i, j);
+    // Steps of ceil(l / 2), ceil(l / 4), ..., 1 (shifts: the divisors are powers of two).
     let mut s: i64 = 0;
-    let mut divisor: i64 = 2;
+    let mut shift = 1;
     loop {
-        let t = (l + divisor - 1) / divisor;
+        let t = (l + (1 << shift) - 1) >> shift;
         if delta(keys, i, ii + (s + t) * d) > delta_node {
             s += t;
         }
         if t == 1 {
             break;
         }
-        divisor *= 2;
+        shift += 1;
     }
     let split = (ii + s * d + d.min(0)) as u32;
     let (first, last) = (ii.min(j) as u32, ii.max(j) as u32);
@@ -139,7 +139,6 @@ pub struct LbvhBuilder<K: Key> {
     scratch: Vec<K>,
     /// First and last sorted position covered by each internal node; one of them is its index.
     ranges: Vec<[u32; 2]>,
-    visits: Vec<AtomicU32>,
     nodes: Vec<GpuNode>,
 }
 
@@ -287,46 +286,40 @@ impl<K: Key> LbvhBuilder<K> {
     }
 
     // Bound leaves by their primitives, then internal nodes bottom-up
+    //
+    // On the CPU, a post-order walk that forks into both subtrees while they are large: each node
+    // is bounded after its children, with no atomics. (The GPU, with a thread per leaf, climbs with
+    // atomic visit counters instead.) Unions never round, so both give identical boxes.
     fn bounds(&mut self, boxes: &[Aabb]) {
         let n = self.keys.len();
         let leaf_base = n - 1;
-        self.visits.resize_with(n - 1, || AtomicU32::new(0));
-        self.visits
-            .par_iter()
-            .with_min_len(MIN_TASK)
-            .for_each(|v| v.store(0, Ordering::Relaxed));
-        let (keys, visits) = (&self.keys, &self.visits);
-        let nodes = Nodes(self.nodes.as_mut_ptr(), self.nodes.len());
-        (0..n).into_par_iter().with_min_len(MIN_TASK).for_each(|k| {
-            // SAFETY: task k alone writes leaf k. An internal node's box is written by the second
-            // of its two children's climbers only, after both children's boxes were written; the
-            // AcqRel visit counter orders those writes before its reads. Links (left, right,
-            // parent) were written in the hierarchy phase and are only read here.
-            unsafe {
-                let primitive = keys[k].primitive();
-                let b = boxes[primitive as usize];
-                let leaf = nodes.at(leaf_base + k);
-                (*leaf).min = b.min.to_array();
-                (*leaf).max = b.max.to_array();
-                (*leaf).left = primitive;
-                (*leaf).right = LEAF;
-                let mut node = (*leaf).parent;
-                while node != NONE {
-                    let i = node as usize;
-                    // The first child to arrive stops; the second knows both boxes.
-                    if visits[i].fetch_add(1, Ordering::AcqRel) == 0 {
-                        return;
+        // Leaves first, in sorted order: their primitives are scattered through `boxes`, so fetch
+        // ahead of use to overlap the cache misses instead of waiting on each.
+        let keys = &self.keys;
+        self.nodes[leaf_base..]
+            .par_chunks_mut(MIN_TASK)
+            .enumerate()
+            .for_each(|(chunk, leaves)| {
+                let base = chunk * MIN_TASK;
+                for (k, leaf) in leaves.iter_mut().enumerate() {
+                    if let Some(ahead) = keys.get(base + k + PREFETCH_DISTANCE) {
+                        prefetch(&boxes[ahead.primitive() as usize]);
                     }
-                    let parent = nodes.at(i);
-                    let (l, r) = (nodes.at((*parent).left as usize), nodes.at((*parent).right as usize));
-                    for axis in 0..3 {
-                        (*parent).min[axis] = (*l).min[axis].min((*r).min[axis]);
-                        (*parent).max[axis] = (*l).max[axis].max((*r).max[axis]);
-                    }
-                    node = (*parent).parent;
+                    let primitive = keys[base + k].primitive();
+                    let b = boxes[primitive as usize];
+                    leaf.min = b.min.to_array();
+                    leaf.max = b.max.to_array();
+                    leaf.left = primitive;
+                    leaf.right = LEAF;
                 }
-            }
-        });
+            });
+        let nodes = Nodes(self.nodes.as_mut_ptr(), self.nodes.len());
+        let walk = BoundsWalk {
+            nodes,
+            ranges: &self.ranges,
+            leaf_base,
+        };
+        walk.bound(0);
     }
 
     // Link every node to the node after its subtree in depth-first order (the escape link)
@@ -358,6 +351,55 @@ impl<K: Key> LbvhBuilder<K> {
                 };
                 out._pad = [0; 2];
             });
+    }
+}
+
+/// Subtrees with fewer leaves than this are bounded on one thread.
+const SERIAL_LEAVES: u32 = 4096;
+
+/// How many leaves ahead the leaf pass fetches its primitives' boxes.
+const PREFETCH_DISTANCE: usize = 32;
+
+fn prefetch<T>(value: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is a hint; it reads nothing and cannot fault.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch(value as *const T as *const i8, std::arch::x86_64::_MM_HINT_T0);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = value;
+}
+
+struct BoundsWalk<'a> {
+    nodes: Nodes,
+    ranges: &'a [[u32; 2]],
+    leaf_base: usize,
+}
+
+impl BoundsWalk<'_> {
+    /// Writes the box of internal `node` and of every internal node below it (leaves are bounded
+    /// already), and returns it.
+    fn bound(&self, node: usize) -> ([f32; 3], [f32; 3]) {
+        let out = self.nodes.at(node);
+        // SAFETY: the walk reaches each node once, from its parent's call; the two subtrees of a
+        // fork are disjoint. Links were written in the hierarchy phase and are only read here.
+        unsafe {
+            if node >= self.leaf_base {
+                return ((*out).min, (*out).max);
+            }
+            let (left, right) = ((*out).left as usize, (*out).right as usize);
+            let [first, last] = self.ranges[node];
+            let ((lmin, lmax), (rmin, rmax)) = if last - first >= SERIAL_LEAVES {
+                rayon::join(|| self.bound(left), || self.bound(right))
+            } else {
+                (self.bound(left), self.bound(right))
+            };
+            let min = [lmin[0].min(rmin[0]), lmin[1].min(rmin[1]), lmin[2].min(rmin[2])];
+            let max = [lmax[0].max(rmax[0]), lmax[1].max(rmax[1]), lmax[2].max(rmax[2])];
+            (*out).min = min;
+            (*out).max = max;
+            (min, max)
+        }
     }
 }
 

@@ -57,7 +57,7 @@ pub fn spread_bits_21(v: u64) -> u64 {
 /// centroid that lies within one rounding of a cell boundary into the neighbouring cell, which changes
 /// the tree but not its validity.
 pub fn quantize(value: f32, lo: f32, scale: f32, cells: u32) -> u32 {
-    ((value - lo) * scale).clamp(0.0, (cells - 1) as f32) as u32
+    ((value - lo) * scale).max(0.0).min((cells - 1) as f32) as u32
 }
 
 /// Per-axis scale that maps the bounds' extent to `cells` cells; a flat axis maps to cell 0.
@@ -67,12 +67,16 @@ pub fn scales(bounds: Aabb, cells: u32) -> Vec3 {
 }
 
 pub fn morton_code(centroid: Vec3, bounds: Aabb, scale: Vec3, bits: MortonBits) -> u64 {
-    let cells = 1u32 << bits.bits_per_axis();
-    let q = |axis: usize| quantize(centroid[axis], bounds.min[axis], scale[axis], cells);
+    let last_cell = ((1u32 << bits.bits_per_axis()) - 1) as f32;
+    // `quantize` on all three axes at once.
+    let cell = ((centroid - bounds.min) * scale)
+        .max(Vec3::ZERO)
+        .min(Vec3::splat(last_cell));
+    let (x, y, z) = (cell.x as u32, cell.y as u32, cell.z as u32);
     match bits {
-        MortonBits::Bits30 => ((spread_bits_10(q(0)) << 2) | (spread_bits_10(q(1)) << 1) | spread_bits_10(q(2))) as u64,
+        MortonBits::Bits30 => ((spread_bits_10(x) << 2) | (spread_bits_10(y) << 1) | spread_bits_10(z)) as u64,
         MortonBits::Bits63 => {
-            (spread_bits_21(q(0) as u64) << 2) | (spread_bits_21(q(1) as u64) << 1) | spread_bits_21(q(2) as u64)
+            (spread_bits_21(x as u64) << 2) | (spread_bits_21(y as u64) << 1) | spread_bits_21(z as u64)
         }
     }
 }
@@ -98,6 +102,23 @@ mod tests {
         assert_eq!(spread_bits_21(0x1f_ffff), 0x1249_2492_4924_9249);
         for v in [0u32, 1, 5, 0x155, 0x3ff] {
             assert_eq!(spread_bits_21(v as u64), spread_bits_10(v) as u64);
+        }
+    }
+
+    #[test]
+    fn codes_quantize_each_axis_as_quantize_does() {
+        let bounds = Aabb::new(Vec3::splat(-1.0), Vec3::new(2.0, 1.0, 5.0));
+        let scale = scales(bounds, 1024);
+        for p in [
+            Vec3::new(0.3, -0.7, 4.9),
+            Vec3::new(-1.0, 1.0, 0.0),
+            Vec3::new(1.999, 0.5, 2.5),
+        ] {
+            let q = |a: usize| spread_bits_10(quantize(p[a], bounds.min[a], scale[a], 1024)) as u64;
+            assert_eq!(
+                morton_code(p, bounds, scale, MortonBits::Bits30),
+                (q(0) << 2) | (q(1) << 1) | q(2)
+            );
         }
     }
 
