@@ -1,5 +1,6 @@
 //! The GPU renderer: one full-screen triangle, all tracing in the fragment shader.
 
+pub mod build;
 pub mod context;
 pub mod readback;
 pub mod render;

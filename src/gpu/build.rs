@@ -1,0 +1,387 @@
+//! The LBVH build on the GPU: `shaders/lbvh.wgsl`'s kernels in five compute passes (morton, sort,
+//! hierarchy, bounds, links), each timed with timestamp queries where the adapter has them. The node
+//! array stays on the GPU, ready for the fragment shader; `read_nodes` fetches it for tests and stats.
+//!
+//! GPU builds use 30-bit Morton codes; 63-bit codes are built on the CPU only.
+
+use super::GpuContext;
+use crate::bvh::BuildTimings;
+use crate::bvh::layout::GpuNode;
+use crate::scene::packed::GpuSphere;
+use anyhow::bail;
+use std::num::NonZeroU64;
+
+const TYPES: &str = include_str!("shaders/types.wgsl");
+const LBVH: &str = include_str!("shaders/lbvh.wgsl");
+
+const GROUP: u32 = 256;
+const BLOCK: u32 = 1024;
+const CODE_BITS: u32 = 30;
+/// Uniform offsets must be multiples of 256 bytes.
+const PARAMS_STRIDE: u64 = 256;
+const MAX_GROUPS_X: u32 = 65535;
+const PHASES: usize = 5;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BuildParams {
+    count: u32,
+    bit: u32,
+}
+
+struct Kernels {
+    bounds_partial: wgpu::ComputePipeline,
+    bounds_final: wgpu::ComputePipeline,
+    morton: wgpu::ComputePipeline,
+    sort_count: wgpu::ComputePipeline,
+    sort_scan: wgpu::ComputePipeline,
+    sort_scatter: wgpu::ComputePipeline,
+    hierarchy: wgpu::ComputePipeline,
+    leaves_and_bounds: wgpu::ComputePipeline,
+    links: wgpu::ComputePipeline,
+}
+
+/// A GPU LBVH builder for a fixed primitive count; build after build it reuses its buffers.
+pub struct GpuLbvhBuilder<'a> {
+    ctx: &'a GpuContext,
+    count: u32,
+    kernels: Kernels,
+    /// [pairs A in, B out], [B in, A out].
+    bind_groups: [wgpu::BindGroup; 2],
+    /// The spheres the build reads; write new positions here before each build.
+    pub spheres: wgpu::Buffer,
+    pairs: wgpu::Buffer,
+    climb: wgpu::Buffer,
+    /// The built nodes (STORAGE | COPY_SRC), the layout of `bvh::layout`.
+    pub nodes: wgpu::Buffer,
+    timer: Option<PhaseTimer>,
+}
+
+fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE | extra,
+        mapped_at_creation: false,
+    })
+}
+
+/// Workgroups as a 2D grid, since one dimension holds at most 65,535.
+fn grid(groups: u32) -> (u32, u32) {
+    let x = groups.clamp(1, MAX_GROUPS_X);
+    (x, groups.div_ceil(x).max(1))
+}
+
+impl<'a> GpuLbvhBuilder<'a> {
+    pub fn new(ctx: &'a GpuContext, count: usize) -> anyhow::Result<Self> {
+        let limits = ctx.limits();
+        let n = count as u64;
+        let node_bytes = (2 * n).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
+        if node_bytes > limits.max_storage_buffer_binding_size {
+            bail!(
+                "{count} primitives need {node_bytes} bytes of nodes, more than the adapter's storage binding limit {}",
+                limits.max_storage_buffer_binding_size
+            );
+        }
+        ctx.checked("creating the GPU LBVH builder", || {
+            let device = &ctx.device;
+            let blocks = n.div_ceil(BLOCK as u64);
+            let spheres = storage(ctx, "build spheres", n * 32, wgpu::BufferUsages::COPY_DST);
+            let pairs = storage(ctx, "pairs A", n * 8, wgpu::BufferUsages::COPY_DST);
+            let pairs_b = storage(ctx, "pairs B", n * 8, wgpu::BufferUsages::empty());
+            let scratch = storage(ctx, "build scratch", (8 + 7 * blocks) * 4, wgpu::BufferUsages::empty());
+            let ranges = storage(ctx, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
+            let parents = storage(
+                ctx,
+                "parents",
+                (2 * n).saturating_sub(1) * 4,
+                wgpu::BufferUsages::empty(),
+            );
+            let climb_words = n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1);
+            let climb = storage(ctx, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
+            let nodes = storage(ctx, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
+            let params = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("build params"),
+                size: PARAMS_STRIDE * CODE_BITS as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            for bit in 0..CODE_BITS {
+                let p = BuildParams {
+                    count: count as u32,
+                    bit,
+                };
+                ctx.queue
+                    .write_buffer(&params, bit as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
+            }
+
+            let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty,
+                count: None,
+            };
+            let buffer = |ty, dynamic| wgpu::BindingType::Buffer {
+                ty,
+                has_dynamic_offset: dynamic,
+                min_binding_size: None,
+            };
+            let rw = wgpu::BufferBindingType::Storage { read_only: false };
+            let mut entries = vec![
+                entry(0, buffer(wgpu::BufferBindingType::Uniform, true)),
+                entry(1, buffer(wgpu::BufferBindingType::Storage { read_only: true }, false)),
+            ];
+            entries.extend((2..=8).map(|b| entry(b, buffer(rw, false))));
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("lbvh build"),
+                entries: &entries,
+            });
+            let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
+                let resources = [
+                    &spheres, pairs_in, pairs_out, &scratch, &ranges, &parents, &climb, &nodes,
+                ];
+                let mut entries = vec![wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &params,
+                        offset: 0,
+                        size: NonZeroU64::new(std::mem::size_of::<BuildParams>() as u64),
+                    }),
+                }];
+                entries.extend(resources.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32 + 1,
+                    resource: b.as_entire_binding(),
+                }));
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("lbvh build"),
+                    layout: &layout,
+                    entries: &entries,
+                })
+            };
+            let bind_groups = [bind_group(&pairs, &pairs_b), bind_group(&pairs_b, &pairs)];
+
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("lbvh"),
+                source: wgpu::ShaderSource::Wgsl(format!("{TYPES}\n{LBVH}").into()),
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("lbvh build"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+            let kernel = |entry_point: &str| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry_point),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry_point),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            };
+            let kernels = Kernels {
+                bounds_partial: kernel("bounds_partial"),
+                bounds_final: kernel("bounds_final"),
+                morton: kernel("morton"),
+                sort_count: kernel("sort_count"),
+                sort_scan: kernel("sort_scan"),
+                sort_scatter: kernel("sort_scatter"),
+                hierarchy: kernel("hierarchy"),
+                leaves_and_bounds: kernel("leaves_and_bounds"),
+                links: kernel("links"),
+            };
+            Ok(Self {
+                ctx,
+                count: count as u32,
+                kernels,
+                bind_groups,
+                spheres,
+                pairs,
+                climb,
+                nodes,
+                timer: ctx.timestamps.then(|| PhaseTimer::new(&ctx.device)),
+            })
+        })
+    }
+
+    pub fn count(&self) -> usize {
+        self.count as usize
+    }
+
+    pub fn write_spheres(&self, spheres: &[GpuSphere]) {
+        assert_eq!(spheres.len(), self.count());
+        self.ctx
+            .queue
+            .write_buffer(&self.spheres, 0, bytemuck::cast_slice(spheres));
+    }
+
+    /// Replaces the Morton phase with given codes (30-bit), for comparisons with the CPU build.
+    pub fn write_codes(&self, codes: &[u64]) {
+        assert_eq!(codes.len(), self.count());
+        let pairs: Vec<[u32; 2]> = codes.iter().enumerate().map(|(i, &c)| [c as u32, i as u32]).collect();
+        self.ctx
+            .queue
+            .write_buffer(&self.pairs, 0, bytemuck::cast_slice(&pairs));
+    }
+
+    /// Records a build into `encoder`: from the spheres, or from the codes of `write_codes` when
+    /// `given_codes` is set.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, given_codes: bool) {
+        let n = self.count;
+        if n == 0 {
+            return;
+        }
+        if n > 1 {
+            encoder.clear_buffer(&self.climb, 0, Some((n as u64 - 1) * 4));
+        }
+        let blocks = n.div_ceil(BLOCK);
+        let items = n.div_ceil(GROUP);
+        let k = &self.kernels;
+        let a = &self.bind_groups[0];
+        let phase = |encoder: &mut wgpu::CommandEncoder,
+                     index: usize,
+                     steps: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, u32, u32)]| {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(PHASE_NAMES[index]),
+                timestamp_writes: self.timer.as_ref().map(|t| t.writes(index)),
+            });
+            for &(pipeline, bind_group, bit, groups) in steps {
+                let (x, y) = grid(groups);
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, bind_group, &[bit * PARAMS_STRIDE as u32]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        };
+        if given_codes {
+            phase(encoder, 0, &[]);
+        } else {
+            phase(
+                encoder,
+                0,
+                &[
+                    (&k.bounds_partial, a, 0, blocks),
+                    (&k.bounds_final, a, 0, 1),
+                    (&k.morton, a, 0, items),
+                ],
+            );
+        }
+        let sort: Vec<_> = (0..CODE_BITS)
+            .flat_map(|bit| {
+                let bind_group = &self.bind_groups[bit as usize % 2];
+                [
+                    (&k.sort_count, bind_group, bit, blocks),
+                    (&k.sort_scan, bind_group, bit, 1),
+                    (&k.sort_scatter, bind_group, bit, blocks),
+                ]
+            })
+            .collect();
+        phase(encoder, 1, &sort);
+        let internal = (n - 1).div_ceil(GROUP);
+        let hierarchy = [(&k.hierarchy, a, 0, internal)];
+        phase(encoder, 2, if n > 1 { &hierarchy[..] } else { &[] });
+        phase(encoder, 3, &[(&k.leaves_and_bounds, a, 0, items)]);
+        phase(encoder, 4, &[(&k.links, a, 0, (2 * n - 1).div_ceil(GROUP))]);
+        if let Some(timer) = &self.timer {
+            timer.resolve(encoder);
+        }
+    }
+
+    /// Builds and waits; returns the GPU time of each phase (zeros where the adapter has no
+    /// timestamp queries).
+    pub fn build(&self, given_codes: bool) -> anyhow::Result<BuildTimings> {
+        self.ctx.checked("building the LBVH on the GPU", || {
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            self.encode(&mut encoder, given_codes);
+            self.ctx.queue.submit([encoder.finish()]);
+            self.ctx.device.poll(wgpu::PollType::wait_indefinitely())?;
+            match &self.timer {
+                Some(timer) if self.count > 0 => timer.read(self.ctx),
+                _ => Ok(BuildTimings::default()),
+            }
+        })
+    }
+
+    /// Copies the node array back to the host.
+    pub fn read_nodes(&self) -> anyhow::Result<Vec<GpuNode>> {
+        let size = (2 * self.count as u64).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
+        if size == 0 {
+            return Ok(Vec::new());
+        }
+        let bytes = read_buffer(self.ctx, &self.nodes, size)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
+
+const PHASE_NAMES: [&str; PHASES] = ["morton", "sort", "hierarchy", "bounds", "links"];
+
+fn read_buffer(ctx: &GpuContext, source: &wgpu::Buffer, size: u64) -> anyhow::Result<Vec<u8>> {
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read back"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
+    ctx.queue.submit([encoder.finish()]);
+    let slice = staging.slice(..);
+    let (sender, receiver) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        let _ = sender.send(result);
+    });
+    ctx.device.poll(wgpu::PollType::wait_indefinitely())?;
+    receiver.recv()??;
+    let bytes = slice.get_mapped_range()?.to_vec();
+    staging.unmap();
+    Ok(bytes)
+}
+
+/// Begin and end timestamps of each phase's compute pass.
+struct PhaseTimer {
+    queries: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+}
+
+impl PhaseTimer {
+    fn new(device: &wgpu::Device) -> Self {
+        Self {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("build phases"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * PHASES as u32,
+            }),
+            resolve: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("build timestamps"),
+                size: 16 * PHASES as u64,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+
+    fn writes(&self, phase: usize) -> wgpu::ComputePassTimestampWrites<'_> {
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(2 * phase as u32),
+            end_of_pass_write_index: Some(2 * phase as u32 + 1),
+        }
+    }
+
+    fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.resolve_query_set(&self.queries, 0..2 * PHASES as u32, &self.resolve, 0);
+    }
+
+    fn read(&self, ctx: &GpuContext) -> anyhow::Result<BuildTimings> {
+        let bytes = read_buffer(ctx, &self.resolve, 16 * PHASES as u64)?;
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        let period_ns = ctx.queue.get_timestamp_period() as f64;
+        let ms = |phase: usize| ticks[2 * phase + 1].wrapping_sub(ticks[2 * phase]) as f64 * period_ns / 1e6;
+        Ok(BuildTimings {
+            morton: ms(0),
+            sort: ms(1),
+            hierarchy: ms(2),
+            bounds: ms(3),
+            links: ms(4),
+        })
+    }
+}

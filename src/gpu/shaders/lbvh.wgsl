@@ -1,0 +1,406 @@
+// The LBVH build in compute passes: the phases of src/bvh/lbvh.rs, giving the same node array for
+// the same Morton codes. Every kernel runs 256 invocations per workgroup; large dispatches are 2D.
+
+const GROUP: u32 = 256u;
+// Items per block in the reduction and sort kernels: 4 consecutive items per invocation.
+const BLOCK: u32 = 1024u;
+const ITEMS: u32 = 4u;
+const CELLS: u32 = 1024u;
+
+struct BuildParams {
+    count: u32,
+    // The key bit a sort pass splits on.
+    bit: u32,
+}
+
+// Layout of `scratch`: centroid bounds, the current pass's total of zero bits, per-block zero counts
+// (scanned in place into offsets), then per-block partial centroid bounds (6 words each).
+const SCRATCH_BOUNDS: u32 = 0u;
+const SCRATCH_ZEROS: u32 = 6u;
+const SCRATCH_BLOCKS: u32 = 8u;
+
+@group(0) @binding(0) var<uniform> params: BuildParams;
+@group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
+// (Morton code, primitive) pairs; sort passes read `pairs_in` and write `pairs_out`.
+@group(0) @binding(2) var<storage, read_write> pairs_in: array<vec2<u32>>;
+@group(0) @binding(3) var<storage, read_write> pairs_out: array<vec2<u32>>;
+@group(0) @binding(4) var<storage, read_write> scratch: array<u32>;
+// Internal node i: (left child, right child, first, last).
+@group(0) @binding(5) var<storage, read_write> ranges: array<vec4<u32>>;
+@group(0) @binding(6) var<storage, read_write> parents: array<u32>;
+// [0, n - 1): visit counters of internal nodes; then 6 words per node: its box's min and max bits.
+@group(0) @binding(7) var<storage, read_write> climb: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> nodes: array<BvhNode>;
+
+var<workgroup> shared_u32: array<u32, GROUP>;
+var<workgroup> shared_lo: array<vec3<f32>, GROUP>;
+var<workgroup> shared_hi: array<vec3<f32>, GROUP>;
+
+fn flat_group(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return wid.y * groups.x + wid.x;
+}
+
+fn block_count() -> u32 {
+    return (params.count + BLOCK - 1u) / BLOCK;
+}
+
+fn sphere_min(s: Sphere) -> vec3<f32> {
+    return s.center - vec3<f32>(s.radius);
+}
+
+fn sphere_max(s: Sphere) -> vec3<f32> {
+    return s.center + vec3<f32>(s.radius);
+}
+
+fn centroid(s: Sphere) -> vec3<f32> {
+    return (sphere_min(s) + sphere_max(s)) * 0.5;
+}
+
+// Min and max over the workgroup's shared_lo / shared_hi, left in slot 0.
+fn reduce_bounds(lid: u32) {
+    for (var stride = GROUP / 2u; stride > 0u; stride /= 2u) {
+        workgroupBarrier();
+        if (lid < stride) {
+            shared_lo[lid] = min(shared_lo[lid], shared_lo[lid + stride]);
+            shared_hi[lid] = max(shared_hi[lid], shared_hi[lid + stride]);
+        }
+    }
+    workgroupBarrier();
+}
+
+const BIG: f32 = 3.0e38;
+
+// Compute the bounds of primitive centroids: per block, then over the blocks.
+@compute @workgroup_size(256)
+fn bounds_partial(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                  @builtin(local_invocation_index) lid: u32) {
+    let block = flat_group(wid, groups);
+    var lo = vec3<f32>(BIG);
+    var hi = vec3<f32>(-BIG);
+    for (var k = 0u; k < ITEMS; k++) {
+        let i = block * BLOCK + lid * ITEMS + k;
+        if (i < params.count) {
+            let c = centroid(spheres[i]);
+            lo = min(lo, c);
+            hi = max(hi, c);
+        }
+    }
+    shared_lo[lid] = lo;
+    shared_hi[lid] = hi;
+    reduce_bounds(lid);
+    if (lid == 0u && block < block_count()) {
+        let base = SCRATCH_BLOCKS + block_count() + block * 6u;
+        for (var a = 0u; a < 3u; a++) {
+            scratch[base + a] = bitcast<u32>(shared_lo[0][a]);
+            scratch[base + 3u + a] = bitcast<u32>(shared_hi[0][a]);
+        }
+    }
+}
+
+@compute @workgroup_size(256)
+fn bounds_final(@builtin(local_invocation_index) lid: u32) {
+    var lo = vec3<f32>(BIG);
+    var hi = vec3<f32>(-BIG);
+    for (var block = lid; block < block_count(); block += GROUP) {
+        let base = SCRATCH_BLOCKS + block_count() + block * 6u;
+        let b_lo = vec3<f32>(bitcast<f32>(scratch[base]), bitcast<f32>(scratch[base + 1u]), bitcast<f32>(scratch[base + 2u]));
+        let b_hi = vec3<f32>(bitcast<f32>(scratch[base + 3u]), bitcast<f32>(scratch[base + 4u]), bitcast<f32>(scratch[base + 5u]));
+        lo = min(lo, b_lo);
+        hi = max(hi, b_hi);
+    }
+    shared_lo[lid] = lo;
+    shared_hi[lid] = hi;
+    reduce_bounds(lid);
+    if (lid == 0u) {
+        for (var a = 0u; a < 3u; a++) {
+            scratch[SCRATCH_BOUNDS + a] = bitcast<u32>(shared_lo[0][a]);
+            scratch[SCRATCH_BOUNDS + 3u + a] = bitcast<u32>(shared_hi[0][a]);
+        }
+    }
+}
+
+fn spread_bits_10(v: u32) -> u32 {
+    var x = v & 0x3ffu;
+    x = (x | (x << 16u)) & 0x030000ffu;
+    x = (x | (x << 8u)) & 0x0300f00fu;
+    x = (x | (x << 4u)) & 0x030c30c3u;
+    x = (x | (x << 2u)) & 0x09249249u;
+    return x;
+}
+
+// Compute Morton codes of primitive centroids: the expression of bvh::morton::morton_code.
+@compute @workgroup_size(256)
+fn morton(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+          @builtin(local_invocation_index) lid: u32) {
+    let i = flat_group(wid, groups) * GROUP + lid;
+    if (i >= params.count) {
+        return;
+    }
+    let lo = vec3<f32>(bitcast<f32>(scratch[0]), bitcast<f32>(scratch[1]), bitcast<f32>(scratch[2]));
+    let hi = vec3<f32>(bitcast<f32>(scratch[3]), bitcast<f32>(scratch[4]), bitcast<f32>(scratch[5]));
+    let extent = hi - lo;
+    let scale = select(vec3<f32>(0.0), vec3<f32>(f32(CELLS)) / extent, extent > vec3<f32>(0.0));
+    let cell = min(max((centroid(spheres[i]) - lo) * scale, vec3<f32>(0.0)), vec3<f32>(f32(CELLS - 1u)));
+    let q = vec3<u32>(cell);
+    let code = (spread_bits_10(q.x) << 2u) | (spread_bits_10(q.y) << 1u) | spread_bits_10(q.z);
+    pairs_in[i] = vec2<u32>(code, i);
+}
+
+fn is_zero_bit(i: u32) -> bool {
+    return ((pairs_in[i].x >> params.bit) & 1u) == 0u;
+}
+
+// Exclusive scan of shared_u32 over the workgroup (Hillis-Steele); returns the total.
+fn scan_shared(lid: u32) -> u32 {
+    workgroupBarrier();
+    for (var offset = 1u; offset < GROUP; offset *= 2u) {
+        var add = 0u;
+        if (lid >= offset) {
+            add = shared_u32[lid - offset];
+        }
+        workgroupBarrier();
+        shared_u32[lid] += add;
+        workgroupBarrier();
+    }
+    let total = shared_u32[GROUP - 1u];
+    workgroupBarrier();
+    return total;
+}
+
+// Sort (code, primitive) pairs by one key bit, stably: count zeros per block, scan, scatter.
+@compute @workgroup_size(256)
+fn sort_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+              @builtin(local_invocation_index) lid: u32) {
+    let block = flat_group(wid, groups);
+    var zeros = 0u;
+    for (var k = 0u; k < ITEMS; k++) {
+        let i = block * BLOCK + lid * ITEMS + k;
+        if (i < params.count && is_zero_bit(i)) {
+            zeros += 1u;
+        }
+    }
+    shared_u32[lid] = zeros;
+    let total = scan_shared(lid);
+    if (lid == 0u && block < block_count()) {
+        scratch[SCRATCH_BLOCKS + block] = total;
+    }
+}
+
+@compute @workgroup_size(256)
+fn sort_scan(@builtin(local_invocation_index) lid: u32) {
+    // Each invocation sums a run of consecutive blocks; a scan over the runs gives their offsets.
+    let blocks = block_count();
+    let per = (blocks + GROUP - 1u) / GROUP;
+    var sum = 0u;
+    for (var b = lid * per; b < min(blocks, (lid + 1u) * per); b++) {
+        sum += scratch[SCRATCH_BLOCKS + b];
+    }
+    shared_u32[lid] = sum;
+    let total = scan_shared(lid);
+    var running = shared_u32[lid] - sum;
+    for (var b = lid * per; b < min(blocks, (lid + 1u) * per); b++) {
+        let zeros = scratch[SCRATCH_BLOCKS + b];
+        scratch[SCRATCH_BLOCKS + b] = running;
+        running += zeros;
+    }
+    if (lid == 0u) {
+        scratch[SCRATCH_ZEROS] = total;
+    }
+}
+
+@compute @workgroup_size(256)
+fn sort_scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                @builtin(local_invocation_index) lid: u32) {
+    let block = flat_group(wid, groups);
+    var zeros = 0u;
+    for (var k = 0u; k < ITEMS; k++) {
+        let i = block * BLOCK + lid * ITEMS + k;
+        if (i < params.count && is_zero_bit(i)) {
+            zeros += 1u;
+        }
+    }
+    shared_u32[lid] = zeros;
+    scan_shared(lid);
+    if (block >= block_count()) {
+        return;
+    }
+    // Zeros before this invocation's first item, over the whole array.
+    var zeros_before = scratch[SCRATCH_BLOCKS + block] + shared_u32[lid] - zeros;
+    let total_zeros = scratch[SCRATCH_ZEROS];
+    for (var k = 0u; k < ITEMS; k++) {
+        let i = block * BLOCK + lid * ITEMS + k;
+        if (i >= params.count) {
+            break;
+        }
+        if (is_zero_bit(i)) {
+            pairs_out[zeros_before] = pairs_in[i];
+            zeros_before += 1u;
+        } else {
+            pairs_out[total_zeros + i - zeros_before] = pairs_in[i];
+        }
+    }
+}
+
+// Length of the common prefix of sorted codes i and j; -1 outside the array; equal codes compare
+// positions (30-bit codes: every count is the CPU's, which works on 64 bits, minus 32).
+fn delta(i: u32, j: i32) -> i32 {
+    if (j < 0 || j >= i32(params.count)) {
+        return -1;
+    }
+    let a = pairs_in[i].x;
+    let b = pairs_in[u32(j)].x;
+    if (a != b) {
+        return i32(countLeadingZeros(a ^ b));
+    }
+    return 32 + i32(countLeadingZeros(i ^ u32(j)));
+}
+
+// Find every internal node's children and range, and every node's parent (Karras 2012).
+@compute @workgroup_size(256)
+fn hierarchy(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+             @builtin(local_invocation_index) lid: u32) {
+    let i = flat_group(wid, groups) * GROUP + lid;
+    let n = params.count;
+    if (i + 1u >= n) {
+        return;
+    }
+    let ii = i32(i);
+    let leaf_base = n - 1u;
+    var d = -1;
+    if (delta(i, ii + 1) > delta(i, ii - 1)) {
+        d = 1;
+    }
+    let delta_min = delta(i, ii - d);
+    var l_max = 2;
+    while (delta(i, ii + l_max * d) > delta_min) {
+        l_max *= 2;
+    }
+    var l = 0;
+    for (var t = l_max / 2; t >= 1; t /= 2) {
+        if (delta(i, ii + (l + t) * d) > delta_min) {
+            l += t;
+        }
+    }
+    let j = ii + l * d;
+    let delta_node = delta(i, j);
+    var s = 0;
+    var shift = 1u;
+    loop {
+        let t = (l + (1 << shift) - 1) >> shift;
+        if (delta(i, ii + (s + t) * d) > delta_node) {
+            s += t;
+        }
+        if (t == 1) {
+            break;
+        }
+        shift += 1u;
+    }
+    let split = u32(ii + s * d + min(d, 0));
+    let first = u32(min(ii, j));
+    let last = u32(max(ii, j));
+    var left = split;
+    if (first == split) {
+        left = leaf_base + split;
+    }
+    var right = split + 1u;
+    if (last == split + 1u) {
+        right = leaf_base + split + 1u;
+    }
+    ranges[i] = vec4<u32>(left, right, first, last);
+    parents[left] = i;
+    parents[right] = i;
+    if (i == 0u) {
+        parents[0] = NONE;
+    }
+}
+
+fn box_base(node: u32) -> u32 {
+    return params.count - 1u + node * 6u;
+}
+
+fn store_box(node: u32, lo: vec3<f32>, hi: vec3<f32>) {
+    let base = box_base(node);
+    for (var a = 0u; a < 3u; a++) {
+        atomicStore(&climb[base + a], bitcast<u32>(lo[a]));
+        atomicStore(&climb[base + 3u + a], bitcast<u32>(hi[a]));
+    }
+}
+
+fn load_box_lo(node: u32) -> vec3<f32> {
+    let base = box_base(node);
+    return vec3<f32>(bitcast<f32>(atomicLoad(&climb[base])), bitcast<f32>(atomicLoad(&climb[base + 1u])),
+                     bitcast<f32>(atomicLoad(&climb[base + 2u])));
+}
+
+fn load_box_hi(node: u32) -> vec3<f32> {
+    let base = box_base(node) + 3u;
+    return vec3<f32>(bitcast<f32>(atomicLoad(&climb[base])), bitcast<f32>(atomicLoad(&climb[base + 1u])),
+                     bitcast<f32>(atomicLoad(&climb[base + 2u])));
+}
+
+// Bound leaves by their primitives, then internal nodes bottom-up: each leaf climbs; at each
+// internal node an atomic visit counter stops the first child to arrive, and the second, which
+// then knows both children's boxes, writes the union and climbs on. Boxes are atomic words so the
+// second arrival reads what the first stored.
+@compute @workgroup_size(256)
+fn leaves_and_bounds(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                     @builtin(local_invocation_index) lid: u32) {
+    let k = flat_group(wid, groups) * GROUP + lid;
+    let n = params.count;
+    if (k >= n) {
+        return;
+    }
+    let leaf = n - 1u + k;
+    let sphere = spheres[pairs_in[k].y];
+    store_box(leaf, sphere_min(sphere), sphere_max(sphere));
+    if (n == 1u) {
+        return;
+    }
+    var node = parents[leaf];
+    while (node != NONE) {
+        if (atomicAdd(&climb[node], 1u) == 0u) {
+            return;
+        }
+        let children = ranges[node];
+        store_box(node, min(load_box_lo(children.x), load_box_lo(children.y)),
+                  max(load_box_hi(children.x), load_box_hi(children.y)));
+        node = parents[node];
+    }
+}
+
+// Link every node to the node after its subtree in depth-first order, and write the node array.
+@compute @workgroup_size(256)
+fn links(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+         @builtin(local_invocation_index) lid: u32) {
+    let node = flat_group(wid, groups) * GROUP + lid;
+    let n = params.count;
+    if (node >= 2u * n - 1u) {
+        return;
+    }
+    let leaf_base = n - 1u;
+    var left: u32;
+    var right: u32;
+    var last: u32;
+    if (node < leaf_base) {
+        let range = ranges[node];
+        left = range.x;
+        right = range.y;
+        last = range.w;
+    } else {
+        left = pairs_in[node - leaf_base].y;
+        right = LEAF;
+        last = node - leaf_base;
+    }
+    let next = last + 1u;
+    var escape = leaf_base + next;
+    if (next == n) {
+        escape = NONE;
+    } else if (next < leaf_base && ranges[next].z == next) {
+        escape = next;
+    }
+    var parent = NONE;
+    if (n > 1u) {
+        parent = parents[node];
+    }
+    nodes[node] = BvhNode(load_box_lo(node), left, load_box_hi(node), right, parent, escape);
+}
