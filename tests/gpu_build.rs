@@ -7,7 +7,6 @@ use glam::Vec3;
 use raypipe::bvh::aabb::Aabb;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::{Bvh, centroid_codes};
-use raypipe::gpu::GpuContext;
 use raypipe::gpu::build::GpuLbvhBuilder;
 use raypipe::scene::builtin::SplitMix64;
 use raypipe::scene::packed::GpuSphere;
@@ -40,11 +39,11 @@ fn boxes(spheres: &[GpuSphere]) -> Vec<Aabb> {
         .collect()
 }
 
-fn check_same_codes(ctx: &GpuContext, spheres: &[GpuSphere], what: &str) {
+fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &str) {
     let boxes = boxes(spheres);
     let codes = centroid_codes(&boxes, MortonBits::Bits30);
     let (cpu, _) = Bvh::build_from_codes(&boxes, &codes, MortonBits::Bits30);
-    let builder = GpuLbvhBuilder::new(ctx, spheres.len()).unwrap();
+    builder.resize(spheres.len()).unwrap();
     builder.write_spheres(spheres);
     builder.write_codes(&codes);
     builder.build(true).unwrap();
@@ -57,25 +56,36 @@ fn check_same_codes(ctx: &GpuContext, spheres: &[GpuSphere], what: &str) {
 #[test]
 fn same_codes_give_identical_nodes() {
     let Some(ctx) = gpu() else { return };
+    let mut builder = GpuLbvhBuilder::new(&ctx, 0).unwrap();
     for n in [0, 1, 2, 3, 100, 1023, 1024, 1025, 5000] {
-        check_same_codes(&ctx, &random_spheres(n, n as u64, n), &format!("{n} random spheres"));
+        check_same_codes(
+            &mut builder,
+            &random_spheres(n, n as u64, n),
+            &format!("{n} random spheres"),
+        );
     }
-    check_same_codes(&ctx, &random_spheres(30_000, 7, 30_000), "30,000 random spheres");
+    check_same_codes(
+        &mut builder,
+        &random_spheres(30_000, 7, 30_000),
+        "30,000 random spheres",
+    );
 }
 
 #[test]
 fn same_codes_give_identical_nodes_with_duplicate_centroids() {
     let Some(ctx) = gpu() else { return };
-    check_same_codes(&ctx, &random_spheres(4000, 3, 7), "4,000 spheres on 7 centres");
-    check_same_codes(&ctx, &random_spheres(2048, 4, 1), "2,048 coincident spheres");
+    let mut builder = GpuLbvhBuilder::new(&ctx, 0).unwrap();
+    check_same_codes(&mut builder, &random_spheres(4000, 3, 7), "4,000 spheres on 7 centres");
+    check_same_codes(&mut builder, &random_spheres(2048, 4, 1), "2,048 coincident spheres");
 }
 
 #[test]
 fn own_codes_give_a_valid_tree() {
     let Some(ctx) = gpu() else { return };
+    let mut builder = GpuLbvhBuilder::new(&ctx, 0).unwrap();
     for (n, centres) in [(1, 1), (2, 2), (10_000, 10_000), (3000, 5)] {
         let spheres = random_spheres(n, 11, centres);
-        let builder = GpuLbvhBuilder::new(&ctx, n).unwrap();
+        builder.resize(n).unwrap();
         builder.write_spheres(&spheres);
         builder.build(false).unwrap();
         let bvh = Bvh {

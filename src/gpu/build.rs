@@ -41,11 +41,19 @@ struct Kernels {
     links: wgpu::ComputePipeline,
 }
 
-/// A GPU LBVH builder for a fixed primitive count; build after build it reuses its buffers.
+/// A GPU LBVH builder: kernels compiled once, buffers kept from build to build while the
+/// primitive count stays the same.
 pub struct GpuLbvhBuilder<'a> {
     ctx: &'a GpuContext,
-    count: u32,
     kernels: Kernels,
+    layout: wgpu::BindGroupLayout,
+    buffers: Buffers,
+    timer: Option<PhaseTimer>,
+}
+
+/// The buffers of a build over `count` primitives.
+pub struct Buffers {
+    count: u32,
     /// [pairs A in, B out], [B in, A out].
     bind_groups: [wgpu::BindGroup; 2],
     /// The spheres the build reads; write new positions here before each build.
@@ -54,7 +62,6 @@ pub struct GpuLbvhBuilder<'a> {
     climb: wgpu::Buffer,
     /// The built nodes (STORAGE | COPY_SRC), the layout of `bvh::layout`.
     pub nodes: wgpu::Buffer,
-    timer: Option<PhaseTimer>,
 }
 
 fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
@@ -73,48 +80,10 @@ fn grid(groups: u32) -> (u32, u32) {
 }
 
 impl<'a> GpuLbvhBuilder<'a> {
+    /// Compiles the kernels and sizes the buffers for `count` primitives.
     pub fn new(ctx: &'a GpuContext, count: usize) -> anyhow::Result<Self> {
-        let limits = ctx.limits();
-        let n = count as u64;
-        let node_bytes = (2 * n).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
-        if node_bytes > limits.max_storage_buffer_binding_size {
-            bail!(
-                "{count} primitives need {node_bytes} bytes of nodes, more than the adapter's storage binding limit {}",
-                limits.max_storage_buffer_binding_size
-            );
-        }
-        ctx.checked("creating the GPU LBVH builder", || {
+        ctx.checked("compiling the GPU LBVH build", || {
             let device = &ctx.device;
-            let blocks = n.div_ceil(BLOCK as u64);
-            let spheres = storage(ctx, "build spheres", n * 32, wgpu::BufferUsages::COPY_DST);
-            let pairs = storage(ctx, "pairs A", n * 8, wgpu::BufferUsages::COPY_DST);
-            let pairs_b = storage(ctx, "pairs B", n * 8, wgpu::BufferUsages::empty());
-            let scratch = storage(ctx, "build scratch", (8 + 7 * blocks) * 4, wgpu::BufferUsages::empty());
-            let ranges = storage(ctx, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
-            let parents = storage(
-                ctx,
-                "parents",
-                (2 * n).saturating_sub(1) * 4,
-                wgpu::BufferUsages::empty(),
-            );
-            let climb_words = n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1);
-            let climb = storage(ctx, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
-            let nodes = storage(ctx, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
-            let params = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("build params"),
-                size: PARAMS_STRIDE * CODE_BITS as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            for bit in 0..CODE_BITS {
-                let p = BuildParams {
-                    count: count as u32,
-                    bit,
-                };
-                ctx.queue
-                    .write_buffer(&params, bit as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
-            }
-
             let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
                 binding,
                 visibility: wgpu::ShaderStages::COMPUTE,
@@ -136,30 +105,6 @@ impl<'a> GpuLbvhBuilder<'a> {
                 label: Some("lbvh build"),
                 entries: &entries,
             });
-            let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
-                let resources = [
-                    &spheres, pairs_in, pairs_out, &scratch, &ranges, &parents, &climb, &nodes,
-                ];
-                let mut entries = vec![wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &params,
-                        offset: 0,
-                        size: NonZeroU64::new(std::mem::size_of::<BuildParams>() as u64),
-                    }),
-                }];
-                entries.extend(resources.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32 + 1,
-                    resource: b.as_entire_binding(),
-                }));
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("lbvh build"),
-                    layout: &layout,
-                    entries: &entries,
-                })
-            };
-            let bind_groups = [bind_group(&pairs, &pairs_b), bind_group(&pairs_b, &pairs)];
-
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("lbvh"),
                 source: wgpu::ShaderSource::Wgsl(format!("{TYPES}\n{LBVH}").into()),
@@ -190,29 +135,40 @@ impl<'a> GpuLbvhBuilder<'a> {
                 leaves_and_bounds: kernel("leaves_and_bounds"),
                 links: kernel("links"),
             };
+            let buffers = Buffers::new(ctx, &layout, count)?;
             Ok(Self {
                 ctx,
-                count: count as u32,
                 kernels,
-                bind_groups,
-                spheres,
-                pairs,
-                climb,
-                nodes,
+                layout,
+                buffers,
                 timer: ctx.timestamps.then(|| PhaseTimer::new(&ctx.device)),
             })
         })
     }
 
+    /// Sizes the buffers for `count` primitives (a no-op when the count is unchanged).
+    pub fn resize(&mut self, count: usize) -> anyhow::Result<()> {
+        if count != self.count() {
+            self.buffers = self.ctx.checked("sizing the GPU LBVH build", || {
+                Buffers::new(self.ctx, &self.layout, count)
+            })?;
+        }
+        Ok(())
+    }
+
+    pub fn buffers(&self) -> &Buffers {
+        &self.buffers
+    }
+
     pub fn count(&self) -> usize {
-        self.count as usize
+        self.buffers.count as usize
     }
 
     pub fn write_spheres(&self, spheres: &[GpuSphere]) {
         assert_eq!(spheres.len(), self.count());
         self.ctx
             .queue
-            .write_buffer(&self.spheres, 0, bytemuck::cast_slice(spheres));
+            .write_buffer(&self.buffers.spheres, 0, bytemuck::cast_slice(spheres));
     }
 
     /// Replaces the Morton phase with given codes (30-bit), for comparisons with the CPU build.
@@ -221,23 +177,24 @@ impl<'a> GpuLbvhBuilder<'a> {
         let pairs: Vec<[u32; 2]> = codes.iter().enumerate().map(|(i, &c)| [c as u32, i as u32]).collect();
         self.ctx
             .queue
-            .write_buffer(&self.pairs, 0, bytemuck::cast_slice(&pairs));
+            .write_buffer(&self.buffers.pairs, 0, bytemuck::cast_slice(&pairs));
     }
 
     /// Records a build into `encoder`: from the spheres, or from the codes of `write_codes` when
     /// `given_codes` is set.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, given_codes: bool) {
-        let n = self.count;
+        let b = &self.buffers;
+        let n = b.count;
         if n == 0 {
             return;
         }
         if n > 1 {
-            encoder.clear_buffer(&self.climb, 0, Some((n as u64 - 1) * 4));
+            encoder.clear_buffer(&b.climb, 0, Some((n as u64 - 1) * 4));
         }
         let blocks = n.div_ceil(BLOCK);
         let items = n.div_ceil(GROUP);
         let k = &self.kernels;
-        let a = &self.bind_groups[0];
+        let a = &b.bind_groups[0];
         let phase = |encoder: &mut wgpu::CommandEncoder,
                      index: usize,
                      steps: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, u32, u32)]| {
@@ -267,7 +224,7 @@ impl<'a> GpuLbvhBuilder<'a> {
         }
         let sort: Vec<_> = (0..CODE_BITS)
             .flat_map(|bit| {
-                let bind_group = &self.bind_groups[bit as usize % 2];
+                let bind_group = &b.bind_groups[bit as usize % 2];
                 [
                     (&k.sort_count, bind_group, bit, blocks),
                     (&k.sort_scan, bind_group, bit, 1),
@@ -295,7 +252,7 @@ impl<'a> GpuLbvhBuilder<'a> {
             self.ctx.queue.submit([encoder.finish()]);
             self.ctx.device.poll(wgpu::PollType::wait_indefinitely())?;
             match &self.timer {
-                Some(timer) if self.count > 0 => timer.read(self.ctx),
+                Some(timer) if self.count() > 0 => timer.read(self.ctx),
                 _ => Ok(BuildTimings::default()),
             }
         })
@@ -303,12 +260,87 @@ impl<'a> GpuLbvhBuilder<'a> {
 
     /// Copies the node array back to the host.
     pub fn read_nodes(&self) -> anyhow::Result<Vec<GpuNode>> {
-        let size = (2 * self.count as u64).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
+        let size = (2 * self.count() as u64).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
         if size == 0 {
             return Ok(Vec::new());
         }
-        let bytes = read_buffer(self.ctx, &self.nodes, size)?;
+        let bytes = read_buffer(self.ctx, &self.buffers.nodes, size)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
+
+impl Buffers {
+    fn new(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, count: usize) -> anyhow::Result<Self> {
+        let limits = ctx.limits();
+        let n = count as u64;
+        let node_bytes = (2 * n).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
+        if node_bytes > limits.max_storage_buffer_binding_size {
+            bail!(
+                "{count} primitives need {node_bytes} bytes of nodes, more than the adapter's storage binding limit {}",
+                limits.max_storage_buffer_binding_size
+            );
+        }
+        let device = &ctx.device;
+        let blocks = n.div_ceil(BLOCK as u64);
+        let spheres = storage(ctx, "build spheres", n * 32, wgpu::BufferUsages::COPY_DST);
+        let pairs = storage(ctx, "pairs A", n * 8, wgpu::BufferUsages::COPY_DST);
+        let pairs_b = storage(ctx, "pairs B", n * 8, wgpu::BufferUsages::empty());
+        let scratch = storage(ctx, "build scratch", (8 + 7 * blocks) * 4, wgpu::BufferUsages::empty());
+        let ranges = storage(ctx, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
+        let parents = storage(
+            ctx,
+            "parents",
+            (2 * n).saturating_sub(1) * 4,
+            wgpu::BufferUsages::empty(),
+        );
+        let climb_words = n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1);
+        let climb = storage(ctx, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
+        let nodes = storage(ctx, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("build params"),
+            size: PARAMS_STRIDE * CODE_BITS as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        for bit in 0..CODE_BITS {
+            let p = BuildParams {
+                count: count as u32,
+                bit,
+            };
+            ctx.queue
+                .write_buffer(&params, bit as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
+        }
+        let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
+            let resources = [
+                &spheres, pairs_in, pairs_out, &scratch, &ranges, &parents, &climb, &nodes,
+            ];
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &params,
+                    offset: 0,
+                    size: NonZeroU64::new(std::mem::size_of::<BuildParams>() as u64),
+                }),
+            }];
+            entries.extend(resources.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32 + 1,
+                resource: b.as_entire_binding(),
+            }));
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("lbvh build"),
+                layout,
+                entries: &entries,
+            })
+        };
+        let bind_groups = [bind_group(&pairs, &pairs_b), bind_group(&pairs_b, &pairs)];
+        Ok(Self {
+            count: count as u32,
+            bind_groups,
+            spheres,
+            pairs,
+            climb,
+            nodes,
+        })
     }
 }
 
