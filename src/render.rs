@@ -1,10 +1,15 @@
 //! One render, on the device the user chose: the GPU, the CPU reference, or the GPU with a CPU fallback.
 
+use crate::bvh::BuildTimings;
+use crate::bvh::lbvh::LbvhBuilder;
+use crate::bvh::morton::MortonBits;
 use crate::cpu;
+use crate::gpu::build::{GpuLbvhBuilder, depth_bound};
 use crate::gpu::context::Backend;
 use crate::gpu::upload::MemoryMode;
 use crate::gpu::{GpuContext, GpuRenderer};
 use crate::image::Frame;
+use crate::scene::Scene;
 use crate::scene::packed::PackedScene;
 use clap::ValueEnum;
 use std::time::Instant;
@@ -57,8 +62,9 @@ pub struct RenderOutcome {
     pub gpu_ms: Option<f64>,
 }
 
-pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<RenderOutcome> {
-    let ctx = match options.device {
+/// The GPU the options ask for: `None` for the CPU (with a notice when `auto` found no adapter).
+fn open_device(options: &RenderOptions) -> anyhow::Result<Option<GpuContext>> {
+    Ok(match options.device {
         DeviceChoice::Cpu => None,
         DeviceChoice::Gpu => Some(GpuContext::require(options.backend)?),
         DeviceChoice::Auto => {
@@ -68,8 +74,11 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
             }
             ctx
         }
-    };
-    match ctx {
+    })
+}
+
+pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<RenderOutcome> {
+    match open_device(options)? {
         Some(ctx) => {
             let renderer = GpuRenderer::new(&ctx, scene, options.memory, options.accel)?;
             if options.warm_up {
@@ -95,4 +104,87 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
             })
         }
     }
+}
+
+/// What a sequence of frames took, frame by frame.
+pub struct FramesOutcome {
+    pub device: String,
+    /// BVH build time per frame, per phase: GPU timestamps on the GPU (zeros without them), wall
+    /// clock on the CPU; empty for brute force.
+    pub builds: Vec<BuildTimings>,
+    /// Render time per frame: GPU timestamps where the adapter has them, else wall clock.
+    pub render_ms: Vec<f64>,
+    /// Rays traced per frame.
+    pub rays: Vec<u64>,
+}
+
+/// Renders `frames` frames of a (moving) scene, rebuilding the BVH every frame, and hands each
+/// frame to `emit`. On the GPU the build runs in compute passes in the same submission as the
+/// frame, reading and writing buffers the fragment shader then reads: no round trip to the host
+/// between build and trace; this needs storage memory. On the CPU, one reusable builder serves
+/// every frame.
+pub fn render_frames(
+    scene: &Scene,
+    options: &RenderOptions,
+    frames: u32,
+    mut emit: impl FnMut(u32, &Frame) -> anyhow::Result<()>,
+) -> anyhow::Result<FramesOutcome> {
+    let first = PackedScene::new(scene)?;
+    let n = first.spheres.len();
+    let mut outcome = FramesOutcome {
+        device: String::new(),
+        builds: Vec::new(),
+        render_ms: Vec::new(),
+        rays: Vec::new(),
+    };
+    let spheres_at = |frame: u32| -> anyhow::Result<PackedScene> { Ok(PackedScene::new(&scene.at_frame(frame))?) };
+    match open_device(options)? {
+        Some(ctx) => {
+            anyhow::ensure!(
+                options.memory == MemoryMode::Storage,
+                "--frames rebuilds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
+            );
+            outcome.device = ctx.describe();
+            let builder = GpuLbvhBuilder::new(&ctx, n)?;
+            let mut layout = first.clone();
+            layout.bvh_depth = depth_bound(n);
+            let renderer = GpuRenderer::with_shared_buffers(&ctx, &layout, options.accel, &builder.shared_buffers())?;
+            for frame in 0..frames {
+                let packed = spheres_at(frame)?;
+                builder.write_spheres(&packed.spheres);
+                let start = Instant::now();
+                let timed = renderer.render_after(|encoder| {
+                    if options.accel.uses_bvh() {
+                        builder.encode(encoder, false);
+                    }
+                })?;
+                let wall = start.elapsed().as_secs_f64() * 1e3;
+                if options.accel.uses_bvh() {
+                    outcome.builds.push(builder.read_timings()?);
+                }
+                outcome.render_ms.push(timed.gpu_ms.unwrap_or(wall));
+                outcome.rays.push(timed.frame.rays());
+                emit(frame, &timed.frame)?;
+            }
+        }
+        None => {
+            outcome.device = format!("CPU reference ({} threads)", rayon::current_num_threads());
+            let mut builder = LbvhBuilder::<u64>::new();
+            let boxes_of = |p: &PackedScene| p.sphere_boxes();
+            for frame in 0..frames {
+                let mut packed = spheres_at(frame)?;
+                if options.accel.uses_bvh() {
+                    let timings = builder.build(&boxes_of(&packed), MortonBits::Bits30);
+                    packed.set_bvh(builder.to_bvh());
+                    outcome.builds.push(timings);
+                }
+                let start = Instant::now();
+                let frame_image = cpu::render(&packed, options.accel, options.progress);
+                outcome.render_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                outcome.rays.push(frame_image.rays());
+                emit(frame, &frame_image)?;
+            }
+        }
+    }
+    Ok(outcome)
 }

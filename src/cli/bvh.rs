@@ -3,6 +3,9 @@ use crate::bvh::lbvh::{Key, LbvhBuilder};
 use crate::bvh::morton::MortonBits;
 use crate::bvh::sah::{build_binned_sah, sah_cost};
 use crate::bvh::{BuildTimings, Bvh};
+use crate::gpu::GpuContext;
+use crate::gpu::build::GpuLbvhBuilder;
+use crate::gpu::context::Backend;
 use crate::scene::Scene;
 use crate::scene::packed::PackedScene;
 use anyhow::Context;
@@ -20,12 +23,23 @@ pub enum Builder {
     Sah,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BuildDevice {
+    Cpu,
+    Gpu,
+}
+
 #[derive(Args)]
 pub struct BvhArgs {
     /// A built-in scene or a TOML file; the BVH is built over its spheres.
     scene: String,
     #[arg(long, value_enum, default_value_t)]
     builder: Builder,
+    /// Where the LBVH is built: the CPU (rayon) or the GPU (compute passes, 30-bit codes).
+    #[arg(long, value_enum, default_value_t = BuildDevice::Cpu)]
+    device: BuildDevice,
+    #[arg(long, value_enum)]
+    backend: Option<Backend>,
     /// Morton code width of the LBVH.
     #[arg(long, value_enum, default_value_t)]
     morton_bits: MortonBits,
@@ -75,7 +89,34 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let packed = PackedScene::new(&scene).with_context(|| args.scene.clone())?;
     let boxes = packed.sphere_boxes();
     let runs = args.runs.max(1);
+    let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
     let (bvh, mut runs) = match (args.builder, args.morton_bits) {
+        (Builder::Lbvh, bits) if args.device == BuildDevice::Gpu => {
+            anyhow::ensure!(
+                bits == MortonBits::Bits30,
+                "the GPU build uses 30-bit Morton codes; drop --morton-bits 63"
+            );
+            let ctx = GpuContext::require(args.backend)?;
+            device = format!("gpu: {}", ctx.describe());
+            anyhow::ensure!(
+                ctx.timestamps,
+                "{device} has no timestamp queries to time the build with"
+            );
+            let builder = GpuLbvhBuilder::new(&ctx, boxes.len())?;
+            builder.write_spheres(&packed.spheres);
+            builder.build(false)?;
+            let timings = (0..runs)
+                .map(|_| builder.build(false))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            let bvh = Bvh {
+                nodes: builder.read_nodes()?,
+                primitive_count: boxes.len(),
+            };
+            (bvh, timings)
+        }
+        (Builder::Sah, _) if args.device == BuildDevice::Gpu => {
+            anyhow::bail!("the binned SAH builder runs on the CPU only")
+        }
         (Builder::Lbvh, MortonBits::Bits30) => time_lbvh::<u64>(&boxes, args.morton_bits, runs),
         (Builder::Lbvh, MortonBits::Bits63) => time_lbvh::<u128>(&boxes, args.morton_bits, runs),
         (Builder::Sah, _) => {
@@ -110,7 +151,7 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
             Builder::Lbvh => format!("lbvh ({}-bit Morton codes)", args.morton_bits.total_bits()),
             Builder::Sah => "binned SAH (16 bins)".into(),
         },
-        device: format!("cpu ({} threads)", rayon::current_num_threads()),
+        device,
         primitives: bvh.primitive_count,
         nodes: bvh.nodes.len(),
         max_depth: depths.iter().copied().max().unwrap_or(0),

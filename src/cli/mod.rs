@@ -5,6 +5,8 @@ mod diff;
 mod info;
 mod render;
 
+pub use render::numbered;
+
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 

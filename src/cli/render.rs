@@ -2,13 +2,13 @@ use crate::bvh::morton::MortonBits;
 use crate::gpu::context::Backend;
 use crate::gpu::upload::MemoryMode;
 use crate::image::io;
-use crate::render::{Accel, DeviceChoice, RenderOptions, render};
+use crate::render::{Accel, DeviceChoice, RenderOptions, render, render_frames};
 use crate::scene::Scene;
 use crate::scene::packed::PackedScene;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
@@ -50,6 +50,32 @@ pub struct RenderArgs {
     /// Print render time and rays per second.
     #[arg(long)]
     stats: bool,
+    /// Render this many frames of a moving scene (bounce:N), rebuilding the BVH every frame (on the
+    /// GPU with --memory storage). Writes the last frame, or every frame when the output name holds
+    /// a printf-style number such as frame_%04d.png.
+    #[arg(long)]
+    frames: Option<u32>,
+}
+
+/// `name` with its `%d` or `%0Nd` replaced by `frame`; `None` when it holds no such pattern.
+pub fn numbered(name: &str, frame: u32) -> Option<String> {
+    let start = name.find('%')?;
+    let rest = &name[start + 1..];
+    let digits_end = rest.find(|c: char| !c.is_ascii_digit())?;
+    if !rest[digits_end..].starts_with('d') {
+        return None;
+    }
+    let width: usize = rest[..digits_end].parse().unwrap_or(0);
+    Some(format!("{}{frame:0width$}{}", &name[..start], &rest[digits_end + 1..]))
+}
+
+fn median(values: impl IntoIterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = values.into_iter().collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
@@ -74,6 +100,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     settings.width = args.width.unwrap_or(settings.width);
     settings.height = args.height.unwrap_or(settings.height);
     settings.max_depth = args.depth.unwrap_or(settings.max_depth);
+    if let Some(frames) = args.frames {
+        return render_sequence(&args, &scene, &output, is_exr, frames);
+    }
     let mut packed = PackedScene::new(&scene).with_context(|| args.scene.clone())?;
     if args.accel.uses_bvh() {
         packed.build_bvh(MortonBits::default());
@@ -89,13 +118,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     };
     let outcome = render(&packed, &options)?;
     let frame = &outcome.frame;
-    let image = match (args.aov, is_exr) {
-        (Aov::Color, false) => frame.display(),
-        (Aov::Color, true) => frame.radiance(),
-        (Aov::Depth, _) => frame.depth(),
-        (Aov::Normal, _) => frame.normals(),
-    };
-    io::write(&image, &output)?;
+    io::write(&aov_image(args.aov, is_exr, frame), &output)?;
 
     if args.stats {
         let pixels = frame.width as u64 * frame.height as u64;
@@ -123,6 +146,80 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             outcome.wall_ms,
             rays as f64 / pixels as f64,
             rays as f64 / (ms * 1e3)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn aov_image(aov: Aov, is_exr: bool, frame: &crate::image::Frame) -> crate::image::FloatImage {
+    match (aov, is_exr) {
+        (Aov::Color, false) => frame.display(),
+        (Aov::Color, true) => frame.radiance(),
+        (Aov::Depth, _) => frame.depth(),
+        (Aov::Normal, _) => frame.normals(),
+    }
+}
+
+fn render_sequence(
+    args: &RenderArgs,
+    scene: &Scene,
+    output: &Path,
+    is_exr: bool,
+    frames: u32,
+) -> anyhow::Result<ExitCode> {
+    anyhow::ensure!(frames >= 1, "--frames must be at least 1");
+    let name = output.to_string_lossy().to_string();
+    let pattern = numbered(&name, 0).is_some();
+    let options = RenderOptions {
+        device: args.device,
+        backend: args.backend,
+        memory: args.memory,
+        accel: args.accel,
+        progress: false,
+        warm_up: false,
+    };
+    let outcome = render_frames(scene, &options, frames, |frame, image| {
+        if pattern {
+            let path = numbered(&name, frame).expect("checked above");
+            io::write(&aov_image(args.aov, is_exr, image), Path::new(&path))?;
+        } else if frame + 1 == frames {
+            io::write(&aov_image(args.aov, is_exr, image), output)?;
+        }
+        Ok(())
+    })
+    .with_context(|| args.scene.clone())?;
+    if args.stats {
+        let s = &scene.settings;
+        println!(
+            "scene: {}, {}x{}, {} spheres, {frames} frames",
+            args.scene,
+            s.width,
+            s.height,
+            scene.spheres.len()
+        );
+        println!(
+            "device: {}, memory {:?}, accel {:?}",
+            outcome.device, args.memory, args.accel
+        );
+        // The first frame pays for pipeline compilation on some drivers: medians skip it.
+        let steady = if frames > 1 { 1 } else { 0 };
+        if !outcome.builds.is_empty() {
+            let b = &outcome.builds[steady..];
+            println!(
+                "BVH build per frame (median): morton {:.3} ms, sort {:.3} ms, hierarchy {:.3} ms, bounds {:.3} ms, links {:.3} ms, total {:.3} ms",
+                median(b.iter().map(|t| t.morton)),
+                median(b.iter().map(|t| t.sort)),
+                median(b.iter().map(|t| t.hierarchy)),
+                median(b.iter().map(|t| t.bounds)),
+                median(b.iter().map(|t| t.links)),
+                median(b.iter().map(|t| t.total())),
+            );
+        }
+        let render_ms = median(outcome.render_ms[steady..].iter().copied());
+        let rays = median(outcome.rays[steady..].iter().map(|&r| r as f64));
+        println!(
+            "render per frame (median): {render_ms:.2} ms, {rays:.0} rays, {:.2} Mrays/s",
+            rays / (render_ms * 1e3)
         );
     }
     Ok(ExitCode::SUCCESS)

@@ -5,6 +5,7 @@
 //! GPU builds use 30-bit Morton codes; 63-bit codes are built on the CPU only.
 
 use super::GpuContext;
+use super::upload::SharedBuffers;
 use crate::bvh::BuildTimings;
 use crate::bvh::layout::GpuNode;
 use crate::scene::packed::GpuSphere;
@@ -251,11 +252,25 @@ impl<'a> GpuLbvhBuilder<'a> {
             self.encode(&mut encoder, given_codes);
             self.ctx.queue.submit([encoder.finish()]);
             self.ctx.device.poll(wgpu::PollType::wait_indefinitely())?;
-            match &self.timer {
-                Some(timer) if self.count() > 0 => timer.read(self.ctx),
-                _ => Ok(BuildTimings::default()),
-            }
+            self.read_timings()
         })
+    }
+
+    /// The GPU time of each phase of the last build that was submitted and finished (zeros where
+    /// the adapter has no timestamp queries).
+    pub fn read_timings(&self) -> anyhow::Result<BuildTimings> {
+        match &self.timer {
+            Some(timer) if self.count() > 0 => timer.read(self.ctx),
+            _ => Ok(BuildTimings::default()),
+        }
+    }
+
+    /// The spheres and nodes, for a renderer to read in place.
+    pub fn shared_buffers(&self) -> SharedBuffers {
+        SharedBuffers {
+            spheres: self.buffers.spheres.clone(),
+            nodes: self.buffers.nodes.clone(),
+        }
     }
 
     /// Copies the node array back to the host.
@@ -342,6 +357,13 @@ impl Buffers {
             nodes,
         })
     }
+}
+
+/// A bound on the depth of any LBVH over `count` primitives with 30-bit codes: each level of the
+/// radix tree consumes at least one bit of the (code, position) key, which has 30 + ceil(log2 n)
+/// bits. Renderers size their traversal stack with it when the tree is built on the GPU.
+pub fn depth_bound(count: usize) -> u32 {
+    CODE_BITS + (count.max(1) as u64).next_power_of_two().trailing_zeros()
 }
 
 const PHASE_NAMES: [&str; PHASES] = ["morton", "sort", "hierarchy", "bounds", "links"];

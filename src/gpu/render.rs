@@ -4,7 +4,7 @@
 use super::GpuContext;
 use super::readback::Readback;
 use super::shader::{ShaderConfig, compose};
-use super::upload::{MemoryMode, SceneResources, upload};
+use super::upload::{MemoryMode, SceneResources, SharedBuffers, upload};
 use crate::image::Frame;
 use crate::render::Accel;
 use crate::scene::packed::PackedScene;
@@ -36,6 +36,27 @@ pub struct TimedFrame {
 
 impl<'a> GpuRenderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &PackedScene, memory: MemoryMode, accel: Accel) -> anyhow::Result<Self> {
+        Self::create(ctx, scene, memory, accel, None)
+    }
+
+    /// A renderer that reads its spheres and nodes from `shared` (storage memory): the buffers of a
+    /// GPU LBVH builder. `scene.bvh_depth` must bound the depth of the trees it will build.
+    pub fn with_shared_buffers(
+        ctx: &'a GpuContext,
+        scene: &PackedScene,
+        accel: Accel,
+        shared: &SharedBuffers,
+    ) -> anyhow::Result<Self> {
+        Self::create(ctx, scene, MemoryMode::Storage, accel, Some(shared))
+    }
+
+    fn create(
+        ctx: &'a GpuContext,
+        scene: &PackedScene,
+        memory: MemoryMode,
+        accel: Accel,
+        shared: Option<&SharedBuffers>,
+    ) -> anyhow::Result<Self> {
         let (width, height) = (scene.width(), scene.height());
         let limits = ctx.limits();
         if width > limits.max_texture_dimension_2d || height > limits.max_texture_dimension_2d {
@@ -44,7 +65,7 @@ impl<'a> GpuRenderer<'a> {
                 limits.max_texture_dimension_2d
             );
         }
-        if accel.uses_bvh() && !scene.spheres.is_empty() && scene.nodes.is_empty() {
+        if accel.uses_bvh() && shared.is_none() && !scene.spheres.is_empty() && scene.nodes.is_empty() {
             bail!("--accel {accel:?} needs the scene's BVH: build it before rendering");
         }
         let features = ctx.adapter.get_texture_format_features(TARGET_FORMAT);
@@ -52,7 +73,7 @@ impl<'a> GpuRenderer<'a> {
             bail!("adapter {} cannot render to rgba32uint targets", ctx.describe());
         }
         ctx.checked("uploading the scene and building the pipeline", || {
-            let resources = upload(ctx, scene, memory, accel)?;
+            let resources = upload(ctx, scene, memory, accel, shared)?;
             let globals = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("globals"),
                 contents: bytemuck::bytes_of(&scene.globals),
@@ -101,6 +122,12 @@ impl<'a> GpuRenderer<'a> {
 
     /// Draws one frame and reads both targets back.
     pub fn render(&self) -> anyhow::Result<TimedFrame> {
+        self.render_after(|_| {})
+    }
+
+    /// Records `prepare` (a BVH build, say) and then the frame into one command buffer, so that the
+    /// GPU runs both without a round trip to the host; reads both targets back.
+    pub fn render_after(&self, prepare: impl FnOnce(&mut wgpu::CommandEncoder)) -> anyhow::Result<TimedFrame> {
         let ctx = self.ctx;
         ctx.checked("rendering", || {
             let size = self.targets[0].size();
@@ -109,6 +136,7 @@ impl<'a> GpuRenderer<'a> {
                 .each_ref()
                 .map(|_| Readback::new(&ctx.device, size.width, size.height, TARGET_BYTES_PER_PIXEL));
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            prepare(&mut encoder);
             self.encode_pass(&mut encoder);
             for (readback, target) in readbacks.iter().zip(&self.targets) {
                 readback.copy_from(&mut encoder, target);

@@ -24,6 +24,14 @@ pub enum MemoryMode {
 /// Texture rows are 2048 texels wide: the smallest maximum texture size WebGL2 guarantees.
 pub const TEXELS_PER_ROW: u32 = 2048;
 
+/// Buffers that already live on the GPU and replace the scene's own in storage memory: the spheres
+/// and nodes of a [`super::build::GpuLbvhBuilder`], rebuilt there every frame.
+#[derive(Clone)]
+pub struct SharedBuffers {
+    pub spheres: wgpu::Buffer,
+    pub nodes: wgpu::Buffer,
+}
+
 /// The scene's arrays on the GPU, ready to bind.
 pub struct SceneResources {
     pub arrays: Vec<RecordArray>,
@@ -58,7 +66,11 @@ pub fn upload(
     scene: &PackedScene,
     memory: MemoryMode,
     accel: Accel,
+    shared: Option<&SharedBuffers>,
 ) -> anyhow::Result<SceneResources> {
+    if shared.is_some() && memory != MemoryMode::Storage {
+        bail!("a BVH built on the GPU is read from storage memory: use --memory storage");
+    }
     let limits = ctx.limits();
     let texels_per_row = TEXELS_PER_ROW.min(limits.max_texture_dimension_2d);
     let mut out = SceneResources {
@@ -69,7 +81,20 @@ pub fn upload(
     };
     for (array, (_, records)) in record_arrays(scene, accel).into_iter().zip(scene_records(scene, accel)) {
         let (name, binding) = (array.name, array.binding);
+        let shared_buffer = match (shared, name) {
+            (Some(shared), "sphere") => Some(shared.spheres.clone()),
+            (Some(shared), "node") => Some(shared.nodes.clone()),
+            _ => None,
+        };
         let (ty, resource) = match memory {
+            MemoryMode::Storage if shared_buffer.is_some() => {
+                let ty = wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                };
+                (ty, Resource::Buffer(shared_buffer.expect("checked by the match guard")))
+            }
             MemoryMode::Uniform | MemoryMode::Storage => {
                 let uniform = memory == MemoryMode::Uniform;
                 // Bindings may not be empty: an empty array travels as one zeroed record.

@@ -12,6 +12,7 @@ pub const NAMES: &[&str] = &[
     "sphere:N",
     "torus:N",
     "random:N[:SEED]",
+    "bounce:N[:SEED]",
 ];
 
 /// Largest primitive count a procedural family accepts (the texture route's limit is far below).
@@ -60,7 +61,7 @@ pub fn by_name(name: &str) -> anyhow::Result<Option<Scene>> {
             expect_params(1..=1)?;
             torus(count(0)?)
         }
-        "random" => {
+        "random" | "bounce" => {
             expect_params(1..=2)?;
             let seed = match params.get(1) {
                 Some(text) => text
@@ -68,7 +69,11 @@ pub fn by_name(name: &str) -> anyhow::Result<Option<Scene>> {
                     .map_err(|_| anyhow::anyhow!("scene '{name}': seed must be an unsigned integer"))?,
                 None => 1,
             };
-            random(count(0)?, seed)
+            if family == "random" {
+                random(count(0)?, seed)
+            } else {
+                bounce(count(0)?, seed)
+            }
         }
         _ => return Ok(None),
     };
@@ -187,6 +192,7 @@ pub fn whitted() -> Scene {
             },
         ],
         planes: vec![floor(-1.0, 0, 1, 1.0)],
+        motion: None,
     }
 }
 
@@ -230,6 +236,7 @@ fn cloud_scene(spheres: Vec<Sphere>, floor_y: f32) -> Scene {
         materials: cloud_materials(),
         spheres,
         planes: vec![floor(floor_y, 0, 1, 0.5)],
+        motion: None,
     }
 }
 
@@ -301,6 +308,23 @@ pub fn random(n: usize, seed: u64) -> Scene {
     scene
 }
 
+/// `random(n, seed)` set in motion: every sphere flies at its own velocity and bounces off the
+/// walls of the box, one frame every 1/30 s.
+pub fn bounce(n: usize, seed: u64) -> Scene {
+    let mut scene = random(n, seed);
+    let mut rng = SplitMix64::new(seed ^ 0x5eed_b0_0ce);
+    let velocities = (0..n)
+        .map(|_| Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5))
+        .collect();
+    scene.motion = Some(super::Motion {
+        velocities,
+        lo: Vec3::new(-1.5, -1.0, -1.5),
+        hi: Vec3::new(1.5, 1.0, 1.5),
+        frame_time: 1.0 / 30.0,
+    });
+    scene
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -315,11 +339,27 @@ mod tests {
             ("torus:7", 7),
             ("random:50", 50),
             ("random:50:9", 50),
+            ("bounce:40", 40),
         ] {
             let scene = by_name(name).unwrap().unwrap();
             assert_eq!(scene.validate(), Ok(()), "{name}");
             assert_eq!(scene.spheres.len(), spheres, "{name}");
         }
+    }
+
+    #[test]
+    fn bouncing_spheres_move_and_stay_in_their_box() {
+        let scene = bounce(200, 3);
+        let later = scene.at_frame(1000);
+        assert_ne!(scene.spheres, later.spheres);
+        let motion = scene.motion.as_ref().unwrap();
+        for s in &later.spheres {
+            assert!(
+                s.center.cmpge(motion.lo - 1e-4).all() && s.center.cmple(motion.hi + 1e-4).all(),
+                "{s:?}"
+            );
+        }
+        assert_eq!(scene.at_frame(0).spheres, scene.spheres);
     }
 
     #[test]

@@ -113,6 +113,38 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub spheres: Vec<Sphere>,
     pub planes: Vec<Plane>,
+    /// How the spheres move from frame to frame; `None` for a still scene.
+    pub motion: Option<Motion>,
+}
+
+/// Spheres that fly at constant velocities and bounce off the walls of a box.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    /// One per sphere, in units per second.
+    pub velocities: Vec<Vec3>,
+    /// The box the spheres' centres stay in.
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Seconds per frame.
+    pub frame_time: f32,
+}
+
+impl Scene {
+    /// The scene at frame `frame` (frame 0 is the scene as loaded).
+    pub fn at_frame(&self, frame: u32) -> Scene {
+        let mut scene = self.clone();
+        if let Some(motion) = &self.motion {
+            let t = frame as f32 * motion.frame_time;
+            let span = motion.hi - motion.lo;
+            for (sphere, v) in scene.spheres.iter_mut().zip(&motion.velocities) {
+                // Position on a triangle wave: moving on, reflected at each wall.
+                let travelled = (sphere.center - motion.lo + *v * t).rem_euclid(2.0 * span);
+                let folded = Vec3::select(travelled.cmpgt(span), 2.0 * span - travelled, travelled);
+                sphere.center = motion.lo + folded;
+            }
+        }
+        scene
+    }
 }
 
 impl Default for Camera {
