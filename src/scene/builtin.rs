@@ -312,7 +312,8 @@ pub fn random(n: usize, seed: u64) -> Scene {
 /// walls of the box, one frame every 1/30 s.
 pub fn bounce(n: usize, seed: u64) -> Scene {
     let mut scene = random(n, seed);
-    let mut rng = SplitMix64::new(seed ^ 0x5eed_b0_0ce);
+    // Another stream than the positions' (which use `seed`).
+    let mut rng = SplitMix64::new(!seed);
     let velocities = (0..n)
         .map(|_| Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5))
         .collect();
