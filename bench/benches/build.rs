@@ -48,12 +48,18 @@ fn bvh_shapes(boxes: &[Aabb]) -> Vec<BvhShape> {
 
 fn obvhs_boxes(boxes: &[Aabb]) -> Vec<obvhs::aabb::Aabb> {
     let v = |v: glam::Vec3| glam::Vec3A::new(v.x, v.y, v.z);
-    boxes.iter().map(|b| obvhs::aabb::Aabb::new(v(b.min), v(b.max))).collect()
+    boxes
+        .iter()
+        .map(|b| obvhs::aabb::Aabb::new(v(b.min), v(b.max)))
+        .collect()
 }
 
 fn cpu_builders(c: &mut Criterion) {
     let mut group = c.benchmark_group("cpu_build");
-    group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(4));
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
     for n in SIZES {
         let (_, boxes) = random_boxes(n);
         group.throughput(Throughput::Elements(n as u64));
@@ -66,7 +72,9 @@ fn cpu_builders(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("bvh_build_par", n), &shapes, |b, shapes| {
             b.iter_batched_ref(
                 || shapes.clone(),
-                |shapes| <bvh::bvh::Bvh<f32, 3> as bvh::bounding_hierarchy::BoundingHierarchy<f32, 3>>::build_par(shapes),
+                |shapes| {
+                    <bvh::bvh::Bvh<f32, 3> as bvh::bounding_hierarchy::BoundingHierarchy<f32, 3>>::build_par(shapes)
+                },
                 criterion::BatchSize::LargeInput,
             )
         });
@@ -87,11 +95,17 @@ fn gpu_builder(c: &mut Criterion) {
         return;
     };
     if !ctx.timestamps {
-        eprintln!("{}: no timestamp queries, skipping the GPU build benchmark", ctx.describe());
+        eprintln!(
+            "{}: no timestamp queries, skipping the GPU build benchmark",
+            ctx.describe()
+        );
         return;
     }
     let mut group = c.benchmark_group(format!("gpu_build ({})", ctx.info.name));
-    group.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(4));
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
     let mut builder = GpuLbvhBuilder::new(&ctx, 0).expect("the build compiles");
     // A software adapter takes seconds per million primitives: stop there.
     let software = ctx.info.device_type == wgpu::DeviceType::Cpu;
