@@ -22,6 +22,10 @@ pub enum Accel {
     Brute,
     /// The linear BVH, walked with a per-pixel stack, nearer child first.
     Stack,
+    /// The linear BVH, walked without a stack (Hapala et al. 2011): parent links, nearer child first.
+    Stackless,
+    /// The linear BVH, walked without a stack along escape links, in fixed depth-first order.
+    Threaded,
 }
 
 impl Accel {

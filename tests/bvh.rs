@@ -3,10 +3,11 @@
 use glam::Vec3;
 use proptest::prelude::*;
 use raypipe::bvh::aabb::Aabb;
+use raypipe::bvh::layout::GpuNode;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
 use raypipe::bvh::{Bvh, centroid_codes};
-use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack};
+use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use raypipe::cpu::intersect::{Hit, HitKind, Ray};
 use raypipe::scene::builtin::SplitMix64;
 use raypipe::scene::packed::GpuSphere;
@@ -147,10 +148,18 @@ fn given_codes_give_the_same_tree() {
     assert_eq!(a, b);
 }
 
-/// Random rays from random points: the stack traversal finds exactly brute force's hit (t and sphere)
+type Traversal = fn(&[GpuNode], &[GpuSphere], &Ray, Hit, bool) -> Hit;
+
+const TRAVERSALS: [(&str, Traversal); 3] = [
+    ("stack", traverse_stack),
+    ("stackless", traverse_stackless),
+    ("threaded", traverse_threaded),
+];
+
+/// Random rays from random points: every traversal finds exactly brute force's hit (t and sphere)
 /// and the same shadow answer, also among coincident spheres.
 #[test]
-fn stack_traversal_equals_brute_force() {
+fn traversals_equal_brute_force() {
     let mut rng = SplitMix64::new(99);
     let mut spheres: Vec<GpuSphere> = (0..3000)
         .map(|i| GpuSphere {
@@ -198,4 +207,37 @@ fn stack_traversal_equals_brute_force() {
         }
     }
     assert!(hits > 5000, "the test rays should hit often ({hits} hits)");
+}
+
+#[test]
+fn traversals_handle_one_and_two_spheres() {
+    for n in [1usize, 2] {
+        let spheres: Vec<GpuSphere> = (0..n)
+            .map(|i| GpuSphere {
+                center: [i as f32 * 3.0, 0.0, 0.0],
+                radius: 1.0,
+                material: 0,
+                _pad: [0; 3],
+            })
+            .collect();
+        let boxes: Vec<Aabb> = spheres
+            .iter()
+            .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius))
+            .collect();
+        let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+        for x in [-3.0f32, 0.0, 0.5, 3.0, 6.0] {
+            let ray = Ray {
+                origin: Vec3::new(x, 0.2, -5.0),
+                dir: Vec3::Z,
+            };
+            let brute = brute_closest(&spheres, &ray, Hit::none(1e30));
+            for (name, traverse) in TRAVERSALS {
+                assert_eq!(
+                    traverse(&bvh.nodes, &spheres, &ray, Hit::none(1e30), false),
+                    brute,
+                    "{name}, {n} spheres, x {x}"
+                );
+            }
+        }
+    }
 }

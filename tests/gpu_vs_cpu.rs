@@ -8,7 +8,7 @@ use raypipe::gpu::upload::MemoryMode;
 use raypipe::render::Accel;
 use raypipe::scene::packed::PackedScene;
 
-const BVH_MODES: [Accel; 1] = [Accel::Stack];
+const BVH_MODES: [Accel; 3] = [Accel::Stack, Accel::Stackless, Accel::Threaded];
 
 fn check(spec: &str, width: u32, height: u32) {
     let mut scene = packed(spec, width, height, 5);

@@ -53,7 +53,7 @@ fn every_shader_variant_validates() {
     let empty = PackedScene::new(&empty).unwrap();
     for scene in [&scene, &empty] {
         for memory in [MemoryMode::Uniform, MemoryMode::Storage, MemoryMode::Texture] {
-            for accel in [Accel::Brute, Accel::Stack] {
+            for accel in [Accel::Brute, Accel::Stack, Accel::Stackless, Accel::Threaded] {
                 for max_depth in [0, 5] {
                     let source = compose(&ShaderConfig {
                         memory,

@@ -13,7 +13,7 @@ fn check(spec: &str) {
     let Some(ctx) = gpu() else { return };
     let mut scene = packed(spec, 64, 48, 5);
     scene.build_bvh(MortonBits::Bits30);
-    for accel in [Accel::Brute, Accel::Stack] {
+    for accel in [Accel::Brute, Accel::Stack, Accel::Stackless, Accel::Threaded] {
         check_accel(&ctx, &scene, accel, spec);
     }
 }

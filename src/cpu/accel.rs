@@ -1,8 +1,8 @@
 //! Acceleration modes: the twins of `shaders/accel_*.wgsl`. Each answers the closest sphere hit and
 //! whether anything blocks a shadow ray.
 
-use super::intersect::{Hit, HitKind, NO_HIT, Ray, closer_sphere, intersect_sphere, v3};
-use crate::bvh::layout::GpuNode;
+use super::intersect::{Hit, HitKind, Ray, closer_sphere, intersect_box, intersect_sphere, safe_inverse, v3};
+use crate::bvh::layout::{GpuNode, NONE};
 use crate::scene::packed::GpuSphere;
 use glam::Vec3;
 
@@ -27,23 +27,6 @@ pub fn brute_occluded(spheres: &[GpuSphere], ray: &Ray, t_max: f32) -> bool {
         let t = intersect_sphere(sphere, ray, t_max);
         t > 0.0 && t < t_max
     })
-}
-
-/// 1 / dir, with near-zero components replaced so the slab test never computes 0 * inf.
-pub fn safe_inverse(dir: Vec3) -> Vec3 {
-    let tiny = Vec3::splat(1e-20);
-    1.0 / Vec3::select(dir.abs().cmplt(tiny), tiny, dir)
-}
-
-/// Where the ray enters the box (0 if it starts inside), if it does so by t_max; else [`NO_HIT`].
-pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
-    let t0 = (lo - origin) * inv_dir;
-    let t1 = (hi - origin) * inv_dir;
-    let near = t0.min(t1);
-    let far = t0.max(t1);
-    let t_enter = near.x.max(near.y).max(near.z.max(0.0));
-    let t_exit = far.x.min(far.y).min(far.z.min(t_max));
-    if t_enter <= t_exit { t_enter } else { NO_HIT }
 }
 
 /// The closest sphere hit that beats `best`; with `shadow`, the first hit nearer than best.t
@@ -102,6 +85,137 @@ pub fn traverse_stack(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best:
         match std::iter::from_fn(|| stack.pop()).find(|&(_, t)| t <= hit.t) {
             Some((index, _)) => node = nodes[index as usize],
             None => break,
+        }
+    }
+    hit
+}
+
+/// Threaded traversal (`accel_threaded.wgsl`): depth-first, left child first, no stack; a missed
+/// node (or a tested leaf) hands over to its escape link.
+pub fn traverse_threaded(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best: Hit, shadow: bool) -> Hit {
+    let mut hit = best;
+    if spheres.is_empty() {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    let mut index = 0u32;
+    while index != NONE {
+        let node = nodes[index as usize];
+        if intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) < 0.0 {
+            index = node.escape;
+            continue;
+        }
+        if !node.is_leaf() {
+            index = node.left;
+            continue;
+        }
+        let t = intersect_sphere(&spheres[node.left as usize], ray, hit.t);
+        if closer_sphere(t, node.left, &hit) {
+            hit = Hit {
+                t,
+                kind: HitKind::Sphere,
+                index: node.left,
+            };
+            if shadow {
+                return hit;
+            }
+        }
+        index = node.escape;
+    }
+    hit
+}
+
+/// How the stackless walk reached the current node.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum From {
+    Parent,
+    Sibling,
+    Child,
+}
+
+/// The near child of an internal node: the one whose box centre comes first along the ray.
+fn near_child(nodes: &[GpuNode], node: &GpuNode, dir: Vec3) -> u32 {
+    let (left, right) = (nodes[node.left as usize], nodes[node.right as usize]);
+    let ahead = ((v3(left.min) + v3(left.max)) - (v3(right.min) + v3(right.max))).dot(dir);
+    if ahead > 0.0 { node.right } else { node.left }
+}
+
+fn sibling(index: u32, parent: &GpuNode) -> u32 {
+    if parent.left == index {
+        parent.right
+    } else {
+        parent.left
+    }
+}
+
+/// Stackless traversal (Hapala et al. 2011, `accel_stackless.wgsl`): parent links and a
+/// three-state automaton, nearer child first.
+pub fn traverse_stackless(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best: Hit, shadow: bool) -> Hit {
+    let mut hit = best;
+    if spheres.is_empty() {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    let root = nodes[0];
+    if intersect_box(v3(root.min), v3(root.max), ray.origin, inv_dir, hit.t) < 0.0 {
+        return hit;
+    }
+    if root.is_leaf() {
+        let t = intersect_sphere(&spheres[root.left as usize], ray, hit.t);
+        if closer_sphere(t, root.left, &hit) {
+            hit = Hit {
+                t,
+                kind: HitKind::Sphere,
+                index: root.left,
+            };
+        }
+        return hit;
+    }
+    let mut index = near_child(nodes, &root, ray.dir);
+    let mut state = From::Parent;
+    loop {
+        let node = nodes[index as usize];
+        if state == From::Child {
+            if index == 0 {
+                break;
+            }
+            let parent = nodes[node.parent as usize];
+            if index == near_child(nodes, &parent, ray.dir) {
+                index = sibling(index, &parent);
+                state = From::Sibling;
+            } else {
+                index = node.parent;
+            }
+            continue;
+        }
+        // From the parent or the sibling: test the box, and the primitive of a leaf.
+        let mut descend = false;
+        if intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) >= 0.0 {
+            if node.is_leaf() {
+                let t = intersect_sphere(&spheres[node.left as usize], ray, hit.t);
+                if closer_sphere(t, node.left, &hit) {
+                    hit = Hit {
+                        t,
+                        kind: HitKind::Sphere,
+                        index: node.left,
+                    };
+                    if shadow {
+                        return hit;
+                    }
+                }
+            } else {
+                descend = true;
+            }
+        }
+        if descend {
+            index = near_child(nodes, &node, ray.dir);
+            state = From::Parent;
+        } else if state == From::Parent {
+            index = sibling(index, &nodes[node.parent as usize]);
+            state = From::Sibling;
+        } else {
+            index = node.parent;
+            state = From::Child;
         }
     }
     hit

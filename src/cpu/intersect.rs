@@ -84,6 +84,23 @@ pub fn intersect_plane(plane: &GpuPlane, ray: &Ray, t_max: f32) -> f32 {
     t_max
 }
 
+/// 1 / dir, with near-zero components replaced so the slab test never computes 0 * inf.
+pub fn safe_inverse(dir: Vec3) -> Vec3 {
+    let tiny = Vec3::splat(1e-20);
+    1.0 / Vec3::select(dir.abs().cmplt(tiny), tiny, dir)
+}
+
+/// Where the ray enters the box (0 if it starts inside), if it does so by t_max; else [`NO_HIT`].
+pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = t0.min(t1);
+    let far = t0.max(t1);
+    let t_enter = near.x.max(near.y).max(near.z.max(0.0));
+    let t_exit = far.x.min(far.y).min(far.z.min(t_max));
+    if t_enter <= t_exit { t_enter } else { NO_HIT }
+}
+
 /// Planes are unbounded, so they stay outside any acceleration structure and are always tested.
 pub fn closest_plane(planes: &[GpuPlane], ray: &Ray, best: Hit) -> Hit {
     let mut hit = best;

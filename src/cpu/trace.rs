@@ -1,6 +1,6 @@
 //! The Whitted tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
 
-use super::accel::{brute_closest, brute_occluded, traverse_stack};
+use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use super::intersect::{Hit, HitKind, Ray, any_plane, closest_plane, v3};
 use super::shade::{fresnel_schlick, offset_origin, reflect};
 use crate::render::Accel;
@@ -54,6 +54,8 @@ impl<'a> Tracer<'a> {
         match self.accel {
             Accel::Brute => brute_closest(&scene.spheres, ray, best),
             Accel::Stack => traverse_stack(&scene.nodes, &scene.spheres, ray, best, false),
+            Accel::Stackless => traverse_stackless(&scene.nodes, &scene.spheres, ray, best, false),
+            Accel::Threaded => traverse_threaded(&scene.nodes, &scene.spheres, ray, best, false),
         }
     }
 
@@ -64,6 +66,14 @@ impl<'a> Tracer<'a> {
             Accel::Brute => brute_occluded(&scene.spheres, ray, t_max),
             Accel::Stack => {
                 let hit = traverse_stack(&scene.nodes, &scene.spheres, ray, Hit::none(t_max), true);
+                hit.kind != HitKind::None
+            }
+            Accel::Stackless => {
+                let hit = traverse_stackless(&scene.nodes, &scene.spheres, ray, Hit::none(t_max), true);
+                hit.kind != HitKind::None
+            }
+            Accel::Threaded => {
+                let hit = traverse_threaded(&scene.nodes, &scene.spheres, ray, Hit::none(t_max), true);
                 hit.kind != HitKind::None
             }
         }

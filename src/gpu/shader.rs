@@ -14,6 +14,8 @@ const FULLSCREEN: &str = include_str!("shaders/fullscreen.wgsl");
 const INTERSECT: &str = include_str!("shaders/intersect.wgsl");
 const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
 const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
+const ACCEL_STACKLESS: &str = include_str!("shaders/accel_stackless.wgsl");
+const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
 const SHADE: &str = include_str!("shaders/shade.wgsl");
 const TRACE: &str = include_str!("shaders/trace.wgsl");
 
@@ -92,6 +94,8 @@ pub fn compose(config: &ShaderConfig) -> String {
     let accel = match config.accel {
         Accel::Brute => ACCEL_BRUTE,
         Accel::Stack => ACCEL_STACK,
+        Accel::Stackless => ACCEL_STACKLESS,
+        Accel::Threaded => ACCEL_THREADED,
     };
     for part in [TYPES, TEXELS, FULLSCREEN, INTERSECT, accel, SHADE, TRACE] {
         source.push('\n');

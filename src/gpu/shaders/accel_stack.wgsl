@@ -1,25 +1,6 @@
 // BVH traversal with a per-pixel stack (the paper's local array), sized to the tree's depth, nearer
 // child first. Mirrored by src/cpu/accel.rs.
 
-// 1 / dir, with near-zero components replaced so the slab test never computes 0 * inf.
-fn safe_inverse(dir: vec3<f32>) -> vec3<f32> {
-    return 1.0 / select(dir, vec3<f32>(1e-20), abs(dir) < vec3<f32>(1e-20));
-}
-
-// Where the ray enters the box (0 if it starts inside), if it does so by t_max; else NO_HIT.
-fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
-    let t0 = (lo - origin) * inv_dir;
-    let t1 = (hi - origin) * inv_dir;
-    let near = min(t0, t1);
-    let far = max(t0, t1);
-    let t_enter = max(max(near.x, near.y), max(near.z, 0.0));
-    let t_exit = min(min(far.x, far.y), min(far.z, t_max));
-    if (t_enter <= t_exit) {
-        return t_enter;
-    }
-    return NO_HIT;
-}
-
 // The closest sphere hit that beats `best`; with `shadow`, the first hit nearer than best.t.
 fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var hit = best;

@@ -61,6 +61,25 @@ fn intersect_plane(plane: Plane, ray: Ray, t_max: f32) -> f32 {
     return t_max;
 }
 
+// 1 / dir, with near-zero components replaced so the slab test never computes 0 * inf.
+fn safe_inverse(dir: vec3<f32>) -> vec3<f32> {
+    return 1.0 / select(dir, vec3<f32>(1e-20), abs(dir) < vec3<f32>(1e-20));
+}
+
+// Where the ray enters the box (0 if it starts inside), if it does so by t_max; else NO_HIT.
+fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    let t_enter = max(max(near.x, near.y), max(near.z, 0.0));
+    let t_exit = min(min(far.x, far.y), min(far.z, t_max));
+    if (t_enter <= t_exit) {
+        return t_enter;
+    }
+    return NO_HIT;
+}
+
 // Planes are unbounded, so they stay outside any acceleration structure and are always tested.
 fn closest_plane(ray: Ray, best: Hit) -> Hit {
     var hit = best;

@@ -1,0 +1,92 @@
+// Stackless BVH traversal (Hapala, Davidovič, Wald, Havran and Slusallek 2011): parent links and a
+// three-state automaton instead of a stack, nearer child first. The state says how the walk reached
+// the current node: from its parent (descending), from its sibling (the near child is done), or from
+// a child (climbing back). Mirrored by src/cpu/accel.rs.
+
+const FROM_PARENT: u32 = 0u;
+const FROM_SIBLING: u32 = 1u;
+const FROM_CHILD: u32 = 2u;
+
+// The near child of an internal node: the one whose box centre comes first along the ray. It
+// depends on the node and the ray only, so the walk decides alike going down and coming back up.
+fn near_child(node: BvhNode, dir: vec3<f32>) -> u32 {
+    let left = load_node(node.left);
+    let right = load_node(node.right);
+    let ahead = dot((left.min + left.max) - (right.min + right.max), dir);
+    return select(node.left, node.right, ahead > 0.0);
+}
+
+fn sibling(index: u32, parent: BvhNode) -> u32 {
+    return select(parent.left, parent.right, parent.left == index);
+}
+
+fn traverse_stackless(ray: Ray, best: Hit, shadow: bool) -> Hit {
+    var hit = best;
+    if (globals.sphere_count == 0u) {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    let root = load_node(0u);
+    if (intersect_box(root.min, root.max, ray.origin, inv_dir, hit.t) < 0.0) {
+        return hit;
+    }
+    if (root.right == LEAF) {
+        let t = intersect_sphere(load_sphere(root.left), ray, hit.t);
+        if (closer_sphere(t, root.left, hit)) {
+            hit = Hit(t, HIT_SPHERE, root.left);
+        }
+        return hit;
+    }
+    var index = near_child(root, ray.dir);
+    var state = FROM_PARENT;
+    loop {
+        let node = load_node(index);
+        if (state == FROM_CHILD) {
+            if (index == 0u) {
+                break;
+            }
+            let parent = load_node(node.parent);
+            if (index == near_child(parent, ray.dir)) {
+                index = sibling(index, parent);
+                state = FROM_SIBLING;
+            } else {
+                index = node.parent;
+            }
+            continue;
+        }
+        // From the parent or the sibling: test the box, and the primitive of a leaf.
+        var descend = false;
+        if (intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) >= 0.0) {
+            if (node.right == LEAF) {
+                let t = intersect_sphere(load_sphere(node.left), ray, hit.t);
+                if (closer_sphere(t, node.left, hit)) {
+                    hit = Hit(t, HIT_SPHERE, node.left);
+                    if (shadow) {
+                        return hit;
+                    }
+                }
+            } else {
+                descend = true;
+            }
+        }
+        if (descend) {
+            index = near_child(node, ray.dir);
+            state = FROM_PARENT;
+        } else if (state == FROM_PARENT) {
+            index = sibling(index, load_node(node.parent));
+            state = FROM_SIBLING;
+        } else {
+            index = node.parent;
+            state = FROM_CHILD;
+        }
+    }
+    return hit;
+}
+
+fn accel_closest(ray: Ray, best: Hit) -> Hit {
+    return traverse_stackless(ray, best, false);
+}
+
+fn accel_occluded(ray: Ray, t_max: f32) -> bool {
+    return traverse_stackless(ray, Hit(t_max, HIT_NONE, 0u), true).kind != HIT_NONE;
+}

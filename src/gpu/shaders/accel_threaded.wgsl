@@ -1,0 +1,40 @@
+// Threaded BVH traversal: depth-first order, left child first, with no stack. A node whose box the
+// ray misses (or a leaf, once tested) hands over to its escape link, the next node after its
+// subtree; a hit descends to the left child. Mirrored by src/cpu/accel.rs.
+
+fn traverse_threaded(ray: Ray, best: Hit, shadow: bool) -> Hit {
+    var hit = best;
+    if (globals.sphere_count == 0u) {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    var index = 0u;
+    while (index != NONE) {
+        let node = load_node(index);
+        if (intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) < 0.0) {
+            index = node.escape;
+            continue;
+        }
+        if (node.right != LEAF) {
+            index = node.left;
+            continue;
+        }
+        let t = intersect_sphere(load_sphere(node.left), ray, hit.t);
+        if (closer_sphere(t, node.left, hit)) {
+            hit = Hit(t, HIT_SPHERE, node.left);
+            if (shadow) {
+                return hit;
+            }
+        }
+        index = node.escape;
+    }
+    return hit;
+}
+
+fn accel_closest(ray: Ray, best: Hit) -> Hit {
+    return traverse_threaded(ray, best, false);
+}
+
+fn accel_occluded(ray: Ray, t_max: f32) -> bool {
+    return traverse_threaded(ray, Hit(t_max, HIT_NONE, 0u), true).kind != HIT_NONE;
+}
