@@ -51,6 +51,8 @@ pub struct RenderOptions {
     pub accel: Accel,
     /// Show a progress bar for CPU renders (only drawn on a terminal).
     pub progress: bool,
+    /// Frames carry each pixel's cost (ray-box tests of the primary ray) instead of its ray count.
+    pub write_cost: bool,
     /// Draw a frame before the timed one: drivers may compile the pipeline at its first draw
     /// (llvmpipe does), which would otherwise count as render time.
     pub warm_up: bool,
@@ -84,7 +86,11 @@ fn open_device(options: &RenderOptions) -> anyhow::Result<Option<GpuContext>> {
 pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<RenderOutcome> {
     match open_device(options)? {
         Some(ctx) => {
-            let renderer = GpuRenderer::new(&ctx, scene, options.memory, options.accel)?;
+            let renderer = if options.write_cost {
+                GpuRenderer::with_cost(&ctx, scene, options.memory, options.accel)?
+            } else {
+                GpuRenderer::new(&ctx, scene, options.memory, options.accel)?
+            };
             if options.warm_up {
                 renderer.render()?;
             }
@@ -99,7 +105,7 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
         }
         None => {
             let start = Instant::now();
-            let frame = cpu::render(scene, options.accel, options.progress);
+            let frame = cpu::render_with(scene, options.accel, options.progress, options.write_cost);
             Ok(RenderOutcome {
                 frame,
                 device: format!("CPU reference ({} threads)", rayon::current_num_threads()),
@@ -133,6 +139,7 @@ pub fn render_frames(
     frames: u32,
     mut emit: impl FnMut(u32, &Frame) -> anyhow::Result<()>,
 ) -> anyhow::Result<FramesOutcome> {
+    anyhow::ensure!(!options.write_cost, "--aov cost renders single frames; drop --frames");
     let first = PackedScene::new(scene)?;
     let n = first.spheres.len();
     let mut outcome = FramesOutcome {

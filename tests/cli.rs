@@ -127,6 +127,42 @@ fn diff_exits_by_threshold_and_writes_a_difference_image() {
 }
 
 #[test]
+fn cost_aov_writes_a_heat_map_with_a_legend() {
+    let out = temp("cost.png");
+    let output = raypipe(&[
+        "render",
+        "random:500",
+        "--device",
+        "cpu",
+        "--accel",
+        "stackless",
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--aov",
+        "cost",
+        "--stats",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("cost per primary ray"));
+    let image = raypipe::image::io::read(&out).unwrap();
+    assert_eq!(image.width, 40);
+    assert!(image.height > 30, "the legend sits under the image");
+    let exr = raypipe(&[
+        "render",
+        "random:10",
+        "--aov",
+        "cost",
+        "-o",
+        temp("cost.exr").to_str().unwrap(),
+    ]);
+    assert_clean_error(&exr, &["png"]);
+}
+
+#[test]
 fn missing_file() {
     assert_clean_error(&render_cpu(Path::new("no/such/scene.toml")), &["no/such/scene.toml"]);
 }

@@ -95,3 +95,34 @@ fn coincident_spheres() {
     scene.build_bvh(MortonBits::Bits30);
     check_scene("coincident", &scene);
 }
+
+#[test]
+fn cost_aov_counts_the_same_tests_on_both_devices() {
+    let mut scene = packed("random:3000:9", 64, 48, 5);
+    scene.build_bvh(MortonBits::Bits30);
+    let brute = raypipe::cpu::render_with(&scene, Accel::Brute, false, true);
+    assert!(
+        brute.counts().iter().all(|&c| c == 3000),
+        "brute force tests every sphere"
+    );
+    let Some(ctx) = gpu() else { return };
+    for accel in BVH_MODES {
+        let cpu = raypipe::cpu::render_with(&scene, accel, false, true);
+        let gpu = raypipe::gpu::GpuRenderer::with_cost(&ctx, &scene, MemoryMode::Storage, accel)
+            .and_then(|r| r.render())
+            .unwrap()
+            .frame;
+        let (g, c) = (gpu.counts(), cpu.counts());
+        let differing = g.iter().zip(&c).filter(|(a, b)| a != b).count();
+        // Devices may disagree on a grazing box test: a handful of pixels at most.
+        assert!(
+            differing * 100 <= g.len(),
+            "{accel:?}: {differing} of {} pixel costs differ",
+            g.len()
+        );
+        assert!(
+            c.iter().any(|&x| x > 0) && c.iter().all(|&x| x < 3000),
+            "{accel:?}: BVH costs are below brute force's"
+        );
+    }
+}

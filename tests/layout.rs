@@ -62,6 +62,7 @@ fn every_shader_variant_validates() {
                         bvh_depth: 12,
                         arrays: &record_arrays(scene, accel),
                         texels_per_row: TEXELS_PER_ROW,
+                        write_cost: max_depth == 0,
                     });
                     let module = parse(&source);
                     let flags = naga::valid::ValidationFlags::all();

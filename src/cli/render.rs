@@ -20,6 +20,9 @@ pub enum Aov {
     Depth,
     /// First-hit normals, mapped from [-1, 1] to [0, 1].
     Normal,
+    /// A heat map of each primary ray's cost: ray-box tests in the BVH (ray-sphere tests for brute
+    /// force), with a colour-scale legend. PNG only.
+    Cost,
 }
 
 #[derive(Args)]
@@ -94,6 +97,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             output.display()
         );
     }
+    if args.aov == Aov::Cost && is_exr {
+        bail!(
+            "{}: --aov cost writes a PNG heat map; name the output *.png",
+            output.display()
+        );
+    }
 
     let mut scene = Scene::load(&args.scene)?;
     let settings = &mut scene.settings;
@@ -114,6 +123,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         memory: args.memory,
         accel: args.accel,
         progress: std::io::stderr().is_terminal(),
+        write_cost: args.aov == Aov::Cost,
         warm_up: args.stats,
     };
     let outcome = render(&packed, &options)?;
@@ -137,6 +147,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             "device: {}, memory {:?}, accel {:?}",
             outcome.device, args.memory, args.accel
         );
+        if args.aov == Aov::Cost {
+            let counts = frame.counts();
+            let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
+            let max = counts.iter().copied().max().unwrap_or(0);
+            println!(
+                "cost per primary ray: mean {mean:.1}, max {max} ray-box tests (ray-sphere tests for brute force)"
+            );
+            return Ok(ExitCode::SUCCESS);
+        }
         let (ms, clock) = match outcome.gpu_ms {
             Some(ms) => (ms, "GPU timestamps"),
             None => (outcome.wall_ms, "wall clock"),
@@ -157,6 +176,7 @@ fn aov_image(aov: Aov, is_exr: bool, frame: &crate::image::Frame) -> crate::imag
         (Aov::Color, true) => frame.radiance(),
         (Aov::Depth, _) => frame.depth(),
         (Aov::Normal, _) => frame.normals(),
+        (Aov::Cost, _) => crate::image::heatmap::heatmap(&frame.counts(), frame.width, frame.height),
     }
 }
 
@@ -176,6 +196,7 @@ fn render_sequence(
         memory: args.memory,
         accel: args.accel,
         progress: false,
+        write_cost: args.aov == Aov::Cost,
         warm_up: false,
     };
     let outcome = render_frames(scene, &options, frames, |frame, image| {

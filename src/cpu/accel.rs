@@ -1,7 +1,9 @@
 //! Acceleration modes: the twins of `shaders/accel_*.wgsl`. Each answers the closest sphere hit and
 //! whether anything blocks a shadow ray.
 
-use super::intersect::{Hit, HitKind, Ray, closer_sphere, intersect_box, intersect_sphere, safe_inverse, v3};
+use super::intersect::{
+    Hit, HitKind, Ray, closer_sphere, count_box_tests, intersect_box, intersect_sphere, safe_inverse, v3,
+};
 use crate::bvh::layout::{GpuNode, NONE};
 use crate::scene::packed::GpuSphere;
 use glam::Vec3;
@@ -9,6 +11,8 @@ use glam::Vec3;
 /// Brute force: every ray against every sphere (`accel_brute.wgsl`).
 pub fn brute_closest(spheres: &[GpuSphere], ray: &Ray, best: Hit) -> Hit {
     let mut hit = best;
+    // The cost of brute force: every sphere tested.
+    count_box_tests(spheres.len() as u32);
     for (i, sphere) in spheres.iter().enumerate() {
         let t = intersect_sphere(sphere, ray, hit.t);
         if closer_sphere(t, i as u32, &hit) {

@@ -39,6 +39,24 @@ pub fn v3(a: [f32; 3]) -> Vec3 {
     Vec3::from_array(a)
 }
 
+thread_local! {
+    /// Ray-box tests on this thread (ray-sphere tests for brute force): the shader's private
+    /// `box_tests`, since one pixel is traced start to end on one thread.
+    static BOX_TESTS: std::cell::Cell<u32> = const { std::cell::Cell::new(0) };
+}
+
+pub fn count_box_tests(n: u32) {
+    BOX_TESTS.with(|c| c.set(c.get().wrapping_add(n)));
+}
+
+pub fn box_tests() -> u32 {
+    BOX_TESTS.with(|c| c.get())
+}
+
+pub fn reset_box_tests() {
+    BOX_TESTS.with(|c| c.set(0));
+}
+
 /// What `intersect_sphere` and `intersect_box` return for a miss.
 pub const NO_HIT: f32 = -1.0;
 
@@ -92,6 +110,7 @@ pub fn safe_inverse(dir: Vec3) -> Vec3 {
 
 /// Where the ray enters the box (0 if it starts inside), if it does so by t_max; else [`NO_HIT`].
 pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
+    count_box_tests(1);
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
     let near = t0.min(t1);

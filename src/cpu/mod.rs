@@ -18,6 +18,12 @@ use trace::Tracer;
 /// Renders every pixel in parallel (rows across rayon's threads); the result does not depend on the
 /// thread count. `progress` shows a bar on a terminal. BVH modes need `scene.nodes` built.
 pub fn render(scene: &PackedScene, accel: Accel, progress: bool) -> Frame {
+    render_with(scene, accel, progress, false)
+}
+
+/// [`render`], with each pixel's cost (see [`trace::PixelTrace::cost`]) in the colour's fourth
+/// channel instead of its ray count where `write_cost` is set, as the shader's cost variant.
+pub fn render_with(scene: &PackedScene, accel: Accel, progress: bool, write_cost: bool) -> Frame {
     assert!(
         accel == Accel::Brute || scene.spheres.is_empty() || !scene.nodes.is_empty(),
         "{accel:?} traversal needs the scene's BVH: call PackedScene::build_bvh first"
@@ -50,7 +56,8 @@ pub fn render(scene: &PackedScene, accel: Accel, progress: bool) -> Frame {
     bar.finish_and_clear();
     let mut frame = Frame::new(width, height);
     for (pixel, trace) in rows.into_iter().flatten().enumerate() {
-        frame.color[pixel] = [trace.color.x, trace.color.y, trace.color.z, trace.rays as f32];
+        let count = if write_cost { trace.cost } else { trace.rays };
+        frame.color[pixel] = [trace.color.x, trace.color.y, trace.color.z, count as f32];
         frame.surface[pixel] = [
             trace.normal.x,
             trace.normal.y,

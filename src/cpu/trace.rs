@@ -1,7 +1,7 @@
 //! The Whitted tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
 
 use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
-use super::intersect::{Hit, HitKind, Ray, any_plane, closest_plane, v3};
+use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
 use super::shade::{fresnel_schlick, offset_origin, reflect};
 use crate::render::Accel;
 use crate::scene::packed::PackedScene;
@@ -29,6 +29,8 @@ pub struct PixelTrace {
     pub depth: Option<f32>,
     /// Primary, shadow and secondary rays traced for this pixel.
     pub rays: u32,
+    /// Ray-box tests of the primary ray (ray-sphere tests for brute force).
+    pub cost: u32,
 }
 
 /// The per-pixel state the shader keeps in private variables.
@@ -105,7 +107,9 @@ impl<'a> Tracer<'a> {
             normal: Vec3::ZERO,
             depth: None,
             rays: 0,
+            cost: 0,
         };
+        reset_box_tests();
         let mut stack = Vec::with_capacity(stack_size);
         stack.push(RayTask {
             origin: primary.origin,
@@ -120,6 +124,9 @@ impl<'a> Tracer<'a> {
             };
             self.ray_count += 1;
             let hit = self.closest_hit(&ray, T_FAR);
+            if task.depth == 0 {
+                result.cost = box_tests();
+            }
             if hit.kind == HitKind::None {
                 result.color += task.weight * v3(self.scene.globals.background);
                 continue;

@@ -36,7 +36,18 @@ pub struct TimedFrame {
 
 impl<'a> GpuRenderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &PackedScene, memory: MemoryMode, accel: Accel) -> anyhow::Result<Self> {
-        Self::create(ctx, scene, memory, accel, None)
+        Self::create(ctx, scene, memory, accel, None, false)
+    }
+
+    /// A renderer whose frames carry each pixel's cost (ray-box tests of the primary ray; spheres
+    /// tested for brute force) in the colour target's fourth channel instead of its ray count.
+    pub fn with_cost(
+        ctx: &'a GpuContext,
+        scene: &PackedScene,
+        memory: MemoryMode,
+        accel: Accel,
+    ) -> anyhow::Result<Self> {
+        Self::create(ctx, scene, memory, accel, None, true)
     }
 
     /// A renderer that reads its spheres and nodes from `shared` (storage memory): the buffers of a
@@ -47,7 +58,7 @@ impl<'a> GpuRenderer<'a> {
         accel: Accel,
         shared: &SharedBuffers,
     ) -> anyhow::Result<Self> {
-        Self::create(ctx, scene, MemoryMode::Storage, accel, Some(shared))
+        Self::create(ctx, scene, MemoryMode::Storage, accel, Some(shared), false)
     }
 
     fn create(
@@ -56,6 +67,7 @@ impl<'a> GpuRenderer<'a> {
         memory: MemoryMode,
         accel: Accel,
         shared: Option<&SharedBuffers>,
+        write_cost: bool,
     ) -> anyhow::Result<Self> {
         let (width, height) = (scene.width(), scene.height());
         let limits = ctx.limits();
@@ -86,6 +98,7 @@ impl<'a> GpuRenderer<'a> {
                 bvh_depth: scene.bvh_depth,
                 arrays: &resources.arrays,
                 texels_per_row: resources.texels_per_row,
+                write_cost,
             });
             let (pipeline, bind_group) = build_pipeline(ctx, &source, &resources, &globals);
             let vertices = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -39,6 +39,8 @@ pub struct ShaderConfig<'a> {
     pub arrays: &'a [RecordArray],
     /// Width of the scene textures, in texels.
     pub texels_per_row: u32,
+    /// Write each pixel's cost (the primary ray's ray-box tests) instead of its ray count.
+    pub write_cost: bool,
 }
 
 pub fn compose(config: &ShaderConfig) -> String {
@@ -54,6 +56,7 @@ pub fn compose(config: &ShaderConfig) -> String {
     // Depth-first with two branches keeps at most one waiting sibling per level, plus the pair just pushed.
     writeln!(w, "const RAY_STACK_SIZE: u32 = {}u;", config.max_depth + 1).unwrap();
     writeln!(w, "const TEXELS_PER_ROW: u32 = {}u;", config.texels_per_row).unwrap();
+    writeln!(w, "const WRITE_COST: bool = {};", config.write_cost).unwrap();
     writeln!(w, "const BVH_STACK_SIZE: u32 = {}u;", config.bvh_depth.max(1)).unwrap();
     writeln!(w, "@group(0) @binding(0) var<uniform> globals: Globals;").unwrap();
     for array in config.arrays {

@@ -1,6 +1,7 @@
 //! Images: the frame both tracers produce, its AOVs, file output and comparison.
 
 pub mod diff;
+pub mod heatmap;
 pub mod io;
 
 /// The depth channel's value where the primary ray hits nothing (the shader cannot write +inf).
@@ -93,6 +94,11 @@ impl Frame {
             .map(|s| if s[3] < 0.0 { f32::INFINITY } else { s[3] })
             .collect();
         self.image(vec!["Z".into()], data)
+    }
+
+    /// The fourth colour channel (rays per pixel, or cost in a cost render) as counts.
+    pub fn counts(&self) -> Vec<u32> {
+        self.color.iter().map(|c| c[3] as u32).collect()
     }
 
     /// First-hit normals mapped from [-1, 1] to [0, 1]; black where the primary ray escapes.

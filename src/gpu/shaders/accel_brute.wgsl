@@ -3,6 +3,8 @@
 
 fn accel_closest(ray: Ray, best: Hit) -> Hit {
     var hit = best;
+    // The cost of brute force: every sphere tested.
+    box_tests += globals.sphere_count;
     for (var i = 0u; i < globals.sphere_count; i++) {
         let t = intersect_sphere(load_sphere(i), ray, hit.t);
         if (closer_sphere(t, i, hit)) {

@@ -68,6 +68,7 @@ fn safe_inverse(dir: vec3<f32>) -> vec3<f32> {
 
 // Where the ray enters the box (0 if it starts inside), if it does so by t_max; else NO_HIT.
 fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
+    box_tests += 1u;
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
     let near = min(t0, t1);

@@ -10,6 +10,10 @@ const DEPTH_MISS: f32 = -1.0;
 
 // Rays traced for the current pixel: primary, shadow and secondary, counted where they are cast.
 var<private> ray_count: u32;
+// Ray-box tests so far (ray-sphere tests for brute force), and their number for the primary ray: the
+// pixel's cost, which a cost render (WRITE_COST) writes instead of the ray count.
+var<private> box_tests: u32;
+var<private> primary_cost: u32;
 
 struct RayTask {
     origin: vec3<f32>,
@@ -57,6 +61,9 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
         let ray = Ray(task.origin, task.dir);
         ray_count += 1u;
         let hit = closest_hit(ray, T_FAR);
+        if (task.depth == 0u) {
+            primary_cost = box_tests;
+        }
         if (hit.kind == HIT_NONE) {
             result.color += task.weight * globals.background;
             continue;
@@ -111,7 +118,7 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
 // Both targets are rgba32uint holding f32 bits: integer targets are colour-renderable everywhere
 // (float targets are not on GLES/WebGL2 without an extension), and bits read back exactly.
 struct FragmentOutput {
-    // rgb: linear radiance; a: rays traced for this pixel.
+    // rgb: linear radiance; a: rays traced for this pixel (its cost, with WRITE_COST).
     @location(0) color: vec4<u32>,
     // xyz: first-hit normal; w: first-hit distance or DEPTH_MISS.
     @location(1) surface: vec4<u32>,
@@ -120,9 +127,11 @@ struct FragmentOutput {
 @fragment
 fn fs_main(@builtin(position) position: vec4<f32>) -> FragmentOutput {
     ray_count = 0u;
+    box_tests = 0u;
     let pixel = trace_pixel(camera_ray(position.xy));
+    let count = select(ray_count, primary_cost, WRITE_COST);
     return FragmentOutput(
-        bitcast<vec4<u32>>(vec4<f32>(pixel.color, f32(ray_count))),
+        bitcast<vec4<u32>>(vec4<f32>(pixel.color, f32(count))),
         bitcast<vec4<u32>>(vec4<f32>(pixel.normal, pixel.depth)),
     );
 }
