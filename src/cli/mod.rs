@@ -1,5 +1,6 @@
 //! The `raypipe` command line: one file per subcommand.
 
+mod bench;
 mod bvh;
 mod diff;
 mod info;
@@ -23,6 +24,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Compare two images: mean and 99th-percentile error, a difference image, exit 1 above a threshold.
     Diff(diff::DiffArgs),
+    /// Frames per second against sphere count, per acceleration and memory mode (the paper's Figure 4).
+    Bench(bench::BenchArgs),
     /// Build a BVH over a scene's spheres and print its size, depth, SAH cost and build time per phase.
     Bvh(bvh::BvhArgs),
     /// List GPU adapters, their backends, drivers and the limits that matter here.
@@ -35,6 +38,7 @@ pub fn run() -> anyhow::Result<ExitCode> {
         Command::Render(args) => render::run(args),
         Command::Diff(args) => diff::run(args),
         Command::Bvh(args) => bvh::run(args),
+        Command::Bench(args) => bench::run(args),
         Command::Info => info::run(),
     }
 }

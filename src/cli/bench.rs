@@ -1,0 +1,275 @@
+//! `raypipe bench`: frames per second against primitive count, per acceleration and memory mode (the
+//! paper's Figure 4), with every mode's image checked against brute force's before it is timed.
+
+use crate::bvh::morton::MortonBits;
+use crate::gpu::build::{GpuLbvhBuilder, depth_bound};
+use crate::gpu::context::Backend;
+use crate::gpu::upload::MemoryMode;
+use crate::gpu::{GpuContext, GpuRenderer};
+use crate::image::diff::{Tolerance, compare};
+use crate::render::Accel;
+use crate::scene::Scene;
+use crate::scene::packed::PackedScene;
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// A built-in family whose size takes the count: random, sphere, torus or bounce.
+    #[arg(default_value = "random")]
+    scene: String,
+    #[arg(long, value_delimiter = ',', default_values_t = [1000, 2000, 5000, 10000, 20000])]
+    counts: Vec<usize>,
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Accel::Brute, Accel::Stack, Accel::Stackless, Accel::Threaded])]
+    accel: Vec<Accel>,
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [MemoryMode::Storage])]
+    memory: Vec<MemoryMode>,
+    #[arg(long, default_value_t = 256)]
+    width: u32,
+    #[arg(long, default_value_t = 256)]
+    height: u32,
+    /// Timed frames per point, after the warm-up frames.
+    #[arg(long, default_value_t = 10)]
+    frames: usize,
+    #[arg(long, default_value_t = 2)]
+    warmup: usize,
+    /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately.
+    #[arg(long)]
+    rebuild: bool,
+    #[arg(long)]
+    backend: Option<Backend>,
+    /// Where results.csv and results.json go.
+    #[arg(long, default_value = "bench-results")]
+    out: PathBuf,
+    /// Also print the JSON array to stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize, Clone)]
+struct Row {
+    count: usize,
+    accel: String,
+    memory: String,
+    width: u32,
+    height: u32,
+    frames: usize,
+    ms_median: f64,
+    ms_min: f64,
+    ms_max: f64,
+    fps: f64,
+    mrays_per_s: f64,
+    /// GPU time of the per-frame LBVH build (median), with --rebuild.
+    build_ms_median: Option<f64>,
+    /// "gpu timestamps" or "wall clock".
+    clock: String,
+    adapter: String,
+    backend: String,
+}
+
+fn name<T: ValueEnum>(value: &T) -> String {
+    value
+        .to_possible_value()
+        .map(|v| v.get_name().to_string())
+        .unwrap_or_default()
+}
+
+fn median(sorted: &[f64]) -> f64 {
+    sorted[sorted.len() / 2]
+}
+
+/// The scene of `family` with `count` spheres, at the given size, packed (with a CPU-built BVH).
+fn scene(family: &str, count: usize, width: u32, height: u32) -> anyhow::Result<PackedScene> {
+    if !["random", "sphere", "torus", "bounce"].contains(&family) {
+        bail!("bench scene '{family}': use a family that takes a count: random, sphere, torus or bounce");
+    }
+    let mut scene = Scene::load(&format!("{family}:{count}"))?;
+    scene.settings.width = width;
+    scene.settings.height = height;
+    let mut packed = PackedScene::new(&scene)?;
+    packed.build_bvh(MortonBits::Bits30);
+    Ok(packed)
+}
+
+/// Renders `mode` and brute force at a small size on the GPU and requires equal images; a mode that
+/// cannot run (a scene too big for uniform memory, say) reports why.
+fn check_against_brute(
+    ctx: &GpuContext,
+    family: &str,
+    count: usize,
+    accel: Accel,
+    memory: MemoryMode,
+) -> anyhow::Result<()> {
+    let small = scene(family, count, 64, 48)?;
+    let brute = GpuRenderer::new(ctx, &small, MemoryMode::Storage, Accel::Brute)?
+        .render()?
+        .frame;
+    let frame = GpuRenderer::new(ctx, &small, memory, accel)?.render()?.frame;
+    let color = compare(&frame.display(), &brute.display())?;
+    let depth = compare(&frame.depth(), &brute.depth())?;
+    Tolerance::COLOR
+        .check(&color)
+        .and_then(|_| Tolerance::DEPTH.check(&depth))
+        .map_err(|e| anyhow::anyhow!("its image differs from brute force's: {e}"))
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
+    let ctx = GpuContext::require(args.backend)?;
+    let clock = if ctx.timestamps { "gpu timestamps" } else { "wall clock" };
+    if !ctx.timestamps {
+        eprintln!(
+            "notice: {} has no timestamp queries; timing with the wall clock",
+            ctx.describe()
+        );
+    }
+    anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
+    anyhow::ensure!(
+        !args.rebuild || args.memory.iter().all(|&m| m == MemoryMode::Storage),
+        "--rebuild builds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
+    );
+    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
+    let points = args.counts.len() * args.accel.len() * args.memory.len();
+    let bar = ProgressBar::new(points as u64);
+    bar.set_style(ProgressStyle::with_template("{spinner} bench {bar:40} {pos}/{len} {msg}").expect("valid template"));
+    let mut rows = Vec::new();
+    let mut refused = Vec::new();
+    for &count in &args.counts {
+        let packed = scene(&args.scene, count, args.width, args.height)?;
+        let mut builder = if args.rebuild {
+            Some(GpuLbvhBuilder::new(&ctx, count)?)
+        } else {
+            None
+        };
+        for &accel in &args.accel {
+            for &memory in &args.memory {
+                let point = format!("{count} {} {}", name(&accel), name(&memory));
+                bar.set_message(point.clone());
+                if accel != Accel::Brute
+                    && let Err(e) = check_against_brute(&ctx, &args.scene, count, accel, memory)
+                {
+                    refused.push(format!("{point}: {e:#}"));
+                    bar.inc(1);
+                    continue;
+                }
+                let rebuild = builder.as_mut().filter(|_| accel.uses_bvh());
+                let renderer = match &rebuild {
+                    Some(b) => {
+                        b.write_spheres(&packed.spheres);
+                        let mut layout = packed.clone();
+                        layout.bvh_depth = depth_bound(count);
+                        GpuRenderer::with_shared_buffers(&ctx, &layout, accel, &b.shared_buffers())
+                    }
+                    None => GpuRenderer::new(&ctx, &packed, memory, accel),
+                };
+                let renderer = match renderer {
+                    Ok(r) => r,
+                    Err(e) => {
+                        refused.push(format!("{point}: {e:#}"));
+                        bar.inc(1);
+                        continue;
+                    }
+                };
+                let mut times = Vec::new();
+                let mut builds = Vec::new();
+                let mut rays = 0;
+                for frame in 0..args.warmup + args.frames {
+                    let start = std::time::Instant::now();
+                    let timed = renderer.render_after(|encoder| {
+                        if let Some(b) = &rebuild {
+                            b.encode(encoder, false);
+                        }
+                    })?;
+                    let wall = start.elapsed().as_secs_f64() * 1e3;
+                    if frame >= args.warmup {
+                        times.push(timed.gpu_ms.unwrap_or(wall));
+                        rays = timed.frame.rays();
+                        if let Some(b) = &rebuild {
+                            builds.push(b.read_timings()?.total());
+                        }
+                    }
+                }
+                times.sort_by(f64::total_cmp);
+                builds.sort_by(f64::total_cmp);
+                let ms = median(&times);
+                rows.push(Row {
+                    count,
+                    accel: name(&accel),
+                    memory: name(&memory),
+                    width: args.width,
+                    height: args.height,
+                    frames: args.frames,
+                    ms_median: ms,
+                    ms_min: times[0],
+                    ms_max: times[times.len() - 1],
+                    fps: 1e3 / ms,
+                    mrays_per_s: rays as f64 / (ms * 1e3),
+                    build_ms_median: (!builds.is_empty()).then(|| median(&builds)),
+                    clock: clock.into(),
+                    adapter: ctx.info.name.clone(),
+                    backend: format!("{:?}", ctx.info.backend),
+                });
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    write_csv(&args.out.join("results.csv"), &rows)?;
+    let json = serde_json::to_string_pretty(&rows)?;
+    std::fs::write(args.out.join("results.json"), &json)
+        .with_context(|| format!("{}: cannot write", args.out.display()))?;
+    for line in &refused {
+        eprintln!("refused: {line}");
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        println!("adapter: {} ({clock}), {}x{}", ctx.describe(), args.width, args.height);
+        println!(
+            "{:>8} {:>10} {:>8} {:>10} {:>10} {:>10}",
+            "count", "accel", "memory", "ms", "fps", "Mrays/s"
+        );
+        for r in &rows {
+            println!(
+                "{:>8} {:>10} {:>8} {:>10.3} {:>10.2} {:>10.2}",
+                r.count, r.accel, r.memory, r.ms_median, r.fps, r.mrays_per_s
+            );
+        }
+        println!("results: {}/results.csv, results.json", args.out.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
+    let mut file = std::fs::File::create(path).with_context(|| format!("{}: cannot write", path.display()))?;
+    writeln!(
+        file,
+        "count,accel,memory,width,height,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,clock,adapter,backend"
+    )?;
+    for r in rows {
+        writeln!(
+            file,
+            "{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},\"{}\",{}",
+            r.count,
+            r.accel,
+            r.memory,
+            r.width,
+            r.height,
+            r.frames,
+            r.ms_median,
+            r.ms_min,
+            r.ms_max,
+            r.fps,
+            r.mrays_per_s,
+            r.build_ms_median.map(|b| format!("{b:.4}")).unwrap_or_default(),
+            r.clock,
+            r.adapter.replace('"', "'"),
+            r.backend
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,60 @@
+//! `raypipe bench`: every point is timed and reported with the documented keys, in CSV and JSON.
+
+mod common;
+use std::process::Command;
+
+#[test]
+fn bench_reports_every_point_with_the_documented_keys() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench");
+    let output = Command::new(env!("CARGO_BIN_EXE_raypipe"))
+        .args([
+            "bench",
+            "random",
+            "--counts",
+            "200,400",
+            "--accel",
+            "brute,stack,stackless,threaded",
+        ])
+        .args([
+            "--width", "32", "--height", "24", "--frames", "2", "--warmup", "1", "--json", "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let rows: Vec<serde_json::Value> = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(rows.len(), 8, "two counts times four modes");
+    let keys = [
+        "count",
+        "accel",
+        "memory",
+        "width",
+        "height",
+        "frames",
+        "ms_median",
+        "ms_min",
+        "ms_max",
+        "fps",
+        "mrays_per_s",
+        "adapter",
+        "backend",
+    ];
+    for row in &rows {
+        for key in keys {
+            assert!(row.get(key).is_some(), "{key} missing from {row}");
+        }
+        let (min, median, max) = (
+            row["ms_min"].as_f64().unwrap(),
+            row["ms_median"].as_f64().unwrap(),
+            row["ms_max"].as_f64().unwrap(),
+        );
+        assert!(0.0 < min && min <= median && median <= max, "{row}");
+        assert!(row["mrays_per_s"].as_f64().unwrap() > 0.0);
+    }
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 9, "a header and eight rows");
+    assert!(out.join("results.json").exists());
+}
