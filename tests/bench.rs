@@ -57,4 +57,11 @@ fn bench_reports_every_point_with_the_documented_keys() {
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     assert_eq!(csv.lines().count(), 9, "a header and eight rows");
     assert!(out.join("results.json").exists());
+    let plot = image::open(out.join("fps.png")).unwrap();
+    assert!(plot.width() > 100 && plot.height() > 100);
+    let svg = std::fs::read_to_string(out.join("fps.svg")).unwrap();
+    assert!(
+        svg.contains("<svg") && svg.contains("stackless"),
+        "the SVG names its lines"
+    );
 }

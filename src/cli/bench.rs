@@ -7,6 +7,7 @@ use crate::gpu::context::Backend;
 use crate::gpu::upload::MemoryMode;
 use crate::gpu::{GpuContext, GpuRenderer};
 use crate::image::diff::{Tolerance, compare};
+use crate::image::plot::{Series, write_fps_plot};
 use crate::render::Accel;
 use crate::scene::Scene;
 use crate::scene::packed::PackedScene;
@@ -43,7 +44,7 @@ pub struct BenchArgs {
     rebuild: bool,
     #[arg(long)]
     backend: Option<Backend>,
-    /// Where results.csv and results.json go.
+    /// Where results.csv, results.json and the plot fps.png (and fps.svg) go.
     #[arg(long, default_value = "bench-results")]
     out: PathBuf,
     /// Also print the JSON array to stdout.
@@ -222,6 +223,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     let json = serde_json::to_string_pretty(&rows)?;
     std::fs::write(args.out.join("results.json"), &json)
         .with_context(|| format!("{}: cannot write", args.out.display()))?;
+    write_plot(&args, &ctx, &rows)?;
     for line in &refused {
         eprintln!("refused: {line}");
     }
@@ -239,7 +241,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 r.count, r.accel, r.memory, r.ms_median, r.fps, r.mrays_per_s
             );
         }
-        println!("results: {}/results.csv, results.json", args.out.display());
+        println!(
+            "results: {}/results.csv, results.json, fps.png, fps.svg",
+            args.out.display()
+        );
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -272,4 +277,33 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// fps against count, one line per (accel, memory), titled with the adapter and resolution.
+fn write_plot(args: &BenchArgs, ctx: &GpuContext, rows: &[Row]) -> anyhow::Result<()> {
+    let mut series: Vec<Series> = Vec::new();
+    for r in rows {
+        let label = if args.memory.len() > 1 {
+            format!("{} ({})", r.accel, r.memory)
+        } else {
+            r.accel.clone()
+        };
+        match series.iter_mut().find(|s| s.name == label) {
+            Some(s) => s.points.push((r.count as f64, r.fps)),
+            None => series.push(Series {
+                name: label,
+                points: vec![(r.count as f64, r.fps)],
+            }),
+        }
+    }
+    let title = format!(
+        "{} spheres, {}x{}, {} ({:?}){}",
+        args.scene,
+        args.width,
+        args.height,
+        ctx.info.name,
+        ctx.info.backend,
+        if args.rebuild { ", BVH rebuilt every frame" } else { "" }
+    );
+    write_fps_plot(&series, &title, &args.out.join("fps.png"), &args.out.join("fps.svg"))
 }

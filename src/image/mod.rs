@@ -3,6 +3,7 @@
 pub mod diff;
 pub mod heatmap;
 pub mod io;
+pub mod plot;
 
 /// The depth channel's value where the primary ray hits nothing (the shader cannot write +inf).
 pub const DEPTH_MISS: f32 = -1.0;
