@@ -2,7 +2,7 @@
 //! whether anything blocks a shadow ray.
 
 use super::intersect::{
-    Hit, HitKind, Ray, closer_sphere, count_box_tests, intersect_box, intersect_sphere, safe_inverse, v3,
+    Hit, HitKind, Ray, closer_sphere, count_box_tests, hit_leaf, intersect_box, intersect_sphere, safe_inverse, v3,
 };
 use crate::bvh::layout::{GpuNode, NONE};
 use crate::scene::packed::GpuSphere;
@@ -49,16 +49,8 @@ pub fn traverse_stack(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best:
     let mut stack: Vec<(u32, f32)> = Vec::with_capacity(64);
     loop {
         if node.is_leaf() {
-            let t = intersect_sphere(&spheres[node.left as usize], ray, hit.t);
-            if closer_sphere(t, node.left, &hit) {
-                hit = Hit {
-                    t,
-                    kind: HitKind::Sphere,
-                    index: node.left,
-                };
-                if shadow {
-                    return hit;
-                }
+            if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
+                return hit;
             }
         } else {
             let left = nodes[node.left as usize];
@@ -113,16 +105,8 @@ pub fn traverse_threaded(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, be
             index = node.left;
             continue;
         }
-        let t = intersect_sphere(&spheres[node.left as usize], ray, hit.t);
-        if closer_sphere(t, node.left, &hit) {
-            hit = Hit {
-                t,
-                kind: HitKind::Sphere,
-                index: node.left,
-            };
-            if shadow {
-                return hit;
-            }
+        if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
+            return hit;
         }
         index = node.escape;
     }
@@ -165,14 +149,7 @@ pub fn traverse_stackless(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, b
         return hit;
     }
     if root.is_leaf() {
-        let t = intersect_sphere(&spheres[root.left as usize], ray, hit.t);
-        if closer_sphere(t, root.left, &hit) {
-            hit = Hit {
-                t,
-                kind: HitKind::Sphere,
-                index: root.left,
-            };
-        }
+        hit_leaf(spheres, &root, ray, &mut hit);
         return hit;
     }
     let mut index = near_child(nodes, &root, ray.dir);
@@ -196,16 +173,8 @@ pub fn traverse_stackless(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, b
         let mut descend = false;
         if intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) >= 0.0 {
             if node.is_leaf() {
-                let t = intersect_sphere(&spheres[node.left as usize], ray, hit.t);
-                if closer_sphere(t, node.left, &hit) {
-                    hit = Hit {
-                        t,
-                        kind: HitKind::Sphere,
-                        index: node.left,
-                    };
-                    if shadow {
-                        return hit;
-                    }
+                if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
+                    return hit;
                 }
             } else {
                 descend = true;

@@ -1,5 +1,6 @@
 //! Ray-primitive intersection: the twin of `shaders/intersect.wgsl`.
 
+use crate::bvh::layout::GpuNode;
 use crate::scene::packed::{GpuPlane, GpuSphere};
 use glam::Vec3;
 
@@ -118,6 +119,21 @@ pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32
     let t_enter = near.x.max(near.y).max(near.z.max(0.0));
     let t_exit = far.x.min(far.y).min(far.z.min(t_max));
     if t_enter <= t_exit { t_enter } else { NO_HIT }
+}
+
+/// Tests a BVH leaf's sphere; when it beats the best hit, it becomes the best hit and this says so
+/// (`hit_leaf` in `intersect.wgsl`).
+pub fn hit_leaf(spheres: &[GpuSphere], node: &GpuNode, ray: &Ray, hit: &mut Hit) -> bool {
+    let t = intersect_sphere(&spheres[node.left as usize], ray, hit.t);
+    if closer_sphere(t, node.left, hit) {
+        *hit = Hit {
+            t,
+            kind: HitKind::Sphere,
+            index: node.left,
+        };
+        return true;
+    }
+    false
 }
 
 /// Planes are unbounded, so they stay outside any acceleration structure and are always tested.

@@ -18,12 +18,8 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var size = 0u;
     loop {
         if (node.right == LEAF) {
-            let t = intersect_sphere(load_sphere(node.left), ray, hit.t);
-            if (closer_sphere(t, node.left, hit)) {
-                hit = Hit(t, HIT_SPHERE, node.left);
-                if (shadow) {
-                    return hit;
-                }
+            if (hit_leaf(node, ray, &hit) && shadow) {
+                return hit;
             }
         } else {
             let left = load_node(node.left);

@@ -31,10 +31,7 @@ fn traverse_stackless(ray: Ray, best: Hit, shadow: bool) -> Hit {
         return hit;
     }
     if (root.right == LEAF) {
-        let t = intersect_sphere(load_sphere(root.left), ray, hit.t);
-        if (closer_sphere(t, root.left, hit)) {
-            hit = Hit(t, HIT_SPHERE, root.left);
-        }
+        hit_leaf(root, ray, &hit);
         return hit;
     }
     var index = near_child(root, ray.dir);
@@ -58,12 +55,8 @@ fn traverse_stackless(ray: Ray, best: Hit, shadow: bool) -> Hit {
         var descend = false;
         if (intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) >= 0.0) {
             if (node.right == LEAF) {
-                let t = intersect_sphere(load_sphere(node.left), ray, hit.t);
-                if (closer_sphere(t, node.left, hit)) {
-                    hit = Hit(t, HIT_SPHERE, node.left);
-                    if (shadow) {
-                        return hit;
-                    }
+                if (hit_leaf(node, ray, &hit) && shadow) {
+                    return hit;
                 }
             } else {
                 descend = true;

@@ -19,12 +19,8 @@ fn traverse_threaded(ray: Ray, best: Hit, shadow: bool) -> Hit {
             index = node.left;
             continue;
         }
-        let t = intersect_sphere(load_sphere(node.left), ray, hit.t);
-        if (closer_sphere(t, node.left, hit)) {
-            hit = Hit(t, HIT_SPHERE, node.left);
-            if (shadow) {
-                return hit;
-            }
+        if (hit_leaf(node, ray, &hit) && shadow) {
+            return hit;
         }
         index = node.escape;
     }

@@ -150,6 +150,18 @@ fn is_zero_bit(i: u32) -> bool {
     return ((pairs_in[i].x >> params.bit) & 1u) == 0u;
 }
 
+// Items whose key bit is zero among the invocation's ITEMS consecutive items of the block.
+fn invocation_zeros(block: u32, lid: u32) -> u32 {
+    var zeros = 0u;
+    for (var k = 0u; k < ITEMS; k++) {
+        let i = block * BLOCK + lid * ITEMS + k;
+        if (i < params.count && is_zero_bit(i)) {
+            zeros += 1u;
+        }
+    }
+    return zeros;
+}
+
 // Exclusive scan of shared_u32 over the workgroup (Hillis-Steele); returns the total.
 fn scan_shared(lid: u32) -> u32 {
     workgroupBarrier();
@@ -172,13 +184,7 @@ fn scan_shared(lid: u32) -> u32 {
 fn sort_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
               @builtin(local_invocation_index) lid: u32) {
     let block = flat_group(wid, groups);
-    var zeros = 0u;
-    for (var k = 0u; k < ITEMS; k++) {
-        let i = block * BLOCK + lid * ITEMS + k;
-        if (i < params.count && is_zero_bit(i)) {
-            zeros += 1u;
-        }
-    }
+    let zeros = invocation_zeros(block, lid);
     shared_u32[lid] = zeros;
     let total = scan_shared(lid);
     if (lid == 0u && block < block_count()) {
@@ -212,13 +218,7 @@ fn sort_scan(@builtin(local_invocation_index) lid: u32) {
 fn sort_scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lid: u32) {
     let block = flat_group(wid, groups);
-    var zeros = 0u;
-    for (var k = 0u; k < ITEMS; k++) {
-        let i = block * BLOCK + lid * ITEMS + k;
-        if (i < params.count && is_zero_bit(i)) {
-            zeros += 1u;
-        }
-    }
+    let zeros = invocation_zeros(block, lid);
     shared_u32[lid] = zeros;
     scan_shared(lid);
     if (block >= block_count()) {
