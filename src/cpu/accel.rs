@@ -2,7 +2,8 @@
 //! whether anything blocks a shadow ray.
 
 use super::intersect::{
-    Hit, HitKind, Ray, closer_sphere, count_box_tests, hit_leaf, intersect_box, intersect_sphere, safe_inverse, v3,
+    Hit, HitKind, NO_HIT, Ray, closer_sphere, count_box_tests, hit_leaf, intersect_box, intersect_sphere, safe_inverse,
+    v3,
 };
 use crate::bvh::layout::{GpuNode, NONE};
 use crate::scene::packed::GpuSphere;
@@ -55,8 +56,23 @@ pub fn traverse_stack(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best:
         } else {
             let left = nodes[node.left as usize];
             let right = nodes[node.right as usize];
-            let t_left = intersect_box(v3(left.min), v3(left.max), ray.origin, inv_dir, hit.t);
-            let t_right = intersect_box(v3(right.min), v3(right.max), ray.origin, inv_dir, hit.t);
+            // Leaf children: test their spheres now (no dearer than their boxes); box-test the others.
+            let mut t_left = NO_HIT;
+            if left.is_leaf() {
+                if hit_leaf(spheres, &left, ray, &mut hit) && shadow {
+                    return hit;
+                }
+            } else {
+                t_left = intersect_box(v3(left.min), v3(left.max), ray.origin, inv_dir, hit.t);
+            }
+            let mut t_right = NO_HIT;
+            if right.is_leaf() {
+                if hit_leaf(spheres, &right, ray, &mut hit) && shadow {
+                    return hit;
+                }
+            } else {
+                t_right = intersect_box(v3(right.min), v3(right.max), ray.origin, inv_dir, hit.t);
+            }
             if t_left >= 0.0 && t_right >= 0.0 {
                 // Both: go to the nearer (left on a tie), the other waits.
                 if t_right < t_left {
@@ -97,18 +113,17 @@ pub fn traverse_threaded(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, be
     let mut index = 0u32;
     while index != NONE {
         let node = nodes[index as usize];
-        if intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) < 0.0 {
+        // A leaf's sphere costs no more to test than its box: test it directly.
+        if node.is_leaf() {
+            if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
+                return hit;
+            }
             index = node.escape;
-            continue;
-        }
-        if !node.is_leaf() {
+        } else if intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) < 0.0 {
+            index = node.escape;
+        } else {
             index = node.left;
-            continue;
         }
-        if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
-            return hit;
-        }
-        index = node.escape;
     }
     hit
 }
@@ -169,16 +184,14 @@ pub fn traverse_stackless(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, b
             }
             continue;
         }
-        // From the parent or the sibling: test the box, and the primitive of a leaf.
+        // From the parent or the sibling: a leaf's sphere (no dearer to test than its box), or the box.
         let mut descend = false;
-        if intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) >= 0.0 {
-            if node.is_leaf() {
-                if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
-                    return hit;
-                }
-            } else {
-                descend = true;
+        if node.is_leaf() {
+            if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
+                return hit;
             }
+        } else {
+            descend = intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) >= 0.0;
         }
         if descend {
             index = near_child(nodes, &node, ray.dir);

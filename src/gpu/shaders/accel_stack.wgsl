@@ -24,8 +24,23 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
         } else {
             let left = load_node(node.left);
             let right = load_node(node.right);
-            let t_left = intersect_box(left.min, left.max, ray.origin, inv_dir, hit.t);
-            let t_right = intersect_box(right.min, right.max, ray.origin, inv_dir, hit.t);
+            // Leaf children: test their spheres now (no dearer than their boxes); box-test the others.
+            var t_left = NO_HIT;
+            if (left.right == LEAF) {
+                if (hit_leaf(left, ray, &hit) && shadow) {
+                    return hit;
+                }
+            } else {
+                t_left = intersect_box(left.min, left.max, ray.origin, inv_dir, hit.t);
+            }
+            var t_right = NO_HIT;
+            if (right.right == LEAF) {
+                if (hit_leaf(right, ray, &hit) && shadow) {
+                    return hit;
+                }
+            } else {
+                t_right = intersect_box(right.min, right.max, ray.origin, inv_dir, hit.t);
+            }
             if (t_left >= 0.0 && t_right >= 0.0) {
                 // Both: go to the nearer (left on a tie), the other waits.
                 if (t_right < t_left) {

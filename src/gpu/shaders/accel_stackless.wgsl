@@ -51,16 +51,14 @@ fn traverse_stackless(ray: Ray, best: Hit, shadow: bool) -> Hit {
             }
             continue;
         }
-        // From the parent or the sibling: test the box, and the primitive of a leaf.
+        // From the parent or the sibling: a leaf's sphere (no dearer to test than its box), or the box.
         var descend = false;
-        if (intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) >= 0.0) {
-            if (node.right == LEAF) {
-                if (hit_leaf(node, ray, &hit) && shadow) {
-                    return hit;
-                }
-            } else {
-                descend = true;
+        if (node.right == LEAF) {
+            if (hit_leaf(node, ray, &hit) && shadow) {
+                return hit;
             }
+        } else {
+            descend = intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) >= 0.0;
         }
         if (descend) {
             index = near_child(node, ray.dir);

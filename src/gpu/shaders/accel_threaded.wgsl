@@ -1,6 +1,6 @@
 // Threaded BVH traversal: depth-first order, left child first, with no stack. A node whose box the
-// ray misses (or a leaf, once tested) hands over to its escape link, the next node after its
-// subtree; a hit descends to the left child. Mirrored by src/cpu/accel.rs.
+// ray misses (or a leaf, once its sphere is tested) hands over to its escape link, the next node
+// after its subtree; a hit descends to the left child. Mirrored by src/cpu/accel.rs.
 
 fn traverse_threaded(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var hit = best;
@@ -11,18 +11,17 @@ fn traverse_threaded(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var index = 0u;
     while (index != NONE) {
         let node = load_node(index);
-        if (intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) < 0.0) {
+        // A leaf's sphere costs no more to test than its box: test it directly.
+        if (node.right == LEAF) {
+            if (hit_leaf(node, ray, &hit) && shadow) {
+                return hit;
+            }
             index = node.escape;
-            continue;
-        }
-        if (node.right != LEAF) {
+        } else if (intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) < 0.0) {
+            index = node.escape;
+        } else {
             index = node.left;
-            continue;
         }
-        if (hit_leaf(node, ray, &hit) && shadow) {
-            return hit;
-        }
-        index = node.escape;
     }
     return hit;
 }
