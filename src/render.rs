@@ -51,7 +51,7 @@ pub struct RenderOptions {
     pub accel: Accel,
     /// Show a progress bar for CPU renders (only drawn on a terminal).
     pub progress: bool,
-    /// Frames carry each pixel's cost (ray-box tests of the primary ray) instead of its ray count.
+    /// Frames carry each pixel's cost (BVH nodes its primary ray tested) instead of its ray count.
     pub write_cost: bool,
     /// Draw a frame before the timed one: drivers may compile the pipeline at its first draw
     /// (llvmpipe does), which would otherwise count as render time.

@@ -20,8 +20,8 @@ pub enum Aov {
     Depth,
     /// First-hit normals, mapped from [-1, 1] to [0, 1].
     Normal,
-    /// A heat map of each primary ray's cost: ray-box tests in the BVH (ray-sphere tests for brute
-    /// force), with a colour-scale legend. PNG only.
+    /// A heat map of each primary ray's cost: BVH nodes tested (box tests of internal nodes, sphere
+    /// tests of leaves; spheres tested for brute force), with a colour-scale legend. PNG only.
     Cost,
 }
 
@@ -151,9 +151,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             let counts = frame.counts();
             let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
             let max = counts.iter().copied().max().unwrap_or(0);
-            println!(
-                "cost per primary ray: mean {mean:.1}, max {max} ray-box tests (ray-sphere tests for brute force)"
-            );
+            println!("cost per primary ray: mean {mean:.1}, max {max} nodes tested (spheres tested for brute force)");
             return Ok(ExitCode::SUCCESS);
         }
         let (ms, clock) = match outcome.gpu_ms {

@@ -41,8 +41,9 @@ pub fn v3(a: [f32; 3]) -> Vec3 {
 }
 
 thread_local! {
-    /// Ray-box tests on this thread (ray-sphere tests for brute force): the shader's private
-    /// `box_tests`, since one pixel is traced start to end on one thread.
+    /// Nodes tested on this thread (ray-box tests of internal nodes, ray-sphere tests of leaves;
+    /// spheres tested for brute force): the shader's private `box_tests`, since one pixel is traced
+    /// start to end on one thread.
     static BOX_TESTS: std::cell::Cell<u32> = const { std::cell::Cell::new(0) };
 }
 
@@ -124,6 +125,7 @@ pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32
 /// Tests a BVH leaf's sphere; when it beats the best hit, it becomes the best hit and this says so
 /// (`hit_leaf` in `intersect.wgsl`).
 pub fn hit_leaf(spheres: &[GpuSphere], node: &GpuNode, ray: &Ray, hit: &mut Hit) -> bool {
+    count_box_tests(1);
     let t = intersect_sphere(&spheres[node.left as usize], ray, hit.t);
     if closer_sphere(t, node.left, hit) {
         *hit = Hit {

@@ -29,7 +29,8 @@ pub struct PixelTrace {
     pub depth: Option<f32>,
     /// Primary, shadow and secondary rays traced for this pixel.
     pub rays: u32,
-    /// Ray-box tests of the primary ray (ray-sphere tests for brute force).
+    /// Nodes the primary ray tested (box tests of internal nodes, sphere tests of leaves; spheres
+    /// tested for brute force).
     pub cost: u32,
 }
 

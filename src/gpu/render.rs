@@ -39,8 +39,9 @@ impl<'a> GpuRenderer<'a> {
         Self::create(ctx, scene, memory, accel, None, false)
     }
 
-    /// A renderer whose frames carry each pixel's cost (ray-box tests of the primary ray; spheres
-    /// tested for brute force) in the colour target's fourth channel instead of its ray count.
+    /// A renderer whose frames carry each pixel's cost (BVH nodes its primary ray tested: box tests of
+    /// internal nodes, sphere tests of leaves; spheres tested for brute force) in the colour target's
+    /// fourth channel instead of its ray count.
     pub fn with_cost(
         ctx: &'a GpuContext,
         scene: &PackedScene,

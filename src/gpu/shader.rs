@@ -39,7 +39,7 @@ pub struct ShaderConfig<'a> {
     pub arrays: &'a [RecordArray],
     /// Width of the scene textures, in texels.
     pub texels_per_row: u32,
-    /// Write each pixel's cost (the primary ray's ray-box tests) instead of its ray count.
+    /// Write each pixel's cost (BVH nodes its primary ray tested) instead of its ray count.
     pub write_cost: bool,
 }
 

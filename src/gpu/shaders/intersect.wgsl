@@ -83,6 +83,7 @@ fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<
 
 // Tests a BVH leaf's sphere; when it beats the best hit, it becomes the best hit and this says so.
 fn hit_leaf(node: BvhNode, ray: Ray, hit: ptr<function, Hit>) -> bool {
+    box_tests += 1u;
     let t = intersect_sphere(load_sphere(node.left), ray, (*hit).t);
     if (closer_sphere(t, node.left, *hit)) {
         *hit = Hit(t, HIT_SPHERE, node.left);

@@ -10,8 +10,9 @@ const DEPTH_MISS: f32 = -1.0;
 
 // Rays traced for the current pixel: primary, shadow and secondary, counted where they are cast.
 var<private> ray_count: u32;
-// Ray-box tests so far (ray-sphere tests for brute force), and their number for the primary ray: the
-// pixel's cost, which a cost render (WRITE_COST) writes instead of the ray count.
+// Nodes tested so far (ray-box tests of internal nodes, ray-sphere tests of leaves; spheres tested for
+// brute force), and their number for the primary ray: the pixel's cost, which a cost render
+// (WRITE_COST) writes instead of the ray count.
 var<private> box_tests: u32;
 var<private> primary_cost: u32;
 
