@@ -5,6 +5,8 @@
 //! GPU builds use 30-bit Morton codes; 63-bit codes are built on the CPU only.
 
 use super::GpuContext;
+use super::readback::read_buffer;
+use super::timing::PassTimestamps;
 use super::upload::SharedBuffers;
 use crate::bvh::BuildTimings;
 use crate::bvh::layout::GpuNode;
@@ -49,7 +51,7 @@ pub struct GpuLbvhBuilder<'a> {
     kernels: Kernels,
     layout: wgpu::BindGroupLayout,
     buffers: Buffers,
-    timer: Option<PhaseTimer>,
+    timer: Option<PassTimestamps>,
 }
 
 /// The buffers of a build over `count` primitives.
@@ -142,7 +144,9 @@ impl<'a> GpuLbvhBuilder<'a> {
                 kernels,
                 layout,
                 buffers,
-                timer: ctx.timestamps.then(|| PhaseTimer::new(&ctx.device)),
+                timer: ctx
+                    .timestamps
+                    .then(|| PassTimestamps::new(&ctx.device, "build phases", PHASES as u32)),
             })
         })
     }
@@ -201,7 +205,7 @@ impl<'a> GpuLbvhBuilder<'a> {
                      steps: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, u32, u32)]| {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(PHASE_NAMES[index]),
-                timestamp_writes: self.timer.as_ref().map(|t| t.writes(index)),
+                timestamp_writes: self.timer.as_ref().map(|t| t.compute_writes(index as u32)),
             });
             for &(pipeline, bind_group, bit, groups) in steps {
                 let (x, y) = grid(groups);
@@ -260,7 +264,16 @@ impl<'a> GpuLbvhBuilder<'a> {
     /// the adapter has no timestamp queries).
     pub fn read_timings(&self) -> anyhow::Result<BuildTimings> {
         match &self.timer {
-            Some(timer) if self.count() > 0 => timer.read(self.ctx),
+            Some(timer) if self.count() > 0 => {
+                let ms = timer.read_ms(self.ctx)?;
+                Ok(BuildTimings {
+                    morton: ms[0],
+                    sort: ms[1],
+                    hierarchy: ms[2],
+                    bounds: ms[3],
+                    links: ms[4],
+                })
+            }
             _ => Ok(BuildTimings::default()),
         }
     }
@@ -279,7 +292,7 @@ impl<'a> GpuLbvhBuilder<'a> {
         if size == 0 {
             return Ok(Vec::new());
         }
-        let bytes = read_buffer(self.ctx, &self.buffers.nodes, size)?;
+        let bytes = read_buffer(&self.ctx.device, &self.ctx.queue, &self.buffers.nodes, size)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 }
@@ -367,75 +380,3 @@ pub fn depth_bound(count: usize) -> u32 {
 }
 
 const PHASE_NAMES: [&str; PHASES] = ["morton", "sort", "hierarchy", "bounds", "links"];
-
-fn read_buffer(ctx: &GpuContext, source: &wgpu::Buffer, size: u64) -> anyhow::Result<Vec<u8>> {
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("read back"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
-    ctx.queue.submit([encoder.finish()]);
-    let slice = staging.slice(..);
-    let (sender, receiver) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |result| {
-        let _ = sender.send(result);
-    });
-    ctx.device.poll(wgpu::PollType::wait_indefinitely())?;
-    receiver.recv()??;
-    let bytes = slice.get_mapped_range()?.to_vec();
-    staging.unmap();
-    Ok(bytes)
-}
-
-/// Begin and end timestamps of each phase's compute pass.
-struct PhaseTimer {
-    queries: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-}
-
-impl PhaseTimer {
-    fn new(device: &wgpu::Device) -> Self {
-        Self {
-            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("build phases"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2 * PHASES as u32,
-            }),
-            resolve: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("build timestamps"),
-                size: 16 * PHASES as u64,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-        }
-    }
-
-    fn writes(&self, phase: usize) -> wgpu::ComputePassTimestampWrites<'_> {
-        wgpu::ComputePassTimestampWrites {
-            query_set: &self.queries,
-            beginning_of_pass_write_index: Some(2 * phase as u32),
-            end_of_pass_write_index: Some(2 * phase as u32 + 1),
-        }
-    }
-
-    fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.resolve_query_set(&self.queries, 0..2 * PHASES as u32, &self.resolve, 0);
-    }
-
-    fn read(&self, ctx: &GpuContext) -> anyhow::Result<BuildTimings> {
-        let bytes = read_buffer(ctx, &self.resolve, 16 * PHASES as u64)?;
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
-        let period_ns = ctx.queue.get_timestamp_period() as f64;
-        let ms = |phase: usize| ticks[2 * phase + 1].wrapping_sub(ticks[2 * phase]) as f64 * period_ns / 1e6;
-        Ok(BuildTimings {
-            morton: ms(0),
-            sort: ms(1),
-            hierarchy: ms(2),
-            bounds: ms(3),
-            links: ms(4),
-        })
-    }
-}

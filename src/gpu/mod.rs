@@ -5,6 +5,7 @@ pub mod context;
 pub mod readback;
 pub mod render;
 pub mod shader;
+pub mod timing;
 pub mod upload;
 
 pub use context::GpuContext;

@@ -47,22 +47,48 @@ impl Readback {
 
     /// Maps the buffer (after the copy was submitted) and returns the rows without their padding.
     pub fn read(&self, device: &wgpu::Device) -> anyhow::Result<Vec<u8>> {
-        let slice = self.buffer.slice(..);
-        let (sender, receiver) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |result| {
-            let _ = sender.send(result);
-        });
-        device.poll(wgpu::PollType::wait_indefinitely())?;
-        receiver.recv()??;
         let padded = padded_bytes_per_row(self.width * self.bytes_per_pixel) as usize;
         let row = (self.width * self.bytes_per_pixel) as usize;
-        let data = slice.get_mapped_range()?;
-        let mut out = Vec::with_capacity(row * self.height as usize);
-        for chunk in data.chunks(padded) {
-            out.extend_from_slice(&chunk[..row]);
-        }
-        drop(data);
-        self.buffer.unmap();
-        Ok(out)
+        map_read(device, &self.buffer, |data| {
+            let mut out = Vec::with_capacity(row * self.height as usize);
+            for chunk in data.chunks(padded) {
+                out.extend_from_slice(&chunk[..row]);
+            }
+            out
+        })
     }
+}
+
+/// Maps a MAP_READ buffer whose copies were submitted, waits for them, hands its bytes to `f`, and
+/// unmaps it again so the buffer can receive the next copy.
+pub fn map_read<T>(device: &wgpu::Device, buffer: &wgpu::Buffer, f: impl FnOnce(&[u8]) -> T) -> anyhow::Result<T> {
+    let slice = buffer.slice(..);
+    let (sender, receiver) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |result| {
+        let _ = sender.send(result);
+    });
+    device.poll(wgpu::PollType::wait_indefinitely())?;
+    receiver.recv()??;
+    let result = f(&slice.get_mapped_range()?);
+    buffer.unmap();
+    Ok(result)
+}
+
+/// Copies the first `size` bytes of `source` (COPY_SRC) to the host.
+pub fn read_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    source: &wgpu::Buffer,
+    size: u64,
+) -> anyhow::Result<Vec<u8>> {
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read back"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(source, 0, &staging, 0, size);
+    queue.submit([encoder.finish()]);
+    map_read(device, &staging, <[u8]>::to_vec)
 }

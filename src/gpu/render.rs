@@ -4,6 +4,7 @@
 use super::GpuContext;
 use super::readback::Readback;
 use super::shader::{ShaderConfig, compose};
+use super::timing::PassTimestamps;
 use super::upload::{MemoryMode, SceneResources, SharedBuffers, upload};
 use crate::image::Frame;
 use crate::render::Accel;
@@ -25,7 +26,9 @@ pub struct GpuRenderer<'a> {
     bind_group: wgpu::BindGroup,
     vertices: wgpu::Buffer,
     targets: [wgpu::Texture; 2],
-    timer: Option<PassTimer>,
+    /// Where each frame's targets are copied to be read; kept from frame to frame.
+    readbacks: [Readback; 2],
+    timer: Option<PassTimestamps>,
 }
 
 /// A frame and, where the adapter has timestamp queries, the GPU time of its render pass.
@@ -123,13 +126,19 @@ impl<'a> GpuRenderer<'a> {
                     view_formats: &[],
                 })
             });
+            let readbacks = targets
+                .each_ref()
+                .map(|_| Readback::new(&ctx.device, width, height, TARGET_BYTES_PER_PIXEL));
             Ok(Self {
                 ctx,
                 pipeline,
                 bind_group,
                 vertices,
                 targets,
-                timer: ctx.timestamps.then(|| PassTimer::new(&ctx.device)),
+                readbacks,
+                timer: ctx
+                    .timestamps
+                    .then(|| PassTimestamps::new(&ctx.device, "render pass", 1)),
             })
         })
     }
@@ -145,26 +154,22 @@ impl<'a> GpuRenderer<'a> {
         let ctx = self.ctx;
         ctx.checked("rendering", || {
             let size = self.targets[0].size();
-            let readbacks = self
-                .targets
-                .each_ref()
-                .map(|_| Readback::new(&ctx.device, size.width, size.height, TARGET_BYTES_PER_PIXEL));
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             prepare(&mut encoder);
             self.encode_pass(&mut encoder);
-            for (readback, target) in readbacks.iter().zip(&self.targets) {
+            for (readback, target) in self.readbacks.iter().zip(&self.targets) {
                 readback.copy_from(&mut encoder, target);
             }
             if let Some(timer) = &self.timer {
                 timer.resolve(&mut encoder);
             }
             ctx.queue.submit([encoder.finish()]);
-            let [color, surface] = readbacks.map(|r| r.read(&ctx.device));
+            let [color, surface] = self.readbacks.each_ref().map(|r| r.read(&ctx.device));
             let mut frame = Frame::new(size.width, size.height);
             frame.color = bytemuck::pod_collect_to_vec(&color?);
             frame.surface = bytemuck::pod_collect_to_vec(&surface?);
             let gpu_ms = match &self.timer {
-                Some(timer) => Some(timer.read_ms(ctx)?),
+                Some(timer) => Some(timer.read_ms(ctx)?[0]),
                 None => None,
             };
             Ok(TimedFrame { frame, gpu_ms })
@@ -188,7 +193,7 @@ impl<'a> GpuRenderer<'a> {
             label: Some("trace"),
             color_attachments: &attachments,
             depth_stencil_attachment: None,
-            timestamp_writes: self.timer.as_ref().map(|t| t.writes()),
+            timestamp_writes: self.timer.as_ref().map(|t| t.render_writes(0)),
             occlusion_query_set: None,
             multiview_mask: None,
         });
@@ -271,66 +276,4 @@ fn build_pipeline(
         cache: None,
     });
     (pipeline, bind_group)
-}
-
-/// Two timestamps around the render pass.
-struct PassTimer {
-    queries: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    read: wgpu::Buffer,
-}
-
-impl PassTimer {
-    fn new(device: &wgpu::Device) -> Self {
-        let buffer = |label, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: 16,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        Self {
-            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass time"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            }),
-            resolve: buffer(
-                "timestamps",
-                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            ),
-            read: buffer(
-                "timestamps read",
-                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            ),
-        }
-    }
-
-    fn writes(&self) -> wgpu::RenderPassTimestampWrites<'_> {
-        wgpu::RenderPassTimestampWrites {
-            query_set: &self.queries,
-            beginning_of_pass_write_index: Some(0),
-            end_of_pass_write_index: Some(1),
-        }
-    }
-
-    fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.resolve_query_set(&self.queries, 0..2, &self.resolve, 0);
-        encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.read, 0, 16);
-    }
-
-    fn read_ms(&self, ctx: &GpuContext) -> anyhow::Result<f64> {
-        let slice = self.read.slice(..);
-        let (sender, receiver) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |result| {
-            let _ = sender.send(result);
-        });
-        ctx.device.poll(wgpu::PollType::wait_indefinitely())?;
-        receiver.recv()??;
-        let ticks: [u64; 2] = bytemuck::pod_read_unaligned(&slice.get_mapped_range()?);
-        self.read.unmap();
-        let period_ns = ctx.queue.get_timestamp_period() as f64;
-        Ok(ticks[1].wrapping_sub(ticks[0]) as f64 * period_ns / 1e6)
-    }
 }
