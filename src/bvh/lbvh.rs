@@ -199,11 +199,7 @@ impl<K: Key> LbvhBuilder<K> {
                 .for_each(|(i, (key, &code))| *key = K::new(code, i as u32));
             return;
         }
-        let bounds = boxes
-            .par_iter()
-            .with_min_len(MIN_TASK)
-            .fold(|| Aabb::EMPTY, |b, p| b.grow(p.centroid()))
-            .reduce(|| Aabb::EMPTY, Aabb::union);
+        let bounds = morton::centroid_bounds(boxes);
         let scale = morton::scales(bounds, 1 << bits.bits_per_axis());
         self.keys
             .par_iter_mut()

@@ -12,6 +12,7 @@ pub mod validate;
 use aabb::Aabb;
 use layout::{GpuNode, NONE};
 use morton::MortonBits;
+pub use morton::centroid_codes;
 use rayon::prelude::*;
 
 /// A BVH over `primitive_count` primitives in the one node layout of [`layout`].
@@ -35,17 +36,6 @@ impl BuildTimings {
     pub fn total(&self) -> f64 {
         self.morton + self.sort + self.hierarchy + self.bounds + self.links
     }
-}
-
-/// Morton codes of the boxes' centroids, quantized in the centroids' bounds.
-pub fn centroid_codes(boxes: &[Aabb], bits: MortonBits) -> Vec<u64> {
-    let centroids: Vec<glam::Vec3> = boxes.par_iter().with_min_len(4096).map(|b| b.centroid()).collect();
-    let bounds = centroids
-        .par_iter()
-        .with_min_len(4096)
-        .fold(|| Aabb::EMPTY, |b, &c| b.grow(c))
-        .reduce(|| Aabb::EMPTY, Aabb::union);
-    morton::morton_codes(&centroids, bounds, bits)
 }
 
 impl Bvh {

@@ -81,13 +81,24 @@ pub fn morton_code(centroid: Vec3, bounds: Aabb, scale: Vec3, bits: MortonBits) 
     }
 }
 
-/// Codes of every centroid, in parallel; `bounds` are the centroids' bounds.
-pub fn morton_codes(centroids: &[Vec3], bounds: Aabb, bits: MortonBits) -> Vec<u64> {
-    let scale = scales(bounds, 1 << bits.bits_per_axis());
-    centroids
+/// Bounds of the boxes' centroids: the grid that Morton codes quantize in.
+pub fn centroid_bounds(boxes: &[Aabb]) -> Aabb {
+    boxes
         .par_iter()
         .with_min_len(4096)
-        .map(|&c| morton_code(c, bounds, scale, bits))
+        .fold(|| Aabb::EMPTY, |b, p| b.grow(p.centroid()))
+        .reduce(|| Aabb::EMPTY, Aabb::union)
+}
+
+/// The Morton codes of the boxes' centroids, quantized in the centroids' bounds: the codes the LBVH
+/// builders compute.
+pub fn centroid_codes(boxes: &[Aabb], bits: MortonBits) -> Vec<u64> {
+    let bounds = centroid_bounds(boxes);
+    let scale = scales(bounds, 1 << bits.bits_per_axis());
+    boxes
+        .par_iter()
+        .with_min_len(4096)
+        .map(|b| morton_code(b.centroid(), bounds, scale, bits))
         .collect()
 }
 
@@ -124,12 +135,8 @@ mod tests {
 
     #[test]
     fn corners_get_extreme_codes() {
-        let bounds = Aabb::new(Vec3::ZERO, Vec3::ONE);
-        let codes = morton_codes(
-            &[Vec3::ZERO, Vec3::ONE, Vec3::new(1.0, 0.0, 0.0)],
-            bounds,
-            MortonBits::Bits30,
-        );
+        let points = [Vec3::ZERO, Vec3::ONE, Vec3::new(1.0, 0.0, 0.0)].map(|p| Aabb::new(p, p));
+        let codes = centroid_codes(&points, MortonBits::Bits30);
         assert_eq!(codes[0], 0);
         assert_eq!(codes[1], (1 << 30) - 1);
         assert_eq!(codes[2], 0x0924_9249 << 2);

@@ -79,22 +79,19 @@ pub fn upload(
         resources: Vec::new(),
         texels_per_row,
     };
-    for (array, (_, records)) in record_arrays(scene, accel).into_iter().zip(scene_records(scene, accel)) {
-        let (name, binding) = (array.name, array.binding);
+    for (index, (name, records)) in scene_records(scene, accel).into_iter().enumerate() {
+        let array = record_array(index, name, records);
+        let binding = array.binding;
         let shared_buffer = match (shared, name) {
             (Some(shared), "sphere") => Some(shared.spheres.clone()),
             (Some(shared), "node") => Some(shared.nodes.clone()),
             _ => None,
         };
         let (ty, resource) = match memory {
-            MemoryMode::Storage if shared_buffer.is_some() => {
-                let ty = wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                };
-                (ty, Resource::Buffer(shared_buffer.expect("checked by the match guard")))
-            }
+            MemoryMode::Storage if shared_buffer.is_some() => (
+                buffer_binding(false),
+                Resource::Buffer(shared_buffer.expect("checked by the match guard")),
+            ),
             MemoryMode::Uniform | MemoryMode::Storage => {
                 let uniform = memory == MemoryMode::Uniform;
                 // Bindings may not be empty: an empty array travels as one zeroed record.
@@ -121,16 +118,7 @@ pub fn upload(
                     contents: &bytes,
                     usage,
                 });
-                let ty = wgpu::BindingType::Buffer {
-                    ty: if uniform {
-                        wgpu::BufferBindingType::Uniform
-                    } else {
-                        wgpu::BufferBindingType::Storage { read_only: true }
-                    },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                };
-                (ty, Resource::Buffer(buffer))
+                (buffer_binding(uniform), Resource::Buffer(buffer))
             }
             MemoryMode::Texture => {
                 let mut texels = records.texel_data();
@@ -200,16 +188,34 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn R
 /// What the shader declares for each of the scene's arrays.
 pub fn record_arrays(scene: &PackedScene, accel: Accel) -> Vec<RecordArray> {
     scene_records(scene, accel)
-        .iter()
+        .into_iter()
         .enumerate()
-        .map(|(i, (name, records))| RecordArray {
-            name,
-            wgsl_type: records.wgsl_type(),
-            texels: records.texels(),
-            binding: i as u32 + 1,
-            capacity: records.len(),
-        })
+        .map(|(index, (name, records))| record_array(index, name, records))
         .collect()
+}
+
+/// The array at `index` among the scene's record arrays: bindings follow the globals' 0.
+fn record_array(index: usize, name: &'static str, records: &dyn RecordSlice) -> RecordArray {
+    RecordArray {
+        name,
+        wgsl_type: records.wgsl_type(),
+        texels: records.texels(),
+        binding: index as u32 + 1,
+        capacity: records.len(),
+    }
+}
+
+/// A read-only buffer binding of the fragment stage: uniform or storage.
+fn buffer_binding(uniform: bool) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty: if uniform {
+            wgpu::BufferBindingType::Uniform
+        } else {
+            wgpu::BufferBindingType::Storage { read_only: true }
+        },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
 }
 
 /// A slice of records of one type, seen without its type so `upload` can loop over arrays.
