@@ -68,6 +68,11 @@ pub struct RenderOutcome {
     pub gpu_ms: Option<f64>,
 }
 
+/// The CPU reference tracer, in words.
+fn cpu_description() -> String {
+    format!("CPU reference ({} threads)", rayon::current_num_threads())
+}
+
 /// The GPU the options ask for: `None` for the CPU (with a notice when `auto` found no adapter).
 fn open_device(options: &RenderOptions) -> anyhow::Result<Option<GpuContext>> {
     Ok(match options.device {
@@ -108,7 +113,7 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
             let frame = cpu::render_with(scene, options.accel, options.progress, options.write_cost);
             Ok(RenderOutcome {
                 frame,
-                device: format!("CPU reference ({} threads)", rayon::current_num_threads()),
+                device: cpu_description(),
                 wall_ms: start.elapsed().as_secs_f64() * 1e3,
                 gpu_ms: None,
             })
@@ -157,12 +162,14 @@ pub fn render_frames(
             );
             outcome.device = ctx.describe();
             let builder = GpuLbvhBuilder::new(&ctx, n)?;
-            let mut layout = first.clone();
+            builder.write_spheres(&first.spheres);
+            let mut layout = first;
             layout.bvh_depth = depth_bound(n);
             let renderer = GpuRenderer::with_shared_buffers(&ctx, &layout, options.accel, &builder.shared_buffers())?;
             for frame in 0..frames {
-                let packed = spheres_at(frame)?;
-                builder.write_spheres(&packed.spheres);
+                if frame > 0 {
+                    builder.write_spheres(&spheres_at(frame)?.spheres);
+                }
                 let start = Instant::now();
                 let timed = renderer.render_after(|encoder| {
                     if options.accel.uses_bvh() {
@@ -179,13 +186,17 @@ pub fn render_frames(
             }
         }
         None => {
-            outcome.device = format!("CPU reference ({} threads)", rayon::current_num_threads());
+            outcome.device = cpu_description();
             let mut builder = LbvhBuilder::<u64>::new();
-            let boxes_of = |p: &PackedScene| p.sphere_boxes();
+            // Frame 0 is packed already.
+            let mut first = Some(first);
             for frame in 0..frames {
-                let mut packed = spheres_at(frame)?;
+                let mut packed = match first.take() {
+                    Some(packed) => packed,
+                    None => spheres_at(frame)?,
+                };
                 if options.accel.uses_bvh() {
-                    let timings = builder.build(&boxes_of(&packed), MortonBits::Bits30);
+                    let timings = builder.build(&packed.sphere_boxes(), MortonBits::Bits30);
                     packed.set_bvh(builder.to_bvh());
                     outcome.builds.push(timings);
                 }

@@ -1,11 +1,13 @@
 //! `raypipe bench`: frames per second against primitive count, per acceleration and memory mode (the
 //! paper's Figure 4), with every mode's image checked against brute force's before it is timed.
 
+use super::median;
 use crate::bvh::morton::MortonBits;
 use crate::gpu::build::{GpuLbvhBuilder, depth_bound};
 use crate::gpu::context::Backend;
 use crate::gpu::upload::MemoryMode;
 use crate::gpu::{GpuContext, GpuRenderer};
+use crate::image::Frame;
 use crate::image::diff::{Tolerance, compare};
 use crate::image::plot::{Series, write_fps_plot};
 use crate::render::Accel;
@@ -80,10 +82,6 @@ fn name<T: ValueEnum>(value: &T) -> String {
         .unwrap_or_default()
 }
 
-fn median(sorted: &[f64]) -> f64 {
-    sorted[sorted.len() / 2]
-}
-
 /// The scene of `family` with `count` spheres, at the given size, packed (with a CPU-built BVH).
 fn scene(family: &str, count: usize, width: u32, height: u32) -> anyhow::Result<PackedScene> {
     if !["random", "sphere", "torus", "bounce"].contains(&family) {
@@ -97,26 +95,33 @@ fn scene(family: &str, count: usize, width: u32, height: u32) -> anyhow::Result<
     Ok(packed)
 }
 
-/// Renders `mode` and brute force at a small size on the GPU and requires equal images; a mode that
-/// cannot run (a scene too big for uniform memory, say) reports why.
-fn check_against_brute(
-    ctx: &GpuContext,
-    family: &str,
-    count: usize,
-    accel: Accel,
-    memory: MemoryMode,
-) -> anyhow::Result<()> {
-    let small = scene(family, count, 64, 48)?;
-    let brute = GpuRenderer::new(ctx, &small, MemoryMode::Storage, Accel::Brute)?
-        .render()?
-        .frame;
-    let frame = GpuRenderer::new(ctx, &small, memory, accel)?.render()?.frame;
-    let color = compare(&frame.display(), &brute.display())?;
-    let depth = compare(&frame.depth(), &brute.depth())?;
-    Tolerance::COLOR
-        .check(&color)
-        .and_then(|_| Tolerance::DEPTH.check(&depth))
-        .map_err(|e| anyhow::anyhow!("its image differs from brute force's: {e}"))
+/// Brute force's image of a count's scene at a small size: what every mode must reproduce before it
+/// is timed.
+struct Reference {
+    scene: PackedScene,
+    brute: Frame,
+}
+
+impl Reference {
+    fn new(ctx: &GpuContext, family: &str, count: usize) -> anyhow::Result<Self> {
+        let scene = scene(family, count, 64, 48)?;
+        let brute = GpuRenderer::new(ctx, &scene, MemoryMode::Storage, Accel::Brute)?
+            .render()?
+            .frame;
+        Ok(Self { scene, brute })
+    }
+
+    /// Renders `accel` in `memory` and requires brute force's image; a mode that cannot run (a scene
+    /// too big for uniform memory, say) reports why.
+    fn check(&self, ctx: &GpuContext, accel: Accel, memory: MemoryMode) -> anyhow::Result<()> {
+        let frame = GpuRenderer::new(ctx, &self.scene, memory, accel)?.render()?.frame;
+        let color = compare(&frame.display(), &self.brute.display())?;
+        let depth = compare(&frame.depth(), &self.brute.depth())?;
+        Tolerance::COLOR
+            .check(&color)
+            .and_then(|_| Tolerance::DEPTH.check(&depth))
+            .map_err(|e| anyhow::anyhow!("its image differs from brute force's: {e}"))
+    }
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
@@ -146,16 +151,22 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         } else {
             None
         };
+        // Made on first need: a run of brute force alone does not render it.
+        let mut reference: Option<Reference> = None;
         for &accel in &args.accel {
             for &memory in &args.memory {
                 let point = format!("{count} {} {}", name(&accel), name(&memory));
                 bar.set_message(point.clone());
-                if accel != Accel::Brute
-                    && let Err(e) = check_against_brute(&ctx, &args.scene, count, accel, memory)
-                {
-                    refused.push(format!("{point}: {e:#}"));
-                    bar.inc(1);
-                    continue;
+                if accel != Accel::Brute {
+                    if reference.is_none() {
+                        reference = Some(Reference::new(&ctx, &args.scene, count)?);
+                    }
+                    let checked = reference.as_ref().expect("made above").check(&ctx, accel, memory);
+                    if let Err(e) = checked {
+                        refused.push(format!("{point}: {e:#}"));
+                        bar.inc(1);
+                        continue;
+                    }
                 }
                 let rebuild = builder.as_mut().filter(|_| accel.uses_bvh());
                 let renderer = match &rebuild {
@@ -195,8 +206,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     }
                 }
                 times.sort_by(f64::total_cmp);
-                builds.sort_by(f64::total_cmp);
-                let ms = median(&times);
+                let ms = median(times.iter().copied());
                 rows.push(Row {
                     count,
                     accel: name(&accel),
@@ -209,7 +219,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     ms_max: times[times.len() - 1],
                     fps: 1e3 / ms,
                     mrays_per_s: rays as f64 / (ms * 1e3),
-                    build_ms_median: (!builds.is_empty()).then(|| median(&builds)),
+                    build_ms_median: (!builds.is_empty()).then(|| median(builds.iter().copied())),
                     clock: clock.into(),
                     adapter: ctx.info.name.clone(),
                     backend: format!("{:?}", ctx.info.backend),

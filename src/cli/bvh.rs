@@ -120,23 +120,19 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
         (Builder::Lbvh, MortonBits::Bits30) => time_lbvh::<u64>(&boxes, args.morton_bits, runs),
         (Builder::Lbvh, MortonBits::Bits63) => time_lbvh::<u128>(&boxes, args.morton_bits, runs),
         (Builder::Sah, _) => {
-            let timed = (0..runs)
+            let mut bvh = None;
+            let timings = (0..runs)
                 .map(|_| {
                     let start = Instant::now();
-                    let bvh = build_binned_sah(&boxes);
+                    bvh = Some(build_binned_sah(&boxes));
                     // The SAH builder has no LBVH phases: its whole time counts as hierarchy.
-                    let hierarchy = start.elapsed().as_secs_f64() * 1e3;
-                    (
-                        bvh,
-                        BuildTimings {
-                            hierarchy,
-                            ..BuildTimings::default()
-                        },
-                    )
+                    BuildTimings {
+                        hierarchy: start.elapsed().as_secs_f64() * 1e3,
+                        ..BuildTimings::default()
+                    }
                 })
-                .collect::<Vec<_>>();
-            let bvh = timed[0].0.clone();
-            (bvh, timed.into_iter().map(|(_, t)| t).collect())
+                .collect();
+            (bvh.expect("at least one run"), timings)
         }
     };
     runs.sort_by(|a, b| a.total().total_cmp(&b.total()));

@@ -42,3 +42,13 @@ pub fn run() -> anyhow::Result<ExitCode> {
         Command::Info => info::run(),
     }
 }
+
+/// The median of `values` (the upper one of an even count); 0 for none.
+fn median(values: impl IntoIterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = values.into_iter().collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}

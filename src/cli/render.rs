@@ -1,3 +1,4 @@
+use super::median;
 use crate::bvh::morton::MortonBits;
 use crate::gpu::context::Backend;
 use crate::gpu::upload::MemoryMode;
@@ -72,15 +73,6 @@ pub fn numbered(name: &str, frame: u32) -> Option<String> {
     Some(format!("{}{frame:0width$}{}", &name[..start], &rest[digits_end + 1..]))
 }
 
-fn median(values: impl IntoIterator<Item = f64>) -> f64 {
-    let mut v: Vec<f64> = values.into_iter().collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let output = args.output.clone().unwrap_or_else(|| match args.aov {
         Aov::Depth => "depth.exr".into(),
@@ -109,14 +101,6 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     settings.width = args.width.unwrap_or(settings.width);
     settings.height = args.height.unwrap_or(settings.height);
     settings.max_depth = args.depth.unwrap_or(settings.max_depth);
-    if let Some(frames) = args.frames {
-        return render_sequence(&args, &scene, &output, is_exr, frames);
-    }
-    let mut packed = PackedScene::new(&scene).with_context(|| args.scene.clone())?;
-    if args.accel.uses_bvh() {
-        packed.build_bvh(MortonBits::default());
-    }
-
     let options = RenderOptions {
         device: args.device,
         backend: args.backend,
@@ -126,6 +110,19 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         write_cost: args.aov == Aov::Cost,
         warm_up: args.stats,
     };
+    if let Some(frames) = args.frames {
+        // No progress bars between frames; sequences time steady frames instead of a warm-up.
+        let options = RenderOptions {
+            progress: false,
+            warm_up: false,
+            ..options
+        };
+        return render_sequence(&args, &scene, &output, is_exr, frames, &options);
+    }
+    let mut packed = PackedScene::new(&scene).with_context(|| args.scene.clone())?;
+    if args.accel.uses_bvh() {
+        packed.build_bvh(MortonBits::default());
+    }
     let outcome = render(&packed, &options)?;
     let frame = &outcome.frame;
     io::write(&aov_image(args.aov, is_exr, frame), &output)?;
@@ -184,20 +181,12 @@ fn render_sequence(
     output: &Path,
     is_exr: bool,
     frames: u32,
+    options: &RenderOptions,
 ) -> anyhow::Result<ExitCode> {
     anyhow::ensure!(frames >= 1, "--frames must be at least 1");
     let name = output.to_string_lossy().to_string();
     let pattern = numbered(&name, 0).is_some();
-    let options = RenderOptions {
-        device: args.device,
-        backend: args.backend,
-        memory: args.memory,
-        accel: args.accel,
-        progress: false,
-        write_cost: args.aov == Aov::Cost,
-        warm_up: false,
-    };
-    let outcome = render_frames(scene, &options, frames, |frame, image| {
+    let outcome = render_frames(scene, options, frames, |frame, image| {
         if pattern {
             let path = numbered(&name, frame).expect("checked above");
             io::write(&aov_image(args.aov, is_exr, image), Path::new(&path))?;
