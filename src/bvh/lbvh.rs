@@ -250,11 +250,6 @@ impl<K: Key> LbvhBuilder<K> {
         timings
     }
 
-    /// The nodes of the last build, without copying them.
-    pub fn nodes(&self) -> &[GpuNode] {
-        &self.nodes
-    }
-
     // Find every internal node's children and range, and every node's parent
     fn hierarchy(&mut self) {
         let n = self.keys.len();

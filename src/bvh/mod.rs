@@ -65,10 +65,6 @@ impl Bvh {
         }
     }
 
-    pub fn root_bounds(&self) -> Aabb {
-        self.nodes.first().map_or(Aabb::EMPTY, node_box)
-    }
-
     /// Depth of every leaf (the root is at depth 0), by climbing parent links in parallel.
     pub fn leaf_depths(&self) -> Vec<u32> {
         self.nodes
