@@ -8,5 +8,6 @@ pub mod cli;
 pub mod cpu;
 pub mod gpu;
 pub mod image;
+pub mod mesh;
 pub mod render;
 pub mod scene;

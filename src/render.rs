@@ -4,7 +4,7 @@ use crate::bvh::BuildTimings;
 use crate::bvh::lbvh::LbvhBuilder;
 use crate::bvh::morton::MortonBits;
 use crate::cpu;
-use crate::gpu::build::{GpuLbvhBuilder, depth_bound};
+use crate::gpu::build::{GpuLbvhBuilder, depth_bound, ensure_spheres_only};
 use crate::gpu::context::Backend;
 use crate::gpu::upload::MemoryMode;
 use crate::gpu::{GpuContext, GpuRenderer};
@@ -14,17 +14,17 @@ use crate::scene::packed::PackedScene;
 use clap::ValueEnum;
 use std::time::Instant;
 
-/// How a ray finds its closest primitive.
+/// How a ray finds its closest primitive. The default is the fastest measured mode (docs/BENCHMARKS.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
 pub enum Accel {
     /// Every ray against every primitive.
-    #[default]
     Brute,
     /// The linear BVH, walked with a per-pixel stack, nearer child first.
     Stack,
     /// The linear BVH, walked without a stack (Hapala et al. 2011): parent links, nearer child first.
     Stackless,
     /// The linear BVH, walked without a stack along escape links, in fixed depth-first order.
+    #[default]
     Threaded,
 }
 
@@ -146,7 +146,7 @@ pub fn render_frames(
 ) -> anyhow::Result<FramesOutcome> {
     anyhow::ensure!(!options.write_cost, "--aov cost renders single frames; drop --frames");
     let first = PackedScene::new(scene)?;
-    let n = first.spheres.len();
+    let n = first.primitive_count();
     let mut outcome = FramesOutcome {
         device: String::new(),
         builds: Vec::new(),
@@ -160,6 +160,7 @@ pub fn render_frames(
                 options.memory == MemoryMode::Storage,
                 "--frames rebuilds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
             );
+            ensure_spheres_only(&first)?;
             outcome.device = ctx.describe();
             let builder = GpuLbvhBuilder::new(&ctx, n)?;
             builder.write_spheres(&first.spheres);
@@ -196,7 +197,7 @@ pub fn render_frames(
                     None => spheres_at(frame)?,
                 };
                 if options.accel.uses_bvh() {
-                    let timings = builder.build(&packed.sphere_boxes(), MortonBits::Bits30);
+                    let timings = builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
                     packed.set_bvh(builder.to_bvh());
                     outcome.builds.push(timings);
                 }

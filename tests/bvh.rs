@@ -8,9 +8,9 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
-use raypipe::cpu::intersect::{Hit, HitKind, Ray};
+use raypipe::cpu::intersect::{Hit, HitKind, Primitives, Ray};
 use raypipe::scene::builtin::SplitMix64;
-use raypipe::scene::packed::GpuSphere;
+use raypipe::scene::packed::{GpuSphere, GpuTriangle};
 
 fn spheres_to_boxes(spheres: &[(Vec3, f32)]) -> Vec<Aabb> {
     spheres.iter().map(|&(c, r)| Aabb::around_sphere(c, r)).collect()
@@ -148,7 +148,7 @@ fn given_codes_give_the_same_tree() {
     assert_eq!(a, b);
 }
 
-type Traversal = fn(&[GpuNode], &[GpuSphere], &Ray, Hit, bool) -> Hit;
+type Traversal = fn(&[GpuNode], &Primitives, &Ray, Hit, bool) -> Hit;
 
 const TRAVERSALS: [(&str, Traversal); 3] = [
     ("stack", traverse_stack),
@@ -156,8 +156,34 @@ const TRAVERSALS: [(&str, Traversal); 3] = [
     ("threaded", traverse_threaded),
 ];
 
-/// Random rays from random points: every traversal finds exactly brute force's hit (t and sphere)
-/// and the same shadow answer, also among coincident spheres.
+fn random_triangle(rng: &mut SplitMix64, material: u32) -> GpuTriangle {
+    let mut point = |scale: f32| Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * scale;
+    let v0 = point(4.0);
+    let (e1, e2) = (point(0.4), point(0.4));
+    GpuTriangle {
+        v0: v0.to_array(),
+        material,
+        e1: e1.to_array(),
+        normals: u32::MAX,
+        e2: e2.to_array(),
+        _pad: 0,
+    }
+}
+
+fn primitive_boxes(spheres: &[GpuSphere], triangles: &[GpuTriangle]) -> Vec<Aabb> {
+    let spheres = spheres
+        .iter()
+        .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius));
+    let triangles = triangles.iter().map(|t| {
+        let v0 = Vec3::from_array(t.v0);
+        let (v1, v2) = (v0 + Vec3::from_array(t.e1), v0 + Vec3::from_array(t.e2));
+        Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
+    });
+    spheres.chain(triangles).collect()
+}
+
+/// Random rays from random points: every traversal finds exactly brute force's hit (t and
+/// primitive) and the same shadow answer, among spheres and triangles, coincident ones included.
 #[test]
 fn traversals_equal_brute_force() {
     let mut rng = SplitMix64::new(99);
@@ -173,17 +199,24 @@ fn traversals_equal_brute_force() {
             _pad: [0; 3],
         })
         .collect();
+    let mut triangles: Vec<GpuTriangle> = (0..2000).map(|i| random_triangle(&mut rng, i % 7)).collect();
     // Duplicates of a tenth of them, each with another material: ties must resolve by index.
     for i in 0..300 {
         let mut copy = spheres[i * 10];
         copy.material += 1;
         spheres.push(copy);
     }
-    let boxes: Vec<Aabb> = spheres
-        .iter()
-        .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius))
-        .collect();
-    let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+    for i in 0..200 {
+        let mut copy = triangles[i * 10];
+        copy.material += 1;
+        triangles.push(copy);
+    }
+    let primitives = Primitives {
+        spheres: &spheres,
+        triangles: &triangles,
+    };
+    let (bvh, _) = Bvh::build_lbvh(&primitive_boxes(&spheres, &triangles), MortonBits::Bits30);
+    let mut triangle_hits = 0;
     let mut hits = 0;
     for _ in 0..20_000 {
         let origin = Vec3::new(
@@ -193,20 +226,27 @@ fn traversals_equal_brute_force() {
         );
         let dir = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5).normalize();
         let ray = Ray { origin, dir };
-        let brute = brute_closest(&spheres, &ray, Hit::none(1e30));
-        let stack = traverse_stack(&bvh.nodes, &spheres, &ray, Hit::none(1e30), false);
-        assert_eq!(stack, brute, "ray {ray:?}");
-        hits += (brute.kind == HitKind::Sphere) as u32;
-        for t_max in [0.5, 2.0] {
-            let blocked = traverse_stack(&bvh.nodes, &spheres, &ray, Hit::none(t_max), true).kind != HitKind::None;
+        let brute = brute_closest(&primitives, &ray, Hit::none(1e30));
+        hits += (brute.kind == HitKind::Primitive) as u32;
+        triangle_hits += (brute.kind == HitKind::Primitive && brute.index as usize >= spheres.len()) as u32;
+        for (name, traverse) in TRAVERSALS {
             assert_eq!(
-                blocked,
-                brute_occluded(&spheres, &ray, t_max),
-                "shadow ray {ray:?} to {t_max}"
+                traverse(&bvh.nodes, &primitives, &ray, Hit::none(1e30), false),
+                brute,
+                "{name}, ray {ray:?}"
             );
+            for t_max in [0.5, 2.0] {
+                let blocked = traverse(&bvh.nodes, &primitives, &ray, Hit::none(t_max), true).kind != HitKind::None;
+                assert_eq!(
+                    blocked,
+                    brute_occluded(&primitives, &ray, t_max),
+                    "{name}, shadow ray {ray:?} to {t_max}"
+                );
+            }
         }
     }
     assert!(hits > 5000, "the test rays should hit often ({hits} hits)");
+    assert!(triangle_hits > 1000, "and hit triangles often ({triangle_hits} hits)");
 }
 
 #[test]
@@ -225,15 +265,19 @@ fn traversals_handle_one_and_two_spheres() {
             .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius))
             .collect();
         let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+        let primitives = Primitives {
+            spheres: &spheres,
+            triangles: &[],
+        };
         for x in [-3.0f32, 0.0, 0.5, 3.0, 6.0] {
             let ray = Ray {
                 origin: Vec3::new(x, 0.2, -5.0),
                 dir: Vec3::Z,
             };
-            let brute = brute_closest(&spheres, &ray, Hit::none(1e30));
+            let brute = brute_closest(&primitives, &ray, Hit::none(1e30));
             for (name, traverse) in TRAVERSALS {
                 assert_eq!(
-                    traverse(&bvh.nodes, &spheres, &ray, Hit::none(1e30), false),
+                    traverse(&bvh.nodes, &primitives, &ray, Hit::none(1e30), false),
                     brute,
                     "{name}, {n} spheres, x {x}"
                 );

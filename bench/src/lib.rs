@@ -7,6 +7,6 @@ use raypipe::scene::packed::PackedScene;
 pub fn random_boxes(n: usize) -> (PackedScene, Vec<Aabb>) {
     let scene = raypipe::scene::builtin::random(n, 1);
     let packed = PackedScene::new(&scene).expect("built-in scenes are valid");
-    let boxes = packed.sphere_boxes();
+    let boxes = packed.primitive_boxes();
     (packed, boxes)
 }

@@ -4,7 +4,7 @@ use crate::bvh::morton::MortonBits;
 use crate::bvh::sah::{build_binned_sah, sah_cost};
 use crate::bvh::{BuildTimings, Bvh};
 use crate::gpu::GpuContext;
-use crate::gpu::build::GpuLbvhBuilder;
+use crate::gpu::build::{GpuLbvhBuilder, ensure_spheres_only};
 use crate::gpu::context::Backend;
 use crate::scene::Scene;
 use crate::scene::packed::PackedScene;
@@ -87,7 +87,7 @@ fn time_lbvh<K: Key>(boxes: &[Aabb], bits: MortonBits, runs: usize) -> (Bvh, Vec
 pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let scene = Scene::load(&args.scene)?;
     let packed = PackedScene::new(&scene).with_context(|| args.scene.clone())?;
-    let boxes = packed.sphere_boxes();
+    let boxes = packed.primitive_boxes();
     let runs = args.runs.max(1);
     let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
     let (bvh, mut runs) = match (args.builder, args.morton_bits) {
@@ -96,6 +96,7 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
                 bits == MortonBits::Bits30,
                 "the GPU build uses 30-bit Morton codes; drop --morton-bits 63"
             );
+            ensure_spheres_only(&packed)?;
             let ctx = GpuContext::require(args.backend)?;
             device = format!("gpu: {}", ctx.describe());
             anyhow::ensure!(

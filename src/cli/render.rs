@@ -5,6 +5,7 @@ use crate::gpu::upload::MemoryMode;
 use crate::image::io;
 use crate::render::{Accel, DeviceChoice, RenderOptions, render, render_frames};
 use crate::scene::Scene;
+use crate::scene::model::{MeshAs, ModelOptions};
 use crate::scene::packed::PackedScene;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
@@ -28,9 +29,17 @@ pub enum Aov {
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// A built-in scene (whitted, sphere-8k, torus-5k, sphere:N, torus:N, random:N[:SEED]) or a TOML file.
+    /// A built-in scene (whitted, sphere-8k, torus-5k, sphere:N, torus:N, random:N[:SEED],
+    /// bounce:N[:SEED]), a TOML scene file, or a model file (.ply, .obj, .off) to frame and render.
     #[arg(default_value = "whitted")]
     scene: String,
+    /// With a model file: render its triangles, or spheres on its surface.
+    #[arg(long = "as", value_enum)]
+    as_: Option<MeshAs>,
+    /// With a model file: this many spheres, sampled uniformly by area (implies --as spheres).
+    /// Without it, --as spheres puts one sphere on every vertex.
+    #[arg(long)]
+    spheres: Option<usize>,
     /// Output file; the extension picks PNG or EXR. Default: render.png, or depth.exr for --aov depth.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -96,7 +105,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         );
     }
 
-    let mut scene = Scene::load(&args.scene)?;
+    let model = ModelOptions {
+        as_: args.as_,
+        spheres: args.spheres,
+    };
+    let mut scene = Scene::load_with(&args.scene, &model)?;
     let settings = &mut scene.settings;
     settings.width = args.width.unwrap_or(settings.width);
     settings.height = args.height.unwrap_or(settings.height);
@@ -131,11 +144,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         let pixels = frame.width as u64 * frame.height as u64;
         let rays = frame.rays();
         println!(
-            "scene: {}, {}x{}, {} spheres, {} planes, {} lights, depth {}",
+            "scene: {}, {}x{}, {} spheres, {} triangles, {} planes, {} lights, depth {}",
             args.scene,
             frame.width,
             frame.height,
             packed.spheres.len(),
+            packed.triangles.len(),
             packed.planes.len(),
             packed.lights.len(),
             packed.max_depth

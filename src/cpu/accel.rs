@@ -1,44 +1,59 @@
-//! Acceleration modes: the twins of `shaders/accel_*.wgsl`. Each answers the closest sphere hit and
+//! Acceleration modes: the twins of `shaders/accel_*.wgsl`. Each answers the closest primitive hit and
 //! whether anything blocks a shadow ray.
 
 use super::intersect::{
-    Hit, HitKind, NO_HIT, Ray, closer_sphere, count_box_tests, hit_leaf, intersect_box, intersect_sphere, safe_inverse,
-    v3,
+    Hit, HitKind, NO_HIT, Primitives, Ray, closer_primitive, count_box_tests, hit_leaf, intersect_box,
+    intersect_sphere, intersect_triangle, safe_inverse, v3,
 };
 use crate::bvh::layout::{GpuNode, NONE};
-use crate::scene::packed::GpuSphere;
 use glam::Vec3;
 
-/// Brute force: every ray against every sphere (`accel_brute.wgsl`).
-pub fn brute_closest(spheres: &[GpuSphere], ray: &Ray, best: Hit) -> Hit {
+/// Brute force: every ray against every primitive (`accel_brute.wgsl`).
+pub fn brute_closest(primitives: &Primitives, ray: &Ray, best: Hit) -> Hit {
     let mut hit = best;
-    // The cost of brute force: every sphere tested.
-    count_box_tests(spheres.len() as u32);
-    for (i, sphere) in spheres.iter().enumerate() {
+    // The cost of brute force: every primitive tested.
+    count_box_tests(primitives.count() as u32);
+    for (i, sphere) in primitives.spheres.iter().enumerate() {
         let t = intersect_sphere(sphere, ray, hit.t);
-        if closer_sphere(t, i as u32, &hit) {
+        if closer_primitive(t, i as u32, &hit) {
             hit = Hit {
                 t,
-                kind: HitKind::Sphere,
+                kind: HitKind::Primitive,
                 index: i as u32,
+            };
+        }
+    }
+    for (i, triangle) in primitives.triangles.iter().enumerate() {
+        let t = intersect_triangle(triangle, ray, hit.t);
+        let index = (primitives.spheres.len() + i) as u32;
+        if closer_primitive(t, index, &hit) {
+            hit = Hit {
+                t,
+                kind: HitKind::Primitive,
+                index,
             };
         }
     }
     hit
 }
 
-pub fn brute_occluded(spheres: &[GpuSphere], ray: &Ray, t_max: f32) -> bool {
-    spheres.iter().any(|sphere| {
-        let t = intersect_sphere(sphere, ray, t_max);
-        t > 0.0 && t < t_max
-    })
+pub fn brute_occluded(primitives: &Primitives, ray: &Ray, t_max: f32) -> bool {
+    let blocks = |t: f32| t > 0.0 && t < t_max;
+    primitives
+        .spheres
+        .iter()
+        .any(|s| blocks(intersect_sphere(s, ray, t_max)))
+        || primitives
+            .triangles
+            .iter()
+            .any(|t| blocks(intersect_triangle(t, ray, t_max)))
 }
 
-/// The closest sphere hit that beats `best`; with `shadow`, the first hit nearer than best.t
+/// The closest primitive hit that beats `best`; with `shadow`, the first hit nearer than best.t
 /// (`traverse_stack` in `accel_stack.wgsl`).
-pub fn traverse_stack(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best: Hit, shadow: bool) -> Hit {
+pub fn traverse_stack(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
     let mut hit = best;
-    if spheres.is_empty() {
+    if primitives.count() == 0 {
         return hit;
     }
     let inv_dir = safe_inverse(ray.dir);
@@ -50,16 +65,16 @@ pub fn traverse_stack(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best:
     let mut stack: Vec<(u32, f32)> = Vec::with_capacity(64);
     loop {
         if node.is_leaf() {
-            if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
+            if hit_leaf(primitives, &node, ray, &mut hit) && shadow {
                 return hit;
             }
         } else {
             let left = nodes[node.left as usize];
             let right = nodes[node.right as usize];
-            // Leaf children: test their spheres now (no dearer than their boxes); box-test the others.
+            // Leaf children: test their primitives now (no dearer than their boxes); box-test the others.
             let mut t_left = NO_HIT;
             if left.is_leaf() {
-                if hit_leaf(spheres, &left, ray, &mut hit) && shadow {
+                if hit_leaf(primitives, &left, ray, &mut hit) && shadow {
                     return hit;
                 }
             } else {
@@ -67,7 +82,7 @@ pub fn traverse_stack(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best:
             }
             let mut t_right = NO_HIT;
             if right.is_leaf() {
-                if hit_leaf(spheres, &right, ray, &mut hit) && shadow {
+                if hit_leaf(primitives, &right, ray, &mut hit) && shadow {
                     return hit;
                 }
             } else {
@@ -104,18 +119,18 @@ pub fn traverse_stack(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best:
 
 /// Threaded traversal (`accel_threaded.wgsl`): depth-first, left child first, no stack; a missed
 /// node (or a tested leaf) hands over to its escape link.
-pub fn traverse_threaded(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best: Hit, shadow: bool) -> Hit {
+pub fn traverse_threaded(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
     let mut hit = best;
-    if spheres.is_empty() {
+    if primitives.count() == 0 {
         return hit;
     }
     let inv_dir = safe_inverse(ray.dir);
     let mut index = 0u32;
     while index != NONE {
         let node = nodes[index as usize];
-        // A leaf's sphere costs no more to test than its box: test it directly.
+        // A leaf's primitive costs no more to test than its box: test it directly.
         if node.is_leaf() {
-            if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
+            if hit_leaf(primitives, &node, ray, &mut hit) && shadow {
                 return hit;
             }
             index = node.escape;
@@ -153,9 +168,9 @@ fn sibling(index: u32, parent: &GpuNode) -> u32 {
 
 /// Stackless traversal (Hapala et al. 2011, `accel_stackless.wgsl`): parent links and a
 /// three-state automaton, nearer child first.
-pub fn traverse_stackless(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, best: Hit, shadow: bool) -> Hit {
+pub fn traverse_stackless(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
     let mut hit = best;
-    if spheres.is_empty() {
+    if primitives.count() == 0 {
         return hit;
     }
     let inv_dir = safe_inverse(ray.dir);
@@ -164,7 +179,7 @@ pub fn traverse_stackless(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, b
         return hit;
     }
     if root.is_leaf() {
-        hit_leaf(spheres, &root, ray, &mut hit);
+        hit_leaf(primitives, &root, ray, &mut hit);
         return hit;
     }
     let mut index = near_child(nodes, &root, ray.dir);
@@ -184,10 +199,10 @@ pub fn traverse_stackless(nodes: &[GpuNode], spheres: &[GpuSphere], ray: &Ray, b
             }
             continue;
         }
-        // From the parent or the sibling: a leaf's sphere (no dearer to test than its box), or the box.
+        // From the parent or the sibling: a leaf's primitive (no dearer to test than its box), or the box.
         let mut descend = false;
         if node.is_leaf() {
-            if hit_leaf(spheres, &node, ray, &mut hit) && shadow {
+            if hit_leaf(primitives, &node, ray, &mut hit) && shadow {
                 return hit;
             }
         } else {

@@ -1,7 +1,7 @@
 //! Ray-primitive intersection: the twin of `shaders/intersect.wgsl`.
 
 use crate::bvh::layout::GpuNode;
-use crate::scene::packed::{GpuPlane, GpuSphere};
+use crate::scene::packed::{GpuPlane, GpuSphere, GpuTriangle};
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -14,7 +14,8 @@ pub struct Ray {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HitKind {
     None,
-    Sphere,
+    /// A sphere or a triangle: the index is the primitive's (spheres first, then triangles).
+    Primitive,
     Plane,
 }
 
@@ -59,11 +60,11 @@ pub fn reset_box_tests() {
     BOX_TESTS.with(|c| c.set(0));
 }
 
-/// What `intersect_sphere` and `intersect_box` return for a miss.
+/// What the `intersect_*` functions return for a miss.
 pub const NO_HIT: f32 = -1.0;
 
 /// The nearest t in (0, t_max] where the ray meets the sphere, or [`NO_HIT`]. t_max itself counts, so
-/// that a sphere as near as the best hit so far can still win the tie (see [`closer_sphere`]).
+/// that a sphere as near as the best hit so far can still win the tie (see [`closer_primitive`]).
 pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
     let oc = ray.origin - v3(sphere.center);
     let b = oc.dot(ray.dir);
@@ -85,10 +86,56 @@ pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
     NO_HIT
 }
 
-/// Whether sphere `index`, met at t (or [`NO_HIT`]), beats the best hit: nearer, or as near with a
-/// lower index, so that coincident spheres resolve the same whatever order a traversal visits them in.
-pub fn closer_sphere(t: f32, index: u32, best: &Hit) -> bool {
-    t > 0.0 && (t < best.t || (t == best.t && best.kind == HitKind::Sphere && index < best.index))
+/// Möller–Trumbore: (u, v, t) where v0 + u e1 + v e2 = origin + t dir. A ray in the triangle's
+/// plane (or a degenerate triangle) has det 0 and gets a u that fails every test.
+pub fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
+    let (e1, e2) = (v3(triangle.e1), v3(triangle.e2));
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return Vec3::splat(NO_HIT);
+    }
+    let inv_det = 1.0 / det;
+    let s = ray.origin - v3(triangle.v0);
+    let q = s.cross(e1);
+    Vec3::new(s.dot(p) * inv_det, ray.dir.dot(q) * inv_det, e2.dot(q) * inv_det)
+}
+
+/// The t in (0, t_max] where the ray meets the triangle, or [`NO_HIT`]; t_max counts, as for spheres.
+pub fn intersect_triangle(triangle: &GpuTriangle, ray: &Ray, t_max: f32) -> f32 {
+    let uvt = triangle_uvt(triangle, ray);
+    if uvt.x >= 0.0 && uvt.y >= 0.0 && uvt.x + uvt.y <= 1.0 && uvt.z > 0.0 && uvt.z <= t_max {
+        return uvt.z;
+    }
+    NO_HIT
+}
+
+/// The primitives in the BVH's order: spheres, then triangles.
+#[derive(Clone, Copy)]
+pub struct Primitives<'a> {
+    pub spheres: &'a [GpuSphere],
+    pub triangles: &'a [GpuTriangle],
+}
+
+impl Primitives<'_> {
+    pub fn count(&self) -> usize {
+        self.spheres.len() + self.triangles.len()
+    }
+
+    /// Primitive `index`'s hit in (0, t_max], or [`NO_HIT`] (`intersect_primitive`).
+    pub fn intersect(&self, index: u32, ray: &Ray, t_max: f32) -> f32 {
+        match self.spheres.get(index as usize) {
+            Some(sphere) => intersect_sphere(sphere, ray, t_max),
+            None => intersect_triangle(&self.triangles[index as usize - self.spheres.len()], ray, t_max),
+        }
+    }
+}
+
+/// Whether primitive `index`, met at t (or [`NO_HIT`]), beats the best hit: nearer, or as near with
+/// a lower index, so that coincident primitives resolve the same whatever order a traversal visits
+/// them in.
+pub fn closer_primitive(t: f32, index: u32, best: &Hit) -> bool {
+    t > 0.0 && (t < best.t || (t == best.t && best.kind == HitKind::Primitive && index < best.index))
 }
 
 pub fn intersect_plane(plane: &GpuPlane, ray: &Ray, t_max: f32) -> f32 {
@@ -122,15 +169,15 @@ pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32
     if t_enter <= t_exit { t_enter } else { NO_HIT }
 }
 
-/// Tests a BVH leaf's sphere; when it beats the best hit, it becomes the best hit and this says so
-/// (`hit_leaf` in `intersect.wgsl`).
-pub fn hit_leaf(spheres: &[GpuSphere], node: &GpuNode, ray: &Ray, hit: &mut Hit) -> bool {
+/// Tests a BVH leaf's primitive; when it beats the best hit, it becomes the best hit and this says
+/// so (`hit_leaf` in `intersect.wgsl`).
+pub fn hit_leaf(primitives: &Primitives, node: &GpuNode, ray: &Ray, hit: &mut Hit) -> bool {
     count_box_tests(1);
-    let t = intersect_sphere(&spheres[node.left as usize], ray, hit.t);
-    if closer_sphere(t, node.left, hit) {
+    let t = primitives.intersect(node.left, ray, hit.t);
+    if closer_primitive(t, node.left, hit) {
         *hit = Hit {
             t,
-            kind: HitKind::Sphere,
+            kind: HitKind::Primitive,
             index: node.left,
         };
         return true;

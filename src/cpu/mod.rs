@@ -25,7 +25,7 @@ pub fn render(scene: &PackedScene, accel: Accel, progress: bool) -> Frame {
 /// channel instead of its ray count where `write_cost` is set, as the shader's cost variant.
 pub fn render_with(scene: &PackedScene, accel: Accel, progress: bool, write_cost: bool) -> Frame {
     assert!(
-        accel == Accel::Brute || scene.spheres.is_empty() || !scene.nodes.is_empty(),
+        accel == Accel::Brute || scene.primitive_count() == 0 || !scene.nodes.is_empty(),
         "{accel:?} traversal needs the scene's BVH: call PackedScene::build_bvh first"
     );
     let (width, height) = (scene.width(), scene.height());

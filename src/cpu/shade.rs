@@ -1,8 +1,9 @@
 //! Surfaces and Whitted shading: the twin of `shaders/shade.wgsl`.
 
-use super::intersect::{Hit, HitKind, Ray, v3};
+use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
 use super::trace::Tracer;
-use crate::scene::packed::GpuMaterial;
+use crate::bvh::layout::NONE;
+use crate::scene::packed::{GpuMaterial, GpuTriangle};
 use glam::Vec3;
 
 /// Secondary rays start this far (scaled by the point's magnitude) off the surface, to escape it.
@@ -11,8 +12,12 @@ pub const RAY_BIAS: f32 = 1e-4;
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {
     pub position: Vec3,
-    /// Geometric, unit, pointing out of the primitive.
+    /// Geometric, unit, pointing out of the primitive: it decides inside and outside, and which side
+    /// new rays start on.
     pub normal: Vec3,
+    /// Unit, on the geometric normal's side: the interpolated vertex normal of a smooth triangle, the
+    /// geometric normal otherwise. Lighting, reflection and refraction use it.
+    pub shading: Vec3,
     pub material: u32,
 }
 
@@ -24,12 +29,23 @@ pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
 impl Tracer<'_> {
     pub fn surface_at(&self, ray: &Ray, hit: &Hit) -> Surface {
         let position = ray.origin + hit.t * ray.dir;
-        if hit.kind == HitKind::Sphere {
-            let sphere = &self.scene.spheres[hit.index as usize];
+        if hit.kind == HitKind::Primitive {
+            if let Some(sphere) = self.scene.spheres.get(hit.index as usize) {
+                let normal = (position - v3(sphere.center)).normalize();
+                return Surface {
+                    position,
+                    normal,
+                    shading: normal,
+                    material: sphere.material,
+                };
+            }
+            let triangle = &self.scene.triangles[hit.index as usize - self.scene.spheres.len()];
+            let normal = v3(triangle.e1).cross(v3(triangle.e2)).normalize();
             return Surface {
                 position,
-                normal: (position - v3(sphere.center)).normalize(),
-                material: sphere.material,
+                normal,
+                shading: self.triangle_shading(triangle, ray, normal),
+                material: triangle.material,
             };
         }
         let plane = &self.scene.planes[hit.index as usize];
@@ -43,13 +59,38 @@ impl Tracer<'_> {
         Surface {
             position,
             normal: v3(plane.normal),
+            shading: v3(plane.normal),
             material,
         }
     }
 
+    /// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's
+    /// side; the geometric normal where they cancel out.
+    fn triangle_shading(&self, triangle: &GpuTriangle, ray: &Ray, normal: Vec3) -> Vec3 {
+        if triangle.normals == NONE {
+            return normal;
+        }
+        let uvt = triangle_uvt(triangle, ray);
+        let n = &self.scene.triangle_normals[triangle.normals as usize];
+        let blended = (1.0 - uvt.x - uvt.y) * v3(n.n0) + uvt.x * v3(n.n1) + uvt.y * v3(n.n2);
+        if blended.dot(blended) == 0.0 {
+            return normal;
+        }
+        let shading = blended.normalize();
+        if shading.dot(normal) < 0.0 { -shading } else { shading }
+    }
+
     /// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
-    /// Phong. `normal` faces the viewer; `view` points from the surface to the viewer.
-    pub fn direct_light(&mut self, surface: &Surface, normal: Vec3, view: Vec3, material: &GpuMaterial) -> Vec3 {
+    /// Phong. `normal` (geometric) and `shading` face the viewer; `view` points from the surface to
+    /// the viewer.
+    pub fn direct_light(
+        &mut self,
+        surface: &Surface,
+        normal: Vec3,
+        shading: Vec3,
+        view: Vec3,
+        material: &GpuMaterial,
+    ) -> Vec3 {
         let globals = &self.scene.globals;
         let albedo = v3(material.color);
         let mut color = globals.ambient * albedo;
@@ -58,7 +99,7 @@ impl Tracer<'_> {
             let to_light = v3(light.position) - surface.position;
             let distance = to_light.length();
             let l = to_light / distance;
-            let n_dot_l = normal.dot(l);
+            let n_dot_l = shading.dot(l);
             if n_dot_l <= 0.0 {
                 continue;
             }
@@ -67,7 +108,7 @@ impl Tracer<'_> {
                 continue;
             }
             let mut highlight = 0.0;
-            let r_dot_v = reflect(-l, normal).dot(view);
+            let r_dot_v = reflect(-l, shading).dot(view);
             if r_dot_v > 0.0 && material.specular > 0.0 {
                 highlight = material.specular * r_dot_v.powf(material.shininess);
             }

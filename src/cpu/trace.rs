@@ -1,7 +1,7 @@
 //! The Whitted tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
 
 use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
-use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
+use super::intersect::{Hit, HitKind, Primitives, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
 use super::shade::{fresnel_schlick, offset_origin, reflect};
 use crate::render::Accel;
 use crate::scene::packed::PackedScene;
@@ -23,7 +23,7 @@ struct RayTask {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelTrace {
     pub color: Vec3,
-    /// First-hit geometric normal; zero where the primary ray escapes.
+    /// First-hit shading normal; zero where the primary ray escapes.
     pub normal: Vec3,
     /// First-hit distance; `None` where the primary ray escapes.
     pub depth: Option<f32>,
@@ -51,32 +51,42 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// The acceleration mode's closest sphere hit (the shader's `accel_closest`).
+    /// The primitives in the BVH's order.
+    pub fn primitives(&self) -> Primitives<'a> {
+        Primitives {
+            spheres: &self.scene.spheres,
+            triangles: &self.scene.triangles,
+        }
+    }
+
+    /// The acceleration mode's closest primitive hit (the shader's `accel_closest`).
     fn accel_closest(&self, ray: &Ray, best: Hit) -> Hit {
         let scene = self.scene;
+        let primitives = self.primitives();
         match self.accel {
-            Accel::Brute => brute_closest(&scene.spheres, ray, best),
-            Accel::Stack => traverse_stack(&scene.nodes, &scene.spheres, ray, best, false),
-            Accel::Stackless => traverse_stackless(&scene.nodes, &scene.spheres, ray, best, false),
-            Accel::Threaded => traverse_threaded(&scene.nodes, &scene.spheres, ray, best, false),
+            Accel::Brute => brute_closest(&primitives, ray, best),
+            Accel::Stack => traverse_stack(&scene.nodes, &primitives, ray, best, false),
+            Accel::Stackless => traverse_stackless(&scene.nodes, &primitives, ray, best, false),
+            Accel::Threaded => traverse_threaded(&scene.nodes, &primitives, ray, best, false),
         }
     }
 
     /// The acceleration mode's shadow query (the shader's `accel_occluded`).
     fn accel_occluded(&self, ray: &Ray, t_max: f32) -> bool {
         let scene = self.scene;
+        let primitives = self.primitives();
         match self.accel {
-            Accel::Brute => brute_occluded(&scene.spheres, ray, t_max),
+            Accel::Brute => brute_occluded(&primitives, ray, t_max),
             Accel::Stack => {
-                let hit = traverse_stack(&scene.nodes, &scene.spheres, ray, Hit::none(t_max), true);
+                let hit = traverse_stack(&scene.nodes, &primitives, ray, Hit::none(t_max), true);
                 hit.kind != HitKind::None
             }
             Accel::Stackless => {
-                let hit = traverse_stackless(&scene.nodes, &scene.spheres, ray, Hit::none(t_max), true);
+                let hit = traverse_stackless(&scene.nodes, &primitives, ray, Hit::none(t_max), true);
                 hit.kind != HitKind::None
             }
             Accel::Threaded => {
-                let hit = traverse_threaded(&scene.nodes, &scene.spheres, ray, Hit::none(t_max), true);
+                let hit = traverse_threaded(&scene.nodes, &primitives, ray, Hit::none(t_max), true);
                 hit.kind != HitKind::None
             }
         }
@@ -134,14 +144,16 @@ impl<'a> Tracer<'a> {
             }
             let surface = self.surface_at(&ray, &hit);
             if task.depth == 0 {
-                result.normal = surface.normal;
+                result.normal = surface.shading;
                 result.depth = Some(hit.t);
             }
             let material = self.scene.materials[surface.material as usize];
             let entering = surface.normal.dot(ray.dir) < 0.0;
+            // The geometric normal picks the side new rays start on; the shading normal bends them.
             let normal = if entering { surface.normal } else { -surface.normal };
+            let shading = if entering { surface.shading } else { -surface.shading };
             let view = -ray.dir;
-            result.color += task.weight * self.direct_light(&surface, normal, view, &material);
+            result.color += task.weight * self.direct_light(&surface, normal, shading, view, &material);
             if task.depth >= max_depth {
                 continue;
             }
@@ -152,14 +164,14 @@ impl<'a> Tracer<'a> {
             let mut refracted = Vec3::ZERO;
             if transmit_share > 0.0 {
                 let eta = if entering { 1.0 / material.ior } else { material.ior };
-                let cos_i = view.dot(normal);
+                let cos_i = view.dot(shading);
                 let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
                 if k < 0.0 {
                     reflect_share += transmit_share;
                     transmit_share = 0.0;
                 } else {
                     let cos_t = k.sqrt();
-                    refracted = (eta * ray.dir + (eta * cos_i - cos_t) * normal).normalize();
+                    refracted = (eta * ray.dir + (eta * cos_i - cos_t) * shading).normalize();
                     let fresnel = fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
                     reflect_share += transmit_share * fresnel;
                     transmit_share *= 1.0 - fresnel;
@@ -178,7 +190,7 @@ impl<'a> Tracer<'a> {
             if worth_tracing(reflect_weight) && stack.len() < stack_size {
                 stack.push(RayTask {
                     origin: offset_origin(surface.position, normal),
-                    dir: reflect(ray.dir, normal),
+                    dir: reflect(ray.dir, shading),
                     weight: reflect_weight,
                     depth: task.depth + 1,
                 });

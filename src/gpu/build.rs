@@ -10,7 +10,7 @@ use super::timing::PassTimestamps;
 use super::upload::SharedBuffers;
 use crate::bvh::BuildTimings;
 use crate::bvh::layout::GpuNode;
-use crate::scene::packed::GpuSphere;
+use crate::scene::packed::{GpuSphere, PackedScene};
 use anyhow::bail;
 use std::num::NonZeroU64;
 
@@ -80,6 +80,17 @@ fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) 
 fn grid(groups: u32) -> (u32, u32) {
     let x = groups.clamp(1, MAX_GROUPS_X);
     (x, groups.div_ceil(x).max(1))
+}
+
+/// The GPU build reads spheres only; scenes with triangles are built on the CPU.
+pub fn ensure_spheres_only(scene: &PackedScene) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        scene.triangles.is_empty(),
+        "the GPU build covers spheres only, and this scene has {} triangles: build its BVH on the CPU \
+         (single frames do; drop --frames, --rebuild or --device gpu)",
+        scene.triangles.len()
+    );
+    Ok(())
 }
 
 impl<'a> GpuLbvhBuilder<'a> {

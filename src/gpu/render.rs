@@ -81,7 +81,7 @@ impl<'a> GpuRenderer<'a> {
                 limits.max_texture_dimension_2d
             );
         }
-        if accel.uses_bvh() && shared.is_none() && !scene.spheres.is_empty() && scene.nodes.is_empty() {
+        if accel.uses_bvh() && shared.is_none() && scene.primitive_count() > 0 && scene.nodes.is_empty() {
             bail!("--accel {accel:?} needs the scene's BVH: build it before rendering");
         }
         let features = ctx.adapter.get_texture_format_features(TARGET_FORMAT);

@@ -175,6 +175,8 @@ pub fn upload(
 fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn RecordSlice)> {
     let mut records: Vec<(&'static str, &dyn RecordSlice)> = vec![
         ("sphere", &scene.spheres),
+        ("triangle", &scene.triangles),
+        ("triangle_normals", &scene.triangle_normals),
         ("plane", &scene.planes),
         ("light", &scene.lights),
         ("material", &scene.materials),

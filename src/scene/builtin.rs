@@ -192,6 +192,7 @@ pub fn whitted() -> Scene {
             },
         ],
         planes: vec![floor(-1.0, 0, 1, 1.0)],
+        triangles: Vec::new(),
         motion: None,
     }
 }
@@ -236,6 +237,7 @@ fn cloud_scene(spheres: Vec<Sphere>, floor_y: f32) -> Scene {
         materials: cloud_materials(),
         spheres,
         planes: vec![floor(floor_y, 0, 1, 0.5)],
+        triangles: Vec::new(),
         motion: None,
     }
 }

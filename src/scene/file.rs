@@ -3,6 +3,7 @@
 //! Every table denies unknown keys, and every error names the file and, where the element has one,
 //! its line: `scene.toml:12: sphere 3: radius must be positive and finite (got -1)`.
 
+use super::model::{MeshAs, Placement, SphereCount, add_mesh};
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere};
 use anyhow::{Context, anyhow};
 use glam::Vec3;
@@ -24,6 +25,8 @@ struct SceneDef {
     sphere: Vec<Spanned<SphereDef>>,
     #[serde(default)]
     plane: Vec<Spanned<PlaneDef>>,
+    #[serde(default)]
+    mesh: Vec<Spanned<MeshDef>>,
 }
 
 #[derive(Deserialize)]
@@ -81,22 +84,53 @@ struct PlaneDef {
     checker_size: Option<f32>,
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshDef {
+    /// Relative to the scene file.
+    file: String,
+    #[serde(rename = "as")]
+    as_: Option<String>,
+    spheres: Option<SpheresDef>,
+    radius: Option<f32>,
+    normalize: Option<bool>,
+    scale: Option<f32>,
+    translate: Option<[f32; 3]>,
+    seed: Option<u64>,
+    material: Option<String>,
+}
+
+/// `spheres = 20000` or `spheres = "vertices"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum SpheresDef {
+    Count(i64),
+    Word(String),
+}
+
 /// The name elements get when they leave `material` out; a file may define it to change it.
 const DEFAULT_MATERIAL: &str = "default";
 
 /// Reads and parses a scene file; every error is one line that starts with the path.
 pub fn load(path: &Path) -> anyhow::Result<Scene> {
     let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read scene file", path.display()))?;
-    parse(&text).map_err(|e| anyhow!("{}:{e}", path.display()))
+    let base = path.parent().unwrap_or(Path::new("."));
+    parse_in(&text, base).map_err(|e| anyhow!("{}:{e}", path.display()))
 }
 
-/// Parses scene TOML. Errors read `LINE: what` (or ` what` where no line is known).
+/// Parses scene TOML whose mesh files are relative to the working directory.
 pub fn parse(text: &str) -> Result<Scene, String> {
+    parse_in(text, Path::new("."))
+}
+
+/// Parses scene TOML whose mesh files are relative to `base`. Errors read `LINE: what` (or ` what`
+/// where no line is known).
+pub fn parse_in(text: &str, base: &Path) -> Result<Scene, String> {
     let def: SceneDef = toml::from_str(text).map_err(|e| {
         let line = e.span().map(|s| line_of(text, s.start));
         at_line(line, e.message().trim())
     })?;
-    build(def, text)
+    build(def, text, base)
 }
 
 fn line_of(text: &str, offset: usize) -> usize {
@@ -115,7 +149,7 @@ fn vec3(a: [f32; 3]) -> Vec3 {
     Vec3::from_array(a)
 }
 
-fn build(def: SceneDef, text: &str) -> Result<Scene, String> {
+fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, String> {
     let line = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
     let mut scene = Scene::default();
 
@@ -217,6 +251,18 @@ fn build(def: SceneDef, text: &str) -> Result<Scene, String> {
         });
     }
 
+    let mut placements = Vec::new();
+    for (i, m) in def.mesh.iter().enumerate() {
+        let at = line(m.span());
+        let element = format!("mesh {i}");
+        placements.push((placement(m.get_ref(), &mut resolve, &element, at)?, element, at));
+    }
+    for (m, (placement, element, at)) in def.mesh.iter().zip(placements) {
+        let path = base.join(&m.get_ref().file);
+        let mesh = crate::mesh::load(&path).map_err(|e| at_line(at, format!("{element}: {e}")))?;
+        add_mesh(&mut scene, mesh, &placement).map_err(|e| at_line(at, format!("{element}: {e}")))?;
+    }
+
     // Semantic checks run on the finished scene; map the element they name back to its line.
     scene.validate().map_err(|e| {
         let index = |prefix: &str| e.element.strip_prefix(prefix).and_then(|n| n.parse::<usize>().ok());
@@ -238,6 +284,51 @@ fn build(def: SceneDef, text: &str) -> Result<Scene, String> {
         at_line(at, format!("{element}: {}", e.message))
     })?;
     Ok(scene)
+}
+
+/// A mesh table's placement, its material resolved.
+fn placement(
+    def: &MeshDef,
+    resolve: &mut impl FnMut(&Option<String>, &str, Option<usize>) -> Result<u32, String>,
+    element: &str,
+    at: Option<usize>,
+) -> Result<Placement, String> {
+    let fail = |message: String| at_line(at, format!("{element}: {message}"));
+    let as_ = match def.as_.as_deref() {
+        None | Some("triangles") => MeshAs::Triangles,
+        Some("spheres") => MeshAs::Spheres,
+        Some(other) => {
+            return Err(fail(format!(
+                "as must be \"triangles\" or \"spheres\" (got \"{other}\")"
+            )));
+        }
+    };
+    let spheres = match &def.spheres {
+        None => SphereCount::Vertices,
+        Some(_) if as_ == MeshAs::Triangles => {
+            return Err(fail("spheres applies to as = \"spheres\"".into()));
+        }
+        Some(SpheresDef::Count(n)) if *n >= 1 => SphereCount::Sampled(*n as usize),
+        Some(SpheresDef::Count(n)) => return Err(fail(format!("spheres must be at least 1 (got {n})"))),
+        Some(SpheresDef::Word(word)) if word == "vertices" => SphereCount::Vertices,
+        Some(SpheresDef::Word(word)) => {
+            return Err(fail(format!(
+                "spheres must be a count or \"vertices\" (got \"{word}\")"
+            )));
+        }
+    };
+    let placement = Placement {
+        as_,
+        spheres,
+        radius: def.radius,
+        normalize: def.normalize.unwrap_or(true),
+        scale: def.scale.unwrap_or(1.0),
+        translate: def.translate.map_or(Vec3::ZERO, vec3),
+        seed: def.seed.unwrap_or(0),
+        material: resolve(&def.material, element, at)?,
+    };
+    placement.validate().map_err(fail)?;
+    Ok(placement)
 }
 
 #[cfg(test)]

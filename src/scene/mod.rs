@@ -5,6 +5,7 @@
 
 pub mod builtin;
 pub mod file;
+pub mod model;
 pub mod packed;
 
 use glam::Vec3;
@@ -87,6 +88,15 @@ pub struct Sphere {
     pub material: u32,
 }
 
+/// A triangle, counter-clockwise seen from its outside (the side its geometric normal points to).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub vertices: [Vec3; 3],
+    /// Vertex normals to interpolate for shading; `None` shades with the geometric normal.
+    pub normals: Option<[Vec3; 3]>,
+    pub material: u32,
+}
+
 /// An infinite plane, optionally a checkerboard of two materials.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
@@ -112,6 +122,7 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub materials: Vec<Material>,
     pub spheres: Vec<Sphere>,
+    pub triangles: Vec<Triangle>,
     pub planes: Vec<Plane>,
     /// How the spheres move from frame to frame; `None` for a still scene.
     pub motion: Option<Motion>,
@@ -180,12 +191,26 @@ fn finite_vec(v: Vec3) -> bool {
 }
 
 impl Scene {
-    /// Loads a scene by built-in name (`whitted`, `random:100:7`, ...) or from a TOML file path.
+    /// Loads a scene by built-in name (`whitted`, `random:100:7`, ...), from a TOML file, or from a
+    /// model file (`.ply`, `.obj`, `.off`) with a camera that frames it.
     pub fn load(spec: &str) -> anyhow::Result<Scene> {
+        Self::load_with(spec, &model::ModelOptions::default())
+    }
+
+    /// [`Scene::load`], with what the command line says of a model file.
+    pub fn load_with(spec: &str, options: &model::ModelOptions) -> anyhow::Result<Scene> {
+        let path = Path::new(spec);
+        if crate::mesh::is_model_path(path) {
+            return model::model_scene(path, options);
+        }
+        anyhow::ensure!(
+            options.is_default(),
+            "scene '{spec}': --as and --spheres apply to model files ({})",
+            crate::mesh::MeshFormat::EXTENSIONS.join(", ")
+        );
         if let Some(scene) = builtin::by_name(spec)? {
             return Ok(scene);
         }
-        let path = Path::new(spec);
         if path.extension().is_some_and(|ext| ext == "toml") || path.exists() {
             return file::load(path);
         }
@@ -253,6 +278,18 @@ impl Scene {
                 ));
             }
             check_material(&element, s.material)?;
+        }
+        for (i, t) in self.triangles.iter().enumerate() {
+            let element = || format!("triangle {i}");
+            if !t.vertices.iter().all(|v| v.is_finite()) {
+                return Err(SceneError::new(element(), "vertices must be finite"));
+            }
+            if let Some(normals) = t.normals
+                && !normals.iter().all(|n| n.is_finite())
+            {
+                return Err(SceneError::new(element(), "normals must be finite"));
+            }
+            check_material(&element, t.material)?;
         }
         for (i, p) in self.planes.iter().enumerate() {
             let element = || format!("plane {i}");

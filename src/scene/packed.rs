@@ -36,6 +36,8 @@ pub struct GpuGlobals {
     pub plane_count: u32,
     pub light_count: u32,
     pub material_count: u32,
+    pub triangle_count: u32,
+    pub _pad: [u32; 3],
 }
 
 #[repr(C)]
@@ -46,6 +48,34 @@ pub struct GpuSphere {
     /// Index into the material records.
     pub material: u32,
     pub _pad: [u32; 3],
+}
+
+/// A triangle as Möller–Trumbore reads it: a corner and the two edges leaving it. Primitive
+/// `sphere_count + i` of the BVH is triangle `i`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangle {
+    pub v0: [f32; 3],
+    pub material: u32,
+    /// v1 - v0.
+    pub e1: [f32; 3],
+    /// Index of the triangle's vertex normals in the normal records, or `NONE` to shade flat.
+    pub normals: u32,
+    /// v2 - v0.
+    pub e2: [f32; 3],
+    pub _pad: u32,
+}
+
+/// A smooth triangle's vertex normals, interpolated by barycentric coordinates for shading.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangleNormals {
+    pub n0: [f32; 3],
+    pub _pad0: f32,
+    pub n1: [f32; 3],
+    pub _pad1: f32,
+    pub n2: [f32; 3],
+    pub _pad2: f32,
 }
 
 /// An infinite plane with its checkerboard frame precomputed, so no basis is derived in the shader.
@@ -109,6 +139,27 @@ impl GpuRecord for GpuSphere {
         let [x, y, z] = self.center;
         out.push([x, y, z, self.radius]);
         out.push([self.material as f32, 0.0, 0.0, 0.0]);
+    }
+}
+
+impl GpuRecord for GpuTriangle {
+    const WGSL_TYPE: &'static str = "Triangle";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        let [ax, ay, az] = self.v0;
+        let [bx, by, bz] = self.e1;
+        let [cx, cy, cz] = self.e2;
+        out.push([ax, ay, az, self.material as f32]);
+        out.push([bx, by, bz, link_texel(self.normals)]);
+        out.push([cx, cy, cz, 0.0]);
+    }
+}
+
+impl GpuRecord for GpuTriangleNormals {
+    const WGSL_TYPE: &'static str = "TriangleNormals";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        for [x, y, z] in [self.n0, self.n1, self.n2] {
+            out.push([x, y, z, 0.0]);
+        }
     }
 }
 
@@ -184,9 +235,11 @@ macro_rules! layout {
 pub const LAYOUTS: &[StructLayout] = &[
     layout!(GpuGlobals, "Globals", [
         eye, tan_half_fov, forward, aspect, right, width, up, height, background, ambient,
-        sphere_count, plane_count, light_count, material_count,
+        sphere_count, plane_count, light_count, material_count, triangle_count,
     ]),
     layout!(GpuSphere, "Sphere", [center, radius, material]),
+    layout!(GpuTriangle, "Triangle", [v0, material, e1, normals, e2]),
+    layout!(GpuTriangleNormals, "TriangleNormals", [n0, n1, n2]),
     layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
     layout!(GpuLight, "Light", [position, color]),
     layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior]),
@@ -199,10 +252,13 @@ pub struct PackedScene {
     pub globals: GpuGlobals,
     pub max_depth: u32,
     pub spheres: Vec<GpuSphere>,
+    pub triangles: Vec<GpuTriangle>,
+    /// The vertex normals of the smooth triangles.
+    pub triangle_normals: Vec<GpuTriangleNormals>,
     pub planes: Vec<GpuPlane>,
     pub lights: Vec<GpuLight>,
     pub materials: Vec<GpuMaterial>,
-    /// The BVH over `spheres`, once [`PackedScene::build_bvh`] ran; empty otherwise.
+    /// The BVH over the primitives (spheres, then triangles), once [`PackedScene::build_bvh`] ran; empty otherwise.
     pub nodes: Vec<GpuNode>,
     /// Longest root-to-leaf path of `nodes`, in edges: the traversal stack's size.
     pub bvh_depth: u32,
@@ -213,7 +269,7 @@ impl PackedScene {
     pub fn new(scene: &Scene) -> Result<Self, super::SceneError> {
         scene.validate()?;
         for (what, count) in [
-            ("spheres", scene.spheres.len()),
+            ("primitives", scene.spheres.len() + scene.triangles.len()),
             ("planes", scene.planes.len()),
             ("lights", scene.lights.len()),
             ("materials", scene.materials.len()),
@@ -245,6 +301,8 @@ impl PackedScene {
             plane_count: scene.planes.len() as u32,
             light_count: scene.lights.len() as u32,
             material_count: scene.materials.len() as u32,
+            triangle_count: scene.triangles.len() as u32,
+            _pad: [0; 3],
         };
         let spheres = scene
             .spheres
@@ -254,6 +312,34 @@ impl PackedScene {
                 radius: s.radius,
                 material: s.material,
                 _pad: [0; 3],
+            })
+            .collect();
+        let mut triangle_normals = Vec::new();
+        let triangles = scene
+            .triangles
+            .iter()
+            .map(|t| {
+                let [v0, v1, v2] = t.vertices;
+                let normals = match t.normals {
+                    Some([n0, n1, n2]) => {
+                        triangle_normals.push(GpuTriangleNormals {
+                            n0: n0.to_array(),
+                            n1: n1.to_array(),
+                            n2: n2.to_array(),
+                            ..Default::default()
+                        });
+                        triangle_normals.len() as u32 - 1
+                    }
+                    None => crate::bvh::layout::NONE,
+                };
+                GpuTriangle {
+                    v0: v0.to_array(),
+                    material: t.material,
+                    e1: (v1 - v0).to_array(),
+                    normals,
+                    e2: (v2 - v0).to_array(),
+                    _pad: 0,
+                }
             })
             .collect();
         let planes = scene
@@ -306,6 +392,8 @@ impl PackedScene {
             globals,
             max_depth: s.max_depth,
             spheres,
+            triangles,
+            triangle_normals,
             planes,
             lights,
             materials,
@@ -314,22 +402,38 @@ impl PackedScene {
         })
     }
 
-    pub fn sphere_boxes(&self) -> Vec<Aabb> {
-        self.spheres
-            .iter()
-            .map(|s| Aabb::around_sphere(glam::Vec3::from_array(s.center), s.radius))
-            .collect()
+    /// Spheres and triangles: the primitives the BVH is built over, in its index order.
+    pub fn primitive_count(&self) -> usize {
+        self.spheres.len() + self.triangles.len()
     }
 
-    /// Builds the linear BVH over the spheres on the CPU.
+    /// The primitives' bounding boxes, spheres first. A triangle's box holds the corners the tracers
+    /// compute (v0, v0 + e1, v0 + e2).
+    pub fn primitive_boxes(&self) -> Vec<Aabb> {
+        let spheres = self
+            .spheres
+            .iter()
+            .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius));
+        let triangles = self.triangles.iter().map(|t| {
+            let v0 = Vec3::from_array(t.v0);
+            let (v1, v2) = (v0 + Vec3::from_array(t.e1), v0 + Vec3::from_array(t.e2));
+            Aabb {
+                min: v0.min(v1).min(v2),
+                max: v0.max(v1).max(v2),
+            }
+        });
+        spheres.chain(triangles).collect()
+    }
+
+    /// Builds the linear BVH over the primitives on the CPU.
     pub fn build_bvh(&mut self, bits: MortonBits) -> BuildTimings {
-        let (bvh, timings) = Bvh::build_lbvh(&self.sphere_boxes(), bits);
+        let (bvh, timings) = Bvh::build_lbvh(&self.primitive_boxes(), bits);
         self.set_bvh(bvh);
         timings
     }
 
     pub fn set_bvh(&mut self, bvh: Bvh) {
-        assert_eq!(bvh.primitive_count, self.spheres.len());
+        assert_eq!(bvh.primitive_count, self.primitive_count());
         self.bvh_depth = bvh.max_depth();
         self.nodes = bvh.nodes;
     }

@@ -1,14 +1,21 @@
-// Brute force: every ray against every sphere. Each acceleration mode defines these two functions.
+// Brute force: every ray against every primitive. Each acceleration mode defines these two functions.
 // Mirrored by src/cpu/accel.rs.
 
 fn accel_closest(ray: Ray, best: Hit) -> Hit {
     var hit = best;
-    // The cost of brute force: every sphere tested.
-    box_tests += globals.sphere_count;
+    // The cost of brute force: every primitive tested.
+    box_tests += primitive_count();
     for (var i = 0u; i < globals.sphere_count; i++) {
         let t = intersect_sphere(load_sphere(i), ray, hit.t);
-        if (closer_sphere(t, i, hit)) {
-            hit = Hit(t, HIT_SPHERE, i);
+        if (closer_primitive(t, i, hit)) {
+            hit = Hit(t, HIT_PRIMITIVE, i);
+        }
+    }
+    for (var i = 0u; i < globals.triangle_count; i++) {
+        let t = intersect_triangle(load_triangle(i), ray, hit.t);
+        let index = globals.sphere_count + i;
+        if (closer_primitive(t, index, hit)) {
+            hit = Hit(t, HIT_PRIMITIVE, index);
         }
     }
     return hit;
@@ -17,6 +24,12 @@ fn accel_closest(ray: Ray, best: Hit) -> Hit {
 fn accel_occluded(ray: Ray, t_max: f32) -> bool {
     for (var i = 0u; i < globals.sphere_count; i++) {
         let t = intersect_sphere(load_sphere(i), ray, t_max);
+        if (t > 0.0 && t < t_max) {
+            return true;
+        }
+    }
+    for (var i = 0u; i < globals.triangle_count; i++) {
+        let t = intersect_triangle(load_triangle(i), ray, t_max);
         if (t > 0.0 && t < t_max) {
             return true;
         }

@@ -1,10 +1,10 @@
 // BVH traversal with a per-pixel stack (the paper's local array), sized to the tree's depth, nearer
 // child first. Mirrored by src/cpu/accel.rs.
 
-// The closest sphere hit that beats `best`; with `shadow`, the first hit nearer than best.t.
+// The closest primitive hit that beats `best`; with `shadow`, the first hit nearer than best.t.
 fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var hit = best;
-    if (globals.sphere_count == 0u) {
+    if (primitive_count() == 0u) {
         return hit;
     }
     let inv_dir = safe_inverse(ray.dir);
@@ -24,7 +24,7 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
         } else {
             let left = load_node(node.left);
             let right = load_node(node.right);
-            // Leaf children: test their spheres now (no dearer than their boxes); box-test the others.
+            // Leaf children: test their primitives now (no dearer than their boxes); box-test the others.
             var t_left = NO_HIT;
             if (left.right == LEAF) {
                 if (hit_leaf(left, ray, &hit) && shadow) {

@@ -22,7 +22,7 @@ fn sibling(index: u32, parent: BvhNode) -> u32 {
 
 fn traverse_stackless(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var hit = best;
-    if (globals.sphere_count == 0u) {
+    if (primitive_count() == 0u) {
         return hit;
     }
     let inv_dir = safe_inverse(ray.dir);
@@ -51,7 +51,7 @@ fn traverse_stackless(ray: Ray, best: Hit, shadow: bool) -> Hit {
             }
             continue;
         }
-        // From the parent or the sibling: a leaf's sphere (no dearer to test than its box), or the box.
+        // From the parent or the sibling: a leaf's primitive (no dearer to test than its box), or the box.
         var descend = false;
         if (node.right == LEAF) {
             if (hit_leaf(node, ray, &hit) && shadow) {

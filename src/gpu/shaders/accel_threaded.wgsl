@@ -1,17 +1,17 @@
 // Threaded BVH traversal: depth-first order, left child first, with no stack. A node whose box the
-// ray misses (or a leaf, once its sphere is tested) hands over to its escape link, the next node
+// ray misses (or a leaf, once its primitive is tested) hands over to its escape link, the next node
 // after its subtree; a hit descends to the left child. Mirrored by src/cpu/accel.rs.
 
 fn traverse_threaded(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var hit = best;
-    if (globals.sphere_count == 0u) {
+    if (primitive_count() == 0u) {
         return hit;
     }
     let inv_dir = safe_inverse(ray.dir);
     var index = 0u;
     while (index != NONE) {
         let node = load_node(index);
-        // A leaf's sphere costs no more to test than its box: test it directly.
+        // A leaf's primitive costs no more to test than its box: test it directly.
         if (node.right == LEAF) {
             if (hit_leaf(node, ray, &hit) && shadow) {
                 return hit;

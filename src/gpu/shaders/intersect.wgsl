@@ -7,7 +7,8 @@ struct Ray {
 }
 
 const HIT_NONE: u32 = 0u;
-const HIT_SPHERE: u32 = 1u;
+// A sphere or a triangle: the index is the primitive's (spheres first, then triangles).
+const HIT_PRIMITIVE: u32 = 1u;
 const HIT_PLANE: u32 = 2u;
 
 // The closest hit found so far: t is t_max while kind is HIT_NONE.
@@ -17,11 +18,11 @@ struct Hit {
     index: u32,
 }
 
-// What intersect_sphere and intersect_box return for a miss.
+// What the intersect_* functions return for a miss.
 const NO_HIT: f32 = -1.0;
 
 // The nearest t in (0, t_max] where the ray meets the sphere, or NO_HIT. t_max itself counts, so that
-// a sphere as near as the best hit so far can still win the tie (see closer_sphere).
+// a sphere as near as the best hit so far can still win the tie (see closer_primitive).
 fn intersect_sphere(sphere: Sphere, ray: Ray, t_max: f32) -> f32 {
     let oc = ray.origin - sphere.center;
     let b = dot(oc, ray.dir);
@@ -43,10 +44,45 @@ fn intersect_sphere(sphere: Sphere, ray: Ray, t_max: f32) -> f32 {
     return NO_HIT;
 }
 
-// Whether sphere `index`, met at t (or NO_HIT), beats the best hit: nearer, or as near with a lower
-// index, so that coincident spheres resolve the same whatever order a traversal visits them in.
-fn closer_sphere(t: f32, index: u32, best: Hit) -> bool {
-    return t > 0.0 && (t < best.t || (t == best.t && best.kind == HIT_SPHERE && index < best.index));
+// Möller–Trumbore: (u, v, t) where v0 + u e1 + v e2 = origin + t dir. A ray in the triangle's plane
+// (or a degenerate triangle) has det 0 and gets a u that fails every test.
+fn triangle_uvt(triangle: Triangle, ray: Ray) -> vec3<f32> {
+    let p = cross(ray.dir, triangle.e2);
+    let det = dot(triangle.e1, p);
+    if (det == 0.0) {
+        return vec3<f32>(NO_HIT);
+    }
+    let inv_det = 1.0 / det;
+    let s = ray.origin - triangle.v0;
+    let q = cross(s, triangle.e1);
+    return vec3<f32>(dot(s, p) * inv_det, dot(ray.dir, q) * inv_det, dot(triangle.e2, q) * inv_det);
+}
+
+// The t in (0, t_max] where the ray meets the triangle, or NO_HIT; t_max counts, as for spheres.
+fn intersect_triangle(triangle: Triangle, ray: Ray, t_max: f32) -> f32 {
+    let uvt = triangle_uvt(triangle, ray);
+    if (uvt.x >= 0.0 && uvt.y >= 0.0 && uvt.x + uvt.y <= 1.0 && uvt.z > 0.0 && uvt.z <= t_max) {
+        return uvt.z;
+    }
+    return NO_HIT;
+}
+
+fn primitive_count() -> u32 {
+    return globals.sphere_count + globals.triangle_count;
+}
+
+// Primitive `index` of the BVH's order: spheres, then triangles.
+fn intersect_primitive(index: u32, ray: Ray, t_max: f32) -> f32 {
+    if (index < globals.sphere_count) {
+        return intersect_sphere(load_sphere(index), ray, t_max);
+    }
+    return intersect_triangle(load_triangle(index - globals.sphere_count), ray, t_max);
+}
+
+// Whether primitive `index`, met at t (or NO_HIT), beats the best hit: nearer, or as near with a
+// lower index, so that coincident primitives resolve the same whatever order a traversal visits them in.
+fn closer_primitive(t: f32, index: u32, best: Hit) -> bool {
+    return t > 0.0 && (t < best.t || (t == best.t && best.kind == HIT_PRIMITIVE && index < best.index));
 }
 
 fn intersect_plane(plane: Plane, ray: Ray, t_max: f32) -> f32 {
@@ -81,12 +117,12 @@ fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<
     return NO_HIT;
 }
 
-// Tests a BVH leaf's sphere; when it beats the best hit, it becomes the best hit and this says so.
+// Tests a BVH leaf's primitive; when it beats the best hit, it becomes the best hit and this says so.
 fn hit_leaf(node: BvhNode, ray: Ray, hit: ptr<function, Hit>) -> bool {
     box_tests += 1u;
-    let t = intersect_sphere(load_sphere(node.left), ray, (*hit).t);
-    if (closer_sphere(t, node.left, *hit)) {
-        *hit = Hit(t, HIT_SPHERE, node.left);
+    let t = intersect_primitive(node.left, ray, (*hit).t);
+    if (closer_primitive(t, node.left, *hit)) {
+        *hit = Hit(t, HIT_PRIMITIVE, node.left);
         return true;
     }
     return false;

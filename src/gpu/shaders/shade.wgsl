@@ -6,16 +6,42 @@ const RAY_BIAS: f32 = 1e-4;
 
 struct Surface {
     position: vec3<f32>,
-    // Geometric, unit, pointing out of the primitive.
+    // Geometric, unit, pointing out of the primitive: it decides inside and outside, and which side
+    // new rays start on.
     normal: vec3<f32>,
+    // Unit, on the geometric normal's side: the interpolated vertex normal of a smooth triangle, the
+    // geometric normal otherwise. Lighting, reflection and refraction use it.
+    shading: vec3<f32>,
     material: u32,
+}
+
+// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's side;
+// the geometric normal where they cancel out.
+fn triangle_shading(triangle: Triangle, ray: Ray, normal: vec3<f32>) -> vec3<f32> {
+    if (triangle.normals == NONE) {
+        return normal;
+    }
+    let uvt = triangle_uvt(triangle, ray);
+    let n = load_triangle_normals(triangle.normals);
+    let blended = (1.0 - uvt.x - uvt.y) * n.n0 + uvt.x * n.n1 + uvt.y * n.n2;
+    if (dot(blended, blended) == 0.0) {
+        return normal;
+    }
+    let shading = normalize(blended);
+    return select(shading, -shading, dot(shading, normal) < 0.0);
 }
 
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let position = ray.origin + hit.t * ray.dir;
-    if (hit.kind == HIT_SPHERE) {
-        let sphere = load_sphere(hit.index);
-        return Surface(position, normalize(position - sphere.center), sphere.material);
+    if (hit.kind == HIT_PRIMITIVE) {
+        if (hit.index < globals.sphere_count) {
+            let sphere = load_sphere(hit.index);
+            let normal = normalize(position - sphere.center);
+            return Surface(position, normal, normal, sphere.material);
+        }
+        let triangle = load_triangle(hit.index - globals.sphere_count);
+        let normal = normalize(cross(triangle.e1, triangle.e2));
+        return Surface(position, normal, triangle_shading(triangle, ray, normal), triangle.material);
     }
     let plane = load_plane(hit.index);
     let local = position - plane.point;
@@ -25,7 +51,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     if (cell - 2.0 * floor(cell * 0.5) != 0.0) {
         material = plane.checker_material;
     }
-    return Surface(position, plane.normal, material);
+    return Surface(position, plane.normal, plane.normal, material);
 }
 
 // `side` points to where the new ray goes: the facing normal for reflection and shadows, its
@@ -45,8 +71,8 @@ fn fresnel_schlick(cos_theta: f32, ior: f32) -> f32 {
 }
 
 // Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and Phong.
-// `normal` faces the viewer; `view` points from the surface to the viewer.
-fn direct_light(surface: Surface, normal: vec3<f32>, view: vec3<f32>, material: Material) -> vec3<f32> {
+// `normal` (geometric) and `shading` face the viewer; `view` points from the surface to the viewer.
+fn direct_light(surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material) -> vec3<f32> {
     var color = globals.ambient * material.color;
     let origin = offset_origin(surface.position, normal);
     for (var i = 0u; i < globals.light_count; i++) {
@@ -54,7 +80,7 @@ fn direct_light(surface: Surface, normal: vec3<f32>, view: vec3<f32>, material: 
         let to_light = light.position - surface.position;
         let distance = length(to_light);
         let l = to_light / distance;
-        let n_dot_l = dot(normal, l);
+        let n_dot_l = dot(shading, l);
         if (n_dot_l <= 0.0) {
             continue;
         }
@@ -63,7 +89,7 @@ fn direct_light(surface: Surface, normal: vec3<f32>, view: vec3<f32>, material: 
             continue;
         }
         var highlight = 0.0;
-        let r_dot_v = dot(reflect(-l, normal), view);
+        let r_dot_v = dot(reflect(-l, shading), view);
         if (r_dot_v > 0.0 && material.specular > 0.0) {
             highlight = material.specular * pow(r_dot_v, material.shininess);
         }

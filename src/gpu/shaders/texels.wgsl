@@ -9,6 +9,14 @@ fn sphere_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Sphere {
     return Sphere(t0.xyz, t0.w, u32(t1.x));
 }
 
+fn triangle_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> Triangle {
+    return Triangle(t0.xyz, u32(t0.w), t1.xyz, link_from_texel(t1.w), t2.xyz);
+}
+
+fn triangle_normals_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> TriangleNormals {
+    return TriangleNormals(t0.xyz, t1.xyz, t2.xyz);
+}
+
 fn plane_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>) -> Plane {
     return Plane(t0.xyz, u32(t0.w), t1.xyz, u32(t1.w), t2.xyz, t2.w, t3.xyz);
 }

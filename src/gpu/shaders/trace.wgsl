@@ -25,7 +25,7 @@ struct RayTask {
 
 struct PixelTrace {
     color: vec3<f32>,
-    // First-hit geometric normal and distance; DEPTH_MISS where the primary ray escapes.
+    // First-hit shading normal and distance; DEPTH_MISS where the primary ray escapes.
     normal: vec3<f32>,
     depth: f32,
 }
@@ -71,14 +71,16 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
         }
         let surface = surface_at(ray, hit);
         if (task.depth == 0u) {
-            result.normal = surface.normal;
+            result.normal = surface.shading;
             result.depth = hit.t;
         }
         let material = load_material(surface.material);
         let entering = dot(surface.normal, ray.dir) < 0.0;
+        // The geometric normal picks the side new rays start on; the shading normal bends them.
         let normal = select(-surface.normal, surface.normal, entering);
+        let shading = select(-surface.shading, surface.shading, entering);
         let view = -ray.dir;
-        result.color += task.weight * direct_light(surface, normal, view, material);
+        result.color += task.weight * direct_light(surface, normal, shading, view, material);
         if (task.depth >= MAX_DEPTH) {
             continue;
         }
@@ -89,14 +91,14 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
         var refracted = vec3<f32>(0.0);
         if (transmit_share > 0.0) {
             let eta = select(material.ior, 1.0 / material.ior, entering);
-            let cos_i = dot(view, normal);
+            let cos_i = dot(view, shading);
             let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
             if (k < 0.0) {
                 reflect_share += transmit_share;
                 transmit_share = 0.0;
             } else {
                 let cos_t = sqrt(k);
-                refracted = normalize(eta * ray.dir + (eta * cos_i - cos_t) * normal);
+                refracted = normalize(eta * ray.dir + (eta * cos_i - cos_t) * shading);
                 let fresnel = fresnel_schlick(select(cos_t, cos_i, entering), material.ior);
                 reflect_share += transmit_share * fresnel;
                 transmit_share *= 1.0 - fresnel;
@@ -109,7 +111,7 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
         }
         let reflect_weight = task.weight * reflect_share;
         if (worth_tracing(reflect_weight) && top < RAY_STACK_SIZE) {
-            stack[top] = RayTask(offset_origin(surface.position, normal), reflect(ray.dir, normal), reflect_weight, task.depth + 1u);
+            stack[top] = RayTask(offset_origin(surface.position, normal), reflect(ray.dir, shading), reflect_weight, task.depth + 1u);
             top += 1u;
         }
     }

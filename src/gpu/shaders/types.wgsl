@@ -16,12 +16,29 @@ struct Globals {
     plane_count: u32,
     light_count: u32,
     material_count: u32,
+    triangle_count: u32,
 }
 
 struct Sphere {
     center: vec3<f32>,
     radius: f32,
     material: u32,
+}
+
+// Möller–Trumbore's form: a corner and the two edges leaving it. BVH primitive sphere_count + i.
+struct Triangle {
+    v0: vec3<f32>,
+    material: u32,
+    e1: vec3<f32>,
+    // Index of the vertex normals, or NONE to shade with the geometric normal.
+    normals: u32,
+    e2: vec3<f32>,
+}
+
+struct TriangleNormals {
+    n0: vec3<f32>,
+    n1: vec3<f32>,
+    n2: vec3<f32>,
 }
 
 struct Plane {
