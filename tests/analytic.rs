@@ -1,4 +1,5 @@
-//! Renders whose answer is known in closed form: a sphere's silhouette area and its distance.
+//! Renders whose answer is known in closed form: a sphere's silhouette area and its distance, and a
+//! quad's depth at every pixel.
 
 mod common;
 use common::*;
@@ -74,4 +75,108 @@ fn cpu_renders_do_not_depend_on_the_thread_count() {
         .unwrap()
         .install(|| raypipe::cpu::render(&scene, Accel::Brute, false));
     assert_eq!(many, one);
+}
+
+/// A quad of two triangles facing the camera at distance DISTANCE, off-centre so that its diagonal
+/// misses the image's symmetric pixels: x in [-1, 1.2], y in [-0.7, 0.9].
+const QUAD: [[f32; 2]; 4] = [[-1.0, -0.7], [1.2, -0.7], [1.2, 0.9], [-1.0, 0.9]];
+
+fn one_quad(accel: Accel) -> PackedScene {
+    use glam::Vec3;
+    use raypipe::scene::{Camera, Light, Material, Scene, Triangle};
+    let corner = |k: usize| Vec3::new(QUAD[k][0], QUAD[k][1], 0.0);
+    let triangle = |a, b, c| Triangle {
+        vertices: [corner(a), corner(b), corner(c)],
+        normals: None,
+        material: 0,
+    };
+    let mut scene = Scene {
+        camera: Camera {
+            eye: Vec3::new(0.0, 0.0, -DISTANCE),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_degrees: FOV_DEGREES,
+        },
+        lights: vec![Light {
+            position: Vec3::new(0.0, 5.0, -5.0),
+            color: Vec3::ONE,
+        }],
+        materials: vec![Material::default()],
+        // Clockwise seen from +z, so counter-clockwise seen from the camera: the normal is -z.
+        triangles: vec![triangle(0, 2, 1), triangle(0, 3, 2)],
+        ..Scene::default()
+    };
+    scene.settings.width = WIDTH;
+    scene.settings.height = HEIGHT;
+    let mut packed = PackedScene::new(&scene).unwrap();
+    if accel.uses_bvh() {
+        packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    }
+    packed
+}
+
+/// Every pixel's depth from the pinhole model in f64: the ray through the pixel centre meets z = 0
+/// at eye + DISTANCE (-x, y, 1), at distance DISTANCE |(x, y, 1)|. Pixels within a hair of an edge
+/// are left out, where f32 may fall either way.
+fn check_quad(frame: &Frame, device: &str) {
+    let tan = (FOV_DEGREES as f64 / 2.0).to_radians().tan();
+    let aspect = WIDTH as f64 / HEIGHT as f64;
+    let depth = frame.depth();
+    let normals = &frame.surface;
+    let (mut inside, mut checked) = (0, 0);
+    for py in 0..HEIGHT {
+        for px in 0..WIDTH {
+            let x = (2.0 * (px as f64 + 0.5) / WIDTH as f64 - 1.0) * tan * aspect;
+            let y = (1.0 - 2.0 * (py as f64 + 0.5) / HEIGHT as f64) * tan;
+            // The camera looks along +z with y up, so its right is cross(forward, up) = -x.
+            let (hx, hy) = (-DISTANCE as f64 * x, DISTANCE as f64 * y);
+            let margin = [
+                hx - QUAD[0][0] as f64,
+                QUAD[1][0] as f64 - hx,
+                hy - QUAD[0][1] as f64,
+                QUAD[2][1] as f64 - hy,
+            ]
+            .into_iter()
+            .fold(f64::INFINITY, |m, d| m.min(d.abs()));
+            if margin < 1e-4 {
+                continue;
+            }
+            checked += 1;
+            let i = (py * WIDTH + px) as usize;
+            let hit =
+                hx > QUAD[0][0] as f64 && hx < QUAD[1][0] as f64 && hy > QUAD[0][1] as f64 && hy < QUAD[2][1] as f64;
+            let got = depth.data[i] as f64;
+            if hit {
+                inside += 1;
+                let expected = DISTANCE as f64 * (x * x + y * y + 1.0).sqrt();
+                assert!(
+                    (got - expected).abs() <= 2e-6 * expected,
+                    "{device}: pixel ({px}, {py}) depth {got}, expected {expected}"
+                );
+                assert_eq!(normals[i][..3], [0.0, 0.0, -1.0], "{device}: pixel ({px}, {py}) normal");
+            } else {
+                assert_eq!(got, f64::INFINITY, "{device}: pixel ({px}, {py}) should miss");
+            }
+        }
+    }
+    assert!(
+        inside > 500 && checked + 20 > (WIDTH * HEIGHT) as usize,
+        "{inside} inside, {checked} checked"
+    );
+}
+
+#[test]
+fn cpu_triangle_depth_is_exact() {
+    for accel in [Accel::Brute, Accel::Threaded] {
+        check_quad(&raypipe::cpu::render(&one_quad(accel), accel, false), "cpu");
+    }
+}
+
+#[test]
+fn gpu_triangle_depth_is_exact() {
+    let Some(ctx) = gpu() else { return };
+    for accel in [Accel::Brute, Accel::Threaded] {
+        let frame = render_gpu(&ctx, &one_quad(accel), MemoryMode::Storage, accel);
+        check_quad(&frame, &format!("{} {accel:?}", ctx.describe()));
+    }
 }

@@ -126,3 +126,15 @@ fn cost_aov_counts_the_same_tests_on_both_devices() {
         );
     }
 }
+
+/// Triangles (smooth glass, flat mirror) and spheres in one BVH.
+#[test]
+fn spheres_and_triangles() {
+    let mut scene = models::mixed_scene(24, 12, 1500);
+    scene.settings.width = 96;
+    scene.settings.height = 64;
+    let mut scene = PackedScene::new(&scene).unwrap();
+    assert_eq!((scene.triangles.len(), scene.spheres.len()), (1152, 1500));
+    scene.build_bvh(MortonBits::Bits30);
+    check_scene("spheres-and-triangles", &scene);
+}

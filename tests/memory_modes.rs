@@ -43,6 +43,20 @@ fn random_spheres_in_every_memory_mode() {
 }
 
 #[test]
+fn triangles_in_every_memory_mode() {
+    let Some(ctx) = gpu() else { return };
+    // 192 triangles and 100 spheres: 583 nodes (28 KB) fit the uniform limit.
+    let mut scene = models::mixed_scene(8, 4, 100);
+    scene.settings.width = 64;
+    scene.settings.height = 48;
+    let mut scene = PackedScene::new(&scene).unwrap();
+    scene.build_bvh(MortonBits::Bits30);
+    for accel in [Accel::Brute, Accel::Stack, Accel::Stackless, Accel::Threaded] {
+        check_accel(&ctx, &scene, accel, "spheres-and-triangles");
+    }
+}
+
+#[test]
 fn uniform_memory_refuses_a_scene_too_big_and_suggests_storage() {
     let Some(ctx) = gpu() else { return };
     let scene = packed("sphere-8k", 16, 16, 1);

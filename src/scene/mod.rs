@@ -211,8 +211,14 @@ impl Scene {
         if let Some(scene) = builtin::by_name(spec)? {
             return Ok(scene);
         }
-        if path.extension().is_some_and(|ext| ext == "toml") || path.exists() {
-            return file::load(path);
+        match path.extension() {
+            Some(ext) if ext == "toml" => return file::load(path),
+            None if path.exists() => return file::load(path),
+            Some(_) if path.exists() => anyhow::bail!(
+                "{spec}: unknown model format (expected a .toml scene, or a model ending in .{})",
+                crate::mesh::MeshFormat::EXTENSIONS.join(", .")
+            ),
+            _ => {}
         }
         anyhow::bail!(
             "unknown scene '{spec}': not a file, and not a built-in ({})",

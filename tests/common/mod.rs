@@ -82,3 +82,4 @@ pub fn assert_frames_match(name: &str, actual: &Frame, expected: &Frame) {
         Tolerance::DEPTH,
     );
 }
+pub mod models;

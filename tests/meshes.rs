@@ -1,0 +1,307 @@
+//! Model files: every format gives the same mesh, the shared scans load and render, broken files give
+//! one clean line and exit code 2, and no mutation of a file makes a parser panic.
+
+mod common;
+use common::models::{self, TestModel, every_format, shared_model, test_dir};
+use glam::Vec3;
+use proptest::prelude::*;
+use raypipe::mesh::{self, Mesh, MeshFormat};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn raypipe(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raypipe")).args(args).output().unwrap()
+}
+
+/// Exit code 2 and one line on stderr, starting with `error:`, holding every needle.
+fn assert_clean_error(output: &Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(lines.len(), 1, "one error line expected: {stderr}");
+    for needle in needles {
+        assert!(lines[0].contains(needle), "{needle:?} not in {:?}", lines[0]);
+    }
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+/// The mesh as a list of triangles by their corners: what must not depend on the format (OBJ loaders
+/// may renumber vertices).
+fn corner_triangles(mesh: &Mesh) -> Vec<[Vec3; 3]> {
+    mesh.triangles.iter().map(|&t| mesh.corners(t)).collect()
+}
+
+fn corner_normals(mesh: &Mesh) -> Vec<[Vec3; 3]> {
+    let normals = mesh.normals.as_ref().expect("the test models have normals");
+    mesh.triangles.iter().map(|t| t.map(|i| normals[i as usize])).collect()
+}
+
+#[test]
+fn every_format_gives_the_same_triangles() {
+    let model = models::torus(12, 6);
+    let dir = test_dir("meshes-formats");
+    let expected: Vec<[Vec3; 3]> = model
+        .quads
+        .iter()
+        .flat_map(|q| {
+            let p = |i: u32| Vec3::from_array(model.positions[i as usize]);
+            [[p(q[0]), p(q[1]), p(q[2])], [p(q[0]), p(q[2]), p(q[3])]]
+        })
+        .collect();
+    for (name, bytes) in every_format(&model) {
+        let mesh = mesh::load(&write(&dir, name, &bytes)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(corner_triangles(&mesh), expected, "{name}");
+        let normals = corner_normals(&mesh);
+        for (triangle, corners) in normals.iter().zip(&expected) {
+            for (n, p) in triangle.iter().zip(corners) {
+                // The torus normal points from the tube's centre line to the point.
+                let center = Vec3::new(p.x, 0.0, p.z).normalize();
+                assert!((*p - center).normalize().dot(*n) > 0.999, "{name}: normal {n} at {p}");
+            }
+        }
+    }
+}
+
+#[test]
+fn the_shared_scans_load_with_their_published_counts() {
+    for (name, vertices, faces) in [("bunny.ply", 35_947, 69_451), ("fertility.off", 23_188, 46_388)] {
+        let Some(path) = shared_model(name) else { return };
+        let mesh = mesh::load(&path).unwrap();
+        assert_eq!(mesh.positions.len(), vertices, "{name}");
+        assert_eq!(mesh.triangles.len(), faces, "{name}: every face is a triangle");
+    }
+}
+
+#[test]
+fn the_bunny_renders_as_20k_spheres() {
+    let Some(bunny) = shared_model("bunny.ply") else { return };
+    let out = test_dir("meshes-bunny").join("bunny-spheres.png");
+    let output = raypipe(&[
+        "render",
+        bunny.to_str().unwrap(),
+        "--spheres",
+        "20000",
+        "--width",
+        "96",
+        "--height",
+        "72",
+        "--stats",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(stdout.contains("20000 spheres, 0 triangles"), "{stdout}");
+    // The bunny fills a good part of the frame: clay pixels (red well above blue) are common.
+    let image = image::open(&out).unwrap().to_rgb8();
+    let clay = image.pixels().filter(|p| p[0] as i32 > p[2] as i32 + 40).count();
+    assert!(clay > image.len() / 3 / 20, "{clay} clay pixels of {}", image.len() / 3);
+}
+
+#[test]
+fn broken_models_give_one_line_and_exit_code_2() {
+    let dir = test_dir("meshes-broken");
+    let model = models::torus(6, 4);
+    let render = |path: &Path| {
+        let out = dir.join("out.png");
+        raypipe(&[
+            "render",
+            path.to_str().unwrap(),
+            "--device",
+            "cpu",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+    };
+
+    let binary = models::binary_ply(&model, true);
+    let truncated = write(&dir, "truncated.ply", &binary[..binary.len() - 7]);
+    assert_clean_error(&render(&truncated), &["truncated.ply", "face"]);
+
+    let text = String::from_utf8(models::off(&model)).unwrap();
+    let bad_index = write(
+        &dir,
+        "bad-index.off",
+        text.replace("4 0 1 5 4", "4 0 1 99 4").as_bytes(),
+    );
+    assert_clean_error(
+        &render(&bad_index),
+        &["bad-index.off:", "face 0", "vertex index 99 out of range"],
+    );
+
+    let text = String::from_utf8(models::ascii_ply(&model)).unwrap();
+    let lying = write(
+        &dir,
+        "lying.ply",
+        text.replace("element face 24", "element face 30").as_bytes(),
+    );
+    assert_clean_error(&render(&lying), &["lying.ply", "face"]);
+
+    // The first vertex line, "nx ny nz x y z confidence", gets a NaN x.
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let first_vertex = lines.iter().position(|l| l == "end_header").unwrap() + 1;
+    let mut fields: Vec<String> = lines[first_vertex].split(' ').map(String::from).collect();
+    fields[3] = "nan".into();
+    lines[first_vertex] = fields.join(" ");
+    let nan = write(&dir, "nan.ply", (lines.join("\n") + "\n").as_bytes());
+    assert_clean_error(&render(&nan), &["nan.ply:15:", "nan"]);
+    let text = String::from_utf8(models::off(&model)).unwrap();
+    let first_vertex = text.lines().nth(3).unwrap();
+    let nan = text.replacen(first_vertex, "nan 0 0 0 0 1", 1);
+    let nan = write(&dir, "nan.off", nan.as_bytes());
+    assert_clean_error(&render(&nan), &["nan.off", "vertex 0", "must be finite"]);
+
+    let empty = write(&dir, "empty.off", b"OFF\n0 0 0\n");
+    assert_clean_error(&render(&empty), &["empty.off", "empty mesh"]);
+
+    let obj = String::from_utf8(models::obj(&model)).unwrap();
+    let obj_index = write(&dir, "bad-index.obj", format!("{obj}f 1 2 300\n").as_bytes());
+    assert_clean_error(&render(&obj_index), &["bad-index.obj:", "out of bounds"]);
+
+    let unknown = write(&dir, "model.stl", b"solid x\n");
+    assert_clean_error(&render(&unknown), &["model.stl", "unknown model format"]);
+
+    let model_file = write(&dir, "torus.off", &models::off(&model));
+    let scene = write(
+        &dir,
+        "zero.toml",
+        format!(
+            "[[mesh]]\nfile = \"{}\"\nas = \"spheres\"\nspheres = 0\n",
+            model_file.file_name().unwrap().to_str().unwrap()
+        )
+        .as_bytes(),
+    );
+    assert_clean_error(
+        &render(&scene),
+        &["zero.toml:1:", "mesh 0", "spheres must be at least 1"],
+    );
+    let scene = write(&dir, "missing.toml", b"[[mesh]]\nfile = \"nowhere.ply\"\n");
+    assert_clean_error(&render(&scene), &["missing.toml:1:", "nowhere.ply", "cannot read"]);
+}
+
+/// A scene file places its meshes relative to itself: normalize, scale, translate.
+#[test]
+fn scene_meshes_are_placed_as_the_file_says() {
+    let dir = test_dir("meshes-placement");
+    write(&dir, "torus.ply", &models::binary_ply(&models::torus(8, 4), false));
+    let scene = write(
+        &dir,
+        "placed.toml",
+        b"[material.clay]\ncolor = [0.8, 0.5, 0.4]\n\n[[mesh]]\nfile = \"torus.ply\"\nscale = 0.5\ntranslate = [3, 0, 0]\nmaterial = \"clay\"\n\n[[mesh]]\nfile = \"torus.ply\"\nas = \"spheres\"\nspheres = 300\nnormalize = false\n",
+    );
+    let scene = raypipe::scene::Scene::load(scene.to_str().unwrap()).unwrap();
+    assert_eq!(scene.triangles.len(), 64);
+    assert_eq!(scene.spheres.len(), 300);
+    let (lo, hi) = scene
+        .triangles
+        .iter()
+        .flat_map(|t| t.vertices)
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+    // Normalized, the torus spans x in [-1, 1]; scaled by 0.5 and moved by 3: [2.5, 3.5].
+    assert!((lo.x - 2.5).abs() < 1e-5 && (hi.x - 3.5).abs() < 1e-5, "{lo} {hi}");
+    assert!(scene.triangles.iter().all(|t| t.normals.is_some() && t.material == 0));
+    // Not normalized, the spheres sit on the mesh as written.
+    let written = mesh::load(&dir.join("torus.ply")).unwrap();
+    for s in &scene.spheres {
+        let on_a_triangle = written
+            .triangles
+            .iter()
+            .any(|&t| on_triangle(s.center, written.corners(t)));
+        assert!(on_a_triangle, "sphere at {} is off the surface", s.center);
+    }
+}
+
+fn on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
+    let n = (b - a).cross(c - a);
+    let in_plane = (p - a).dot(n).abs() <= 1e-5 * n.length();
+    // Barycentric coordinates from areas, each within [0, 1] up to rounding.
+    let weights = [(b - p).cross(c - p), (c - p).cross(a - p), (a - p).cross(b - p)].map(|w| w.dot(n) / n.dot(n));
+    in_plane && weights.iter().all(|&w| (-1e-4..=1.0 + 1e-4).contains(&w))
+}
+
+/// Mutations of a valid file: flipped bytes, cut ranges, inserted bytes, truncation.
+#[derive(Clone, Debug)]
+enum Mutation {
+    Flip(usize, u8),
+    Cut(usize, usize),
+    Insert(usize, Vec<u8>),
+    Truncate(usize),
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    prop_oneof![
+        (any::<usize>(), any::<u8>()).prop_map(|(at, bits)| Mutation::Flip(at, bits)),
+        (any::<usize>(), 1usize..40).prop_map(|(at, len)| Mutation::Cut(at, len)),
+        (
+            any::<usize>(),
+            prop::collection::vec(
+                prop_oneof![any::<u8>(), Just(b' '), Just(b'\n'), Just(b'9'), Just(b'-')],
+                1..12
+            )
+        )
+            .prop_map(|(at, bytes)| Mutation::Insert(at, bytes)),
+        any::<usize>().prop_map(Mutation::Truncate),
+    ]
+}
+
+fn mutate(mut bytes: Vec<u8>, mutations: &[Mutation]) -> Vec<u8> {
+    for m in mutations {
+        let len = bytes.len().max(1);
+        match m {
+            Mutation::Flip(at, bits) => {
+                if let Some(b) = bytes.get_mut(at % len) {
+                    *b ^= bits;
+                }
+            }
+            Mutation::Cut(at, n) => {
+                let start = (at % len).min(bytes.len());
+                let end = (start + n).min(bytes.len());
+                bytes.drain(start..end);
+            }
+            Mutation::Insert(at, new) => {
+                let at = (at % len).min(bytes.len());
+                bytes.splice(at..at, new.iter().copied());
+            }
+            Mutation::Truncate(at) => bytes.truncate(at % len),
+        }
+    }
+    bytes
+}
+
+fn small_files() -> Vec<(MeshFormat, Vec<u8>)> {
+    let model: TestModel = models::torus(4, 3);
+    every_format(&model)
+        .into_iter()
+        .map(|(name, bytes)| (MeshFormat::from_path(Path::new(name)).unwrap(), bytes))
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// A mutated file parses to a valid mesh or fails with one line; it never panics.
+    #[test]
+    fn mutated_files_never_panic(which in 0usize..5, mutations in prop::collection::vec(mutation(), 1..4)) {
+        let (format, bytes) = small_files().swap_remove(which);
+        let bytes = mutate(bytes, &mutations);
+        match mesh::parse(&bytes, format, &mut Vec::new()) {
+            Ok(mesh) => prop_assert!(mesh.validate().is_ok()),
+            Err(e) => {
+                let message = e.to_string();
+                prop_assert!(!message.contains('\n') && !message.trim().is_empty(), "{message:?}");
+            }
+        }
+    }
+}
