@@ -10,20 +10,23 @@ use crate::gpu::{GpuContext, GpuRenderer};
 use crate::image::Frame;
 use crate::image::diff::{Tolerance, compare};
 use crate::image::plot::{Series, write_fps_plot};
+use crate::mesh::is_model_path;
 use crate::render::Accel;
 use crate::scene::Scene;
+use crate::scene::model::{MeshAs, ModelOptions};
 use crate::scene::packed::PackedScene;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// A built-in family whose size takes the count: random, sphere, torus or bounce.
+    /// A built-in family whose size takes the count (random, sphere, torus or bounce), or a model file
+    /// (.ply, .obj, .off) with that many spheres on its surface.
     #[arg(default_value = "random")]
     scene: String,
     #[arg(long, value_delimiter = ',', default_values_t = [1000, 2000, 5000, 10000, 20000])]
@@ -82,12 +85,23 @@ fn name<T: ValueEnum>(value: &T) -> String {
         .unwrap_or_default()
 }
 
-/// The scene of `family` with `count` spheres, at the given size, packed (with a CPU-built BVH).
+/// The scene of one bench point, at the given size, packed with a CPU-built BVH: a built-in family
+/// at `count` spheres, or a model with `count` spheres on its surface.
 fn scene(family: &str, count: usize, width: u32, height: u32) -> anyhow::Result<PackedScene> {
-    if !["random", "sphere", "torus", "bounce"].contains(&family) {
-        bail!("bench scene '{family}': use a family that takes a count: random, sphere, torus or bounce");
-    }
-    let mut scene = Scene::load(&format!("{family}:{count}"))?;
+    let mut scene = if is_model_path(Path::new(family)) {
+        let options = ModelOptions {
+            as_: Some(MeshAs::Spheres),
+            spheres: Some(count),
+            rotate: None,
+        };
+        Scene::load_with(family, &options)?
+    } else if ["random", "sphere", "torus", "bounce"].contains(&family) {
+        Scene::load(&format!("{family}:{count}"))?
+    } else {
+        bail!(
+            "bench scene '{family}': use a family that takes a count (random, sphere, torus or bounce) or a model file"
+        );
+    };
     scene.settings.width = width;
     scene.settings.height = height;
     let mut packed = PackedScene::new(&scene)?;
@@ -306,9 +320,12 @@ fn write_plot(args: &BenchArgs, ctx: &GpuContext, rows: &[Row]) -> anyhow::Resul
             }),
         }
     }
+    // A model's file name, not its whole path.
+    let scene = Path::new(&args.scene)
+        .file_name()
+        .map_or(args.scene.clone(), |name| name.to_string_lossy().into_owned());
     let title = format!(
-        "{} spheres, {}x{}, {} ({:?}){}",
-        args.scene,
+        "{scene} spheres, {}x{}, {} ({:?}){}",
         args.width,
         args.height,
         ctx.info.name,

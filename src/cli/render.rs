@@ -40,6 +40,10 @@ pub struct RenderArgs {
     /// Without it, --as spheres puts one sphere on every vertex.
     #[arg(long)]
     spheres: Option<usize>,
+    /// With a model file: rotate it first by these Euler angles in degrees, about x, then y, then z
+    /// (say --rotate=-90,0,0 to stand up a model whose up axis is z).
+    #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
+    rotate: Option<glam::Vec3>,
     /// Output file; the extension picks PNG or EXR. Default: render.png, or depth.exr for --aov depth.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -68,6 +72,18 @@ pub struct RenderArgs {
     /// a printf-style number such as frame_%04d.png.
     #[arg(long)]
     frames: Option<u32>,
+}
+
+/// `X,Y,Z` in degrees.
+fn parse_angles(text: &str) -> Result<glam::Vec3, String> {
+    let angles: Vec<f32> = text
+        .split(',')
+        .map(|a| a.trim().parse::<f32>().map_err(|_| format!("'{a}' is not a number")))
+        .collect::<Result<_, _>>()?;
+    match angles[..] {
+        [x, y, z] if angles.iter().all(|a| a.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err("expected three finite angles in degrees, as in -90,0,0".into()),
+    }
 }
 
 /// `name` with its `%d` or `%0Nd` replaced by `frame`; `None` when it holds no such pattern.
@@ -108,6 +124,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let model = ModelOptions {
         as_: args.as_,
         spheres: args.spheres,
+        rotate: args.rotate,
     };
     let mut scene = Scene::load_with(&args.scene, &model)?;
     let settings = &mut scene.settings;

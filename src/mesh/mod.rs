@@ -197,6 +197,22 @@ impl Mesh {
         }
     }
 
+    /// Rotates about the origin by Euler angles in degrees: about x, then y, then z.
+    pub fn rotate(&mut self, degrees: Vec3) {
+        let r = glam::Quat::from_euler(
+            glam::EulerRot::ZYX,
+            degrees.z.to_radians(),
+            degrees.y.to_radians(),
+            degrees.x.to_radians(),
+        );
+        for p in &mut self.positions {
+            *p = r * *p;
+        }
+        for n in self.normals.iter_mut().flatten() {
+            *n = r * *n;
+        }
+    }
+
     /// p' = p * scale + translate; `scale` is positive, so normals keep their direction.
     pub fn transform(&mut self, scale: f32, translate: Vec3) {
         for p in &mut self.positions {
@@ -285,6 +301,22 @@ mod tests {
         assert_eq!(hi, Vec3::new(0.5, 1.0, 0.0));
         mesh.transform(2.0, Vec3::new(1.0, 0.0, 0.0));
         assert_eq!(mesh.bounds(), (Vec3::new(0.0, -2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)));
+    }
+
+    #[test]
+    fn rotation_turns_x_then_y_then_z() {
+        let mut mesh = Mesh {
+            positions: vec![Vec3::X, Vec3::Y],
+            normals: Some(vec![Vec3::Z, Vec3::Z]),
+            triangles: vec![],
+        };
+        // x by 90 sends y to z; then z by 90 sends x to y.
+        mesh.rotate(Vec3::new(90.0, 0.0, 90.0));
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-6;
+        assert!(close(mesh.positions[0], Vec3::Y), "{}", mesh.positions[0]);
+        assert!(close(mesh.positions[1], Vec3::Z), "{}", mesh.positions[1]);
+        // The normal turns alike: z to -y about x, then -y to x about z.
+        assert!(close(mesh.normals.as_ref().unwrap()[0], Vec3::X), "{:?}", mesh.normals);
     }
 
     #[test]

@@ -205,7 +205,7 @@ impl Scene {
         }
         anyhow::ensure!(
             options.is_default(),
-            "scene '{spec}': --as and --spheres apply to model files ({})",
+            "scene '{spec}': --as, --spheres and --rotate apply to model files ({})",
             crate::mesh::MeshFormat::EXTENSIONS.join(", ")
         );
         if let Some(scene) = builtin::by_name(spec)? {

@@ -33,6 +33,8 @@ pub struct Placement {
     pub spheres: SphereCount,
     /// Sphere radius; by default [`Mesh::default_sphere_radius`] of the placed mesh.
     pub radius: Option<f32>,
+    /// Euler angles in degrees (about x, then y, then z), applied first, about the model's origin.
+    pub rotate: Vec3,
     /// Centre the bounding box at the origin, longest side 2, before `scale` and `translate`.
     pub normalize: bool,
     pub scale: f32,
@@ -48,6 +50,7 @@ impl Default for Placement {
             as_: MeshAs::Triangles,
             spheres: SphereCount::Vertices,
             radius: None,
+            rotate: Vec3::ZERO,
             normalize: true,
             scale: 1.0,
             translate: Vec3::ZERO,
@@ -65,6 +68,9 @@ impl Placement {
         if !self.translate.is_finite() {
             return Err("translate must be finite".into());
         }
+        if !self.rotate.is_finite() {
+            return Err("rotate must be finite".into());
+        }
         if self.spheres == SphereCount::Sampled(0) {
             return Err("spheres must be at least 1".into());
         }
@@ -80,6 +86,9 @@ impl Placement {
 /// Places `mesh` and adds it to `scene`: its triangles, or spheres on its surface.
 pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Result<(), String> {
     placement.validate()?;
+    if placement.rotate != Vec3::ZERO {
+        mesh.rotate(placement.rotate);
+    }
     if placement.normalize {
         mesh.normalize();
     }
@@ -117,11 +126,13 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
     Ok(())
 }
 
-/// What the command line says of a model file: `--as` and `--spheres`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// What the command line says of a model file: `--as`, `--spheres` and `--rotate`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ModelOptions {
     pub as_: Option<MeshAs>,
     pub spheres: Option<usize>,
+    /// Euler angles in degrees, as [`Placement::rotate`].
+    pub rotate: Option<Vec3>,
 }
 
 impl ModelOptions {
@@ -139,6 +150,7 @@ impl ModelOptions {
         Ok(Placement {
             as_,
             spheres: self.spheres.map_or(SphereCount::Vertices, SphereCount::Sampled),
+            rotate: self.rotate.unwrap_or(Vec3::ZERO),
             ..Placement::default()
         })
     }
