@@ -9,6 +9,7 @@ use std::io::Cursor;
 
 pub fn parse(bytes: &[u8], notices: &mut Vec<String>) -> Result<Mesh, MeshError> {
     let text = std::str::from_utf8(bytes).map_err(|e| MeshError::new(format!("not a text file: {e}")))?;
+    check_vertices(text)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         // One index for position and normal, so normals come out one per vertex.
@@ -51,6 +52,26 @@ pub fn parse(bytes: &[u8], notices: &mut Vec<String>) -> Result<Mesh, MeshError>
         mesh.normals = Some(normals);
     }
     Ok(mesh)
+}
+
+/// Non-finite coordinates, found here because tobj takes `nan` and `inf` as numbers and renumbers the
+/// vertices, so that a later check could not name the line.
+fn check_vertices(text: &str) -> Result<(), MeshError> {
+    let mut vertex = 0;
+    for (i, line) in text.lines().enumerate() {
+        let mut tokens = line.split_whitespace();
+        if tokens.next() != Some("v") {
+            continue;
+        }
+        if tokens.take(3).any(|t| t.parse::<f32>().is_ok_and(|v| !v.is_finite())) {
+            return Err(MeshError::at(
+                i + 1,
+                format!("vertex {vertex}: coordinates must be finite"),
+            ));
+        }
+        vertex += 1;
+    }
+    Ok(())
 }
 
 /// The line tobj's error is about: the first line of the statement kind it names that does not
@@ -142,5 +163,9 @@ mod tests {
         let err = |text: &str| parse(text.as_bytes(), &mut Vec::new()).unwrap_err().to_string();
         assert!(err("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").starts_with("4: "));
         assert!(err("v 0 0 0\nv 1 x 0\n").starts_with("2: "));
+        assert_eq!(
+            err("v 0 0 0\n\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n"),
+            "3: vertex 1: coordinates must be finite"
+        );
     }
 }
