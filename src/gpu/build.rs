@@ -20,6 +20,13 @@ const LBVH: &str = include_str!("shaders/lbvh.wgsl");
 const GROUP: u32 = 256;
 const BLOCK: u32 = 1024;
 const CODE_BITS: u32 = 30;
+/// The radix sort's digit (RADIX = 16 in lbvh.wgsl), and its passes over 30-bit codes: an even number,
+/// so that the sorted pairs end where they started, in pairs A.
+const DIGIT_BITS: u32 = 4;
+const SORT_PASSES: u32 = CODE_BITS.div_ceil(DIGIT_BITS);
+const _: () = assert!(SORT_PASSES % 2 == 0);
+/// Words of `scratch` per block: 16 digit counts and 6 words of centroid bounds.
+const SCRATCH_WORDS_PER_BLOCK: u64 = 16 + 6;
 /// Uniform offsets must be multiples of 256 bytes.
 const PARAMS_STRIDE: u64 = 256;
 const MAX_GROUPS_X: u32 = 65535;
@@ -29,7 +36,8 @@ const PHASES: usize = 5;
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct BuildParams {
     count: u32,
-    bit: u32,
+    /// The lowest key bit of the digit a sort pass orders by.
+    shift: u32,
 }
 
 struct Kernels {
@@ -218,10 +226,11 @@ impl<'a> GpuLbvhBuilder<'a> {
                 label: Some(PHASE_NAMES[index]),
                 timestamp_writes: self.timer.as_ref().map(|t| t.compute_writes(index as u32)),
             });
-            for &(pipeline, bind_group, bit, groups) in steps {
+            // `pass_index` picks the sort pass's parameters (0 for the other kernels).
+            for &(pipeline, bind_group, pass_index, groups) in steps {
                 let (x, y) = grid(groups);
                 pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, bind_group, &[bit * PARAMS_STRIDE as u32]);
+                pass.set_bind_group(0, bind_group, &[pass_index * PARAMS_STRIDE as u32]);
                 pass.dispatch_workgroups(x, y, 1);
             }
         };
@@ -238,13 +247,13 @@ impl<'a> GpuLbvhBuilder<'a> {
                 ],
             );
         }
-        let sort: Vec<_> = (0..CODE_BITS)
-            .flat_map(|bit| {
-                let bind_group = &b.bind_groups[bit as usize % 2];
+        let sort: Vec<_> = (0..SORT_PASSES)
+            .flat_map(|pass| {
+                let bind_group = &b.bind_groups[pass as usize % 2];
                 [
-                    (&k.sort_count, bind_group, bit, blocks),
-                    (&k.sort_scan, bind_group, bit, 1),
-                    (&k.sort_scatter, bind_group, bit, blocks),
+                    (&k.sort_count, bind_group, pass, blocks),
+                    (&k.sort_scan, bind_group, pass, 1),
+                    (&k.sort_scatter, bind_group, pass, blocks),
                 ]
             })
             .collect();
@@ -324,7 +333,12 @@ impl Buffers {
         let spheres = storage(ctx, "build spheres", n * 32, wgpu::BufferUsages::COPY_DST);
         let pairs = storage(ctx, "pairs A", n * 8, wgpu::BufferUsages::COPY_DST);
         let pairs_b = storage(ctx, "pairs B", n * 8, wgpu::BufferUsages::empty());
-        let scratch = storage(ctx, "build scratch", (8 + 7 * blocks) * 4, wgpu::BufferUsages::empty());
+        let scratch = storage(
+            ctx,
+            "build scratch",
+            (8 + SCRATCH_WORDS_PER_BLOCK * blocks) * 4,
+            wgpu::BufferUsages::empty(),
+        );
         let ranges = storage(ctx, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
         let parents = storage(
             ctx,
@@ -337,17 +351,17 @@ impl Buffers {
         let nodes = storage(ctx, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("build params"),
-            size: PARAMS_STRIDE * CODE_BITS as u64,
+            size: PARAMS_STRIDE * SORT_PASSES as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        for bit in 0..CODE_BITS {
+        for pass in 0..SORT_PASSES {
             let p = BuildParams {
                 count: count as u32,
-                bit,
+                shift: pass * DIGIT_BITS,
             };
             ctx.queue
-                .write_buffer(&params, bit as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
+                .write_buffer(&params, pass as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
         }
         let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
             let resources = [

@@ -7,17 +7,20 @@ const BLOCK: u32 = 1024u;
 const ITEMS: u32 = 4u;
 const CELLS: u32 = 1024u;
 
+// The sort orders keys by digits of 4 bits, lowest digit first.
+const RADIX: u32 = 16u;
+
 struct BuildParams {
     count: u32,
-    // The key bit a sort pass splits on.
-    bit: u32,
+    // The lowest key bit of the digit a sort pass orders by.
+    shift: u32,
 }
 
-// Layout of `scratch`: centroid bounds, the current pass's total of zero bits, per-block zero counts
-// (scanned in place into offsets), then per-block partial centroid bounds (6 words each).
+// Layout of `scratch`: centroid bounds; from SCRATCH_HIST, the current sort pass's digit counts per
+// block, digit-major (RADIX * blocks words, scanned in place into where each block's items of each
+// digit go); then per-block partial centroid bounds (6 words each).
 const SCRATCH_BOUNDS: u32 = 0u;
-const SCRATCH_ZEROS: u32 = 6u;
-const SCRATCH_BLOCKS: u32 = 8u;
+const SCRATCH_HIST: u32 = 8u;
 
 @group(0) @binding(0) var<uniform> params: BuildParams;
 @group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
@@ -33,6 +36,12 @@ const SCRATCH_BLOCKS: u32 = 8u;
 @group(0) @binding(8) var<storage, read_write> nodes: array<BvhNode>;
 
 var<workgroup> shared_u32: array<u32, GROUP>;
+// An invocation's digit counts, two 16-bit counts per word, eight words in two vectors: digits 0 and
+// 1 in shared_counts_lo.x, ..., digits 14 and 15 in shared_counts_hi.w. Vectors updated by masks,
+// never indexed by a variable: GL drivers compile dynamically indexed locals very slowly.
+var<workgroup> shared_counts_lo: array<vec4<u32>, GROUP>;
+var<workgroup> shared_counts_hi: array<vec4<u32>, GROUP>;
+var<workgroup> digit_totals: array<atomic<u32>, RADIX>;
 var<workgroup> shared_lo: array<vec3<f32>, GROUP>;
 var<workgroup> shared_hi: array<vec3<f32>, GROUP>;
 
@@ -42,6 +51,11 @@ fn flat_group(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
 
 fn block_count() -> u32 {
     return (params.count + BLOCK - 1u) / BLOCK;
+}
+
+// Where block `block`'s centroid bounds wait for bounds_final.
+fn partial_bounds(block: u32) -> u32 {
+    return SCRATCH_HIST + RADIX * block_count() + block * 6u;
 }
 
 fn sphere_min(s: Sphere) -> vec3<f32> {
@@ -89,7 +103,7 @@ fn bounds_partial(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
     shared_hi[lid] = hi;
     reduce_bounds(lid);
     if (lid == 0u && block < block_count()) {
-        let base = SCRATCH_BLOCKS + block_count() + block * 6u;
+        let base = partial_bounds(block);
         for (var a = 0u; a < 3u; a++) {
             scratch[base + a] = bitcast<u32>(shared_lo[0][a]);
             scratch[base + 3u + a] = bitcast<u32>(shared_hi[0][a]);
@@ -102,7 +116,7 @@ fn bounds_final(@builtin(local_invocation_index) lid: u32) {
     var lo = vec3<f32>(BIG);
     var hi = vec3<f32>(-BIG);
     for (var block = lid; block < block_count(); block += GROUP) {
-        let base = SCRATCH_BLOCKS + block_count() + block * 6u;
+        let base = partial_bounds(block);
         let b_lo = vec3<f32>(bitcast<f32>(scratch[base]), bitcast<f32>(scratch[base + 1u]), bitcast<f32>(scratch[base + 2u]));
         let b_hi = vec3<f32>(bitcast<f32>(scratch[base + 3u]), bitcast<f32>(scratch[base + 4u]), bitcast<f32>(scratch[base + 5u]));
         lo = min(lo, b_lo);
@@ -146,20 +160,8 @@ fn morton(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups
     pairs_in[i] = vec2<u32>(code, i);
 }
 
-fn is_zero_bit(i: u32) -> bool {
-    return ((pairs_in[i].x >> params.bit) & 1u) == 0u;
-}
-
-// Items whose key bit is zero among the invocation's ITEMS consecutive items of the block.
-fn invocation_zeros(block: u32, lid: u32) -> u32 {
-    var zeros = 0u;
-    for (var k = 0u; k < ITEMS; k++) {
-        let i = block * BLOCK + lid * ITEMS + k;
-        if (i < params.count && is_zero_bit(i)) {
-            zeros += 1u;
-        }
-    }
-    return zeros;
+fn digit(i: u32) -> u32 {
+    return (pairs_in[i].x >> params.shift) & (RADIX - 1u);
 }
 
 // Exclusive scan of shared_u32 over the workgroup (Hillis-Steele); returns the total.
@@ -179,38 +181,77 @@ fn scan_shared(lid: u32) -> u32 {
     return total;
 }
 
-// Sort (code, primitive) pairs by one key bit, stably: count zeros per block, scan, scatter.
+// Inclusive scan of shared_counts_lo and _hi over the workgroup (Hillis-Steele): all sixteen digits
+// at once.
+fn scan_counts(lid: u32) {
+    workgroupBarrier();
+    for (var offset = 1u; offset < GROUP; offset *= 2u) {
+        var add_lo = vec4<u32>(0u);
+        var add_hi = vec4<u32>(0u);
+        if (lid >= offset) {
+            add_lo = shared_counts_lo[lid - offset];
+            add_hi = shared_counts_hi[lid - offset];
+        }
+        workgroupBarrier();
+        shared_counts_lo[lid] += add_lo;
+        shared_counts_hi[lid] += add_hi;
+        workgroupBarrier();
+    }
+}
+
+// One item of digit d, as packed counts: the half of the eight words from `first_word`.
+fn one_digit(d: u32, first_word: u32) -> vec4<u32> {
+    let words = vec4<u32>(first_word) + vec4<u32>(0u, 1u, 2u, 3u);
+    return select(vec4<u32>(0u), vec4<u32>(1u << (16u * (d & 1u))), words == vec4<u32>(d >> 1u));
+}
+
+// Digit d's count in packed counts.
+fn packed_count(lo: vec4<u32>, hi: vec4<u32>, d: u32) -> u32 {
+    let picked = select(vec4<u32>(0u), lo, vec4<u32>(0u, 1u, 2u, 3u) == vec4<u32>(d >> 1u))
+        + select(vec4<u32>(0u), hi, vec4<u32>(4u, 5u, 6u, 7u) == vec4<u32>(d >> 1u));
+    let word = picked.x + picked.y + picked.z + picked.w;
+    return (word >> (16u * (d & 1u))) & 0xffffu;
+}
+
+// One pass of a stable LSD radix sort of (code, primitive) pairs by the digit at params.shift:
+// count each block's digits, scan the counts, scatter.
 @compute @workgroup_size(256)
 fn sort_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
               @builtin(local_invocation_index) lid: u32) {
     let block = flat_group(wid, groups);
-    let zeros = invocation_zeros(block, lid);
-    shared_u32[lid] = zeros;
-    let total = scan_shared(lid);
-    if (lid == 0u && block < block_count()) {
-        scratch[SCRATCH_BLOCKS + block] = total;
+    if (lid < RADIX) {
+        atomicStore(&digit_totals[lid], 0u);
+    }
+    workgroupBarrier();
+    for (var k = 0u; k < ITEMS; k++) {
+        let i = block * BLOCK + lid * ITEMS + k;
+        if (i < params.count) {
+            atomicAdd(&digit_totals[digit(i)], 1u);
+        }
+    }
+    workgroupBarrier();
+    if (lid < RADIX && block < block_count()) {
+        scratch[SCRATCH_HIST + lid * block_count() + block] = atomicLoad(&digit_totals[lid]);
     }
 }
 
 @compute @workgroup_size(256)
 fn sort_scan(@builtin(local_invocation_index) lid: u32) {
-    // Each invocation sums a run of consecutive blocks; a scan over the runs gives their offsets.
-    let blocks = block_count();
-    let per = (blocks + GROUP - 1u) / GROUP;
+    // Digit-major counts: one exclusive scan gives every (digit, block) its first output position.
+    // Each invocation sums a run of consecutive entries; a scan over the runs gives their offsets.
+    let entries = RADIX * block_count();
+    let per = (entries + GROUP - 1u) / GROUP;
     var sum = 0u;
-    for (var b = lid * per; b < min(blocks, (lid + 1u) * per); b++) {
-        sum += scratch[SCRATCH_BLOCKS + b];
+    for (var e = lid * per; e < min(entries, (lid + 1u) * per); e++) {
+        sum += scratch[SCRATCH_HIST + e];
     }
     shared_u32[lid] = sum;
-    let total = scan_shared(lid);
+    scan_shared(lid);
     var running = shared_u32[lid] - sum;
-    for (var b = lid * per; b < min(blocks, (lid + 1u) * per); b++) {
-        let zeros = scratch[SCRATCH_BLOCKS + b];
-        scratch[SCRATCH_BLOCKS + b] = running;
-        running += zeros;
-    }
-    if (lid == 0u) {
-        scratch[SCRATCH_ZEROS] = total;
+    for (var e = lid * per; e < min(entries, (lid + 1u) * per); e++) {
+        let count = scratch[SCRATCH_HIST + e];
+        scratch[SCRATCH_HIST + e] = running;
+        running += count;
     }
 }
 
@@ -218,26 +259,35 @@ fn sort_scan(@builtin(local_invocation_index) lid: u32) {
 fn sort_scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lid: u32) {
     let block = flat_group(wid, groups);
-    let zeros = invocation_zeros(block, lid);
-    shared_u32[lid] = zeros;
-    scan_shared(lid);
+    // How many items of each digit this invocation holds; a scan gives those of the invocations before.
+    var own_lo = vec4<u32>(0u);
+    var own_hi = vec4<u32>(0u);
+    for (var k = 0u; k < ITEMS; k++) {
+        let i = block * BLOCK + lid * ITEMS + k;
+        if (i < params.count) {
+            let d = digit(i);
+            own_lo += one_digit(d, 0u);
+            own_hi += one_digit(d, 4u);
+        }
+    }
+    shared_counts_lo[lid] = own_lo;
+    shared_counts_hi[lid] = own_hi;
+    scan_counts(lid);
     if (block >= block_count()) {
         return;
     }
-    // Zeros before this invocation's first item, over the whole array.
-    var zeros_before = scratch[SCRATCH_BLOCKS + block] + shared_u32[lid] - zeros;
-    let total_zeros = scratch[SCRATCH_ZEROS];
+    // Items of each digit ahead of the next item in the block.
+    var ahead_lo = shared_counts_lo[lid] - own_lo;
+    var ahead_hi = shared_counts_hi[lid] - own_hi;
     for (var k = 0u; k < ITEMS; k++) {
         let i = block * BLOCK + lid * ITEMS + k;
         if (i >= params.count) {
             break;
         }
-        if (is_zero_bit(i)) {
-            pairs_out[zeros_before] = pairs_in[i];
-            zeros_before += 1u;
-        } else {
-            pairs_out[total_zeros + i - zeros_before] = pairs_in[i];
-        }
+        let d = digit(i);
+        pairs_out[scratch[SCRATCH_HIST + d * block_count() + block] + packed_count(ahead_lo, ahead_hi, d)] = pairs_in[i];
+        ahead_lo += one_digit(d, 0u);
+        ahead_hi += one_digit(d, 4u);
     }
 }
 
