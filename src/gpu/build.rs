@@ -24,7 +24,7 @@ const CODE_BITS: u32 = 30;
 /// so that the sorted pairs end where they started, in pairs A.
 const DIGIT_BITS: u32 = 4;
 const SORT_PASSES: u32 = CODE_BITS.div_ceil(DIGIT_BITS);
-const _: () = assert!(SORT_PASSES % 2 == 0);
+const _: () = assert!(SORT_PASSES.is_multiple_of(2));
 /// Words of `scratch` per block: 16 digit counts and 6 words of centroid bounds.
 const SCRATCH_WORDS_PER_BLOCK: u64 = 16 + 6;
 /// Uniform offsets must be multiples of 256 bytes.
