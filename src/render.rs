@@ -4,7 +4,7 @@ use crate::bvh::BuildTimings;
 use crate::bvh::lbvh::LbvhBuilder;
 use crate::bvh::morton::MortonBits;
 use crate::cpu;
-use crate::gpu::build::{GpuLbvhBuilder, depth_bound, ensure_spheres_only};
+use crate::gpu::build::{GpuLbvhBuilder, depth_bound};
 use crate::gpu::context::Backend;
 use crate::gpu::upload::MemoryMode;
 use crate::gpu::{GpuContext, GpuRenderer};
@@ -160,10 +160,10 @@ pub fn render_frames(
                 options.memory == MemoryMode::Storage,
                 "--frames rebuilds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
             );
-            ensure_spheres_only(&first)?;
             outcome.device = ctx.describe();
-            let builder = GpuLbvhBuilder::new(&ctx, n)?;
-            builder.write_spheres(&first.spheres);
+            let mut builder = GpuLbvhBuilder::new(&ctx, first.spheres.len(), first.triangles.len())?;
+            // The triangles stand still: written once. The spheres move: written every frame.
+            builder.write_scene(&first)?;
             let mut layout = first;
             layout.bvh_depth = depth_bound(n);
             let renderer = GpuRenderer::with_shared_buffers(&ctx, &layout, options.accel, &builder.shared_buffers())?;

@@ -50,3 +50,29 @@ fn frame_names_follow_printf_patterns() {
     assert_eq!(numbered("plain.png", 3), None);
     assert_eq!(numbered("odd%x.png", 3), None);
 }
+
+/// Spheres flying among standing triangles, rebuilt on the GPU every frame: the CPU's frames.
+#[test]
+fn gpu_rebuilt_frames_with_triangles_match_the_cpu() {
+    let mut scene = models::mixed_scene(12, 6, 300);
+    scene.settings.width = 48;
+    scene.settings.height = 32;
+    let velocities = (0..scene.spheres.len())
+        .map(|i| glam::Vec3::new((i % 7) as f32 - 3.0, (i % 5) as f32 - 2.0, (i % 3) as f32 - 1.0))
+        .collect();
+    scene.motion = Some(raypipe::scene::Motion {
+        velocities,
+        lo: glam::Vec3::new(-2.0, -0.5, -1.0),
+        hi: glam::Vec3::new(2.0, 1.0, 2.5),
+        frame_time: 1.0 / 30.0,
+    });
+    if gpu().is_none() {
+        return;
+    }
+    let on_gpu = frames(&scene, DeviceChoice::Gpu, Accel::Threaded, 3);
+    let on_cpu = frames(&scene, DeviceChoice::Cpu, Accel::Threaded, 3);
+    assert_ne!(on_cpu[0], on_cpu[2], "the spheres move");
+    for (k, (g, c)) in on_gpu.iter().zip(&on_cpu).enumerate() {
+        assert_frames_match(&format!("frames-triangles-{k}"), g, c);
+    }
+}

@@ -43,7 +43,7 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
     let boxes = boxes(spheres);
     let codes = centroid_codes(&boxes, MortonBits::Bits30);
     let (cpu, _) = Bvh::build_from_codes(&boxes, &codes, MortonBits::Bits30);
-    builder.resize(spheres.len()).unwrap();
+    builder.resize(spheres.len(), 0).unwrap();
     builder.write_spheres(spheres);
     builder.write_codes(&codes);
     builder.build(true).unwrap();
@@ -56,7 +56,7 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
 #[test]
 fn same_codes_give_identical_nodes() {
     let Some(ctx) = gpu() else { return };
-    let mut builder = GpuLbvhBuilder::new(&ctx, 0).unwrap();
+    let mut builder = GpuLbvhBuilder::new(&ctx, 0, 0).unwrap();
     for n in [0, 1, 2, 3, 100, 1023, 1024, 1025, 5000] {
         check_same_codes(
             &mut builder,
@@ -74,7 +74,7 @@ fn same_codes_give_identical_nodes() {
 #[test]
 fn same_codes_give_identical_nodes_with_duplicate_centroids() {
     let Some(ctx) = gpu() else { return };
-    let mut builder = GpuLbvhBuilder::new(&ctx, 0).unwrap();
+    let mut builder = GpuLbvhBuilder::new(&ctx, 0, 0).unwrap();
     check_same_codes(&mut builder, &random_spheres(4000, 3, 7), "4,000 spheres on 7 centres");
     check_same_codes(&mut builder, &random_spheres(2048, 4, 1), "2,048 coincident spheres");
 }
@@ -82,10 +82,10 @@ fn same_codes_give_identical_nodes_with_duplicate_centroids() {
 #[test]
 fn own_codes_give_a_valid_tree() {
     let Some(ctx) = gpu() else { return };
-    let mut builder = GpuLbvhBuilder::new(&ctx, 0).unwrap();
+    let mut builder = GpuLbvhBuilder::new(&ctx, 0, 0).unwrap();
     for (n, centres) in [(1, 1), (2, 2), (10_000, 10_000), (3000, 5)] {
         let spheres = random_spheres(n, 11, centres);
-        builder.resize(n).unwrap();
+        builder.resize(n, 0).unwrap();
         builder.write_spheres(&spheres);
         builder.build(false).unwrap();
         let bvh = Bvh {
@@ -101,4 +101,32 @@ fn own_codes_give_a_valid_tree() {
             eprintln!("note: {n} spheres: the GPU's own Morton codes gave another valid tree than the CPU's");
         }
     }
+}
+
+/// Spheres and triangles in one build: the GPU's triangle boxes are the CPU's to the bit, so the same
+/// codes give the same nodes, and the GPU's own codes give a valid tree over both kinds.
+#[test]
+fn spheres_and_triangles_build_alike() {
+    let Some(ctx) = gpu() else { return };
+    let mut scene = common::models::mixed_scene(16, 8, 700);
+    scene.settings.width = 16;
+    scene.settings.height = 16;
+    let packed = raypipe::scene::packed::PackedScene::new(&scene).unwrap();
+    assert!(!packed.triangles.is_empty() && !packed.spheres.is_empty());
+    let boxes = packed.primitive_boxes();
+    let codes = centroid_codes(&boxes, MortonBits::Bits30);
+    let (cpu, _) = Bvh::build_from_codes(&boxes, &codes, MortonBits::Bits30);
+
+    let mut builder = GpuLbvhBuilder::new(&ctx, 0, 0).unwrap();
+    builder.write_scene(&packed).unwrap();
+    builder.write_codes(&codes);
+    builder.build(true).unwrap();
+    assert!(builder.read_nodes().unwrap() == cpu.nodes, "GPU and CPU nodes differ");
+
+    builder.build(false).unwrap();
+    let own = Bvh {
+        nodes: builder.read_nodes().unwrap(),
+        primitive_count: boxes.len(),
+    };
+    own.validate(&boxes).unwrap();
 }

@@ -161,7 +161,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     for &count in &args.counts {
         let packed = scene(&args.scene, count, args.width, args.height)?;
         let mut builder = if args.rebuild {
-            Some(GpuLbvhBuilder::new(&ctx, count)?)
+            Some(GpuLbvhBuilder::new(&ctx, packed.spheres.len(), packed.triangles.len())?)
         } else {
             None
         };
@@ -186,8 +186,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 let renderer = match &rebuild {
                     Some(b) => {
                         b.write_spheres(&packed.spheres);
+                        b.write_triangles(&packed.triangles);
                         let mut layout = packed.clone();
-                        layout.bvh_depth = depth_bound(count);
+                        layout.bvh_depth = depth_bound(packed.primitive_count());
                         GpuRenderer::with_shared_buffers(&ctx, &layout, accel, &b.shared_buffers())
                     }
                     None => GpuRenderer::new(&ctx, &packed, memory, accel),

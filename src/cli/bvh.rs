@@ -4,7 +4,7 @@ use crate::bvh::morton::MortonBits;
 use crate::bvh::sah::{build_binned_sah, sah_cost};
 use crate::bvh::{BuildTimings, Bvh};
 use crate::gpu::GpuContext;
-use crate::gpu::build::{GpuLbvhBuilder, ensure_spheres_only};
+use crate::gpu::build::GpuLbvhBuilder;
 use crate::gpu::context::Backend;
 use crate::scene::Scene;
 use crate::scene::packed::PackedScene;
@@ -96,15 +96,14 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
                 bits == MortonBits::Bits30,
                 "the GPU build uses 30-bit Morton codes; drop --morton-bits 63"
             );
-            ensure_spheres_only(&packed)?;
             let ctx = GpuContext::require(args.backend)?;
             device = format!("gpu: {}", ctx.describe());
             anyhow::ensure!(
                 ctx.timestamps,
                 "{device} has no timestamp queries to time the build with"
             );
-            let builder = GpuLbvhBuilder::new(&ctx, boxes.len())?;
-            builder.write_spheres(&packed.spheres);
+            let mut builder = GpuLbvhBuilder::new(&ctx, packed.spheres.len(), packed.triangles.len())?;
+            builder.write_scene(&packed)?;
             builder.build(false)?;
             let timings = (0..runs)
                 .map(|_| builder.build(false))

@@ -10,7 +10,7 @@ use super::timing::PassTimestamps;
 use super::upload::SharedBuffers;
 use crate::bvh::BuildTimings;
 use crate::bvh::layout::GpuNode;
-use crate::scene::packed::{GpuSphere, PackedScene};
+use crate::scene::packed::{GpuSphere, GpuTriangle, PackedScene};
 use anyhow::bail;
 use std::num::NonZeroU64;
 
@@ -35,9 +35,12 @@ const PHASES: usize = 5;
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct BuildParams {
+    /// Primitives: spheres, then triangles.
     count: u32,
     /// The lowest key bit of the digit a sort pass orders by.
     shift: u32,
+    sphere_count: u32,
+    _pad: u32,
 }
 
 struct Kernels {
@@ -65,10 +68,14 @@ pub struct GpuLbvhBuilder<'a> {
 /// The buffers of a build over `count` primitives.
 pub struct Buffers {
     count: u32,
+    sphere_count: u32,
+    triangle_count: u32,
     /// [pairs A in, B out], [B in, A out].
     bind_groups: [wgpu::BindGroup; 2],
     /// The spheres the build reads; write new positions here before each build.
     pub spheres: wgpu::Buffer,
+    /// The triangles the build reads (primitives `sphere_count..`).
+    pub triangles: wgpu::Buffer,
     pairs: wgpu::Buffer,
     climb: wgpu::Buffer,
     /// The built nodes (STORAGE | COPY_SRC), the layout of `bvh::layout`.
@@ -90,20 +97,9 @@ fn grid(groups: u32) -> (u32, u32) {
     (x, groups.div_ceil(x).max(1))
 }
 
-/// The GPU build reads spheres only; scenes with triangles are built on the CPU.
-pub fn ensure_spheres_only(scene: &PackedScene) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        scene.triangles.is_empty(),
-        "the GPU build covers spheres only, and this scene has {} triangles: build its BVH on the CPU \
-         (single frames do; drop --frames, --rebuild or --device gpu)",
-        scene.triangles.len()
-    );
-    Ok(())
-}
-
 impl<'a> GpuLbvhBuilder<'a> {
-    /// Compiles the kernels and sizes the buffers for `count` primitives.
-    pub fn new(ctx: &'a GpuContext, count: usize) -> anyhow::Result<Self> {
+    /// Compiles the kernels and sizes the buffers for `spheres` spheres and `triangles` triangles.
+    pub fn new(ctx: &'a GpuContext, spheres: usize, triangles: usize) -> anyhow::Result<Self> {
         ctx.checked("compiling the GPU LBVH build", || {
             let device = &ctx.device;
             let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
@@ -118,11 +114,13 @@ impl<'a> GpuLbvhBuilder<'a> {
                 min_binding_size: None,
             };
             let rw = wgpu::BufferBindingType::Storage { read_only: false };
+            let read = wgpu::BufferBindingType::Storage { read_only: true };
             let mut entries = vec![
                 entry(0, buffer(wgpu::BufferBindingType::Uniform, true)),
-                entry(1, buffer(wgpu::BufferBindingType::Storage { read_only: true }, false)),
+                entry(1, buffer(read, false)),
             ];
             entries.extend((2..=8).map(|b| entry(b, buffer(rw, false))));
+            entries.push(entry(9, buffer(read, false)));
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("lbvh build"),
                 entries: &entries,
@@ -157,7 +155,7 @@ impl<'a> GpuLbvhBuilder<'a> {
                 leaves_and_bounds: kernel("leaves_and_bounds"),
                 links: kernel("links"),
             };
-            let buffers = Buffers::new(ctx, &layout, count)?;
+            let buffers = Buffers::new(ctx, &layout, spheres, triangles)?;
             Ok(Self {
                 ctx,
                 kernels,
@@ -170,11 +168,12 @@ impl<'a> GpuLbvhBuilder<'a> {
         })
     }
 
-    /// Sizes the buffers for `count` primitives (a no-op when the count is unchanged).
-    pub fn resize(&mut self, count: usize) -> anyhow::Result<()> {
-        if count != self.count() {
+    /// Sizes the buffers for `spheres` spheres and `triangles` triangles (a no-op when the counts are
+    /// unchanged).
+    pub fn resize(&mut self, spheres: usize, triangles: usize) -> anyhow::Result<()> {
+        if (spheres, triangles) != (self.buffers.sphere_count as usize, self.buffers.triangle_count as usize) {
             self.buffers = self.ctx.checked("sizing the GPU LBVH build", || {
-                Buffers::new(self.ctx, &self.layout, count)
+                Buffers::new(self.ctx, &self.layout, spheres, triangles)
             })?;
         }
         Ok(())
@@ -184,15 +183,31 @@ impl<'a> GpuLbvhBuilder<'a> {
         &self.buffers
     }
 
+    /// Primitives: spheres and triangles.
     pub fn count(&self) -> usize {
         self.buffers.count as usize
     }
 
     pub fn write_spheres(&self, spheres: &[GpuSphere]) {
-        assert_eq!(spheres.len(), self.count());
+        assert_eq!(spheres.len(), self.buffers.sphere_count as usize);
         self.ctx
             .queue
             .write_buffer(&self.buffers.spheres, 0, bytemuck::cast_slice(spheres));
+    }
+
+    pub fn write_triangles(&self, triangles: &[GpuTriangle]) {
+        assert_eq!(triangles.len(), self.buffers.triangle_count as usize);
+        self.ctx
+            .queue
+            .write_buffer(&self.buffers.triangles, 0, bytemuck::cast_slice(triangles));
+    }
+
+    /// Writes a scene's primitives, sized for them.
+    pub fn write_scene(&mut self, scene: &PackedScene) -> anyhow::Result<()> {
+        self.resize(scene.spheres.len(), scene.triangles.len())?;
+        self.write_spheres(&scene.spheres);
+        self.write_triangles(&scene.triangles);
+        Ok(())
     }
 
     /// Replaces the Morton phase with given codes (30-bit), for comparisons with the CPU build.
@@ -318,7 +333,13 @@ impl<'a> GpuLbvhBuilder<'a> {
 }
 
 impl Buffers {
-    fn new(ctx: &GpuContext, layout: &wgpu::BindGroupLayout, count: usize) -> anyhow::Result<Self> {
+    fn new(
+        ctx: &GpuContext,
+        layout: &wgpu::BindGroupLayout,
+        sphere_count: usize,
+        triangle_count: usize,
+    ) -> anyhow::Result<Self> {
+        let count = sphere_count + triangle_count;
         let limits = ctx.limits();
         let n = count as u64;
         let node_bytes = (2 * n).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
@@ -330,7 +351,20 @@ impl Buffers {
         }
         let device = &ctx.device;
         let blocks = n.div_ceil(BLOCK as u64);
-        let spheres = storage(ctx, "build spheres", n * 32, wgpu::BufferUsages::COPY_DST);
+        // A binding may not be empty: an absent kind of primitive gets room for one record.
+        let record_room = |records: usize, size: usize| records.max(1) as u64 * size as u64;
+        let spheres = storage(
+            ctx,
+            "build spheres",
+            record_room(sphere_count, std::mem::size_of::<GpuSphere>()),
+            wgpu::BufferUsages::COPY_DST,
+        );
+        let triangles = storage(
+            ctx,
+            "build triangles",
+            record_room(triangle_count, std::mem::size_of::<GpuTriangle>()),
+            wgpu::BufferUsages::COPY_DST,
+        );
         let pairs = storage(ctx, "pairs A", n * 8, wgpu::BufferUsages::COPY_DST);
         let pairs_b = storage(ctx, "pairs B", n * 8, wgpu::BufferUsages::empty());
         let scratch = storage(
@@ -359,13 +393,15 @@ impl Buffers {
             let p = BuildParams {
                 count: count as u32,
                 shift: pass * DIGIT_BITS,
+                sphere_count: sphere_count as u32,
+                _pad: 0,
             };
             ctx.queue
                 .write_buffer(&params, pass as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
         }
         let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
             let resources = [
-                &spheres, pairs_in, pairs_out, &scratch, &ranges, &parents, &climb, &nodes,
+                &spheres, pairs_in, pairs_out, &scratch, &ranges, &parents, &climb, &nodes, &triangles,
             ];
             let mut entries = vec![wgpu::BindGroupEntry {
                 binding: 0,
@@ -388,8 +424,11 @@ impl Buffers {
         let bind_groups = [bind_group(&pairs, &pairs_b), bind_group(&pairs_b, &pairs)];
         Ok(Self {
             count: count as u32,
+            sphere_count: sphere_count as u32,
+            triangle_count: triangle_count as u32,
             bind_groups,
             spheres,
+            triangles,
             pairs,
             climb,
             nodes,

@@ -11,9 +11,11 @@ const CELLS: u32 = 1024u;
 const RADIX: u32 = 16u;
 
 struct BuildParams {
+    // Primitives: spheres, then triangles.
     count: u32,
     // The lowest key bit of the digit a sort pass orders by.
     shift: u32,
+    sphere_count: u32,
 }
 
 // Layout of `scratch`: centroid bounds; from SCRATCH_HIST, the current sort pass's digit counts per
@@ -34,6 +36,8 @@ const SCRATCH_HIST: u32 = 8u;
 // [0, n - 1): visit counters of internal nodes; then 6 words per node: its box's min and max bits.
 @group(0) @binding(7) var<storage, read_write> climb: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> nodes: array<BvhNode>;
+// Primitive sphere_count + i is triangle i.
+@group(0) @binding(9) var<storage, read> triangles: array<Triangle>;
 
 var<workgroup> shared_u32: array<u32, GROUP>;
 // An invocation's digit counts, two 16-bit counts per word, eight words in two vectors: digits 0 and
@@ -58,16 +62,26 @@ fn partial_bounds(block: u32) -> u32 {
     return SCRATCH_HIST + RADIX * block_count() + block * 6u;
 }
 
-fn sphere_min(s: Sphere) -> vec3<f32> {
-    return s.center - vec3<f32>(s.radius);
+struct Box {
+    lo: vec3<f32>,
+    hi: vec3<f32>,
 }
 
-fn sphere_max(s: Sphere) -> vec3<f32> {
-    return s.center + vec3<f32>(s.radius);
+// Primitive i's bounding box: PackedScene::primitive_boxes, to the bit.
+fn primitive_box(i: u32) -> Box {
+    if (i < params.sphere_count) {
+        let s = spheres[i];
+        return Box(s.center - vec3<f32>(s.radius), s.center + vec3<f32>(s.radius));
+    }
+    let t = triangles[i - params.sphere_count];
+    let v1 = t.v0 + t.e1;
+    let v2 = t.v0 + t.e2;
+    return Box(min(min(t.v0, v1), v2), max(max(t.v0, v1), v2));
 }
 
-fn centroid(s: Sphere) -> vec3<f32> {
-    return (sphere_min(s) + sphere_max(s)) * 0.5;
+fn centroid(i: u32) -> vec3<f32> {
+    let b = primitive_box(i);
+    return (b.lo + b.hi) * 0.5;
 }
 
 // Min and max over the workgroup's shared_lo / shared_hi, left in slot 0.
@@ -94,7 +108,7 @@ fn bounds_partial(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
     for (var k = 0u; k < ITEMS; k++) {
         let i = block * BLOCK + lid * ITEMS + k;
         if (i < params.count) {
-            let c = centroid(spheres[i]);
+            let c = centroid(i);
             lo = min(lo, c);
             hi = max(hi, c);
         }
@@ -154,7 +168,7 @@ fn morton(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups
     let hi = vec3<f32>(bitcast<f32>(scratch[3]), bitcast<f32>(scratch[4]), bitcast<f32>(scratch[5]));
     let extent = hi - lo;
     let scale = select(vec3<f32>(0.0), vec3<f32>(f32(CELLS)) / extent, extent > vec3<f32>(0.0));
-    let cell = min(max((centroid(spheres[i]) - lo) * scale, vec3<f32>(0.0)), vec3<f32>(f32(CELLS - 1u)));
+    let cell = min(max((centroid(i) - lo) * scale, vec3<f32>(0.0)), vec3<f32>(f32(CELLS - 1u)));
     let q = vec3<u32>(cell);
     let code = (spread_bits_10(q.x) << 2u) | (spread_bits_10(q.y) << 1u) | spread_bits_10(q.z);
     pairs_in[i] = vec2<u32>(code, i);
@@ -401,8 +415,8 @@ fn leaves_and_bounds(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
         return;
     }
     let leaf = n - 1u + k;
-    let sphere = spheres[pairs_in[k].y];
-    store_box(leaf, sphere_min(sphere), sphere_max(sphere));
+    let b = primitive_box(pairs_in[k].y);
+    store_box(leaf, b.lo, b.hi);
     if (n == 1u) {
         return;
     }
