@@ -68,15 +68,20 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, MeshError> {
         normals: has_normals.then(|| Vec::with_capacity(vertex_count)),
         triangles: Vec::with_capacity(face_count),
     };
+    // The next record of a table the header sized: `index` of `count` `what`.
     let mut last_line = count_line;
-    for v in 0..vertex_count {
-        let (line, tokens) = records.next().ok_or_else(|| {
+    let mut next = |index: usize, count: usize, what: &str| {
+        let record = records.next().ok_or_else(|| {
             MeshError::at(
                 last_line,
-                format!("the header declares {vertex_count} vertices, the file ends after {v}"),
+                format!("the header declares {count} {what}, the file ends after {index}"),
             )
         })?;
-        last_line = line;
+        last_line = record.0;
+        Ok::<_, MeshError>(record)
+    };
+    for v in 0..vertex_count {
+        let (line, tokens) = next(v, vertex_count, "vertices")?;
         let needed = if has_normals { 6 } else { 3 };
         if tokens.len() < needed {
             return Err(MeshError::at(
@@ -93,13 +98,7 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, MeshError> {
     }
     let mut face = Vec::new();
     for f in 0..face_count {
-        let (line, tokens) = records.next().ok_or_else(|| {
-            MeshError::at(
-                last_line,
-                format!("the header declares {face_count} faces, the file ends after {f}"),
-            )
-        })?;
-        last_line = line;
+        let (line, tokens) = next(f, face_count, "faces")?;
         let what = format!("face {f}");
         let corners: usize = number(line, tokens[0], &what)?;
         if corners >= tokens.len() {
