@@ -20,7 +20,7 @@ pub enum Aov {
     Color,
     /// Distance from the eye to the first hit, channel `Z` of a float EXR; +inf where nothing is hit.
     Depth,
-    /// First-hit normals, mapped from [-1, 1] to [0, 1].
+    /// First-hit shading normals, mapped from [-1, 1] to [0, 1].
     Normal,
     /// A heat map of each primary ray's cost: BVH nodes tested (box tests of internal nodes, sphere
     /// tests of leaves; spheres tested for brute force), with a colour-scale legend. PNG only.
