@@ -171,15 +171,8 @@ fn random_triangle(rng: &mut SplitMix64, material: u32) -> GpuTriangle {
 }
 
 fn primitive_boxes(spheres: &[GpuSphere], triangles: &[GpuTriangle]) -> Vec<Aabb> {
-    let spheres = spheres
-        .iter()
-        .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius));
-    let triangles = triangles.iter().map(|t| {
-        let v0 = Vec3::from_array(t.v0);
-        let (v1, v2) = (v0 + Vec3::from_array(t.e1), v0 + Vec3::from_array(t.e2));
-        Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
-    });
-    spheres.chain(triangles).collect()
+    let spheres = spheres.iter().map(GpuSphere::bounds);
+    spheres.chain(triangles.iter().map(GpuTriangle::bounds)).collect()
 }
 
 /// Random rays from random points: every traversal finds exactly brute force's hit (t and
@@ -260,10 +253,7 @@ fn traversals_handle_one_and_two_spheres() {
                 _pad: [0; 3],
             })
             .collect();
-        let boxes: Vec<Aabb> = spheres
-            .iter()
-            .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius))
-            .collect();
+        let boxes: Vec<Aabb> = spheres.iter().map(GpuSphere::bounds).collect();
         let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
         let primitives = Primitives {
             spheres: &spheres,

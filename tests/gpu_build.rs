@@ -3,7 +3,6 @@
 
 mod common;
 use common::gpu;
-use glam::Vec3;
 use raypipe::bvh::aabb::Aabb;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::{Bvh, centroid_codes};
@@ -33,10 +32,7 @@ fn random_spheres(n: usize, seed: u64, distinct_centres: usize) -> Vec<GpuSphere
 }
 
 fn boxes(spheres: &[GpuSphere]) -> Vec<Aabb> {
-    spheres
-        .iter()
-        .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius))
-        .collect()
+    spheres.iter().map(GpuSphere::bounds).collect()
 }
 
 fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &str) {

@@ -66,6 +66,22 @@ pub struct GpuTriangle {
     pub _pad: u32,
 }
 
+impl GpuSphere {
+    pub fn bounds(&self) -> Aabb {
+        Aabb::around_sphere(Vec3::from_array(self.center), self.radius)
+    }
+}
+
+impl GpuTriangle {
+    /// The box around the corners the tracers compute: v0, v0 + e1, v0 + e2 (lbvh.wgsl's
+    /// `primitive_box`, to the bit).
+    pub fn bounds(&self) -> Aabb {
+        let v0 = Vec3::from_array(self.v0);
+        let (v1, v2) = (v0 + Vec3::from_array(self.e1), v0 + Vec3::from_array(self.e2));
+        Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
+    }
+}
+
 /// A smooth triangle's vertex normals, interpolated by barycentric coordinates for shading.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -407,22 +423,10 @@ impl PackedScene {
         self.spheres.len() + self.triangles.len()
     }
 
-    /// The primitives' bounding boxes, spheres first. A triangle's box holds the corners the tracers
-    /// compute (v0, v0 + e1, v0 + e2).
+    /// The primitives' bounding boxes, spheres first.
     pub fn primitive_boxes(&self) -> Vec<Aabb> {
-        let spheres = self
-            .spheres
-            .iter()
-            .map(|s| Aabb::around_sphere(Vec3::from_array(s.center), s.radius));
-        let triangles = self.triangles.iter().map(|t| {
-            let v0 = Vec3::from_array(t.v0);
-            let (v1, v2) = (v0 + Vec3::from_array(t.e1), v0 + Vec3::from_array(t.e2));
-            Aabb {
-                min: v0.min(v1).min(v2),
-                max: v0.max(v1).max(v2),
-            }
-        });
-        spheres.chain(triangles).collect()
+        let spheres = self.spheres.iter().map(GpuSphere::bounds);
+        spheres.chain(self.triangles.iter().map(GpuTriangle::bounds)).collect()
     }
 
     /// Builds the linear BVH over the primitives on the CPU.
