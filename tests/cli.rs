@@ -1,12 +1,10 @@
 //! The command line: renders write files, diff exits by threshold, and bad input ends with one line
 //! on stderr and exit code 2, never a panic.
 
+mod common;
+use common::{assert_clean_error, raypipe};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn raypipe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raypipe")).args(args).output().unwrap()
-}
+use std::process::Output;
 
 fn temp(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli");
@@ -18,18 +16,6 @@ fn write(name: &str, text: &str) -> PathBuf {
     let path = temp(name);
     std::fs::write(&path, text).unwrap();
     path
-}
-
-/// Exit code 2, exactly one line on stderr that starts with `error:` and contains every `needle`.
-fn assert_clean_error(output: &Output, needles: &[&str]) {
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
-    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    assert_eq!(lines.len(), 1, "one error line expected: {stderr}");
-    for needle in needles {
-        assert!(lines[0].contains(needle), "{needle:?} not in {:?}", lines[0]);
-    }
 }
 
 fn render_cpu(scene: &Path) -> Output {

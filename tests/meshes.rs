@@ -3,27 +3,11 @@
 
 mod common;
 use common::models::{self, TestModel, every_format, shared_model, test_dir};
+use common::{assert_clean_error, raypipe};
 use glam::Vec3;
 use proptest::prelude::*;
 use raypipe::mesh::{self, Mesh, MeshFormat};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn raypipe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raypipe")).args(args).output().unwrap()
-}
-
-/// Exit code 2 and one line on stderr, starting with `error:`, holding every needle.
-fn assert_clean_error(output: &Output, needles: &[&str]) {
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
-    assert_eq!(lines.len(), 1, "one error line expected: {stderr}");
-    for needle in needles {
-        assert!(lines[0].contains(needle), "{needle:?} not in {:?}", lines[0]);
-    }
-}
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let path = dir.join(name);
