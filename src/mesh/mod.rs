@@ -70,16 +70,19 @@ pub enum MeshFormat {
 }
 
 impl MeshFormat {
-    pub const EXTENSIONS: &[&str] = &["ply", "obj", "off"];
+    const BY_EXTENSION: [(&str, MeshFormat); 3] = [("ply", Self::Ply), ("obj", Self::Obj), ("off", Self::Off)];
 
     pub fn from_path(path: &Path) -> Option<Self> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-        match ext.as_str() {
-            "ply" => Some(Self::Ply),
-            "obj" => Some(Self::Obj),
-            "off" => Some(Self::Off),
-            _ => None,
-        }
+        Self::BY_EXTENSION
+            .iter()
+            .find(|(known, _)| *known == ext)
+            .map(|&(_, format)| format)
+    }
+
+    /// The extensions read, for messages: ".ply, .obj, .off".
+    pub fn extension_list() -> String {
+        Self::BY_EXTENSION.map(|(ext, _)| format!(".{ext}")).join(", ")
     }
 }
 
@@ -94,11 +97,7 @@ pub fn load(path: &Path) -> anyhow::Result<Mesh> {
     let format = MeshFormat::from_path(path).ok_or_else(|| {
         anyhow::anyhow!(
             "{shown}: unknown model format (expected a file ending in {})",
-            MeshFormat::EXTENSIONS
-                .iter()
-                .map(|e| format!(".{e}"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            MeshFormat::extension_list()
         )
     })?;
     let bytes = std::fs::read(path).map_err(|e| anyhow::anyhow!("{shown}: cannot read model file: {e}"))?;

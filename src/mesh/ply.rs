@@ -9,7 +9,7 @@ use super::{Mesh, MeshError, check_face, push_fan};
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Encoding, Property, PropertyAccess, PropertyAccessResult, PropertyType};
-use std::io::{BufRead, Cursor};
+use std::io::Cursor;
 
 #[derive(Default)]
 struct PlyVertex {
@@ -178,11 +178,11 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, MeshError> {
         };
         result.map_err(|e| parse_error(e, ascii))?;
     }
-    let mut rest = reader.into_inner();
-    let trailing = rest.fill_buf().map(|b| b.len()).unwrap_or(0);
-    let position = rest.position() as usize;
+    let position = reader.into_inner().position() as usize;
     let left = &bytes[position.min(bytes.len())..];
-    if trailing > 0 && !(ascii && left.iter().all(u8::is_ascii_whitespace)) {
+    // An ASCII file may end in blank lines; anything else after the last element means the counts lie.
+    let blank = ascii && left.iter().all(u8::is_ascii_whitespace);
+    if !(left.is_empty() || blank) {
         return Err(MeshError::new(format!(
             "{} bytes after the last element the header declares: the counts in the header are wrong",
             left.len()

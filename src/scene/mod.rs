@@ -206,7 +206,7 @@ impl Scene {
         anyhow::ensure!(
             options.is_default(),
             "scene '{spec}': --as, --spheres and --rotate apply to model files ({})",
-            crate::mesh::MeshFormat::EXTENSIONS.join(", ")
+            crate::mesh::MeshFormat::extension_list()
         );
         if let Some(scene) = builtin::by_name(spec)? {
             return Ok(scene);
@@ -215,8 +215,8 @@ impl Scene {
             Some(ext) if ext == "toml" => return file::load(path),
             None if path.exists() => return file::load(path),
             Some(_) if path.exists() => anyhow::bail!(
-                "{spec}: unknown model format (expected a .toml scene, or a model ending in .{})",
-                crate::mesh::MeshFormat::EXTENSIONS.join(", .")
+                "{spec}: unknown model format (expected a .toml scene, or a model ending in {})",
+                crate::mesh::MeshFormat::extension_list()
             ),
             _ => {}
         }
