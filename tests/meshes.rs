@@ -6,6 +6,7 @@ use common::models::{self, TestModel, every_format, shared_model, test_dir};
 use common::{assert_clean_error, raypipe};
 use glam::Vec3;
 use proptest::prelude::*;
+use raypipe::bvh::aabb::Aabb;
 use raypipe::mesh::{self, Mesh, MeshFormat};
 use std::path::{Path, PathBuf};
 
@@ -186,13 +187,7 @@ fn scene_meshes_are_placed_as_the_file_says() {
     let scene = raypipe::scene::Scene::load(scene.to_str().unwrap()).unwrap();
     assert_eq!(scene.triangles.len(), 64);
     assert_eq!(scene.spheres.len(), 300);
-    let (lo, hi) = scene
-        .triangles
-        .iter()
-        .flat_map(|t| t.vertices)
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p), hi.max(p))
-        });
+    let Aabb { min: lo, max: hi } = Aabb::around_points(scene.triangles.iter().flat_map(|t| t.vertices));
     // Normalized, the torus spans x in [-1, 1]; scaled by 0.5 and moved by 3: [2.5, 3.5].
     assert!((lo.x - 2.5).abs() < 1e-5 && (hi.x - 3.5).abs() < 1e-5, "{lo} {hi}");
     assert!(scene.triangles.iter().all(|t| t.normals.is_some() && t.material == 0));

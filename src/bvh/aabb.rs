@@ -32,6 +32,11 @@ impl Aabb {
         Aabb::new(self.min.min(point), self.max.max(point))
     }
 
+    /// The smallest box holding every point; [`Aabb::EMPTY`] for none.
+    pub fn around_points(points: impl IntoIterator<Item = Vec3>) -> Aabb {
+        points.into_iter().fold(Aabb::EMPTY, Aabb::grow)
+    }
+
     pub fn centroid(self) -> Vec3 {
         (self.min + self.max) * 0.5
     }

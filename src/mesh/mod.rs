@@ -9,6 +9,7 @@ mod obj;
 mod off;
 mod ply;
 
+use crate::bvh::aabb::Aabb;
 use crate::scene::builtin::SplitMix64;
 use glam::Vec3;
 use std::fmt;
@@ -177,19 +178,15 @@ impl Mesh {
         Ok(())
     }
 
-    pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.positions
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            })
+    pub fn bounds(&self) -> Aabb {
+        Aabb::around_points(self.positions.iter().copied())
     }
 
     /// Centres the bounding box at the origin and scales its longest side to 2.
     pub fn normalize(&mut self) {
-        let (lo, hi) = self.bounds();
-        let center = (lo + hi) * 0.5;
-        let longest = (hi - lo).max_element();
+        let bounds = self.bounds();
+        let center = bounds.centroid();
+        let longest = (bounds.max - bounds.min).max_element();
         let scale = if longest > 0.0 { 2.0 / longest } else { 1.0 };
         for p in &mut self.positions {
             *p = (*p - center) * scale;
@@ -295,11 +292,14 @@ mod tests {
     fn normalize_centres_and_scales_the_longest_side_to_two() {
         let mut mesh = square();
         mesh.normalize();
-        let (lo, hi) = mesh.bounds();
-        assert_eq!(lo, Vec3::new(-0.5, -1.0, 0.0));
-        assert_eq!(hi, Vec3::new(0.5, 1.0, 0.0));
+        let bounds = mesh.bounds();
+        assert_eq!(bounds.min, Vec3::new(-0.5, -1.0, 0.0));
+        assert_eq!(bounds.max, Vec3::new(0.5, 1.0, 0.0));
         mesh.transform(2.0, Vec3::new(1.0, 0.0, 0.0));
-        assert_eq!(mesh.bounds(), (Vec3::new(0.0, -2.0, 0.0), Vec3::new(2.0, 2.0, 0.0)));
+        assert_eq!(
+            mesh.bounds(),
+            Aabb::new(Vec3::new(0.0, -2.0, 0.0), Vec3::new(2.0, 2.0, 0.0))
+        );
     }
 
     #[test]

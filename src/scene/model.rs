@@ -2,6 +2,7 @@
 //! on its surface; and the scene `raypipe render MODEL` gets, which frames one model.
 
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, Triangle};
+use crate::bvh::aabb::Aabb;
 use crate::mesh::{self, Mesh};
 use clap::ValueEnum;
 use glam::Vec3;
@@ -184,9 +185,9 @@ pub fn model_scene(path: &Path, options: &ModelOptions) -> anyhow::Result<Scene>
         ..Scene::default()
     };
     add_mesh(&mut scene, mesh, &placement).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let (lo, hi) = scene_bounds(&scene);
-    let center = (lo + hi) * 0.5;
-    let radius = ((hi - lo) * 0.5).length();
+    let bounds = scene_bounds(&scene);
+    let center = bounds.centroid();
+    let radius = ((bounds.max - bounds.min) * 0.5).length();
     let fov: f32 = 35.0;
     // About the distance where the bounding sphere fills the vertical field of view; a bit nearer,
     // since the bounding box's corners are seldom filled.
@@ -209,7 +210,7 @@ pub fn model_scene(path: &Path, options: &ModelOptions) -> anyhow::Result<Scene>
         },
     ];
     scene.planes.push(Plane {
-        point: Vec3::new(0.0, lo.y, 0.0),
+        point: Vec3::new(0.0, bounds.min.y, 0.0),
         normal: Vec3::Y,
         material: 1,
         checker: Some(Checker {
@@ -222,15 +223,13 @@ pub fn model_scene(path: &Path, options: &ModelOptions) -> anyhow::Result<Scene>
 }
 
 /// The box around the scene's spheres and triangles.
-fn scene_bounds(scene: &Scene) -> (Vec3, Vec3) {
+fn scene_bounds(scene: &Scene) -> Aabb {
     let points = scene
         .spheres
         .iter()
         .flat_map(|s| [s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)])
         .chain(scene.triangles.iter().flat_map(|t| t.vertices));
-    points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-        (lo.min(p), hi.max(p))
-    })
+    Aabb::around_points(points)
 }
 
 #[cfg(test)]
@@ -255,9 +254,9 @@ mod tests {
         };
         add_mesh(&mut scene, tetrahedron(), &placement).unwrap();
         assert_eq!(scene.triangles.len(), 4);
-        let (lo, hi) = scene_bounds(&scene);
-        assert_eq!(lo, Vec3::new(9.5, -0.5, -0.5));
-        assert_eq!(hi, Vec3::new(10.5, 0.5, 0.5));
+        let bounds = scene_bounds(&scene);
+        assert_eq!(bounds.min, Vec3::new(9.5, -0.5, -0.5));
+        assert_eq!(bounds.max, Vec3::new(10.5, 0.5, 0.5));
     }
 
     #[test]
