@@ -67,7 +67,6 @@ pub struct GpuLbvhBuilder<'a> {
 
 /// The buffers of a build over `count` primitives.
 pub struct Buffers {
-    count: u32,
     sphere_count: u32,
     triangle_count: u32,
     /// [pairs A in, B out], [B in, A out].
@@ -185,7 +184,7 @@ impl<'a> GpuLbvhBuilder<'a> {
 
     /// Primitives: spheres and triangles.
     pub fn count(&self) -> usize {
-        self.buffers.count as usize
+        self.buffers.count() as usize
     }
 
     pub fn write_spheres(&self, spheres: &[GpuSphere]) {
@@ -223,7 +222,7 @@ impl<'a> GpuLbvhBuilder<'a> {
     /// `given_codes` is set.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, given_codes: bool) {
         let b = &self.buffers;
-        let n = b.count;
+        let n = b.count();
         if n == 0 {
             return;
         }
@@ -333,6 +332,11 @@ impl<'a> GpuLbvhBuilder<'a> {
 }
 
 impl Buffers {
+    /// Primitives: spheres, then triangles.
+    fn count(&self) -> u32 {
+        self.sphere_count + self.triangle_count
+    }
+
     fn new(
         ctx: &GpuContext,
         layout: &wgpu::BindGroupLayout,
@@ -423,7 +427,6 @@ impl Buffers {
         };
         let bind_groups = [bind_group(&pairs, &pairs_b), bind_group(&pairs_b, &pairs)];
         Ok(Self {
-            count: count as u32,
             sphere_count: sphere_count as u32,
             triangle_count: triangle_count as u32,
             bind_groups,
