@@ -4,6 +4,7 @@ use glam::Vec3;
 use proptest::prelude::*;
 use raypipe::bvh::aabb::Aabb;
 use raypipe::bvh::layout::GpuNode;
+use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
 use raypipe::bvh::{Bvh, centroid_codes};
@@ -146,6 +147,23 @@ fn given_codes_give_the_same_tree() {
     let (a, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
     let (b, _) = Bvh::build_from_codes(&boxes, &codes, MortonBits::Bits30);
     assert_eq!(a, b);
+}
+
+/// A builder kept from frame to frame must forget the last frame: each build equals a fresh one,
+/// whether the scene grows, shrinks or empties.
+#[test]
+fn a_reused_builder_equals_a_fresh_one() {
+    let mut rng = SplitMix64::new(11);
+    let mut builder = LbvhBuilder::<u64>::new();
+    for n in [3000, 17, 1, 0, 2, 5000, 640] {
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|_| Aabb::around_sphere(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()), 0.02))
+            .collect();
+        builder.build(&boxes, MortonBits::Bits30);
+        let (fresh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+        assert_eq!(builder.to_bvh(), fresh, "{n} boxes after a build of another size");
+        assert_eq!(fresh.validate(&boxes), Ok(()));
+    }
 }
 
 type Traversal = fn(&[GpuNode], &Primitives, &Ray, Hit, bool) -> Hit;

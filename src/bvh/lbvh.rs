@@ -1,12 +1,12 @@
 //! Karras (2012): the binary radix tree over sorted Morton codes, every internal node found
-//! independently, then bounds bottom-up and the traversal links. Each phase runs in parallel over
-//! nodes and writes the final node array in place; `LbvhBuilder` keeps its buffers from one build to
-//! the next, as a per-frame rebuild wants.
+//! independently, then bounds bottom-up and the traversal links. Each phase runs in parallel, and
+//! the last writes each node of the final array once, whole; `LbvhBuilder` keeps its buffers from
+//! one build to the next, as a per-frame rebuild wants.
 
 use super::aabb::Aabb;
 use super::layout::{GpuNode, LEAF, NONE};
-use super::morton::{self, MortonBits};
-use super::sort::radix_sort_by_key;
+use super::morton::{Grid, MortonBits};
+use super::sort::{DisjointWrites, radix_sort_by_key};
 use super::{BuildTimings, Bvh};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -17,10 +17,17 @@ const MIN_TASK: usize = 4096;
 /// A sort key: the Morton code above the primitive index, so that one stable radix sort of the code
 /// bits orders primitives by code and keeps equal codes in primitive order. 30-bit codes fit a u64
 /// with the index (half the sort's memory traffic); 63-bit codes need a u128.
+///
+/// After the sort, the same type with the sorted position in place of the primitive is what the
+/// hierarchy search compares (see [`delta`]).
 pub trait Key: Copy + Default + Send + Sync + 'static {
     fn new(code: u64, primitive: u32) -> Self;
     fn code(self) -> u64;
     fn primitive(self) -> u32;
+    /// The same code above `position`.
+    fn at_position(self, position: u32) -> Self;
+    /// Leading bits that two keys share.
+    fn common_prefix(self, other: Self) -> u32;
 }
 
 impl Key for u64 {
@@ -32,6 +39,13 @@ impl Key for u64 {
     }
     fn primitive(self) -> u32 {
         self as u32
+    }
+    fn at_position(self, position: u32) -> Self {
+        (self & !0xffff_ffff) | position as u64
+    }
+    #[inline(always)]
+    fn common_prefix(self, other: Self) -> u32 {
+        (self ^ other).leading_zeros()
     }
 }
 
@@ -45,65 +59,84 @@ impl Key for u128 {
     fn primitive(self) -> u32 {
         self as u32
     }
+    fn at_position(self, position: u32) -> Self {
+        (self & !0xffff_ffff) | position as u128
+    }
+    #[inline(always)]
+    fn common_prefix(self, other: Self) -> u32 {
+        (self ^ other).leading_zeros()
+    }
 }
 
-/// Length of the common prefix of sorted keys i and j; -1 outside the array. Equal codes compare
-/// their positions instead, so every key is distinct (Karras, section 4).
+/// Length of the common prefix of sorted keys i and j; -1 outside the array. Karras (section 4)
+/// makes every key distinct by comparing positions where codes are equal: keys that hold their
+/// sorted position below the code do exactly that in one xor. (A key type wider than its code only
+/// adds a constant to every length, and only their order matters.)
+#[inline(always)]
 pub fn delta<K: Key>(keys: &[K], i: usize, j: i64) -> i32 {
     if j < 0 || j >= keys.len() as i64 {
         return -1;
     }
-    let (a, b) = (keys[i].code(), keys[j as usize].code());
-    if a != b {
-        (a ^ b).leading_zeros() as i32
+    keys[i].common_prefix(keys[j as usize]) as i32
+}
+
+/// Internal node i over n sorted keys: its left and right child, as node indices (internal nodes
+/// 0..n-1, then leaves).
+#[inline(always)]
+pub fn internal_node<K: Key>(keys: &[K], i: usize) -> [u32; 2] {
+    // Direction of the range: towards the neighbour that shares the longer prefix. The other
+    // neighbour's prefix bounds the range: every key in it shares more with i.
+    let right = delta(keys, i, i as i64 + 1);
+    let left = delta(keys, i, i as i64 - 1);
+    if right > left {
+        search_range::<K, true>(keys, i, left)
     } else {
-        64 + ((i as u32) ^ (j as u32)).leading_zeros() as i32
+        search_range::<K, false>(keys, i, right)
     }
 }
 
-/// Internal node i over n sorted keys: (left child, right child, first, last), children as node
-/// indices (internal nodes 0..n-1, then leaves).
-pub fn internal_node<K: Key>(keys: &[K], i: usize) -> (u32, u32, u32, u32) {
-    let n = keys.len();
-    let leaf_base = (n - 1) as u32;
+/// The rest of [`internal_node`], for a range that grows from i to the right (`RIGHT`) or to the
+/// left; a constant direction spares the searches a multiply on every step.
+#[inline(always)]
+fn search_range<K: Key, const RIGHT: bool>(keys: &[K], i: usize, delta_min: i32) -> [u32; 2] {
+    let leaf_base = (keys.len() - 1) as u32;
     let ii = i as i64;
-    // Direction of the range: towards the neighbour that shares the longer prefix.
-    let d: i64 = if delta(keys, i, ii + 1) > delta(keys, i, ii - 1) {
-        1
-    } else {
-        -1
-    };
-    // Upper bound of the range's length by doubling, then its exact length by binary search.
-    let delta_min = delta(keys, i, ii - d);
+    let at = |offset: i64| if RIGHT { ii + offset } else { ii - offset };
+    // Upper bound of the range's length by doubling, then its exact length by binary search. The
+    // binary search starts at l_max / 2, which the doubling passed (for l_max = 2, the neighbour at
+    // 1 passes by the choice of direction). Its steps add 0 or t without a branch: which way they
+    // go is data, and unpredictable.
     let mut l_max: i64 = 2;
-    while delta(keys, i, ii + l_max * d) > delta_min {
+    while delta(keys, i, at(l_max)) > delta_min {
         l_max *= 2;
     }
-    let mut l: i64 = 0;
-    let mut t = l_max / 2;
+    let mut l = l_max / 2;
+    let mut t = l_max / 4;
     while t >= 1 {
-        if delta(keys, i, ii + (l + t) * d) > delta_min {
-            l += t;
-        }
+        l += t * (delta(keys, i, at(l + t)) > delta_min) as i64;
         t /= 2;
     }
-    let j = ii + l * d;
-    // The split: the last position that shares more than the node's prefix with i.
+    let j = at(l);
+    if l == 1 {
+        // Two leaves, the commonest node: the split is between them.
+        let split = if RIGHT { i } else { i - 1 } as u32;
+        return [leaf_base + split, leaf_base + split + 1];
+    }
+    // The split: the last position that shares more than the node's prefix with i, in steps of
+    // ceil(l / 2), ceil(l / 4), ..., 1 (shifts: the divisors are powers of two).
     let delta_node = delta(keys, i, j);
-    // Steps of ceil(l / 2), ceil(l / 4), ..., 1 (shifts: the divisors are powers of two).
     let mut s: i64 = 0;
     let mut shift = 1;
     loop {
         let t = (l + (1 << shift) - 1) >> shift;
-        if delta(keys, i, ii + (s + t) * d) > delta_node {
-            s += t;
-        }
+        s += t * (delta(keys, i, at(s + t)) > delta_node) as i64;
         if t == 1 {
             break;
         }
         shift += 1;
     }
-    let split = (ii + s * d + d.min(0)) as u32;
+    // The split position is the last key of the left child.
+    let split = if RIGHT { at(s) } else { at(s) - 1 } as u32;
     let (first, last) = (ii.min(j) as u32, ii.max(j) as u32);
     let left = if first == split { leaf_base + split } else { split };
     let right = if last == split + 1 {
@@ -111,24 +144,33 @@ pub fn internal_node<K: Key>(keys: &[K], i: usize) -> (u32, u32, u32, u32) {
     } else {
         split + 1
     };
-    (left, right, first, last)
+    [left, right]
 }
 
-/// The node array, written field by field from many tasks: each phase writes every field of its
-/// own nodes, and reads only fields written in an earlier phase or ordered by an atomic.
-#[derive(Clone, Copy)]
-struct Nodes(*mut GpuNode, usize);
-
-// SAFETY: tasks write disjoint fields; see each use.
-unsafe impl Send for Nodes {}
-unsafe impl Sync for Nodes {}
-
-impl Nodes {
-    fn at(&self, i: usize) -> *mut GpuNode {
-        assert!(i < self.1, "node {i} out of bounds {}", self.1);
-        // SAFETY: in bounds.
-        unsafe { self.0.add(i) }
+/// The escape link of a node whose range ends at sorted position `last`: the node after its subtree
+/// in depth-first order. That is the right child of the internal node that splits at `last`, and it
+/// starts at `last + 1`: internal node `last + 1` when that node's range starts there (its split then
+/// lies at or after it), otherwise leaf `last + 1`. Nothing follows a subtree that ends at n - 1.
+#[inline(always)]
+pub fn escape(children: &[[u32; 2]], last: u32) -> u32 {
+    let leaf_base = children.len() as u32;
+    let next = last + 1;
+    if next == leaf_base + 1 {
+        NONE
+    } else if next < leaf_base && split(children, next) >= next {
+        next
+    } else {
+        leaf_base + next
     }
+}
+
+/// Where internal node `node` splits its range: the last position of its left child, which is the
+/// child's number when it is internal (a left child is numbered by its last position).
+#[inline(always)]
+fn split(children: &[[u32; 2]], node: u32) -> u32 {
+    let leaf_base = children.len() as u32;
+    let left = children[node as usize][0];
+    if left >= leaf_base { left - leaf_base } else { left }
 }
 
 /// A reusable LBVH builder: build after build, its buffers keep their capacity. `K` is `u64` for
@@ -137,8 +179,13 @@ impl Nodes {
 pub struct LbvhBuilder<K: Key> {
     keys: Vec<K>,
     scratch: Vec<K>,
-    /// First and last sorted position covered by each internal node; one of them is its index.
-    ranges: Vec<[u32; 2]>,
+    /// The sorted keys with their positions in place of their primitives: what the hierarchy
+    /// search compares.
+    positioned: Vec<K>,
+    /// Left and right child of each internal node.
+    children: Vec<[u32; 2]>,
+    /// Parent of each node.
+    parents: Vec<u32>,
     nodes: Vec<GpuNode>,
 }
 
@@ -199,17 +246,13 @@ impl<K: Key> LbvhBuilder<K> {
                 .for_each(|(i, (key, &code))| *key = K::new(code, i as u32));
             return;
         }
-        let bounds = morton::centroid_bounds(boxes);
-        let scale = morton::scales(bounds, 1 << bits.bits_per_axis());
+        let grid = Grid::around_centroids(boxes, bits);
         self.keys
             .par_iter_mut()
             .with_min_len(MIN_TASK)
             .zip(boxes)
             .enumerate()
-            .for_each(|(i, (key, b))| {
-                let code = morton::morton_code(b.centroid(), bounds, scale, bits);
-                *key = K::new(code, i as u32);
-            });
+            .for_each(|(i, (key, b))| *key = K::new(grid.code(b), i as u32));
     }
 
     fn build_from_keys(&mut self, boxes: &[Aabb], bits: MortonBits) -> BuildTimings {
@@ -225,130 +268,71 @@ impl<K: Key> LbvhBuilder<K> {
         if n == 0 {
             return timings;
         }
-        if n == 1 {
-            self.nodes[0] = GpuNode {
-                min: boxes[0].min.to_array(),
-                left: 0,
-                max: boxes[0].max.to_array(),
-                right: LEAF,
-                parent: NONE,
-                escape: NONE,
-                _pad: [0; 2],
-            };
-            return timings;
-        }
-
         let start = Instant::now();
         self.hierarchy();
         timings.hierarchy = ms_since(start);
         let start = Instant::now();
-        self.bounds(boxes);
+        self.bounds_and_links(boxes);
         timings.bounds = ms_since(start);
-        let start = Instant::now();
-        self.links();
-        timings.links = ms_since(start);
         timings
     }
 
-    // Find every internal node's children and range, and every node's parent
+    // Find every internal node's children, and so every node's parent
     fn hierarchy(&mut self) {
         let n = self.keys.len();
-        let keys = &self.keys;
-        self.ranges.resize(n - 1, [0, 0]);
-        let nodes = Nodes(self.nodes.as_mut_ptr(), self.nodes.len());
-        // SAFETY (field writes below): task i alone writes node i's children and the parent field
-        // of those two children; every node is the child of exactly one internal node.
-        unsafe { (*nodes.at(0)).parent = NONE };
-        self.ranges
+        self.positioned.resize(n, K::default());
+        self.positioned
+            .par_iter_mut()
+            .with_min_len(MIN_TASK)
+            .zip(&self.keys)
+            .enumerate()
+            .for_each(|(position, (out, key))| *out = key.at_position(position as u32));
+        let positioned = &self.positioned;
+        self.children.resize(n - 1, [0, 0]);
+        self.parents.resize(2 * n - 1, NONE);
+        self.parents[0] = NONE;
+        let parents = DisjointWrites::new(&mut self.parents);
+        self.children
             .par_iter_mut()
             .with_min_len(MIN_TASK)
             .enumerate()
-            .for_each(|(i, range)| {
-                let (left, right, first, last) = internal_node(keys, i);
-                *range = [first, last];
+            .for_each(|(i, children)| {
+                *children = internal_node(positioned, i);
+                // SAFETY: every node but the root is the child of exactly one internal node.
                 unsafe {
-                    let node = nodes.at(i);
-                    (*node).left = left;
-                    (*node).right = right;
-                    (*nodes.at(left as usize)).parent = i as u32;
-                    (*nodes.at(right as usize)).parent = i as u32;
+                    parents.write(children[0] as usize, i as u32);
+                    parents.write(children[1] as usize, i as u32);
                 }
             });
     }
 
-    // Bound leaves by their primitives, then internal nodes bottom-up
+    // Write every node whole: its box (leaves from their primitives, internal nodes bottom-up), its
+    // children, its parent and its escape link
     //
-    // On the CPU, a post-order walk that forks into both subtrees while they are large: each node
-    // is bounded after its children, with no atomics. (The GPU, with a thread per leaf, climbs with
-    // atomic visit counters instead.) Unions never round, so both give identical boxes.
-    fn bounds(&mut self, boxes: &[Aabb]) {
+    // On the CPU, a walk that forks into both subtrees while they are large, then climbs from each
+    // leaf of a small subtree in order: each node is written once, after its children, with no
+    // atomics and no second pass over the array. (The GPU, with a thread per leaf, climbs with
+    // atomic visit counters and writes the links in a pass of its own.) Unions never round, so both
+    // give identical boxes; each escape link comes from the end of its node's range alone, by the
+    // rule of the GPU's pass.
+    fn bounds_and_links(&mut self, boxes: &[Aabb]) {
         let n = self.keys.len();
-        let leaf_base = n - 1;
-        // Leaves first, in sorted order: their primitives are scattered through `boxes`, so fetch
-        // ahead of use to overlap the cache misses instead of waiting on each.
-        let keys = &self.keys;
-        self.nodes[leaf_base..]
-            .par_chunks_mut(MIN_TASK)
-            .enumerate()
-            .for_each(|(chunk, leaves)| {
-                let base = chunk * MIN_TASK;
-                for (k, leaf) in leaves.iter_mut().enumerate() {
-                    if let Some(ahead) = keys.get(base + k + PREFETCH_DISTANCE) {
-                        prefetch(&boxes[ahead.primitive() as usize]);
-                    }
-                    let primitive = keys[base + k].primitive();
-                    let b = boxes[primitive as usize];
-                    leaf.min = b.min.to_array();
-                    leaf.max = b.max.to_array();
-                    leaf.left = primitive;
-                    leaf.right = LEAF;
-                }
-            });
-        let nodes = Nodes(self.nodes.as_mut_ptr(), self.nodes.len());
-        let walk = BoundsWalk {
-            nodes,
-            ranges: &self.ranges,
-            leaf_base,
+        let walk = Walk {
+            nodes: DisjointWrites::new(&mut self.nodes),
+            keys: &self.keys,
+            children: &self.children,
+            parents: &self.parents,
+            boxes,
+            leaf_base: n as u32 - 1,
         };
-        walk.bound(0);
-    }
-
-    // Link every node to the node after its subtree in depth-first order (the escape link)
-    //
-    // A node that covers sorted positions [.., b] is followed by the right child of the internal
-    // node that splits at b. That child starts at b + 1: it is internal node b + 1 when that node's
-    // range starts there, and otherwise leaf b + 1. Nothing follows a subtree that ends at n - 1.
-    fn links(&mut self) {
-        let n = self.keys.len();
-        let leaf_base = (n - 1) as u32;
-        let ranges = &self.ranges;
-        self.nodes
-            .par_iter_mut()
-            .with_min_len(MIN_TASK)
-            .enumerate()
-            .for_each(|(node, out)| {
-                let last = if node < n - 1 {
-                    ranges[node][1]
-                } else {
-                    node as u32 - leaf_base
-                };
-                let next = last + 1;
-                out.escape = if next as usize == n {
-                    NONE
-                } else if (next as usize) < n - 1 && ranges[next as usize][0] == next {
-                    next
-                } else {
-                    leaf_base + next
-                };
-                out._pad = [0; 2];
-            });
+        walk.visit(0, 0, n as u32 - 1);
     }
 }
 
-/// Subtrees with fewer leaves than this are bounded on one thread.
+/// Subtrees with fewer leaves than this are walked on one thread.
 const SERIAL_LEAVES: u32 = 4096;
 
-/// How many leaves ahead the leaf pass fetches its primitives' boxes.
+/// How many leaves ahead the walk fetches their primitives' boxes.
 const PREFETCH_DISTANCE: usize = 32;
 
 fn prefetch<T>(value: &T) {
@@ -361,37 +345,107 @@ fn prefetch<T>(value: &T) {
     let _ = value;
 }
 
-struct BoundsWalk<'a> {
-    nodes: Nodes,
-    ranges: &'a [[u32; 2]],
-    leaf_base: usize,
+struct Walk<'a, K: Key> {
+    nodes: DisjointWrites<GpuNode>,
+    keys: &'a [K],
+    children: &'a [[u32; 2]],
+    parents: &'a [u32],
+    boxes: &'a [Aabb],
+    leaf_base: u32,
 }
 
-impl BoundsWalk<'_> {
-    /// Writes the box of internal `node` and of every internal node below it (leaves are bounded
-    /// already), and returns it.
-    fn bound(&self, node: usize) -> ([f32; 3], [f32; 3]) {
-        let out = self.nodes.at(node);
-        // SAFETY: the walk reaches each node once, from its parent's call; the two subtrees of a
-        // fork are disjoint. Links were written in the hierarchy phase and are only read here.
-        unsafe {
-            if node >= self.leaf_base {
-                return ((*out).min, (*out).max);
-            }
-            let (left, right) = ((*out).left as usize, (*out).right as usize);
-            let [first, last] = self.ranges[node];
-            let ((lmin, lmax), (rmin, rmax)) = if last - first >= SERIAL_LEAVES {
-                rayon::join(|| self.bound(left), || self.bound(right))
-            } else {
-                (self.bound(left), self.bound(right))
-            };
-            let min = [lmin[0].min(rmin[0]), lmin[1].min(rmin[1]), lmin[2].min(rmin[2])];
-            let max = [lmax[0].max(rmax[0]), lmax[1].max(rmax[1]), lmax[2].max(rmax[2])];
-            (*out).min = min;
-            (*out).max = max;
-            (min, max)
+impl<K: Key> Walk<'_, K> {
+    /// Writes `node`, which covers sorted positions `first..=last`, and every node below it, and
+    /// returns its box: forks into both subtrees while they are large, then hands each to
+    /// [`Self::climb`].
+    fn visit(&self, node: u32, first: u32, last: u32) -> ([f32; 3], [f32; 3]) {
+        if last - first < SERIAL_LEAVES {
+            return self.climb(node, first, last);
         }
+        let [left, right] = self.children[node as usize];
+        let split = split(self.children, node);
+        let ((lmin, lmax), (rmin, rmax)) =
+            rayon::join(|| self.visit(left, first, split), || self.visit(right, split + 1, last));
+        let (min, max) = union(lmin, lmax, rmin, rmax);
+        self.write_internal(node, left, right, min, max, last);
+        (min, max)
     }
+
+    /// Writes the subtree of `root`, which covers sorted positions `first..=last`, on this thread
+    /// and returns its box: leaves in order, each followed by the climb through the nodes that it
+    /// ends (those it is the last leaf of: a node is done when its right child is). A node's left
+    /// child was written before it, and its box is read back from the array.
+    fn climb(&self, root: u32, first: u32, last: u32) -> ([f32; 3], [f32; 3]) {
+        let mut bounds = ([0.0; 3], [0.0; 3]);
+        for position in first..=last {
+            let mut node = self.leaf_base + position;
+            let (mut min, mut max) = self.write_leaf(position);
+            while node != root {
+                let parent = self.parents[node as usize];
+                let [left, right] = self.children[parent as usize];
+                if right != node {
+                    break;
+                }
+                // SAFETY: the left child ends before `position`: this thread wrote it already.
+                let sibling = unsafe { self.nodes.read(left as usize) };
+                (min, max) = union(sibling.min, sibling.max, min, max);
+                self.write_internal(parent, left, right, min, max, position);
+                node = parent;
+            }
+            bounds = (min, max);
+        }
+        bounds
+    }
+
+    /// Writes the leaf at sorted `position` and returns its box.
+    #[inline(always)]
+    fn write_leaf(&self, position: u32) -> ([f32; 3], [f32; 3]) {
+        // The primitives are scattered through `boxes`; fetching ahead overlaps the cache misses.
+        if let Some(ahead) = self.keys.get(position as usize + PREFETCH_DISTANCE) {
+            prefetch(&self.boxes[ahead.primitive() as usize]);
+        }
+        let primitive = self.keys[position as usize].primitive();
+        let b = self.boxes[primitive as usize];
+        let (min, max) = (b.min.to_array(), b.max.to_array());
+        let node = self.leaf_base + position;
+        let leaf = GpuNode {
+            min,
+            left: primitive,
+            max,
+            right: LEAF,
+            parent: self.parents[node as usize],
+            escape: escape(self.children, position),
+            _pad: [0; 2],
+        };
+        // SAFETY: the walk reaches each node once; the subtrees of a fork are disjoint.
+        unsafe { self.nodes.write(node as usize, leaf) };
+        (min, max)
+    }
+
+    /// Writes internal `node`, whose range ends at sorted position `last`.
+    #[inline(always)]
+    fn write_internal(&self, node: u32, left: u32, right: u32, min: [f32; 3], max: [f32; 3], last: u32) {
+        let internal = GpuNode {
+            min,
+            left,
+            max,
+            right,
+            parent: self.parents[node as usize],
+            escape: escape(self.children, last),
+            _pad: [0; 2],
+        };
+        // SAFETY: as for leaves.
+        unsafe { self.nodes.write(node as usize, internal) };
+    }
+}
+
+/// The union of two boxes, exact in any order.
+#[inline(always)]
+fn union(amin: [f32; 3], amax: [f32; 3], bmin: [f32; 3], bmax: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    (
+        [amin[0].min(bmin[0]), amin[1].min(bmin[1]), amin[2].min(bmin[2])],
+        [amax[0].max(bmax[0]), amax[1].max(bmax[1]), amax[2].max(bmax[2])],
+    )
 }
 
 fn ms_since(start: Instant) -> f64 {

@@ -29,6 +29,8 @@ pub struct BuildTimings {
     pub sort: f64,
     pub hierarchy: f64,
     pub bounds: f64,
+    /// Zero where the links are written with the bounds, as the CPU LBVH builder writes them;
+    /// their time is then in `bounds`.
     pub links: f64,
 }
 

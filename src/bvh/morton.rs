@@ -3,7 +3,7 @@
 
 use super::aabb::Aabb;
 use clap::ValueEnum;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
@@ -66,40 +66,75 @@ pub fn scales(bounds: Aabb, cells: u32) -> Vec3 {
     Vec3::select(extent.cmpgt(Vec3::ZERO), Vec3::splat(cells as f32) / extent, Vec3::ZERO)
 }
 
-pub fn morton_code(centroid: Vec3, bounds: Aabb, scale: Vec3, bits: MortonBits) -> u64 {
-    let last_cell = ((1u32 << bits.bits_per_axis()) - 1) as f32;
-    // `quantize` on all three axes at once.
-    let cell = ((centroid - bounds.min) * scale)
-        .max(Vec3::ZERO)
-        .min(Vec3::splat(last_cell));
-    let (x, y, z) = (cell.x as u32, cell.y as u32, cell.z as u32);
-    match bits {
-        MortonBits::Bits30 => ((spread_bits_10(x) << 2) | (spread_bits_10(y) << 1) | spread_bits_10(z)) as u64,
-        MortonBits::Bits63 => {
-            (spread_bits_21(x as u64) << 2) | (spread_bits_21(y as u64) << 1) | spread_bits_21(z as u64)
+/// The grid that Morton codes quantize centroids in: the centroids' bounds, cut into `2^bits` cells
+/// per axis.
+#[derive(Clone, Copy, Debug)]
+pub struct Grid {
+    min: Vec3A,
+    scale: Vec3A,
+    last_cell: Vec3A,
+    bits: MortonBits,
+}
+
+impl Grid {
+    /// The grid over the centroids of `boxes`.
+    pub fn around_centroids(boxes: &[Aabb], bits: MortonBits) -> Grid {
+        let bounds = centroid_bounds(boxes);
+        let cells = 1 << bits.bits_per_axis();
+        Grid {
+            min: bounds.min.into(),
+            scale: scales(bounds, cells).into(),
+            last_cell: Vec3A::splat((cells - 1) as f32),
+            bits,
+        }
+    }
+
+    /// The Morton code of `b`'s centroid: [`quantize`] on all three axes at once.
+    #[inline]
+    pub fn code(&self, b: &Aabb) -> u64 {
+        let cell = ((centroid(b) - self.min) * self.scale)
+            .max(Vec3A::ZERO)
+            .min(self.last_cell);
+        let (x, y, z) = (cell.x as u32, cell.y as u32, cell.z as u32);
+        match self.bits {
+            MortonBits::Bits30 => ((spread_bits_10(x) << 2) | (spread_bits_10(y) << 1) | spread_bits_10(z)) as u64,
+            MortonBits::Bits63 => {
+                (spread_bits_21(x as u64) << 2) | (spread_bits_21(y as u64) << 1) | spread_bits_21(z as u64)
+            }
         }
     }
 }
 
+/// A box's centroid in SIMD lanes; the same value as [`Aabb::centroid`], whose operations it repeats.
+#[inline]
+fn centroid(b: &Aabb) -> Vec3A {
+    (Vec3A::from(b.min) + Vec3A::from(b.max)) * 0.5
+}
+
 /// Bounds of the boxes' centroids: the grid that Morton codes quantize in.
 pub fn centroid_bounds(boxes: &[Aabb]) -> Aabb {
-    boxes
-        .par_iter()
-        .with_min_len(4096)
-        .fold(|| Aabb::EMPTY, |b, p| b.grow(p.centroid()))
-        .reduce(|| Aabb::EMPTY, Aabb::union)
+    let (min, max) = boxes
+        .par_chunks(4096)
+        .map(|chunk| {
+            chunk
+                .iter()
+                .fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(min, max), b| {
+                    let c = centroid(b);
+                    (min.min(c), max.max(c))
+                })
+        })
+        .reduce(
+            || (Vec3A::INFINITY, Vec3A::NEG_INFINITY),
+            |(a_min, a_max), (b_min, b_max)| (a_min.min(b_min), a_max.max(b_max)),
+        );
+    Aabb::new(min.into(), max.into())
 }
 
 /// The Morton codes of the boxes' centroids, quantized in the centroids' bounds: the codes the LBVH
 /// builders compute.
 pub fn centroid_codes(boxes: &[Aabb], bits: MortonBits) -> Vec<u64> {
-    let bounds = centroid_bounds(boxes);
-    let scale = scales(bounds, 1 << bits.bits_per_axis());
-    boxes
-        .par_iter()
-        .with_min_len(4096)
-        .map(|b| morton_code(b.centroid(), bounds, scale, bits))
-        .collect()
+    let grid = Grid::around_centroids(boxes, bits);
+    boxes.par_iter().with_min_len(4096).map(|b| grid.code(b)).collect()
 }
 
 #[cfg(test)]
@@ -120,16 +155,15 @@ mod tests {
     fn codes_quantize_each_axis_as_quantize_does() {
         let bounds = Aabb::new(Vec3::splat(-1.0), Vec3::new(2.0, 1.0, 5.0));
         let scale = scales(bounds, 1024);
+        let corners = [bounds.min, bounds.max].map(|p| Aabb::new(p, p));
+        let grid = Grid::around_centroids(&corners, MortonBits::Bits30);
         for p in [
             Vec3::new(0.3, -0.7, 4.9),
             Vec3::new(-1.0, 1.0, 0.0),
             Vec3::new(1.999, 0.5, 2.5),
         ] {
             let q = |a: usize| spread_bits_10(quantize(p[a], bounds.min[a], scale[a], 1024)) as u64;
-            assert_eq!(
-                morton_code(p, bounds, scale, MortonBits::Bits30),
-                (q(0) << 2) | (q(1) << 1) | q(2)
-            );
+            assert_eq!(grid.code(&Aabb::new(p, p)), (q(0) << 2) | (q(1) << 1) | q(2));
         }
     }
 

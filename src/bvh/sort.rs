@@ -27,6 +27,15 @@ impl<T> DisjointWrites<T> {
         // SAFETY: in bounds (checked above); exclusive by the caller's contract.
         unsafe { self.0.add(index).write(value) }
     }
+
+    /// # Safety
+    /// `index` must have been written by this task, and no other task may access it until the
+    /// parallel section ends.
+    pub(crate) unsafe fn read(&self, index: usize) -> T {
+        assert!(index < self.1, "index {index} out of bounds {}", self.1);
+        // SAFETY: in bounds (checked above), initialized and exclusive by the caller's contract.
+        unsafe { self.0.add(index).read() }
+    }
 }
 
 /// Sorts `items` by the `bits` low bits of `key(item)`, stably. `scratch` is resized to match and

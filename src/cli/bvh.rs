@@ -178,14 +178,17 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
         "SAH cost: {:.2} (traversal and intersection cost 1, relative to the root's area)",
         report.sah_cost
     );
+    let bounds_and_links = if b.links == 0.0 {
+        format!("bounds and links {:.2} ms", b.bounds)
+    } else {
+        format!("bounds {:.2} ms, links {:.2} ms", b.bounds, b.links)
+    };
     println!(
-        "build (median of {} runs): morton {:.2} ms, sort {:.2} ms, hierarchy {:.2} ms, bounds {:.2} ms, links {:.2} ms, total {:.2} ms, {:.1} Mprims/s",
+        "build (median of {} runs): morton {:.2} ms, sort {:.2} ms, hierarchy {:.2} ms, {bounds_and_links}, total {:.2} ms, {:.1} Mprims/s",
         runs.len(),
         b.morton,
         b.sort,
         b.hierarchy,
-        b.bounds,
-        b.links,
         b.total,
         report.mprims_per_s
     );
