@@ -7,7 +7,7 @@ use super::aabb::Aabb;
 use super::layout::{GpuNode, LEAF, NONE};
 use super::morton::{Grid, MortonBits};
 use super::sort::{DisjointWrites, radix_sort_by_key};
-use super::{BuildTimings, Bvh};
+use super::{BuildTimings, Bvh, node_box};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -358,28 +358,28 @@ impl<K: Key> Walk<'_, K> {
     /// Writes `node`, which covers sorted positions `first..=last`, and every node below it, and
     /// returns its box: forks into both subtrees while they are large, then hands each to
     /// [`Self::climb`].
-    fn visit(&self, node: u32, first: u32, last: u32) -> ([f32; 3], [f32; 3]) {
+    fn visit(&self, node: u32, first: u32, last: u32) -> Aabb {
         if last - first < SERIAL_LEAVES {
             return self.climb(node, first, last);
         }
         let [left, right] = self.children[node as usize];
         let split = split(self.children, node);
-        let ((lmin, lmax), (rmin, rmax)) =
+        let (left_box, right_box) =
             rayon::join(|| self.visit(left, first, split), || self.visit(right, split + 1, last));
-        let (min, max) = union(lmin, lmax, rmin, rmax);
-        self.write_internal(node, left, right, min, max, last);
-        (min, max)
+        let bounds = left_box.union(right_box);
+        self.write_internal(node, left, right, bounds, last);
+        bounds
     }
 
     /// Writes the subtree of `root`, which covers sorted positions `first..=last`, on this thread
     /// and returns its box: leaves in order, each followed by the climb through the nodes that it
     /// ends (those it is the last leaf of: a node is done when its right child is). A node's left
     /// child was written before it, and its box is read back from the array.
-    fn climb(&self, root: u32, first: u32, last: u32) -> ([f32; 3], [f32; 3]) {
-        let mut bounds = ([0.0; 3], [0.0; 3]);
+    fn climb(&self, root: u32, first: u32, last: u32) -> Aabb {
+        let mut bounds = Aabb::EMPTY;
         for position in first..=last {
             let mut node = self.leaf_base + position;
-            let (mut min, mut max) = self.write_leaf(position);
+            bounds = self.write_leaf(position);
             while node != root {
                 let parent = self.parents[node as usize];
                 let [left, right] = self.children[parent as usize];
@@ -388,30 +388,29 @@ impl<K: Key> Walk<'_, K> {
                 }
                 // SAFETY: the left child ends before `position`: this thread wrote it already.
                 let sibling = unsafe { self.nodes.read(left as usize) };
-                (min, max) = union(sibling.min, sibling.max, min, max);
-                self.write_internal(parent, left, right, min, max, position);
+                bounds = node_box(&sibling).union(bounds);
+                self.write_internal(parent, left, right, bounds, position);
                 node = parent;
             }
-            bounds = (min, max);
         }
+        // The last leaf's climb ends at the root.
         bounds
     }
 
     /// Writes the leaf at sorted `position` and returns its box.
     #[inline(always)]
-    fn write_leaf(&self, position: u32) -> ([f32; 3], [f32; 3]) {
+    fn write_leaf(&self, position: u32) -> Aabb {
         // The primitives are scattered through `boxes`; fetching ahead overlaps the cache misses.
         if let Some(ahead) = self.keys.get(position as usize + PREFETCH_DISTANCE) {
             prefetch(&self.boxes[ahead.primitive() as usize]);
         }
         let primitive = self.keys[position as usize].primitive();
         let b = self.boxes[primitive as usize];
-        let (min, max) = (b.min.to_array(), b.max.to_array());
         let node = self.leaf_base + position;
         let leaf = GpuNode {
-            min,
+            min: b.min.to_array(),
             left: primitive,
-            max,
+            max: b.max.to_array(),
             right: LEAF,
             parent: self.parents[node as usize],
             escape: escape(self.children, position),
@@ -419,16 +418,16 @@ impl<K: Key> Walk<'_, K> {
         };
         // SAFETY: the walk reaches each node once; the subtrees of a fork are disjoint.
         unsafe { self.nodes.write(node as usize, leaf) };
-        (min, max)
+        b
     }
 
     /// Writes internal `node`, whose range ends at sorted position `last`.
     #[inline(always)]
-    fn write_internal(&self, node: u32, left: u32, right: u32, min: [f32; 3], max: [f32; 3], last: u32) {
+    fn write_internal(&self, node: u32, left: u32, right: u32, bounds: Aabb, last: u32) {
         let internal = GpuNode {
-            min,
+            min: bounds.min.to_array(),
             left,
-            max,
+            max: bounds.max.to_array(),
             right,
             parent: self.parents[node as usize],
             escape: escape(self.children, last),
@@ -437,15 +436,6 @@ impl<K: Key> Walk<'_, K> {
         // SAFETY: as for leaves.
         unsafe { self.nodes.write(node as usize, internal) };
     }
-}
-
-/// The union of two boxes, exact in any order.
-#[inline(always)]
-fn union(amin: [f32; 3], amax: [f32; 3], bmin: [f32; 3], bmax: [f32; 3]) -> ([f32; 3], [f32; 3]) {
-    (
-        [amin[0].min(bmin[0]), amin[1].min(bmin[1]), amin[2].min(bmin[2])],
-        [amax[0].max(bmax[0]), amax[1].max(bmax[1]), amax[2].max(bmax[2])],
-    )
 }
 
 fn ms_since(start: Instant) -> f64 {
