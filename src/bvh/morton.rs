@@ -92,7 +92,7 @@ impl Grid {
     /// The Morton code of `b`'s centroid: [`quantize`] on all three axes at once.
     #[inline]
     pub fn code(&self, b: &Aabb) -> u64 {
-        let cell = ((centroid(b) - self.min) * self.scale)
+        let cell = ((Vec3A::from(b.centroid()) - self.min) * self.scale)
             .max(Vec3A::ZERO)
             .min(self.last_cell);
         let (x, y, z) = (cell.x as u32, cell.y as u32, cell.z as u32);
@@ -105,12 +105,6 @@ impl Grid {
     }
 }
 
-/// A box's centroid in SIMD lanes; the same value as [`Aabb::centroid`], whose operations it repeats.
-#[inline]
-fn centroid(b: &Aabb) -> Vec3A {
-    (Vec3A::from(b.min) + Vec3A::from(b.max)) * 0.5
-}
-
 /// Bounds of the boxes' centroids: the grid that Morton codes quantize in.
 pub fn centroid_bounds(boxes: &[Aabb]) -> Aabb {
     let (min, max) = boxes
@@ -119,7 +113,7 @@ pub fn centroid_bounds(boxes: &[Aabb]) -> Aabb {
             chunk
                 .iter()
                 .fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(min, max), b| {
-                    let c = centroid(b);
+                    let c = Vec3A::from(b.centroid());
                     (min.min(c), max.max(c))
                 })
         })
