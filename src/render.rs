@@ -161,11 +161,12 @@ pub fn render_frames(
                 "--frames rebuilds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
             );
             outcome.device = ctx.describe();
-            let mut builder = GpuLbvhBuilder::new(&ctx, first.spheres.len(), first.triangles.len())?;
+            let mut builder =
+                GpuLbvhBuilder::new(&ctx, MortonBits::Bits30, first.spheres.len(), first.triangles.len())?;
             // The triangles stand still: written once. The spheres move: written every frame.
             builder.write_scene(&first)?;
             let mut layout = first;
-            layout.bvh_depth = depth_bound(n);
+            layout.bvh_depth = depth_bound(n, MortonBits::Bits30);
             let renderer = GpuRenderer::with_shared_buffers(&ctx, &layout, options.accel, &builder.shared_buffers())?;
             for frame in 0..frames {
                 if frame > 0 {

@@ -106,7 +106,7 @@ fn gpu_builder(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let mut builder = GpuLbvhBuilder::new(&ctx, 0, 0).expect("the build compiles");
+    let mut builder = GpuLbvhBuilder::new(&ctx, MortonBits::Bits30, 0, 0).expect("the build compiles");
     // A software adapter takes seconds per million primitives: stop there.
     let software = ctx.info.device_type == wgpu::DeviceType::Cpu;
     for n in SIZES.into_iter().filter(|&n| !software || n <= 1_000_000) {

@@ -161,7 +161,12 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     for &count in &args.counts {
         let packed = scene(&args.scene, count, args.width, args.height)?;
         let mut builder = if args.rebuild {
-            Some(GpuLbvhBuilder::new(&ctx, packed.spheres.len(), packed.triangles.len())?)
+            Some(GpuLbvhBuilder::new(
+                &ctx,
+                MortonBits::Bits30,
+                packed.spheres.len(),
+                packed.triangles.len(),
+            )?)
         } else {
             None
         };
@@ -188,7 +193,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                         b.write_spheres(&packed.spheres);
                         b.write_triangles(&packed.triangles);
                         let mut layout = packed.clone();
-                        layout.bvh_depth = depth_bound(packed.primitive_count());
+                        layout.bvh_depth = depth_bound(packed.primitive_count(), MortonBits::Bits30);
                         GpuRenderer::with_shared_buffers(&ctx, &layout, accel, &b.shared_buffers())
                     }
                     None => GpuRenderer::new(&ctx, &packed, memory, accel),

@@ -35,7 +35,7 @@ pub struct BvhArgs {
     scene: String,
     #[arg(long, value_enum, default_value_t)]
     builder: Builder,
-    /// Where the LBVH is built: the CPU (rayon) or the GPU (compute passes, 30-bit codes).
+    /// Where the LBVH is built: the CPU (rayon) or the GPU (compute passes).
     #[arg(long, value_enum, default_value_t = BuildDevice::Cpu)]
     device: BuildDevice,
     #[arg(long, value_enum)]
@@ -92,17 +92,13 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
     let (bvh, mut runs) = match (args.builder, args.morton_bits) {
         (Builder::Lbvh, bits) if args.device == BuildDevice::Gpu => {
-            anyhow::ensure!(
-                bits == MortonBits::Bits30,
-                "the GPU build uses 30-bit Morton codes; drop --morton-bits 63"
-            );
             let ctx = GpuContext::require(args.backend)?;
             device = format!("gpu: {}", ctx.describe());
             anyhow::ensure!(
                 ctx.timestamps,
                 "{device} has no timestamp queries to time the build with"
             );
-            let mut builder = GpuLbvhBuilder::new(&ctx, packed.spheres.len(), packed.triangles.len())?;
+            let mut builder = GpuLbvhBuilder::new(&ctx, bits, packed.spheres.len(), packed.triangles.len())?;
             builder.write_scene(&packed)?;
             builder.build(false)?;
             let timings = (0..runs)

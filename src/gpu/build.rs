@@ -2,7 +2,8 @@
 //! hierarchy, bounds, links), each timed with timestamp queries where the adapter has them. The node
 //! array stays on the GPU, ready for the fragment shader; `read_nodes` fetches it for tests and stats.
 //!
-//! GPU builds use 30-bit Morton codes; 63-bit codes are built on the CPU only.
+//! Morton codes are 30-bit or 63-bit, as on the CPU; the width picks the key type the kernels are
+//! compiled with.
 
 use super::GpuContext;
 use super::readback::read_buffer;
@@ -10,6 +11,7 @@ use super::timing::PassTimestamps;
 use super::upload::SharedBuffers;
 use crate::bvh::BuildTimings;
 use crate::bvh::layout::GpuNode;
+use crate::bvh::morton::MortonBits;
 use crate::scene::packed::{GpuSphere, GpuTriangle, PackedScene};
 use anyhow::bail;
 use std::num::NonZeroU64;
@@ -19,12 +21,51 @@ const LBVH: &str = include_str!("shaders/lbvh.wgsl");
 
 const GROUP: u32 = 256;
 const BLOCK: u32 = 1024;
-const CODE_BITS: u32 = 30;
-/// The radix sort's digit (RADIX = 16 in lbvh.wgsl), and its passes over 30-bit codes: an even number,
-/// so that the sorted pairs end where they started, in pairs A.
+/// The radix sort's digit (RADIX = 16 in lbvh.wgsl).
 const DIGIT_BITS: u32 = 4;
-const SORT_PASSES: u32 = CODE_BITS.div_ceil(DIGIT_BITS);
-const _: () = assert!(SORT_PASSES.is_multiple_of(2));
+/// Passes of the radix sort over codes of each width: even numbers, so that the sorted pairs end
+/// where they started, in pairs A.
+const fn sort_passes(bits: MortonBits) -> u32 {
+    match bits {
+        MortonBits::Bits30 => 30u32.div_ceil(DIGIT_BITS),
+        MortonBits::Bits63 => 63u32.div_ceil(DIGIT_BITS),
+    }
+}
+const _: () = assert!(sort_passes(MortonBits::Bits30).is_multiple_of(2));
+const _: () = assert!(sort_passes(MortonBits::Bits63).is_multiple_of(2));
+
+/// What lbvh.wgsl needs to know of the code width: the grid, and the (code, primitive) pair.
+fn key_preamble(bits: MortonBits) -> String {
+    let pair = match bits {
+        MortonBits::Bits30 => {
+            "// A 30-bit code and its primitive.
+alias Pair = vec2<u32>;
+fn pair(code: vec2<u32>, primitive: u32) -> Pair { return Pair(code.x, primitive); }
+fn pair_primitive(p: Pair) -> u32 { return p.y; }
+fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, 0u, high); }"
+        }
+        MortonBits::Bits63 => {
+            "// A 63-bit code (low word, high word) and its primitive; w is unused.
+alias Pair = vec4<u32>;
+fn pair(code: vec2<u32>, primitive: u32) -> Pair { return Pair(code, primitive, 0u); }
+fn pair_primitive(p: Pair) -> u32 { return p.z; }
+fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, p.y, high); }"
+        }
+    };
+    format!(
+        "// Generated: {}-bit Morton codes.\nconst CELLS: u32 = {}u;\n{pair}\n",
+        bits.total_bits(),
+        1u32 << bits.bits_per_axis()
+    )
+}
+
+/// Bytes of one (code, primitive) pair.
+fn pair_bytes(bits: MortonBits) -> u64 {
+    match bits {
+        MortonBits::Bits30 => 8,
+        MortonBits::Bits63 => 16,
+    }
+}
 /// Words of `scratch` per block: 16 digit counts and 6 words of centroid bounds.
 const SCRATCH_WORDS_PER_BLOCK: u64 = 16 + 6;
 /// Uniform offsets must be multiples of 256 bytes.
@@ -59,6 +100,7 @@ struct Kernels {
 /// primitive count stays the same.
 pub struct GpuLbvhBuilder<'a> {
     ctx: &'a GpuContext,
+    bits: MortonBits,
     kernels: Kernels,
     layout: wgpu::BindGroupLayout,
     buffers: Buffers,
@@ -97,8 +139,9 @@ fn grid(groups: u32) -> (u32, u32) {
 }
 
 impl<'a> GpuLbvhBuilder<'a> {
-    /// Compiles the kernels and sizes the buffers for `spheres` spheres and `triangles` triangles.
-    pub fn new(ctx: &'a GpuContext, spheres: usize, triangles: usize) -> anyhow::Result<Self> {
+    /// Compiles the kernels for Morton codes of `bits` and sizes the buffers for `spheres` spheres and
+    /// `triangles` triangles.
+    pub fn new(ctx: &'a GpuContext, bits: MortonBits, spheres: usize, triangles: usize) -> anyhow::Result<Self> {
         ctx.checked("compiling the GPU LBVH build", || {
             let device = &ctx.device;
             let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
@@ -126,7 +169,7 @@ impl<'a> GpuLbvhBuilder<'a> {
             });
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("lbvh"),
-                source: wgpu::ShaderSource::Wgsl(format!("{TYPES}\n{LBVH}").into()),
+                source: wgpu::ShaderSource::Wgsl(format!("{}\n{TYPES}\n{LBVH}", key_preamble(bits)).into()),
             });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("lbvh build"),
@@ -154,9 +197,10 @@ impl<'a> GpuLbvhBuilder<'a> {
                 leaves_and_bounds: kernel("leaves_and_bounds"),
                 links: kernel("links"),
             };
-            let buffers = Buffers::new(ctx, &layout, spheres, triangles)?;
+            let buffers = Buffers::new(ctx, &layout, bits, spheres, triangles)?;
             Ok(Self {
                 ctx,
+                bits,
                 kernels,
                 layout,
                 buffers,
@@ -172,7 +216,7 @@ impl<'a> GpuLbvhBuilder<'a> {
     pub fn resize(&mut self, spheres: usize, triangles: usize) -> anyhow::Result<()> {
         if (spheres, triangles) != (self.buffers.sphere_count as usize, self.buffers.triangle_count as usize) {
             self.buffers = self.ctx.checked("sizing the GPU LBVH build", || {
-                Buffers::new(self.ctx, &self.layout, spheres, triangles)
+                Buffers::new(self.ctx, &self.layout, self.bits, spheres, triangles)
             })?;
         }
         Ok(())
@@ -209,13 +253,30 @@ impl<'a> GpuLbvhBuilder<'a> {
         Ok(())
     }
 
-    /// Replaces the Morton phase with given codes (30-bit), for comparisons with the CPU build.
+    /// The Morton code width the kernels were compiled for.
+    pub fn bits(&self) -> MortonBits {
+        self.bits
+    }
+
+    /// Replaces the Morton phase with given codes (of the builder's width), for comparisons with
+    /// the CPU build.
     pub fn write_codes(&self, codes: &[u64]) {
         assert_eq!(codes.len(), self.count());
-        let pairs: Vec<[u32; 2]> = codes.iter().enumerate().map(|(i, &c)| [c as u32, i as u32]).collect();
-        self.ctx
-            .queue
-            .write_buffer(&self.buffers.pairs, 0, bytemuck::cast_slice(&pairs));
+        let bytes: Vec<u8> = match self.bits {
+            MortonBits::Bits30 => {
+                let pairs: Vec<[u32; 2]> = codes.iter().enumerate().map(|(i, &c)| [c as u32, i as u32]).collect();
+                bytemuck::cast_slice(&pairs).to_vec()
+            }
+            MortonBits::Bits63 => {
+                let pairs: Vec<[u32; 4]> = codes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &c)| [c as u32, (c >> 32) as u32, i as u32, 0])
+                    .collect();
+                bytemuck::cast_slice(&pairs).to_vec()
+            }
+        };
+        self.ctx.queue.write_buffer(&self.buffers.pairs, 0, &bytes);
     }
 
     /// Records a build into `encoder`: from the spheres, or from the codes of `write_codes` when
@@ -261,7 +322,7 @@ impl<'a> GpuLbvhBuilder<'a> {
                 ],
             );
         }
-        let sort: Vec<_> = (0..SORT_PASSES)
+        let sort: Vec<_> = (0..sort_passes(self.bits))
             .flat_map(|pass| {
                 let bind_group = &b.bind_groups[pass as usize % 2];
                 [
@@ -340,6 +401,7 @@ impl Buffers {
     fn new(
         ctx: &GpuContext,
         layout: &wgpu::BindGroupLayout,
+        bits: MortonBits,
         sphere_count: usize,
         triangle_count: usize,
     ) -> anyhow::Result<Self> {
@@ -369,8 +431,8 @@ impl Buffers {
             record_room(triangle_count, std::mem::size_of::<GpuTriangle>()),
             wgpu::BufferUsages::COPY_DST,
         );
-        let pairs = storage(ctx, "pairs A", n * 8, wgpu::BufferUsages::COPY_DST);
-        let pairs_b = storage(ctx, "pairs B", n * 8, wgpu::BufferUsages::empty());
+        let pairs = storage(ctx, "pairs A", n * pair_bytes(bits), wgpu::BufferUsages::COPY_DST);
+        let pairs_b = storage(ctx, "pairs B", n * pair_bytes(bits), wgpu::BufferUsages::empty());
         let scratch = storage(
             ctx,
             "build scratch",
@@ -389,11 +451,11 @@ impl Buffers {
         let nodes = storage(ctx, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("build params"),
-            size: PARAMS_STRIDE * SORT_PASSES as u64,
+            size: PARAMS_STRIDE * sort_passes(bits) as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        for pass in 0..SORT_PASSES {
+        for pass in 0..sort_passes(bits) {
             let p = BuildParams {
                 count: count as u32,
                 shift: pass * DIGIT_BITS,
@@ -439,11 +501,11 @@ impl Buffers {
     }
 }
 
-/// A bound on the depth of any LBVH over `count` primitives with 30-bit codes: each level of the
-/// radix tree consumes at least one bit of the (code, position) key, which has 30 + ceil(log2 n)
+/// A bound on the depth of any LBVH over `count` primitives with codes of `bits`: each level of the
+/// radix tree consumes at least one bit of the (code, position) key, which has bits + ceil(log2 n)
 /// bits. Renderers size their traversal stack with it when the tree is built on the GPU.
-pub fn depth_bound(count: usize) -> u32 {
-    CODE_BITS + (count.max(1) as u64).next_power_of_two().trailing_zeros()
+pub fn depth_bound(count: usize, bits: MortonBits) -> u32 {
+    bits.total_bits() + (count.max(1) as u64).next_power_of_two().trailing_zeros()
 }
 
 const PHASE_NAMES: [&str; PHASES] = ["morton", "sort", "hierarchy", "bounds", "links"];

@@ -1,11 +1,14 @@
 // The LBVH build in compute passes: the phases of src/bvh/lbvh.rs, giving the same node array for
 // the same Morton codes. Every kernel runs 256 invocations per workgroup; large dispatches are 2D.
+//
+// src/gpu/build.rs prepends what depends on the code width: CELLS (grid cells per axis), the `Pair`
+// type that holds a code and its primitive, and its accessors `pair`, `pair_primitive` and
+// `code_word` (the code's low or high 32 bits; 30-bit codes have no high word, it reads 0).
 
 const GROUP: u32 = 256u;
 // Items per block in the reduction and sort kernels: 4 consecutive items per invocation.
 const BLOCK: u32 = 1024u;
 const ITEMS: u32 = 4u;
-const CELLS: u32 = 1024u;
 
 // The sort orders keys by digits of 4 bits, lowest digit first.
 const RADIX: u32 = 16u;
@@ -27,8 +30,8 @@ const SCRATCH_HIST: u32 = 8u;
 @group(0) @binding(0) var<uniform> params: BuildParams;
 @group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
 // (Morton code, primitive) pairs; sort passes read `pairs_in` and write `pairs_out`.
-@group(0) @binding(2) var<storage, read_write> pairs_in: array<vec2<u32>>;
-@group(0) @binding(3) var<storage, read_write> pairs_out: array<vec2<u32>>;
+@group(0) @binding(2) var<storage, read_write> pairs_in: array<Pair>;
+@group(0) @binding(3) var<storage, read_write> pairs_out: array<Pair>;
 @group(0) @binding(4) var<storage, read_write> scratch: array<u32>;
 // Internal node i: (left child, right child, first, last).
 @group(0) @binding(5) var<storage, read_write> ranges: array<vec4<u32>>;
@@ -156,7 +159,18 @@ fn spread_bits_10(v: u32) -> u32 {
     return x;
 }
 
-// Compute Morton codes of primitive centroids: the expression of bvh::morton::morton_code.
+// The low 21 bits of v spread so that two zero bits separate each: (bits 0-31, bits 32-63) of
+// bvh::morton::spread_bits_21. Below 1024 it is spread_bits_10 in the low word.
+fn spread_bits_21(v: u32) -> vec2<u32> {
+    return vec2<u32>(spread_bits_10(v) | (((v >> 10u) & 1u) << 30u), spread_bits_10(v >> 11u) << 1u);
+}
+
+// A 64-bit value as (low, high) words, shifted left by s in 1..31.
+fn shift_left_64(v: vec2<u32>, s: u32) -> vec2<u32> {
+    return vec2<u32>(v.x << s, (v.y << s) | (v.x >> (32u - s)));
+}
+
+// Compute Morton codes of primitive centroids: the expression of bvh::morton::Grid::code.
 @compute @workgroup_size(256)
 fn morton(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
           @builtin(local_invocation_index) lid: u32) {
@@ -170,12 +184,13 @@ fn morton(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups
     let scale = select(vec3<f32>(0.0), vec3<f32>(f32(CELLS)) / extent, extent > vec3<f32>(0.0));
     let cell = min(max((centroid(i) - lo) * scale, vec3<f32>(0.0)), vec3<f32>(f32(CELLS - 1u)));
     let q = vec3<u32>(cell);
-    let code = (spread_bits_10(q.x) << 2u) | (spread_bits_10(q.y) << 1u) | spread_bits_10(q.z);
-    pairs_in[i] = vec2<u32>(code, i);
+    let code = shift_left_64(spread_bits_21(q.x), 2u) | shift_left_64(spread_bits_21(q.y), 1u) | spread_bits_21(q.z);
+    pairs_in[i] = pair(code, i);
 }
 
+// A digit never straddles the two words of a 64-bit code: 32 is a multiple of the digit's 4 bits.
 fn digit(i: u32) -> u32 {
-    return (pairs_in[i].x >> params.shift) & (RADIX - 1u);
+    return (code_word(pairs_in[i], params.shift >= 32u) >> (params.shift & 31u)) & (RADIX - 1u);
 }
 
 // Exclusive scan of shared_u32 over the workgroup (Hillis-Steele); returns the total.
@@ -305,18 +320,25 @@ fn sort_scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
     }
 }
 
-// Length of the common prefix of sorted codes i and j; -1 outside the array; equal codes compare
-// positions (30-bit codes: every count is the CPU's, which works on 64 bits, minus 32).
+// Length of the common prefix of the keys (code as 64 bits, then sorted position as 32) at sorted
+// positions i and j; -1 outside the array. The CPU's keys hold the same bits under another number
+// of leading zeros: its lengths differ from these by a constant, and every comparison of two lengths
+// comes out the same on both devices.
 fn delta(i: u32, j: i32) -> i32 {
     if (j < 0 || j >= i32(params.count)) {
         return -1;
     }
-    let a = pairs_in[i].x;
-    let b = pairs_in[u32(j)].x;
-    if (a != b) {
-        return i32(countLeadingZeros(a ^ b));
+    let a = pairs_in[i];
+    let b = pairs_in[u32(j)];
+    let high = code_word(a, true) ^ code_word(b, true);
+    if (high != 0u) {
+        return i32(countLeadingZeros(high));
     }
-    return 32 + i32(countLeadingZeros(i ^ u32(j)));
+    let low = code_word(a, false) ^ code_word(b, false);
+    if (low != 0u) {
+        return 32 + i32(countLeadingZeros(low));
+    }
+    return 64 + i32(countLeadingZeros(i ^ u32(j)));
 }
 
 // Find every internal node's children and range, and every node's parent (Karras 2012).
@@ -415,7 +437,7 @@ fn leaves_and_bounds(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
         return;
     }
     let leaf = n - 1u + k;
-    let b = primitive_box(pairs_in[k].y);
+    let b = primitive_box(pair_primitive(pairs_in[k]));
     store_box(leaf, b.lo, b.hi);
     if (n == 1u) {
         return;
@@ -451,7 +473,7 @@ fn links(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
         right = range.y;
         last = range.w;
     } else {
-        left = pairs_in[node - leaf_base].y;
+        left = pair_primitive(pairs_in[node - leaf_base]);
         right = LEAF;
         last = node - leaf_base;
     }
