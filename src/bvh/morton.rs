@@ -18,14 +18,14 @@ pub enum MortonBits {
 }
 
 impl MortonBits {
-    pub fn bits_per_axis(self) -> u32 {
+    pub const fn bits_per_axis(self) -> u32 {
         match self {
             MortonBits::Bits30 => 10,
             MortonBits::Bits63 => 21,
         }
     }
 
-    pub fn total_bits(self) -> u32 {
+    pub const fn total_bits(self) -> u32 {
         3 * self.bits_per_axis()
     }
 }

@@ -26,10 +26,7 @@ const DIGIT_BITS: u32 = 4;
 /// Passes of the radix sort over codes of each width: even numbers, so that the sorted pairs end
 /// where they started, in pairs A.
 const fn sort_passes(bits: MortonBits) -> u32 {
-    match bits {
-        MortonBits::Bits30 => 30u32.div_ceil(DIGIT_BITS),
-        MortonBits::Bits63 => 63u32.div_ceil(DIGIT_BITS),
-    }
+    bits.total_bits().div_ceil(DIGIT_BITS)
 }
 const _: () = assert!(sort_passes(MortonBits::Bits30).is_multiple_of(2));
 const _: () = assert!(sort_passes(MortonBits::Bits63).is_multiple_of(2));
@@ -66,6 +63,7 @@ fn pair_bytes(bits: MortonBits) -> u64 {
         MortonBits::Bits63 => 16,
     }
 }
+
 /// Words of `scratch` per block: 16 digit counts and 6 words of centroid bounds.
 const SCRATCH_WORDS_PER_BLOCK: u64 = 16 + 6;
 /// Uniform offsets must be multiples of 256 bytes.
