@@ -367,7 +367,7 @@ impl<K: Key> Walk<'_, K> {
         let (left_box, right_box) =
             rayon::join(|| self.visit(left, first, split), || self.visit(right, split + 1, last));
         let bounds = left_box.union(right_box);
-        self.write_internal(node, left, right, bounds, last);
+        self.write_node(node, left, right, bounds, last);
         bounds
     }
 
@@ -389,7 +389,7 @@ impl<K: Key> Walk<'_, K> {
                 // SAFETY: the left child ends before `position`: this thread wrote it already.
                 let sibling = unsafe { self.nodes.read(left as usize) };
                 bounds = node_box(&sibling).union(bounds);
-                self.write_internal(parent, left, right, bounds, position);
+                self.write_node(parent, left, right, bounds, position);
                 node = parent;
             }
         }
@@ -406,25 +406,15 @@ impl<K: Key> Walk<'_, K> {
         }
         let primitive = self.keys[position as usize].primitive();
         let b = self.boxes[primitive as usize];
-        let node = self.leaf_base + position;
-        let leaf = GpuNode {
-            min: b.min.to_array(),
-            left: primitive,
-            max: b.max.to_array(),
-            right: LEAF,
-            parent: self.parents[node as usize],
-            escape: escape(self.children, position),
-            _pad: [0; 2],
-        };
-        // SAFETY: the walk reaches each node once; the subtrees of a fork are disjoint.
-        unsafe { self.nodes.write(node as usize, leaf) };
+        self.write_node(self.leaf_base + position, primitive, LEAF, b, position);
         b
     }
 
-    /// Writes internal `node`, whose range ends at sorted position `last`.
+    /// Writes `node`, whose range ends at sorted position `last`: `left` and `right` as the layout
+    /// has them (a leaf's primitive and [`LEAF`]), its parent and its escape link.
     #[inline(always)]
-    fn write_internal(&self, node: u32, left: u32, right: u32, bounds: Aabb, last: u32) {
-        let internal = GpuNode {
+    fn write_node(&self, node: u32, left: u32, right: u32, bounds: Aabb, last: u32) {
+        let written = GpuNode {
             min: bounds.min.to_array(),
             left,
             max: bounds.max.to_array(),
@@ -433,8 +423,8 @@ impl<K: Key> Walk<'_, K> {
             escape: escape(self.children, last),
             _pad: [0; 2],
         };
-        // SAFETY: as for leaves.
-        unsafe { self.nodes.write(node as usize, internal) };
+        // SAFETY: the walk reaches each node once; the subtrees of a fork are disjoint.
+        unsafe { self.nodes.write(node as usize, written) };
     }
 }
 
