@@ -166,7 +166,7 @@ pub fn render_frames(
             // The triangles stand still: written once. The spheres move: written every frame.
             builder.write_scene(&first)?;
             let mut layout = first;
-            layout.bvh_depth = depth_bound(n, MortonBits::Bits30);
+            layout.bvh_depth = depth_bound(n, builder.bits());
             let renderer = GpuRenderer::with_shared_buffers(&ctx, &layout, options.accel, &builder.shared_buffers())?;
             for frame in 0..frames {
                 if frame > 0 {

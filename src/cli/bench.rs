@@ -160,13 +160,12 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     let mut refused = Vec::new();
     for &count in &args.counts {
         let packed = scene(&args.scene, count, args.width, args.height)?;
-        let mut builder = if args.rebuild {
-            Some(GpuLbvhBuilder::new(
-                &ctx,
-                MortonBits::Bits30,
-                packed.spheres.len(),
-                packed.triangles.len(),
-            )?)
+        // The rebuilds read the primitives from the builder's buffers: written once per count.
+        let builder = if args.rebuild {
+            let mut builder =
+                GpuLbvhBuilder::new(&ctx, MortonBits::Bits30, packed.spheres.len(), packed.triangles.len())?;
+            builder.write_scene(&packed)?;
+            Some(builder)
         } else {
             None
         };
@@ -187,13 +186,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                         continue;
                     }
                 }
-                let rebuild = builder.as_mut().filter(|_| accel.uses_bvh());
+                let rebuild = builder.as_ref().filter(|_| accel.uses_bvh());
                 let renderer = match &rebuild {
                     Some(b) => {
-                        b.write_spheres(&packed.spheres);
-                        b.write_triangles(&packed.triangles);
                         let mut layout = packed.clone();
-                        layout.bvh_depth = depth_bound(packed.primitive_count(), MortonBits::Bits30);
+                        layout.bvh_depth = depth_bound(packed.primitive_count(), b.bits());
                         GpuRenderer::with_shared_buffers(&ctx, &layout, accel, &b.shared_buffers())
                     }
                     None => GpuRenderer::new(&ctx, &packed, memory, accel),

@@ -260,21 +260,17 @@ impl<'a> GpuLbvhBuilder<'a> {
     /// the CPU build.
     pub fn write_codes(&self, codes: &[u64]) {
         assert_eq!(codes.len(), self.count());
-        let bytes: Vec<u8> = match self.bits {
-            MortonBits::Bits30 => {
-                let pairs: Vec<[u32; 2]> = codes.iter().enumerate().map(|(i, &c)| [c as u32, i as u32]).collect();
-                bytemuck::cast_slice(&pairs).to_vec()
+        // The words of each pair, as the preamble's `Pair` lays them out.
+        let mut words = Vec::with_capacity(codes.len() * pair_bytes(self.bits) as usize / 4);
+        for (i, &code) in codes.iter().enumerate() {
+            match self.bits {
+                MortonBits::Bits30 => words.extend([code as u32, i as u32]),
+                MortonBits::Bits63 => words.extend([code as u32, (code >> 32) as u32, i as u32, 0]),
             }
-            MortonBits::Bits63 => {
-                let pairs: Vec<[u32; 4]> = codes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &c)| [c as u32, (c >> 32) as u32, i as u32, 0])
-                    .collect();
-                bytemuck::cast_slice(&pairs).to_vec()
-            }
-        };
-        self.ctx.queue.write_buffer(&self.buffers.pairs, 0, &bytes);
+        }
+        self.ctx
+            .queue
+            .write_buffer(&self.buffers.pairs, 0, bytemuck::cast_slice(&words));
     }
 
     /// Records a build into `encoder`: from the spheres, or from the codes of `write_codes` when
