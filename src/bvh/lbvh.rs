@@ -9,6 +9,7 @@ use super::morton::{Grid, MortonBits};
 use super::sort::{DisjointWrites, radix_sort_by_key};
 use super::{BuildTimings, Bvh, node_box};
 use rayon::prelude::*;
+use std::ops::{BitXor, Not};
 use std::time::Instant;
 
 /// Rayon splits below this many items cost more than they save.
@@ -19,15 +20,17 @@ const MIN_TASK: usize = 4096;
 /// with the index (half the sort's memory traffic); 63-bit codes need a u128.
 ///
 /// After the sort, the same type with the sorted position in place of the primitive is what the
-/// hierarchy search compares (see [`delta`]).
-pub trait Key: Copy + Default + Send + Sync + 'static {
+/// hierarchy search compares (see [`shares_more`]).
+pub trait Key: Copy + Default + Ord + BitXor<Output = Self> + Not<Output = Self> + Send + Sync + 'static {
     fn new(code: u64, primitive: u32) -> Self;
     fn code(self) -> u64;
     fn primitive(self) -> u32;
     /// The same code above `position`.
     fn at_position(self, position: u32) -> Self;
-    /// Leading bits that two keys share.
-    fn common_prefix(self, other: Self) -> u32;
+    /// Every bit below the highest set bit (`self` is the xor of two distinct keys). Another key
+    /// shares more leading bits with a key than these two keys share when its xor with it is at
+    /// most this.
+    fn below_top_bit(self) -> Self;
 }
 
 impl Key for u64 {
@@ -44,8 +47,8 @@ impl Key for u64 {
         (self & !0xffff_ffff) | position as u64
     }
     #[inline(always)]
-    fn common_prefix(self, other: Self) -> u32 {
-        (self ^ other).leading_zeros()
+    fn below_top_bit(self) -> Self {
+        u64::MAX >> self.leading_zeros() >> 1
     }
 }
 
@@ -63,42 +66,48 @@ impl Key for u128 {
         (self & !0xffff_ffff) | position as u128
     }
     #[inline(always)]
-    fn common_prefix(self, other: Self) -> u32 {
-        (self ^ other).leading_zeros()
+    fn below_top_bit(self) -> Self {
+        u128::MAX >> self.leading_zeros() >> 1
     }
 }
 
-/// Length of the common prefix of sorted keys i and j; -1 outside the array. Karras (section 4)
-/// makes every key distinct by comparing positions where codes are equal: keys that hold their
-/// sorted position below the code do exactly that in one xor. (A key type wider than its code only
-/// adds a constant to every length, and only their order matters.)
+/// Whether sorted key j shares more leading bits with key i than `limit` allows (see
+/// [`Key::below_top_bit`]); no key outside the array does. Karras (section 4) makes every key
+/// distinct by comparing positions where codes are equal: keys that hold their sorted position below
+/// the code do exactly that in one xor. Comparing xors with a limit ranks common-prefix lengths
+/// without counting them: the searches below compare with one length at a time.
 #[inline(always)]
-pub fn delta<K: Key>(keys: &[K], i: usize, j: i64) -> i32 {
-    if j < 0 || j >= keys.len() as i64 {
-        return -1;
-    }
-    keys[i].common_prefix(keys[j as usize]) as i32
+fn shares_more<K: Key>(keys: &[K], i: usize, j: i64, limit: K) -> bool {
+    j >= 0 && j < keys.len() as i64 && (keys[i] ^ keys[j as usize]) <= limit
 }
 
 /// Internal node i over n sorted keys: its left and right child, as node indices (internal nodes
 /// 0..n-1, then leaves).
 #[inline(always)]
 pub fn internal_node<K: Key>(keys: &[K], i: usize) -> [u32; 2] {
-    // Direction of the range: towards the neighbour that shares the longer prefix. The other
-    // neighbour's prefix bounds the range: every key in it shares more with i.
-    let right = delta(keys, i, i as i64 + 1);
-    let left = delta(keys, i, i as i64 - 1);
-    if right > left {
-        search_range::<K, true>(keys, i, left)
+    // Direction of the range: towards the neighbour that shares the longer prefix, which is the one
+    // with the smaller xor (sorted distinct keys never differ from i first at the same bit on both
+    // sides). The other neighbour's prefix bounds the range: every key in it shares more with i.
+    let key = keys[i];
+    let to_right = key ^ keys[i + 1];
+    if i == 0 {
+        // No left neighbour: the root spans everything.
+        let everything = !K::default();
+        return search_range::<K, true>(keys, i, everything);
+    }
+    let to_left = key ^ keys[i - 1];
+    if to_right < to_left {
+        search_range::<K, true>(keys, i, to_left.below_top_bit())
     } else {
-        search_range::<K, false>(keys, i, right)
+        search_range::<K, false>(keys, i, to_right.below_top_bit())
     }
 }
 
 /// The rest of [`internal_node`], for a range that grows from i to the right (`RIGHT`) or to the
-/// left; a constant direction spares the searches a multiply on every step.
+/// left; a constant direction spares the searches a multiply on every step. `in_range` is the xor
+/// limit of the keys in the range.
 #[inline(always)]
-fn search_range<K: Key, const RIGHT: bool>(keys: &[K], i: usize, delta_min: i32) -> [u32; 2] {
+fn search_range<K: Key, const RIGHT: bool>(keys: &[K], i: usize, in_range: K) -> [u32; 2] {
     let leaf_base = (keys.len() - 1) as u32;
     let ii = i as i64;
     let at = |offset: i64| if RIGHT { ii + offset } else { ii - offset };
@@ -107,13 +116,13 @@ fn search_range<K: Key, const RIGHT: bool>(keys: &[K], i: usize, delta_min: i32)
     // 1 passes by the choice of direction). Its steps add 0 or t without a branch: which way they
     // go is data, and unpredictable.
     let mut l_max: i64 = 2;
-    while delta(keys, i, at(l_max)) > delta_min {
+    while shares_more(keys, i, at(l_max), in_range) {
         l_max *= 2;
     }
     let mut l = l_max / 2;
     let mut t = l_max / 4;
     while t >= 1 {
-        l += t * (delta(keys, i, at(l + t)) > delta_min) as i64;
+        l += t * shares_more(keys, i, at(l + t), in_range) as i64;
         t /= 2;
     }
     let j = at(l);
@@ -124,12 +133,12 @@ fn search_range<K: Key, const RIGHT: bool>(keys: &[K], i: usize, delta_min: i32)
     }
     // The split: the last position that shares more than the node's prefix with i, in steps of
     // ceil(l / 2), ceil(l / 4), ..., 1 (shifts: the divisors are powers of two).
-    let delta_node = delta(keys, i, j);
+    let in_child = (keys[i] ^ keys[j as usize]).below_top_bit();
     let mut s: i64 = 0;
     let mut shift = 1;
     loop {
         let t = (l + (1 << shift) - 1) >> shift;
-        s += t * (delta(keys, i, at(s + t)) > delta_node) as i64;
+        s += t * shares_more(keys, i, at(s + t), in_child) as i64;
         if t == 1 {
             break;
         }
