@@ -195,6 +195,8 @@ pub struct LbvhBuilder<K: Key> {
     children: Vec<[u32; 2]>,
     /// Parent of each node.
     parents: Vec<u32>,
+    /// The primitives' boxes in sorted order: the leaves' boxes.
+    leaf_boxes: Vec<Aabb>,
     nodes: Vec<GpuNode>,
 }
 
@@ -326,12 +328,27 @@ impl<K: Key> LbvhBuilder<K> {
     // rule of the GPU's pass.
     fn bounds_and_links(&mut self, boxes: &[Aabb]) {
         let n = self.keys.len();
+        // The primitives' boxes are scattered; a gather with nothing else in flight overlaps their
+        // cache misses better than the climb would with its loads and branches between them.
+        let keys = &self.keys;
+        self.leaf_boxes.resize(n, Aabb::EMPTY);
+        self.leaf_boxes
+            .par_chunks_mut(MIN_TASK)
+            .enumerate()
+            .for_each(|(chunk, leaf_boxes)| {
+                for (position, leaf_box) in (chunk * MIN_TASK..).zip(leaf_boxes) {
+                    if let Some(ahead) = keys.get(position + PREFETCH_DISTANCE) {
+                        prefetch(&boxes[ahead.primitive() as usize]);
+                    }
+                    *leaf_box = boxes[keys[position].primitive() as usize];
+                }
+            });
         let walk = Walk {
             nodes: DisjointWrites::new(&mut self.nodes),
-            keys: &self.keys,
+            keys,
             children: &self.children,
             parents: &self.parents,
-            boxes,
+            leaf_boxes: &self.leaf_boxes,
             leaf_base: n as u32 - 1,
         };
         walk.visit(0, 0, n as u32 - 1);
@@ -341,7 +358,7 @@ impl<K: Key> LbvhBuilder<K> {
 /// Subtrees with fewer leaves than this are walked on one thread.
 const SERIAL_LEAVES: u32 = 4096;
 
-/// How many leaves ahead the walk fetches their primitives' boxes.
+/// How many leaves ahead the gather fetches their primitives' boxes.
 const PREFETCH_DISTANCE: usize = 32;
 
 fn prefetch<T>(value: &T) {
@@ -359,7 +376,7 @@ struct Walk<'a, K: Key> {
     keys: &'a [K],
     children: &'a [[u32; 2]],
     parents: &'a [u32],
-    boxes: &'a [Aabb],
+    leaf_boxes: &'a [Aabb],
     leaf_base: u32,
 }
 
@@ -409,12 +426,8 @@ impl<K: Key> Walk<'_, K> {
     /// Writes the leaf at sorted `position` and returns its box.
     #[inline(always)]
     fn write_leaf(&self, position: u32) -> Aabb {
-        // The primitives are scattered through `boxes`; fetching ahead overlaps the cache misses.
-        if let Some(ahead) = self.keys.get(position as usize + PREFETCH_DISTANCE) {
-            prefetch(&self.boxes[ahead.primitive() as usize]);
-        }
         let primitive = self.keys[position as usize].primitive();
-        let b = self.boxes[primitive as usize];
+        let b = self.leaf_boxes[position as usize];
         self.write_node(self.leaf_base + position, primitive, LEAF, b, position);
         b
     }
