@@ -1,11 +1,25 @@
-//! A stable parallel LSD radix sort: per-chunk digit histograms, one prefix sum over (digit, chunk),
-//! then each chunk scatters its items to their places. Chunks and items keep their order, so equal
-//! keys keep their input order.
+//! A stable parallel radix sort. The first pass scatters the items by their most significant digit,
+//! in parallel: per-chunk digit histograms, one prefix sum over (digit, chunk), then each chunk
+//! scatters its items to their places. Each bucket that makes (a few thousand items, for a million
+//! evenly spread keys) is then sorted by the digits below on one thread, least significant first,
+//! while it stays in cache; the buckets run in parallel. A bucket too large for that (clustered keys)
+//! is split by its next digit the same way. Chunks and items keep their order at every step, so
+//! equal keys keep their input order.
 
 use rayon::prelude::*;
 
+/// Digits of the parallel passes over the whole array. Wider ones measured slower: each chunk's
+/// writes then go to more places at once than the caches keep apart.
 const DIGIT_BITS: u32 = 8;
 const BUCKETS: usize = 1 << DIGIT_BITS;
+
+/// Digits of the passes within a bucket, which stays in cache: 22 bits below a 30-bit code's top
+/// digit take two passes instead of three.
+const SERIAL_DIGIT_BITS: u32 = 11;
+const SERIAL_BUCKETS: usize = 1 << SERIAL_DIGIT_BITS;
+
+/// Buckets up to this many items are sorted on one thread.
+const SERIAL_ITEMS: usize = 1 << 16;
 
 /// A shared output buffer that tasks write at disjoint indices.
 #[derive(Clone, Copy)]
@@ -40,56 +54,161 @@ impl<T> DisjointWrites<T> {
 
 /// Sorts `items` by the `bits` low bits of `key(item)`, stably. `scratch` is resized to match and
 /// keeps its capacity for the next sort.
-pub fn radix_sort_by_key<T, K>(items: &mut Vec<T>, scratch: &mut Vec<T>, bits: u32, key: K)
+pub fn radix_sort_by_key<T, K>(items: &mut [T], scratch: &mut Vec<T>, bits: u32, key: K)
 where
     T: Copy + Default + Send + Sync,
     K: Fn(T) -> u64 + Sync,
 {
+    scratch.resize(items.len(), T::default());
+    sort_slice(items, scratch, bits.min(64), &key);
+}
+
+/// Sorts `items` by the `bits` low bits of their keys, stably, using `scratch` (as long) on the way.
+fn sort_slice<T, K>(items: &mut [T], scratch: &mut [T], bits: u32, key: &K)
+where
+    T: Copy + Send + Sync,
+    K: Fn(T) -> u64 + Sync,
+{
     let n = items.len();
-    if n < 2 {
+    if n < 2 || bits == 0 {
         return;
     }
-    let threads = rayon::current_num_threads();
-    let chunk = n.div_ceil(threads * 4).max(1 << 14);
-    scratch.resize(n, T::default());
-    let mut shift = 0;
-    while shift < bits {
-        let digit = |item: &T| ((key(*item) >> shift) as usize) & (BUCKETS - 1);
-        let histograms: Vec<[usize; BUCKETS]> = items
-            .par_chunks(chunk)
-            .map(|c| {
-                let mut h = [0usize; BUCKETS];
-                for item in c {
-                    h[digit(item)] += 1;
-                }
-                h
-            })
-            .collect();
-        // Skip a digit that every item shares: the pass would not move anything.
-        let single_bucket = (0..BUCKETS).any(|d| histograms.iter().map(|h| h[d]).sum::<usize>() == n);
-        if !single_bucket {
-            // Offsets in digit-major, chunk-minor order keep the sort stable.
-            let mut offsets = vec![[0usize; BUCKETS]; histograms.len()];
-            let mut running = 0;
-            for d in 0..BUCKETS {
-                for (c, h) in histograms.iter().enumerate() {
-                    offsets[c][d] = running;
-                    running += h[d];
-                }
-            }
-            let out = DisjointWrites::new(scratch);
-            items.par_chunks(chunk).zip(offsets).for_each(|(c, mut offset)| {
-                for &item in c {
-                    let d = digit(&item);
-                    // SAFETY: the prefix sums give every item of every chunk its own slot.
-                    unsafe { out.write(offset[d], item) };
-                    offset[d] += 1;
-                }
-            });
-            std::mem::swap(items, scratch);
+    if n <= SERIAL_ITEMS {
+        if serial_lsd(items, scratch, bits, key) {
+            items.copy_from_slice(scratch);
         }
-        shift += DIGIT_BITS;
+        return;
     }
+    let shift = bits.saturating_sub(DIGIT_BITS);
+    let Some(starts) = scatter_by_digit(items, scratch, bits, shift, key) else {
+        // Every item has the same top digit: nothing moved.
+        return sort_slice(items, scratch, shift, key);
+    };
+    // The buckets are in `scratch` now; each is sorted back into its place in `items`.
+    let mut buckets = Vec::with_capacity(BUCKETS);
+    let (mut rest_items, mut rest_scratch) = (items, scratch);
+    for d in 0..BUCKETS {
+        let len = starts[d + 1] - starts[d];
+        let (bucket_items, after_items) = rest_items.split_at_mut(len);
+        let (bucket_scratch, after_scratch) = rest_scratch.split_at_mut(len);
+        if len > 0 {
+            buckets.push((bucket_items, bucket_scratch));
+        }
+        (rest_items, rest_scratch) = (after_items, after_scratch);
+    }
+    buckets.into_par_iter().for_each(|(bucket_items, bucket_scratch)| {
+        if bucket_items.len() <= SERIAL_ITEMS {
+            // Sorted from `scratch`, with `items` as the scratch space.
+            if !serial_lsd(bucket_scratch, bucket_items, shift, key) {
+                bucket_items.copy_from_slice(bucket_scratch);
+            }
+        } else {
+            bucket_items.copy_from_slice(bucket_scratch);
+            sort_slice(bucket_items, bucket_scratch, shift, key);
+        }
+    });
+}
+
+/// One parallel pass that moves `items` into `out`, stably grouped by their key bits from `shift` up
+/// to `bits` (at most a digit); returns
+/// where each digit's bucket starts (and, last, the end), or `None` and moves nothing when all
+/// items share the digit.
+fn scatter_by_digit<T, K>(items: &[T], out: &mut [T], bits: u32, shift: u32, key: &K) -> Option<[usize; BUCKETS + 1]>
+where
+    T: Copy + Send + Sync,
+    K: Fn(T) -> u64 + Sync,
+{
+    let n = items.len();
+    let chunk = n.div_ceil(rayon::current_num_threads() * 4).max(1 << 14);
+    let mask = digit_mask(bits - shift, DIGIT_BITS);
+    // The constant mask tells the compiler that the digit indexes the histograms in bounds.
+    let digit = |item: &T| ((key(*item) >> shift) as usize) & mask & (BUCKETS - 1);
+    let histograms: Vec<[usize; BUCKETS]> = items
+        .par_chunks(chunk)
+        .map(|c| {
+            let mut h = [0usize; BUCKETS];
+            for item in c {
+                h[digit(item)] += 1;
+            }
+            h
+        })
+        .collect();
+    // Offsets in digit-major, chunk-minor order keep the pass stable.
+    let mut offsets = vec![[0usize; BUCKETS]; histograms.len()];
+    let mut starts = [0usize; BUCKETS + 1];
+    let mut running = 0;
+    for d in 0..BUCKETS {
+        starts[d] = running;
+        for (c, h) in histograms.iter().enumerate() {
+            offsets[c][d] = running;
+            running += h[d];
+        }
+        if running - starts[d] == n {
+            return None;
+        }
+    }
+    starts[BUCKETS] = n;
+    let out = DisjointWrites::new(out);
+    items.par_chunks(chunk).zip(offsets).for_each(|(c, mut offset)| {
+        for &item in c {
+            let d = digit(&item);
+            // SAFETY: the prefix sums give every item of every chunk its own slot.
+            unsafe { out.write(offset[d], item) };
+            offset[d] += 1;
+        }
+    });
+    Some(starts)
+}
+
+/// The mask of a digit of `digit_bits` of which only the low `bits` count.
+fn digit_mask(bits: u32, digit_bits: u32) -> usize {
+    (1 << bits.min(digit_bits)) - 1
+}
+
+/// Sorts `items` by the `bits` low bits of their keys on this thread, least significant digit first,
+/// moving them between `items` and `other` (as long); returns true when the result is in `other`.
+/// One read counts every digit; a digit that all items share costs no pass.
+fn serial_lsd<T, K>(items: &mut [T], other: &mut [T], bits: u32, key: &K) -> bool
+where
+    T: Copy,
+    K: Fn(T) -> u64,
+{
+    const MAX_DIGITS: usize = 64usize.div_ceil(SERIAL_DIGIT_BITS as usize);
+    let digits = bits.div_ceil(SERIAL_DIGIT_BITS) as usize;
+    let masks: [usize; MAX_DIGITS] =
+        std::array::from_fn(|p| digit_mask(bits.saturating_sub(p as u32 * SERIAL_DIGIT_BITS), SERIAL_DIGIT_BITS));
+    let mut counts = [[0u32; SERIAL_BUCKETS]; MAX_DIGITS];
+    for &item in items.iter() {
+        let k = key(item);
+        for (p, count) in counts[..digits].iter_mut().enumerate() {
+            // The constant mask tells the compiler that the digit indexes the counts in bounds.
+            count[((k >> (p as u32 * SERIAL_DIGIT_BITS)) as usize) & masks[p] & (SERIAL_BUCKETS - 1)] += 1;
+        }
+    }
+    let n = items.len() as u32;
+    let (mut from, mut to) = (items, other);
+    let mut in_other = false;
+    for (p, count) in counts[..digits].iter().enumerate() {
+        if count.contains(&n) {
+            continue;
+        }
+        let mut offset = [0u32; SERIAL_BUCKETS];
+        let mut running = 0;
+        for (o, c) in offset.iter_mut().zip(count) {
+            *o = running;
+            running += c;
+        }
+        let (shift, mask) = (p as u32 * SERIAL_DIGIT_BITS, masks[p]);
+        for &item in from.iter() {
+            let d = ((key(item) >> shift) as usize) & mask & (SERIAL_BUCKETS - 1);
+            // SAFETY: the counts give the items of each digit the slots from its offset on, in bounds.
+            unsafe { *to.get_unchecked_mut(offset[d] as usize) = item };
+            offset[d] += 1;
+        }
+        (from, to) = (to, from);
+        in_other = !in_other;
+    }
+    in_other
 }
 
 #[cfg(test)]
@@ -97,13 +216,52 @@ mod tests {
     use super::*;
     use crate::scene::builtin::SplitMix64;
 
+    /// Radix-sorts `(key, index)` pairs by `bits` key bits and compares with the standard library's
+    /// stable sort.
+    fn check(keys: impl Iterator<Item = u64>, bits: u32) {
+        let mut items: Vec<(u64, u32)> = keys.zip(0..).collect();
+        let mut expected = items.clone();
+        expected.sort_by_key(|&(k, _)| k & (u64::MAX >> (64 - bits)));
+        radix_sort_by_key(&mut items, &mut Vec::new(), bits, |(k, _)| k);
+        assert_eq!(items, expected, "{bits}-bit keys");
+    }
+
     #[test]
     fn sorts_stably_across_chunks() {
         let mut rng = SplitMix64::new(3);
-        let mut items: Vec<(u64, u32)> = (0..100_000).map(|i| (rng.next_u64() % 1000, i)).collect();
-        let mut expected = items.clone();
-        expected.sort_by_key(|&(k, _)| k);
-        radix_sort_by_key(&mut items, &mut Vec::new(), 10, |(k, _)| k);
-        assert_eq!(items, expected);
+        check((0..100_000).map(|_| rng.next_u64() % 1000), 10);
+    }
+
+    #[test]
+    fn sorts_wide_keys_and_small_inputs() {
+        let mut rng = SplitMix64::new(5);
+        for (n, bits) in [
+            (0, 30),
+            (1, 30),
+            (2, 30),
+            (1000, 30),
+            (300_000, 30),
+            (300_000, 63),
+            (5000, 63),
+        ] {
+            check((0..n).map(|_| rng.next_u64() >> (64 - bits)), bits);
+        }
+        // Bits above `bits` do not count.
+        for (n, bits) in [(1000, 3), (1000, 30), (200_000, 5), (200_000, 30)] {
+            check((0..n).map(|_| rng.next_u64()), bits);
+        }
+    }
+
+    #[test]
+    fn sorts_clustered_and_equal_keys() {
+        let mut rng = SplitMix64::new(7);
+        // Most keys share the top digit, so one bucket is too large for one thread and is split
+        // again; some share every digit.
+        check((0..400_000).map(|_| (3 << 22) | (rng.next_u64() % 5000)), 30);
+        check(
+            (0..200_000).map(|i| if i % 3 == 0 { 17 } else { rng.next_u64() >> 34 }),
+            30,
+        );
+        check(std::iter::repeat_n(12345, 150_000), 30);
     }
 }
