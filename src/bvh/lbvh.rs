@@ -393,56 +393,54 @@ impl<K: Key> Walk<'_, K> {
         let (left_box, right_box) =
             rayon::join(|| self.visit(left, first, split), || self.visit(right, split + 1, last));
         let bounds = left_box.union(right_box);
-        self.write_node(node, left, right, bounds, last);
+        let parent = self.parents[node as usize];
+        self.write_node(node, [left, right], bounds, parent, escape(self.children, last));
         bounds
     }
 
     /// Writes the subtree of `root`, which covers sorted positions `first..=last`, on this thread
     /// and returns its box: leaves in order, each followed by the climb through the nodes that it
     /// ends (those it is the last leaf of: a node is done when its right child is). A node's left
-    /// child was written before it, and its box is read back from the array.
+    /// child was written before it, and its box is read back from the array. Every node that a
+    /// leaf ends shares the leaf's escape link.
     fn climb(&self, root: u32, first: u32, last: u32) -> Aabb {
         let mut bounds = Aabb::EMPTY;
         for position in first..=last {
+            let escape = escape(self.children, position);
             let mut node = self.leaf_base + position;
-            bounds = self.write_leaf(position);
+            let mut parent = self.parents[node as usize];
+            let primitive = self.keys[position as usize].primitive();
+            bounds = self.leaf_boxes[position as usize];
+            self.write_node(node, [primitive, LEAF], bounds, parent, escape);
             while node != root {
-                let parent = self.parents[node as usize];
-                let [left, right] = self.children[parent as usize];
+                let children @ [left, right] = self.children[parent as usize];
                 if right != node {
                     break;
                 }
                 // SAFETY: the left child ends before `position`: this thread wrote it already.
                 let sibling = unsafe { self.nodes.read(left as usize) };
                 bounds = node_box(&sibling).union(bounds);
-                self.write_node(parent, left, right, bounds, position);
-                node = parent;
+                let grandparent = self.parents[parent as usize];
+                self.write_node(parent, children, bounds, grandparent, escape);
+                (node, parent) = (parent, grandparent);
             }
         }
         // The last leaf's climb ends at the root.
         bounds
     }
 
-    /// Writes the leaf at sorted `position` and returns its box.
+    /// Writes `node`: `children` as the layout has them (a leaf's primitive and [`LEAF`]), its box,
+    /// parent and escape link.
     #[inline(always)]
-    fn write_leaf(&self, position: u32) -> Aabb {
-        let primitive = self.keys[position as usize].primitive();
-        let b = self.leaf_boxes[position as usize];
-        self.write_node(self.leaf_base + position, primitive, LEAF, b, position);
-        b
-    }
-
-    /// Writes `node`, whose range ends at sorted position `last`: `left` and `right` as the layout
-    /// has them (a leaf's primitive and [`LEAF`]), its parent and its escape link.
-    #[inline(always)]
-    fn write_node(&self, node: u32, left: u32, right: u32, bounds: Aabb, last: u32) {
+    fn write_node(&self, node: u32, children: [u32; 2], bounds: Aabb, parent: u32, escape: u32) {
+        let [left, right] = children;
         let written = GpuNode {
             min: bounds.min.to_array(),
             left,
             max: bounds.max.to_array(),
             right,
-            parent: self.parents[node as usize],
-            escape: escape(self.children, last),
+            parent,
+            escape,
             _pad: [0; 2],
         };
         // SAFETY: the walk reaches each node once; the subtrees of a fork are disjoint.
