@@ -7,7 +7,8 @@ use super::aabb::Aabb;
 use super::layout::{GpuNode, LEAF, NONE};
 use super::morton::{Grid, MortonBits};
 use super::sort::{DisjointWrites, radix_sort_by_key};
-use super::{BuildTimings, Bvh, node_box};
+use super::{BuildTimings, Bvh};
+use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 use std::ops::{BitXor, Not};
 use std::time::Instant;
@@ -394,7 +395,8 @@ impl<K: Key> Walk<'_, K> {
             rayon::join(|| self.visit(left, first, split), || self.visit(right, split + 1, last));
         let bounds = left_box.union(right_box);
         let parent = self.parents[node as usize];
-        self.write_node(node, [left, right], bounds, parent, escape(self.children, last));
+        let (min, max) = (bounds.min.into(), bounds.max.into());
+        self.write_node(node, [left, right], min, max, parent, escape(self.children, last));
         bounds
     }
 
@@ -410,8 +412,9 @@ impl<K: Key> Walk<'_, K> {
             let mut node = self.leaf_base + position;
             let mut parent = self.parents[node as usize];
             let primitive = self.keys[position as usize].primitive();
-            bounds = self.leaf_boxes[position as usize];
-            self.write_node(node, [primitive, LEAF], bounds, parent, escape);
+            let leaf = self.leaf_boxes[position as usize];
+            let (mut min, mut max) = (Vec3A::from(leaf.min), Vec3A::from(leaf.max));
+            self.write_node(node, [primitive, LEAF], min, max, parent, escape);
             while node != root {
                 let children @ [left, right] = self.children[parent as usize];
                 if right != node {
@@ -419,11 +422,16 @@ impl<K: Key> Walk<'_, K> {
                 }
                 // SAFETY: the left child ends before `position`: this thread wrote it already.
                 let sibling = unsafe { self.nodes.read(left as usize) };
-                bounds = node_box(&sibling).union(bounds);
+                // The node's first two 16-byte rows are its min and max corners in SIMD lanes (the
+                // fourth lane holds a child link and is never written back).
+                let rows: [[f32; 4]; 3] = bytemuck::cast(sibling);
+                min = Vec3A::from_vec4(Vec4::from_array(rows[0])).min(min);
+                max = Vec3A::from_vec4(Vec4::from_array(rows[1])).max(max);
                 let grandparent = self.parents[parent as usize];
-                self.write_node(parent, children, bounds, grandparent, escape);
+                self.write_node(parent, children, min, max, grandparent, escape);
                 (node, parent) = (parent, grandparent);
             }
+            bounds = Aabb::new(min.into(), max.into());
         }
         // The last leaf's climb ends at the root.
         bounds
@@ -432,12 +440,12 @@ impl<K: Key> Walk<'_, K> {
     /// Writes `node`: `children` as the layout has them (a leaf's primitive and [`LEAF`]), its box,
     /// parent and escape link.
     #[inline(always)]
-    fn write_node(&self, node: u32, children: [u32; 2], bounds: Aabb, parent: u32, escape: u32) {
+    fn write_node(&self, node: u32, children: [u32; 2], min: Vec3A, max: Vec3A, parent: u32, escape: u32) {
         let [left, right] = children;
         let written = GpuNode {
-            min: bounds.min.to_array(),
+            min: min.to_array(),
             left,
-            max: bounds.max.to_array(),
+            max: max.to_array(),
             right,
             parent,
             escape,
