@@ -260,11 +260,14 @@ impl<K: Key> LbvhBuilder<K> {
         }
         let grid = Grid::around_centroids(boxes, bits);
         self.keys
-            .par_iter_mut()
-            .with_min_len(MIN_TASK)
-            .zip(boxes)
+            .par_chunks_mut(MIN_TASK)
+            .zip(boxes.par_chunks(MIN_TASK))
             .enumerate()
-            .for_each(|(i, (key, b))| *key = K::new(grid.code(b), i as u32));
+            .for_each(|(chunk, (keys, boxes))| {
+                for ((i, key), b) in (chunk * MIN_TASK..).zip(keys).zip(boxes) {
+                    *key = K::new(grid.code(b), i as u32);
+                }
+            });
     }
 
     fn build_from_keys(&mut self, boxes: &[Aabb], bits: MortonBits) -> BuildTimings {
@@ -294,26 +297,30 @@ impl<K: Key> LbvhBuilder<K> {
         let n = self.keys.len();
         self.positioned.resize(n, K::default());
         self.positioned
-            .par_iter_mut()
-            .with_min_len(MIN_TASK)
-            .zip(&self.keys)
+            .par_chunks_mut(MIN_TASK)
+            .zip(self.keys.par_chunks(MIN_TASK))
             .enumerate()
-            .for_each(|(position, (out, key))| *out = key.at_position(position as u32));
+            .for_each(|(chunk, (out, keys))| {
+                for ((position, out), key) in (chunk * MIN_TASK..).zip(out).zip(keys) {
+                    *out = key.at_position(position as u32);
+                }
+            });
         let positioned = &self.positioned;
         self.children.resize(n - 1, [0, 0]);
         self.parents.resize(2 * n - 1, NONE);
         self.parents[0] = NONE;
         let parents = DisjointWrites::new(&mut self.parents);
         self.children
-            .par_iter_mut()
-            .with_min_len(MIN_TASK)
+            .par_chunks_mut(MIN_TASK)
             .enumerate()
-            .for_each(|(i, children)| {
-                *children = internal_node(positioned, i);
-                // SAFETY: every node but the root is the child of exactly one internal node.
-                unsafe {
-                    parents.write(children[0] as usize, i as u32);
-                    parents.write(children[1] as usize, i as u32);
+            .for_each(|(chunk, children)| {
+                for (i, children) in (chunk * MIN_TASK..).zip(children) {
+                    *children = internal_node(positioned, i);
+                    // SAFETY: every node but the root is the child of exactly one internal node.
+                    unsafe {
+                        parents.write(children[0] as usize, i as u32);
+                        parents.write(children[1] as usize, i as u32);
+                    }
                 }
             });
     }
