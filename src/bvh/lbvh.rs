@@ -6,7 +6,7 @@
 use super::aabb::Aabb;
 use super::layout::{GpuNode, LEAF, NONE};
 use super::morton::{Grid, MortonBits};
-use super::sort::{DisjointWrites, radix_sort_by_key};
+use super::sort::{DisjointWrites, radix_sort_by_key_then};
 use super::{BuildTimings, Bvh};
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
@@ -276,7 +276,22 @@ impl<K: Key> LbvhBuilder<K> {
 
         // Sort the keys by code; the index below keeps equal codes in primitive order
         let start = Instant::now();
-        radix_sort_by_key(&mut self.keys, &mut self.scratch, bits.total_bits(), |k| k.code());
+        // Each sorted stretch, while in cache, also gives the hierarchy its positioned keys.
+        self.positioned.resize(n, K::default());
+        let positioned = DisjointWrites::new(&mut self.positioned);
+        let position_keys = |start: usize, keys: &[K]| {
+            for (position, key) in (start..).zip(keys) {
+                // SAFETY: the sorted stretches are disjoint.
+                unsafe { positioned.write(position, key.at_position(position as u32)) };
+            }
+        };
+        radix_sort_by_key_then(
+            &mut self.keys,
+            &mut self.scratch,
+            bits.total_bits(),
+            |k| k.code(),
+            position_keys,
+        );
         timings.sort = ms_since(start);
 
         self.nodes.resize((2 * n).saturating_sub(1), GpuNode::default());
@@ -295,16 +310,6 @@ impl<K: Key> LbvhBuilder<K> {
     // Find every internal node's children, and so every node's parent
     fn hierarchy(&mut self) {
         let n = self.keys.len();
-        self.positioned.resize(n, K::default());
-        self.positioned
-            .par_chunks_mut(MIN_TASK)
-            .zip(self.keys.par_chunks(MIN_TASK))
-            .enumerate()
-            .for_each(|(chunk, (out, keys))| {
-                for ((position, out), key) in (chunk * MIN_TASK..).zip(out).zip(keys) {
-                    *out = key.at_position(position as u32);
-                }
-            });
         let positioned = &self.positioned;
         self.children.resize(n - 1, [0, 0]);
         self.parents.resize(2 * n - 1, NONE);

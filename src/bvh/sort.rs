@@ -59,30 +59,48 @@ where
     T: Copy + Default + Send + Sync,
     K: Fn(T) -> u64 + Sync,
 {
-    scratch.resize(items.len(), T::default());
-    sort_slice(items, scratch, bits.min(64), &key);
+    radix_sort_by_key_then(items, scratch, bits, key, |_, _| {});
 }
 
-/// Sorts `items` by the `bits` low bits of their keys, stably, using `scratch` (as long) on the way.
-fn sort_slice<T, K>(items: &mut [T], scratch: &mut [T], bits: u32, key: &K)
+/// [`radix_sort_by_key`] that hands each stretch of the result to `then(start, stretch)` as soon
+/// as it is in place, while it is still in cache, on the thread that sorted it. The stretches tile
+/// the whole array.
+pub fn radix_sort_by_key_then<T, K, F>(items: &mut [T], scratch: &mut Vec<T>, bits: u32, key: K, then: F)
+where
+    T: Copy + Default + Send + Sync,
+    K: Fn(T) -> u64 + Sync,
+    F: Fn(usize, &[T]) + Sync,
+{
+    scratch.resize(items.len(), T::default());
+    sort_slice(items, scratch, bits.min(64), &key, 0, &then);
+}
+
+/// Sorts `items`, which start at `start` in the whole array, by the `bits` low bits of their keys,
+/// stably, using `scratch` (as long) on the way; hands the sorted stretches to `then`.
+fn sort_slice<T, K, F>(items: &mut [T], scratch: &mut [T], bits: u32, key: &K, start: usize, then: &F)
 where
     T: Copy + Send + Sync,
     K: Fn(T) -> u64 + Sync,
+    F: Fn(usize, &[T]) + Sync,
 {
     let n = items.len();
     if n < 2 || bits == 0 {
+        if n > 0 {
+            then(start, items);
+        }
         return;
     }
     if n <= SERIAL_ITEMS {
         if serial_lsd(items, scratch, bits, key) {
             items.copy_from_slice(scratch);
         }
+        then(start, items);
         return;
     }
     let shift = bits.saturating_sub(DIGIT_BITS);
     let Some(starts) = scatter_by_digit(items, scratch, bits, shift, key) else {
         // Every item has the same top digit: nothing moved.
-        return sort_slice(items, scratch, shift, key);
+        return sort_slice(items, scratch, shift, key, start, then);
     };
     // The buckets are in `scratch` now; each is sorted back into its place in `items`.
     let mut buckets = Vec::with_capacity(BUCKETS);
@@ -92,21 +110,24 @@ where
         let (bucket_items, after_items) = rest_items.split_at_mut(len);
         let (bucket_scratch, after_scratch) = rest_scratch.split_at_mut(len);
         if len > 0 {
-            buckets.push((bucket_items, bucket_scratch));
+            buckets.push((start + starts[d], bucket_items, bucket_scratch));
         }
         (rest_items, rest_scratch) = (after_items, after_scratch);
     }
-    buckets.into_par_iter().for_each(|(bucket_items, bucket_scratch)| {
-        if bucket_items.len() <= SERIAL_ITEMS {
-            // Sorted from `scratch`, with `items` as the scratch space.
-            if !serial_lsd(bucket_scratch, bucket_items, shift, key) {
+    buckets
+        .into_par_iter()
+        .for_each(|(bucket_start, bucket_items, bucket_scratch)| {
+            if bucket_items.len() <= SERIAL_ITEMS {
+                // Sorted from `scratch`, with `items` as the scratch space.
+                if !serial_lsd(bucket_scratch, bucket_items, shift, key) {
+                    bucket_items.copy_from_slice(bucket_scratch);
+                }
+                then(bucket_start, bucket_items);
+            } else {
                 bucket_items.copy_from_slice(bucket_scratch);
+                sort_slice(bucket_items, bucket_scratch, shift, key, bucket_start, then);
             }
-        } else {
-            bucket_items.copy_from_slice(bucket_scratch);
-            sort_slice(bucket_items, bucket_scratch, shift, key);
-        }
-    });
+        });
 }
 
 /// One parallel pass that moves `items` into `out`, stably grouped by their key bits from `shift` up
@@ -249,6 +270,47 @@ mod tests {
         // Bits above `bits` do not count.
         for (n, bits) in [(1000, 3), (1000, 30), (200_000, 5), (200_000, 30)] {
             check((0..n).map(|_| rng.next_u64()), bits);
+        }
+    }
+
+    #[test]
+    fn hands_over_stretches_that_tile_the_result() {
+        let mut rng = SplitMix64::new(11);
+        for n in [0, 1, 3000, 300_000] {
+            // Half the keys share a top digit, so that bucket is split again.
+            let mut items: Vec<u64> = (0..n)
+                .map(|i| {
+                    if i % 2 == 0 {
+                        rng.next_u64() >> 34
+                    } else {
+                        (5 << 22) | (rng.next_u64() >> 44)
+                    }
+                })
+                .collect();
+            let stretches = std::sync::Mutex::new(Vec::new());
+            radix_sort_by_key_then(
+                &mut items,
+                &mut Vec::new(),
+                30,
+                |k| k,
+                |start, stretch: &[u64]| {
+                    stretches.lock().unwrap().push((start, stretch.to_vec()));
+                },
+            );
+            let mut stretches = stretches.into_inner().unwrap();
+            stretches.sort_by_key(|&(start, _)| start);
+            let mut next = 0;
+            for (start, stretch) in stretches {
+                assert_eq!(start, next, "{n} items: stretches must tile the array");
+                assert_eq!(
+                    stretch[..],
+                    items[start..start + stretch.len()],
+                    "{n} items: a stretch is the final result"
+                );
+                next += stretch.len();
+            }
+            assert_eq!(next, n);
+            assert!(items.is_sorted());
         }
     }
 
