@@ -245,27 +245,27 @@ impl<K: Key> LbvhBuilder<K> {
         }
     }
 
-    // Compute Morton codes of primitive centroids, paired with primitive indices
+    // Compute Morton codes of primitive centroids (or take the given ones), paired with primitive
+    // indices
     fn morton_keys(&mut self, boxes: &[Aabb], bits: MortonBits, codes: Option<&[u64]>) {
-        let n = boxes.len();
-        self.keys.resize(n, K::default());
-        if let Some(codes) = codes {
-            self.keys
-                .par_iter_mut()
-                .with_min_len(MIN_TASK)
-                .zip(codes)
-                .enumerate()
-                .for_each(|(i, (key, &code))| *key = K::new(code, i as u32));
-            return;
+        match codes {
+            Some(codes) => self.fill_keys(boxes, |i, _| codes[i]),
+            None => {
+                let grid = Grid::around_centroids(boxes, bits);
+                self.fill_keys(boxes, |_, b| grid.code(b));
+            }
         }
-        let grid = Grid::around_centroids(boxes, bits);
+    }
+
+    fn fill_keys(&mut self, boxes: &[Aabb], code: impl Fn(usize, &Aabb) -> u64 + Sync) {
+        self.keys.resize(boxes.len(), K::default());
         self.keys
             .par_chunks_mut(MIN_TASK)
             .zip(boxes.par_chunks(MIN_TASK))
             .enumerate()
             .for_each(|(chunk, (keys, boxes))| {
                 for ((i, key), b) in (chunk * MIN_TASK..).zip(keys).zip(boxes) {
-                    *key = K::new(grid.code(b), i as u32);
+                    *key = K::new(code(i, b), i as u32);
                 }
             });
     }
@@ -418,14 +418,14 @@ impl<K: Key> Walk<'_, K> {
     /// child was written before it, and its box is read back from the array. Every node that a
     /// leaf ends shares the leaf's escape link.
     fn climb(&self, root: u32, first: u32, last: u32) -> Aabb {
-        let mut bounds = Aabb::EMPTY;
+        let (mut min, mut max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for position in first..=last {
             let escape = escape(self.children, position);
             let mut node = self.leaf_base + position;
             let mut parent = self.parents[node as usize];
             let primitive = self.keys[position as usize].primitive();
             let leaf = self.leaf_boxes[position as usize];
-            let (mut min, mut max) = (Vec3A::from(leaf.min), Vec3A::from(leaf.max));
+            (min, max) = (Vec3A::from(leaf.min), Vec3A::from(leaf.max));
             self.write_node(node, [primitive, LEAF], min, max, parent, escape);
             while node != root {
                 let children @ [left, right] = self.children[parent as usize];
@@ -443,10 +443,9 @@ impl<K: Key> Walk<'_, K> {
                 self.write_node(parent, children, min, max, grandparent, escape);
                 (node, parent) = (parent, grandparent);
             }
-            bounds = Aabb::new(min.into(), max.into());
         }
         // The last leaf's climb ends at the root.
-        bounds
+        Aabb::new(min.into(), max.into())
     }
 
     /// Writes `node`: `children` as the layout has them (a leaf's primitive and [`LEAF`]), its box,

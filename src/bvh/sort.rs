@@ -131,9 +131,8 @@ where
 }
 
 /// One parallel pass that moves `items` into `out`, stably grouped by their key bits from `shift` up
-/// to `bits` (at most a digit); returns
-/// where each digit's bucket starts (and, last, the end), or `None` and moves nothing when all
-/// items share the digit.
+/// to `bits` (at most a digit); returns where each digit's bucket starts (and, last, the end), or
+/// `None` and moves nothing when all items share the digit.
 fn scatter_by_digit<T, K>(items: &[T], out: &mut [T], bits: u32, shift: u32, key: &K) -> Option<[usize; BUCKETS + 1]>
 where
     T: Copy + Send + Sync,
