@@ -180,7 +180,9 @@ pub fn render_frames(
                 })?;
                 let wall = start.elapsed().as_secs_f64() * 1e3;
                 if options.accel.uses_bvh() {
-                    outcome.builds.push(builder.read_timings()?);
+                    let mut timings = builder.read_timings()?;
+                    timings.links += timed.layout_ms.unwrap_or(0.0);
+                    outcome.builds.push(timings);
                 }
                 outcome.render_ms.push(timed.gpu_ms.unwrap_or(wall));
                 outcome.rays.push(timed.frame.rays());

@@ -7,6 +7,7 @@ use raypipe::bvh::layout::GpuNode;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
+use raypipe::bvh::threaded::{self, GpuThreadedNode, QuantizationFrame, threaded_nodes};
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use raypipe::cpu::intersect::{Hit, HitKind, Primitives, Ray};
@@ -27,9 +28,24 @@ fn check_all_builders(boxes: &[Aabb]) -> Result<(), TestCaseError> {
             bits,
             boxes.len()
         );
+        let (frame, threaded) = threaded_nodes(&bvh.nodes);
+        prop_assert_eq!(
+            threaded::validate(&frame, &threaded, boxes),
+            Ok(()),
+            "threaded LBVH {:?} over {} boxes",
+            bits,
+            boxes.len()
+        );
     }
     let sah = build_binned_sah(boxes);
     prop_assert_eq!(sah.validate(boxes), Ok(()), "binned SAH over {} boxes", boxes.len());
+    let (frame, threaded) = threaded_nodes(&sah.nodes);
+    prop_assert_eq!(
+        threaded::validate(&frame, &threaded, boxes),
+        Ok(()),
+        "threaded binned SAH over {} boxes",
+        boxes.len()
+    );
     Ok(())
 }
 
@@ -116,6 +132,45 @@ fn a_corrupted_tree_fails_validation() {
 }
 
 #[test]
+fn a_corrupted_threaded_tree_fails_validation() {
+    let boxes = spheres_to_boxes(
+        &(0..50)
+            .map(|i| (Vec3::new(i as f32, (i % 3) as f32, 0.0), 0.4))
+            .collect::<Vec<_>>(),
+    );
+    let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+    let (frame, nodes) = threaded_nodes(&bvh.nodes);
+    threaded::validate(&frame, &nodes, &boxes).unwrap();
+    let internal = nodes.iter().position(|n| !n.is_leaf() && n.link > 5).unwrap();
+    let leaf = nodes.iter().position(GpuThreadedNode::is_leaf).unwrap();
+    let mut corruptions: Vec<(&str, Vec<GpuThreadedNode>)> = Vec::new();
+    let mut c = nodes.clone();
+    // min.x moved up to max.x
+    c[leaf].bounds[0] = (c[leaf].bounds[0] & 0xffff_0000) | (c[leaf].bounds[1] >> 16);
+    corruptions.push(("a box that no longer holds its primitive", c));
+    let mut c = nodes.clone();
+    c[internal].link -= 1;
+    corruptions.push(("a link short of the subtree's end", c));
+    let mut c = nodes.clone();
+    let other = nodes.iter().rposition(GpuThreadedNode::is_leaf).unwrap();
+    c[other].link = c[leaf].link;
+    corruptions.push(("a primitive in two leaves", c));
+    for (what, corrupted) in corruptions {
+        assert!(
+            threaded::validate(&frame, &corrupted, &boxes).is_err(),
+            "{what} passed validation"
+        );
+    }
+    // A frame moved by one quantum leaves some box short of its primitives.
+    let mut moved = frame;
+    moved.origin.x += moved.quantum.x * 2.0;
+    assert!(
+        threaded::validate(&moved, &nodes, &boxes).is_err(),
+        "a shifted frame passed validation"
+    );
+}
+
+#[test]
 fn equal_codes_keep_primitive_order_and_build_a_balanced_tree() {
     // 1,024 coincident centroids: one Morton code, so the split falls back to the index bits.
     let boxes = vec![Aabb::around_sphere(Vec3::ZERO, 1.0); 1024];
@@ -166,12 +221,36 @@ fn a_reused_builder_equals_a_fresh_one() {
     }
 }
 
-type Traversal = fn(&[GpuNode], &Primitives, &Ray, Hit, bool) -> Hit;
+/// A built tree in both forms the walks read: the node layout, and the threaded nodes with their frame.
+struct Trees {
+    nodes: Vec<GpuNode>,
+    frame: QuantizationFrame,
+    threaded: Vec<GpuThreadedNode>,
+}
+
+impl Trees {
+    fn new(bvh: Bvh) -> Self {
+        let (frame, threaded) = threaded_nodes(&bvh.nodes);
+        Self {
+            nodes: bvh.nodes,
+            frame,
+            threaded,
+        }
+    }
+}
+
+type Traversal = fn(&Trees, &Primitives, &Ray, Hit, bool) -> Hit;
 
 const TRAVERSALS: [(&str, Traversal); 3] = [
-    ("stack", traverse_stack),
-    ("stackless", traverse_stackless),
-    ("threaded", traverse_threaded),
+    ("stack", |t, p, ray, best, shadow| {
+        traverse_stack(&t.nodes, p, ray, best, shadow)
+    }),
+    ("stackless", |t, p, ray, best, shadow| {
+        traverse_stackless(&t.nodes, p, ray, best, shadow)
+    }),
+    ("threaded", |t, p, ray, best, shadow| {
+        traverse_threaded(&t.threaded, &t.frame, p, ray, best, shadow)
+    }),
 ];
 
 fn random_triangle(rng: &mut SplitMix64, material: u32) -> GpuTriangle {
@@ -227,6 +306,7 @@ fn traversals_equal_brute_force() {
         triangles: &triangles,
     };
     let (bvh, _) = Bvh::build_lbvh(&primitive_boxes(&spheres, &triangles), MortonBits::Bits30);
+    let trees = Trees::new(bvh);
     let mut triangle_hits = 0;
     let mut hits = 0;
     for _ in 0..20_000 {
@@ -242,12 +322,12 @@ fn traversals_equal_brute_force() {
         triangle_hits += (brute.kind == HitKind::Primitive && brute.index as usize >= spheres.len()) as u32;
         for (name, traverse) in TRAVERSALS {
             assert_eq!(
-                traverse(&bvh.nodes, &primitives, &ray, Hit::none(1e30), false),
+                traverse(&trees, &primitives, &ray, Hit::none(1e30), false),
                 brute,
                 "{name}, ray {ray:?}"
             );
             for t_max in [0.5, 2.0] {
-                let blocked = traverse(&bvh.nodes, &primitives, &ray, Hit::none(t_max), true).kind != HitKind::None;
+                let blocked = traverse(&trees, &primitives, &ray, Hit::none(t_max), true).kind != HitKind::None;
                 assert_eq!(
                     blocked,
                     brute_occluded(&primitives, &ray, t_max),
@@ -273,6 +353,7 @@ fn traversals_handle_one_and_two_spheres() {
             .collect();
         let boxes: Vec<Aabb> = spheres.iter().map(GpuSphere::bounds).collect();
         let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+        let trees = Trees::new(bvh);
         let primitives = Primitives {
             spheres: &spheres,
             triangles: &[],
@@ -285,7 +366,7 @@ fn traversals_handle_one_and_two_spheres() {
             let brute = brute_closest(&primitives, &ray, Hit::none(1e30));
             for (name, traverse) in TRAVERSALS {
                 assert_eq!(
-                    traverse(&bvh.nodes, &primitives, &ray, Hit::none(1e30), false),
+                    traverse(&trees, &primitives, &ray, Hit::none(1e30), false),
                     brute,
                     "{name}, {n} spheres, x {x}"
                 );

@@ -4,9 +4,12 @@
 mod common;
 use common::gpu;
 use raypipe::bvh::aabb::Aabb;
+use raypipe::bvh::layout::GpuNode;
 use raypipe::bvh::morton::MortonBits;
+use raypipe::bvh::threaded::threaded_nodes;
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::gpu::build::GpuLbvhBuilder;
+use raypipe::gpu::threaded::GpuThreadedLayout;
 use raypipe::scene::builtin::SplitMix64;
 use raypipe::scene::packed::GpuSphere;
 
@@ -66,6 +69,22 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
     let first_difference = nodes.iter().zip(&cpu.nodes).position(|(g, c)| g != c);
     assert_eq!(nodes.len(), cpu.nodes.len(), "{what}: node counts");
     assert_eq!(first_difference, None, "{what}: first differing node");
+    check_threaded_layout(builder, &cpu.nodes, &what);
+}
+
+/// The threaded layout of the GPU's nodes, laid out on the GPU, against the CPU's of the same nodes.
+fn check_threaded_layout(builder: &GpuLbvhBuilder, nodes: &[GpuNode], what: &str) {
+    let ctx = builder.context();
+    let layout = GpuThreadedLayout::new(ctx, &builder.buffers().nodes, builder.count()).unwrap();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    layout.encode(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    let (frame, threaded) = layout.read(ctx).unwrap();
+    let (cpu_frame, cpu_threaded) = threaded_nodes(nodes);
+    assert_eq!(frame, cpu_frame, "{what}: quantization frames");
+    let first_difference = threaded.iter().zip(&cpu_threaded).position(|(g, c)| g != c);
+    assert_eq!(threaded.len(), cpu_threaded.len(), "{what}: threaded node counts");
+    assert_eq!(first_difference, None, "{what}: first differing threaded node");
 }
 
 #[test]

@@ -7,6 +7,7 @@ pub mod lbvh;
 pub mod morton;
 pub mod sah;
 pub mod sort;
+pub mod threaded;
 pub mod validate;
 
 use aabb::Aabb;
@@ -30,7 +31,8 @@ pub struct BuildTimings {
     pub hierarchy: f64,
     pub bounds: f64,
     /// Zero where the links are written with the bounds, as the CPU LBVH builder writes them;
-    /// their time is then in `bounds`.
+    /// their time is then in `bounds`. A per-frame GPU rebuild for the threaded walk adds its
+    /// layout of the tree (`gpu::threaded`) here.
     pub links: f64,
 }
 

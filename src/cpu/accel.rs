@@ -2,10 +2,11 @@
 //! whether anything blocks a shadow ray.
 
 use super::intersect::{
-    Hit, HitKind, NO_HIT, Primitives, Ray, closer_primitive, count_box_tests, hit_leaf, intersect_box,
+    Hit, HitKind, NO_HIT, Primitives, Ray, closer_primitive, count_box_tests, hit_leaf, hit_primitive, intersect_box,
     intersect_sphere, intersect_triangle, safe_inverse, v3,
 };
-use crate::bvh::layout::{GpuNode, NONE};
+use crate::bvh::layout::GpuNode;
+use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame};
 use glam::Vec3;
 
 /// Brute force: every ray against every primitive (`accel_brute.wgsl`).
@@ -117,27 +118,37 @@ pub fn traverse_stack(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray, bes
     hit
 }
 
-/// Threaded traversal (`accel_threaded.wgsl`): depth-first, left child first, no stack; a missed
-/// node (or a tested leaf) hands over to its escape link.
-pub fn traverse_threaded(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
+/// Threaded traversal (`accel_threaded.wgsl`) over the depth-first nodes of [`threaded`]: after a
+/// hit box or a leaf the next node, after a missed box the node's link past its subtree.
+///
+/// [`threaded`]: crate::bvh::threaded
+pub fn traverse_threaded(
+    nodes: &[GpuThreadedNode],
+    frame: &QuantizationFrame,
+    primitives: &Primitives,
+    ray: &Ray,
+    best: Hit,
+    shadow: bool,
+) -> Hit {
     let mut hit = best;
-    if primitives.count() == 0 {
-        return hit;
-    }
-    let inv_dir = safe_inverse(ray.dir);
-    let mut index = 0u32;
-    while index != NONE {
-        let node = nodes[index as usize];
-        // A leaf's primitive costs no more to test than its box: test it directly.
+    // The ray in the quantization frame, where box corners are whole quanta: t is unchanged.
+    let origin = (ray.origin - frame.origin) * frame.inverse_quantum();
+    let inv_dir = safe_inverse(ray.dir) * frame.quantum;
+    let mut index = 0;
+    while let Some(node) = nodes.get(index as usize) {
         if node.is_leaf() {
-            if hit_leaf(primitives, &node, ray, &mut hit) && shadow {
+            // A leaf's primitive costs no more to test than its box: test it directly.
+            if hit_primitive(primitives, node.primitive(), ray, &mut hit) && shadow {
                 return hit;
             }
-            index = node.escape;
-        } else if intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) < 0.0 {
-            index = node.escape;
+            index += 1;
         } else {
-            index = node.left;
+            let (lo, hi) = node.corners();
+            if intersect_box(lo, hi, origin, inv_dir, hit.t) < 0.0 {
+                index = node.link;
+            } else {
+                index += 1;
+            }
         }
     }
     hit

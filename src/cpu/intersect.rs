@@ -169,16 +169,21 @@ pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32
     if t_enter <= t_exit { t_enter } else { NO_HIT }
 }
 
-/// Tests a BVH leaf's primitive; when it beats the best hit, it becomes the best hit and this says
-/// so (`hit_leaf` in `intersect.wgsl`).
+/// Tests a BVH leaf's primitive (`hit_leaf` in `intersect.wgsl`).
 pub fn hit_leaf(primitives: &Primitives, node: &GpuNode, ray: &Ray, hit: &mut Hit) -> bool {
+    hit_primitive(primitives, node.left, ray, hit)
+}
+
+/// Tests a primitive of the BVH; when it beats the best hit, it becomes the best hit and this says
+/// so (`hit_primitive`).
+pub fn hit_primitive(primitives: &Primitives, index: u32, ray: &Ray, hit: &mut Hit) -> bool {
     count_box_tests(1);
-    let t = primitives.intersect(node.left, ray, hit.t);
-    if closer_primitive(t, node.left, hit) {
+    let t = primitives.intersect(index, ray, hit.t);
+    if closer_primitive(t, index, hit) {
         *hit = Hit {
             t,
             kind: HitKind::Primitive,
-            index: node.left,
+            index,
         };
         return true;
     }

@@ -67,7 +67,10 @@ impl<'a> Tracer<'a> {
             Accel::Brute => brute_closest(&primitives, ray, best),
             Accel::Stack => traverse_stack(&scene.nodes, &primitives, ray, best, false),
             Accel::Stackless => traverse_stackless(&scene.nodes, &primitives, ray, best, false),
-            Accel::Threaded => traverse_threaded(&scene.nodes, &primitives, ray, best, false),
+            Accel::Threaded => {
+                let frame = scene.quantization_frame();
+                traverse_threaded(&scene.threaded_nodes, &frame, &primitives, ray, best, false)
+            }
         }
     }
 
@@ -86,7 +89,8 @@ impl<'a> Tracer<'a> {
                 hit.kind != HitKind::None
             }
             Accel::Threaded => {
-                let hit = traverse_threaded(&scene.nodes, &primitives, ray, Hit::none(t_max), true);
+                let frame = scene.quantization_frame();
+                let hit = traverse_threaded(&scene.threaded_nodes, &frame, &primitives, ray, Hit::none(t_max), true);
                 hit.kind != HitKind::None
             }
         }

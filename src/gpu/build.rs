@@ -7,6 +7,7 @@
 
 use super::GpuContext;
 use super::readback::read_buffer;
+use super::shader::TYPES;
 use super::timing::PassTimestamps;
 use super::upload::SharedBuffers;
 use crate::bvh::BuildTimings;
@@ -16,7 +17,6 @@ use crate::scene::packed::{GpuSphere, GpuTriangle, PackedScene};
 use anyhow::bail;
 use std::num::NonZeroU64;
 
-const TYPES: &str = include_str!("shaders/types.wgsl");
 const LBVH: &str = include_str!("shaders/lbvh.wgsl");
 
 const GROUP: u32 = 256;
@@ -220,6 +220,10 @@ impl<'a> GpuLbvhBuilder<'a> {
         Ok(())
     }
 
+    pub fn context(&self) -> &'a GpuContext {
+        self.ctx
+    }
+
     pub fn buffers(&self) -> &Buffers {
         &self.buffers
     }
@@ -372,6 +376,7 @@ impl<'a> GpuLbvhBuilder<'a> {
         SharedBuffers {
             spheres: self.buffers.spheres.clone(),
             nodes: self.buffers.nodes.clone(),
+            threaded_nodes: None,
         }
     }
 

@@ -5,6 +5,7 @@ pub mod context;
 pub mod readback;
 pub mod render;
 pub mod shader;
+pub mod threaded;
 pub mod timing;
 pub mod upload;
 

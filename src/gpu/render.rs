@@ -4,6 +4,7 @@
 use super::GpuContext;
 use super::readback::Readback;
 use super::shader::{ShaderConfig, compose};
+use super::threaded::GpuThreadedLayout;
 use super::timing::PassTimestamps;
 use super::upload::{MemoryMode, SceneResources, SharedBuffers, upload};
 use crate::image::Frame;
@@ -24,6 +25,9 @@ pub struct GpuRenderer<'a> {
     ctx: &'a GpuContext,
     pipeline: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
+    globals: wgpu::Buffer,
+    /// With shared buffers and the threaded walk: lays out each frame's rebuilt tree.
+    threaded_layout: Option<GpuThreadedLayout>,
     vertices: wgpu::Buffer,
     targets: [wgpu::Texture; 2],
     /// Where each frame's targets are copied to be read; kept from frame to frame.
@@ -35,6 +39,8 @@ pub struct GpuRenderer<'a> {
 pub struct TimedFrame {
     pub frame: Frame,
     pub gpu_ms: Option<f64>,
+    /// The GPU time of the threaded layout of a rebuilt tree, where one ran and was timed.
+    pub layout_ms: Option<f64>,
 }
 
 impl<'a> GpuRenderer<'a> {
@@ -55,7 +61,8 @@ impl<'a> GpuRenderer<'a> {
     }
 
     /// A renderer that reads its spheres and nodes from `shared` (storage memory): the buffers of a
-    /// GPU LBVH builder. `scene.bvh_depth` must bound the depth of the trees it will build.
+    /// GPU LBVH builder. `scene.bvh_depth` must bound the depth of the trees it will build. The
+    /// threaded walk lays out each frame's tree itself, after `render_after`'s `prepare`.
     pub fn with_shared_buffers(
         ctx: &'a GpuContext,
         scene: &PackedScene,
@@ -89,11 +96,22 @@ impl<'a> GpuRenderer<'a> {
             bail!("adapter {} cannot render to rgba32uint targets", ctx.describe());
         }
         ctx.checked("uploading the scene and building the pipeline", || {
-            let resources = upload(ctx, scene, memory, accel, shared)?;
+            let threaded_layout = match shared {
+                Some(shared) if accel == Accel::Threaded => {
+                    Some(GpuThreadedLayout::new(ctx, &shared.nodes, scene.primitive_count())?)
+                }
+                _ => None,
+            };
+            let shared = shared.map(|shared| SharedBuffers {
+                threaded_nodes: threaded_layout.as_ref().map(|layout| layout.threaded.clone()),
+                ..shared.clone()
+            });
+            let resources = upload(ctx, scene, memory, accel, shared.as_ref())?;
+            // A rebuilt tree's quantization frame is copied in on the GPU.
             let globals = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("globals"),
                 contents: bytemuck::bytes_of(&scene.globals),
-                usage: wgpu::BufferUsages::UNIFORM,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             });
             let source = compose(&ShaderConfig {
                 memory,
@@ -133,6 +151,8 @@ impl<'a> GpuRenderer<'a> {
                 ctx,
                 pipeline,
                 bind_group,
+                globals,
+                threaded_layout,
                 vertices,
                 targets,
                 readbacks,
@@ -156,6 +176,10 @@ impl<'a> GpuRenderer<'a> {
             let size = self.targets[0].size();
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             prepare(&mut encoder);
+            if let Some(layout) = &self.threaded_layout {
+                layout.encode(&mut encoder);
+                layout.encode_frame_copy(&mut encoder, &self.globals);
+            }
             self.encode_pass(&mut encoder);
             for (readback, target) in self.readbacks.iter().zip(&self.targets) {
                 readback.copy_from(&mut encoder, target);
@@ -172,7 +196,15 @@ impl<'a> GpuRenderer<'a> {
                 Some(timer) => Some(timer.read_ms(ctx)?[0]),
                 None => None,
             };
-            Ok(TimedFrame { frame, gpu_ms })
+            let layout_ms = match &self.threaded_layout {
+                Some(layout) => layout.read_ms(ctx)?,
+                None => None,
+            };
+            Ok(TimedFrame {
+                frame,
+                gpu_ms,
+                layout_ms,
+            })
         })
     }
 

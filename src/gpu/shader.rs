@@ -8,7 +8,8 @@ use super::upload::MemoryMode;
 use crate::render::Accel;
 use std::fmt::Write;
 
-const TYPES: &str = include_str!("shaders/types.wgsl");
+/// The records shared with the host, which every shader module starts from.
+pub const TYPES: &str = include_str!("shaders/types.wgsl");
 const TEXELS: &str = include_str!("shaders/texels.wgsl");
 const FULLSCREEN: &str = include_str!("shaders/fullscreen.wgsl");
 const INTERSECT: &str = include_str!("shaders/intersect.wgsl");

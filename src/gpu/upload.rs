@@ -25,11 +25,14 @@ pub enum MemoryMode {
 pub const TEXELS_PER_ROW: u32 = 2048;
 
 /// Buffers that already live on the GPU and replace the scene's own in storage memory: the spheres
-/// and nodes of a [`super::build::GpuLbvhBuilder`], rebuilt there every frame.
+/// and nodes of a [`super::build::GpuLbvhBuilder`], rebuilt there every frame, and the threaded
+/// nodes laid out from them.
 #[derive(Clone)]
 pub struct SharedBuffers {
     pub spheres: wgpu::Buffer,
     pub nodes: wgpu::Buffer,
+    /// Set by the renderer, which lays them out (`super::threaded`).
+    pub threaded_nodes: Option<wgpu::Buffer>,
 }
 
 /// The scene's arrays on the GPU, ready to bind.
@@ -85,6 +88,7 @@ pub fn upload(
         let shared_buffer = match (shared, name) {
             (Some(shared), "sphere") => Some(shared.spheres.clone()),
             (Some(shared), "node") => Some(shared.nodes.clone()),
+            (Some(shared), "threaded_node") => shared.threaded_nodes.clone(),
             _ => None,
         };
         let (ty, resource) = match memory {
@@ -181,8 +185,10 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn R
         ("light", &scene.lights),
         ("material", &scene.materials),
     ];
-    if accel.uses_bvh() {
-        records.push(("node", &scene.nodes));
+    match accel {
+        Accel::Brute => {}
+        Accel::Threaded => records.push(("threaded_node", &scene.threaded_nodes)),
+        Accel::Stack | Accel::Stackless => records.push(("node", &scene.nodes)),
     }
     records
 }

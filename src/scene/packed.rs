@@ -9,6 +9,7 @@ use super::Scene;
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::GpuNode;
 use crate::bvh::morton::MortonBits;
+use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, threaded_nodes};
 use crate::bvh::{BuildTimings, Bvh};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -38,6 +39,15 @@ pub struct GpuGlobals {
     pub material_count: u32,
     pub triangle_count: u32,
     pub _pad: [u32; 3],
+    /// The threaded BVH's quantization frame (`bvh::threaded`): the root box's minimum corner,
+    pub bvh_origin: [f32; 3],
+    pub _pad1: u32,
+    /// the quantum of each axis (a power of two),
+    pub bvh_quantum: [f32; 3],
+    pub _pad2: u32,
+    /// and its inverse.
+    pub bvh_inverse_quantum: [f32; 3],
+    pub _pad3: u32,
 }
 
 #[repr(C)]
@@ -217,6 +227,23 @@ fn link_texel(link: u32) -> f32 {
     if link == u32::MAX { -1.0 } else { link as f32 }
 }
 
+impl GpuRecord for GpuThreadedNode {
+    const WGSL_TYPE: &'static str = "ThreadedNode";
+    // Quantized corners are exact floats, so the six take two texels.
+    const TEXELS: usize = 2;
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        let (lo, hi) = self.corners();
+        // A leaf travels as -(primitive + 1).
+        let link = if self.is_leaf() {
+            -(self.primitive() as f32) - 1.0
+        } else {
+            self.link as f32
+        };
+        out.push([lo.x, lo.y, lo.z, link]);
+        out.push([hi.x, hi.y, hi.z, 0.0]);
+    }
+}
+
 impl GpuRecord for GpuNode {
     const WGSL_TYPE: &'static str = "BvhNode";
     fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
@@ -252,6 +279,7 @@ pub const LAYOUTS: &[StructLayout] = &[
     layout!(GpuGlobals, "Globals", [
         eye, tan_half_fov, forward, aspect, right, width, up, height, background, ambient,
         sphere_count, plane_count, light_count, material_count, triangle_count,
+        bvh_origin, bvh_quantum, bvh_inverse_quantum,
     ]),
     layout!(GpuSphere, "Sphere", [center, radius, material]),
     layout!(GpuTriangle, "Triangle", [v0, material, e1, normals, e2]),
@@ -260,6 +288,7 @@ pub const LAYOUTS: &[StructLayout] = &[
     layout!(GpuLight, "Light", [position, color]),
     layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior]),
     layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
+    layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
 ];
 
 /// The scene as the tracers read it.
@@ -278,6 +307,8 @@ pub struct PackedScene {
     pub nodes: Vec<GpuNode>,
     /// Longest root-to-leaf path of `nodes`, in edges: the traversal stack's size.
     pub bvh_depth: u32,
+    /// The same tree as the threaded walk reads it (its frame is in the globals).
+    pub threaded_nodes: Vec<GpuThreadedNode>,
 }
 
 impl PackedScene {
@@ -318,7 +349,8 @@ impl PackedScene {
             light_count: scene.lights.len() as u32,
             material_count: scene.materials.len() as u32,
             triangle_count: scene.triangles.len() as u32,
-            _pad: [0; 3],
+            // Set with the BVH (`set_bvh`).
+            ..Default::default()
         };
         let spheres = scene
             .spheres
@@ -414,6 +446,7 @@ impl PackedScene {
             lights,
             materials,
             nodes: Vec::new(),
+            threaded_nodes: Vec::new(),
             bvh_depth: 0,
         })
     }
@@ -439,7 +472,23 @@ impl PackedScene {
     pub fn set_bvh(&mut self, bvh: Bvh) {
         assert_eq!(bvh.primitive_count, self.primitive_count());
         self.bvh_depth = bvh.max_depth();
+        let (frame, threaded_nodes) = threaded_nodes(&bvh.nodes);
+        self.set_quantization_frame(frame);
+        self.threaded_nodes = threaded_nodes;
         self.nodes = bvh.nodes;
+    }
+
+    pub fn quantization_frame(&self) -> QuantizationFrame {
+        QuantizationFrame {
+            origin: Vec3::from_array(self.globals.bvh_origin),
+            quantum: Vec3::from_array(self.globals.bvh_quantum),
+        }
+    }
+
+    pub fn set_quantization_frame(&mut self, frame: QuantizationFrame) {
+        self.globals.bvh_origin = frame.origin.to_array();
+        self.globals.bvh_quantum = frame.quantum.to_array();
+        self.globals.bvh_inverse_quantum = frame.inverse_quantum().to_array();
     }
 
     pub fn width(&self) -> u32 {

@@ -1,29 +1,42 @@
-// Threaded BVH traversal: depth-first order, left child first, with no stack. A node whose box the
-// ray misses (or a leaf, once its primitive is tested) hands over to its escape link, the next node
-// after its subtree; a hit descends to the left child. Mirrored by src/cpu/accel.rs.
+// Threaded BVH traversal (src/bvh/threaded.rs): nodes in depth-first order, left child first, so
+// after a hit box or a leaf the walk goes on to the next node, and after a missed box it follows the
+// node's link past the subtree. No stack, one fixed order. Mirrored by src/cpu/accel.rs.
 
 fn traverse_threaded(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var hit = best;
-    if (primitive_count() == 0u) {
-        return hit;
-    }
-    let inv_dir = safe_inverse(ray.dir);
+    let count = threaded_node_count();
+    // The ray in the quantization frame, where box corners are whole quanta: t is unchanged.
+    let origin = (ray.origin - globals.bvh_origin) * globals.bvh_inverse_quantum;
+    let inv_dir = safe_inverse(ray.dir) * globals.bvh_quantum;
     var index = 0u;
-    while (index != NONE) {
-        let node = load_node(index);
-        // A leaf's primitive costs no more to test than its box: test it directly.
-        if (node.right == LEAF) {
-            if (hit_leaf(node, ray, &hit) && shadow) {
+    while (index < count) {
+        let node = load_threaded_node(index);
+        if ((node.link & LEAF_BIT) != 0u) {
+            // A leaf's primitive costs no more to test than its box: test it directly.
+            if (hit_primitive(node.link & ~LEAF_BIT, ray, &hit) && shadow) {
                 return hit;
             }
-            index = node.escape;
-        } else if (intersect_box(node.min, node.max, ray.origin, inv_dir, hit.t) < 0.0) {
-            index = node.escape;
+            index += 1u;
+        } else if (intersect_box(quantized_min(node), quantized_max(node), origin, inv_dir, hit.t) < 0.0) {
+            index = node.link;
         } else {
-            index = node.left;
+            index += 1u;
         }
     }
     return hit;
+}
+
+// 2n - 1 nodes for n primitives.
+fn threaded_node_count() -> u32 {
+    return max(2u * primitive_count(), 1u) - 1u;
+}
+
+fn quantized_min(node: ThreadedNode) -> vec3<f32> {
+    return vec3<f32>(vec3<u32>(node.bounds.x & 0xffffu, node.bounds.x >> 16u, node.bounds.y & 0xffffu));
+}
+
+fn quantized_max(node: ThreadedNode) -> vec3<f32> {
+    return vec3<f32>(vec3<u32>(node.bounds.y >> 16u, node.bounds.z & 0xffffu, node.bounds.z >> 16u));
 }
 
 fn accel_closest(ray: Ray, best: Hit) -> Hit {

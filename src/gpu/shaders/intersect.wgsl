@@ -117,12 +117,17 @@ fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<
     return NO_HIT;
 }
 
-// Tests a BVH leaf's primitive; when it beats the best hit, it becomes the best hit and this says so.
+// Tests a BVH leaf's primitive.
 fn hit_leaf(node: BvhNode, ray: Ray, hit: ptr<function, Hit>) -> bool {
+    return hit_primitive(node.left, ray, hit);
+}
+
+// Tests a primitive of the BVH; when it beats the best hit, it becomes the best hit and this says so.
+fn hit_primitive(index: u32, ray: Ray, hit: ptr<function, Hit>) -> bool {
     box_tests += 1u;
-    let t = intersect_primitive(node.left, ray, (*hit).t);
-    if (closer_primitive(t, node.left, *hit)) {
-        *hit = Hit(t, HIT_PRIMITIVE, node.left);
+    let t = intersect_primitive(index, ray, (*hit).t);
+    if (closer_primitive(t, index, *hit)) {
+        *hit = Hit(t, HIT_PRIMITIVE, index);
         return true;
     }
     return false;

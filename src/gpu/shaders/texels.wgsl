@@ -37,3 +37,12 @@ fn link_from_texel(value: f32) -> u32 {
 fn node_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> BvhNode {
     return BvhNode(t0.xyz, link_from_texel(t0.w), t1.xyz, link_from_texel(t1.w), link_from_texel(t2.x), link_from_texel(t2.y));
 }
+
+// Corners travel as exact floats; a leaf's link as -(primitive + 1).
+fn threaded_node_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> ThreadedNode {
+    let lo = vec3<u32>(t0.xyz);
+    let hi = vec3<u32>(t1.xyz);
+    let bounds = vec3<u32>(lo.x | (lo.y << 16u), lo.z | (hi.x << 16u), hi.y | (hi.z << 16u));
+    let link = select(u32(t0.w), LEAF_BIT | u32(-t0.w - 1.0), t0.w < 0.0);
+    return ThreadedNode(bounds, link);
+}

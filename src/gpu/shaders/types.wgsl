@@ -17,6 +17,10 @@ struct Globals {
     light_count: u32,
     material_count: u32,
     triangle_count: u32,
+    // The threaded BVH's quantization frame: root box minimum, quantum per axis, its inverse.
+    bvh_origin: vec3<f32>,
+    bvh_quantum: vec3<f32>,
+    bvh_inverse_quantum: vec3<f32>,
 }
 
 struct Sphere {
@@ -81,3 +85,13 @@ struct BvhNode {
 
 const LEAF: u32 = 0xffffffffu;
 const NONE: u32 = 0xffffffffu;
+
+// A node of the threaded BVH (src/bvh/threaded.rs), in depth-first order: 16-bit box corners in
+// quanta of the globals' frame (min.x | min.y << 16, min.z | max.x << 16, max.y | max.z << 16) and
+// one link: the node after the subtree for an internal node, LEAF_BIT | primitive for a leaf.
+struct ThreadedNode {
+    bounds: vec3<u32>,
+    link: u32,
+}
+
+const LEAF_BIT: u32 = 0x80000000u;

@@ -1,0 +1,182 @@
+//! The threaded BVH laid out on the GPU (`shaders/threaded.wgsl`) from the node array a
+//! [`GpuLbvhBuilder`](super::build::GpuLbvhBuilder) builds there: the per-frame twin of
+//! [`crate::bvh::threaded::threaded_nodes`], so a rebuilt tree reaches the threaded walk with no
+//! round trip to the host.
+
+use super::GpuContext;
+use super::readback::read_buffer;
+use super::shader::TYPES;
+use super::timing::PassTimestamps;
+use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame};
+use crate::scene::packed::GpuGlobals;
+use glam::Vec3;
+
+const LAYOUT: &str = include_str!("shaders/threaded.wgsl");
+const GROUP: u32 = 256;
+const MAX_GROUPS_X: u32 = 65535;
+/// The frame's three vec4 rows, as `GpuGlobals` holds them from `bvh_origin` on.
+const FRAME_BYTES: u64 = 48;
+
+pub struct GpuThreadedLayout {
+    order: wgpu::ComputePipeline,
+    nodes: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    node_count: u32,
+    /// The threaded nodes (STORAGE | COPY_SRC), in depth-first order.
+    pub threaded: wgpu::Buffer,
+    /// The quantization frame, laid out as the globals' `bvh_origin`, `bvh_quantum` and
+    /// `bvh_inverse_quantum` (COPY_SRC).
+    pub frame: wgpu::Buffer,
+    timer: Option<PassTimestamps>,
+}
+
+impl GpuThreadedLayout {
+    /// Compiles the kernels and sizes the buffers for the LBVH of `primitive_count` primitives
+    /// whose nodes are in `nodes`.
+    pub fn new(ctx: &GpuContext, nodes: &wgpu::Buffer, primitive_count: usize) -> anyhow::Result<Self> {
+        ctx.checked("compiling the threaded BVH layout", || {
+            let device = &ctx.device;
+            let node_count = (2 * primitive_count).saturating_sub(1) as u32;
+            let storage = |label, bytes: u64, extra| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: bytes.max(16),
+                    usage: wgpu::BufferUsages::STORAGE | extra,
+                    mapped_at_creation: false,
+                })
+            };
+            let order = storage("depth-first order", node_count as u64 * 4, wgpu::BufferUsages::empty());
+            let threaded = storage(
+                "threaded nodes",
+                node_count as u64 * std::mem::size_of::<GpuThreadedNode>() as u64,
+                wgpu::BufferUsages::COPY_SRC,
+            );
+            let frame = storage("quantization frame", FRAME_BYTES, wgpu::BufferUsages::COPY_SRC);
+            let params = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("layout params"),
+                size: 16,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            ctx.queue
+                .write_buffer(&params, 0, bytemuck::bytes_of(&[node_count, 0, 0, 0]));
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("threaded layout"),
+                source: wgpu::ShaderSource::Wgsl(format!("{TYPES}\n{LAYOUT}").into()),
+            });
+            let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            };
+            let read_write = wgpu::BufferBindingType::Storage { read_only: false };
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("threaded layout"),
+                entries: &[
+                    entry(0, wgpu::BufferBindingType::Uniform),
+                    entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
+                    entry(2, read_write),
+                    entry(3, read_write),
+                    entry(4, read_write),
+                ],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("threaded layout"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+            let kernel = |entry_point: &str| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry_point),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry_point),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            };
+            let (order_kernel, nodes_kernel) = (kernel("depth_first_order"), kernel("threaded_nodes"));
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("threaded layout"),
+                layout: &layout,
+                entries: &[&params, nodes, &order, &threaded, &frame]
+                    .iter()
+                    .enumerate()
+                    .map(|(i, buffer)| wgpu::BindGroupEntry {
+                        binding: i as u32,
+                        resource: buffer.as_entire_binding(),
+                    })
+                    .collect::<Vec<_>>(),
+            });
+            Ok(Self {
+                order: order_kernel,
+                nodes: nodes_kernel,
+                bind_group,
+                node_count,
+                threaded,
+                frame,
+                timer: ctx
+                    .timestamps
+                    .then(|| PassTimestamps::new(device, "threaded layout", 1)),
+            })
+        })
+    }
+
+    /// Records the layout of the nodes as they will be when the encoder reaches it.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
+        if self.node_count == 0 {
+            return;
+        }
+        let groups = self.node_count.div_ceil(GROUP);
+        let x = groups.min(MAX_GROUPS_X);
+        let y = groups.div_ceil(x);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("threaded layout"),
+            timestamp_writes: self.timer.as_ref().map(|t| t.compute_writes(0)),
+        });
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        for kernel in [&self.order, &self.nodes] {
+            pass.set_pipeline(kernel);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        drop(pass);
+        if let Some(timer) = &self.timer {
+            timer.resolve(encoder);
+        }
+    }
+
+    /// Records the copy of the frame into a globals buffer (COPY_DST), after [`Self::encode`].
+    pub fn encode_frame_copy(&self, encoder: &mut wgpu::CommandEncoder, globals: &wgpu::Buffer) {
+        let offset = std::mem::offset_of!(GpuGlobals, bvh_origin) as u64;
+        encoder.copy_buffer_to_buffer(&self.frame, 0, globals, offset, FRAME_BYTES);
+    }
+
+    /// GPU milliseconds of the last layout submitted and finished (None without timestamp queries).
+    pub fn read_ms(&self, ctx: &GpuContext) -> anyhow::Result<Option<f64>> {
+        match &self.timer {
+            Some(timer) if self.node_count > 0 => Ok(Some(timer.read_ms(ctx)?[0])),
+            _ => Ok(None),
+        }
+    }
+
+    /// Copies the frame and the nodes back to the host.
+    pub fn read(&self, ctx: &GpuContext) -> anyhow::Result<(QuantizationFrame, Vec<GpuThreadedNode>)> {
+        if self.node_count == 0 {
+            return Ok((QuantizationFrame::default(), Vec::new()));
+        }
+        let frame: Vec<f32> =
+            bytemuck::pod_collect_to_vec(&read_buffer(&ctx.device, &ctx.queue, &self.frame, FRAME_BYTES)?);
+        let size = self.node_count as u64 * std::mem::size_of::<GpuThreadedNode>() as u64;
+        let nodes = bytemuck::pod_collect_to_vec(&read_buffer(&ctx.device, &ctx.queue, &self.threaded, size)?);
+        let frame = QuantizationFrame {
+            origin: Vec3::from_slice(&frame[0..3]),
+            quantum: Vec3::from_slice(&frame[4..7]),
+        };
+        Ok((frame, nodes))
+    }
+}
