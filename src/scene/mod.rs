@@ -190,6 +190,14 @@ fn finite_vec(v: Vec3) -> bool {
     v.is_finite()
 }
 
+/// The farthest a primitive may reach from the origin: beyond it, box extents (and the threaded
+/// BVH's quantization frame) could overflow f32.
+pub const MAX_COORDINATE: f32 = 1e30;
+
+fn within_reach(v: Vec3) -> bool {
+    v.abs().max_element() <= MAX_COORDINATE
+}
+
 impl Scene {
     /// Loads a scene by built-in name (`whitted`, `random:100:7`, ...), from a TOML file, or from a
     /// model file (`.ply`, `.obj`, `.off`) with a camera that frames it.
@@ -283,12 +291,24 @@ impl Scene {
                     format!("radius must be positive and finite (got {})", s.radius),
                 ));
             }
+            if !within_reach(s.center.abs() + s.radius) {
+                return Err(SceneError::new(
+                    element(),
+                    format!("must lie within {MAX_COORDINATE:e} of the origin"),
+                ));
+            }
             check_material(&element, s.material)?;
         }
         for (i, t) in self.triangles.iter().enumerate() {
             let element = || format!("triangle {i}");
             if !t.vertices.iter().all(|v| v.is_finite()) {
                 return Err(SceneError::new(element(), "vertices must be finite"));
+            }
+            if !t.vertices.iter().all(|&v| within_reach(v)) {
+                return Err(SceneError::new(
+                    element(),
+                    format!("must lie within {MAX_COORDINATE:e} of the origin"),
+                ));
             }
             if let Some(normals) = t.normals
                 && !normals.iter().all(|n| n.is_finite())
