@@ -9,7 +9,7 @@
 //! Boxes are kept in a [`QuantizationFrame`] around the root: integer corners in units of a power
 //! of two per axis, rounded outwards by one more unit. The walk moves the ray into the frame
 //! instead of the boxes out of it, so the corners it tests are exact integers and every box holds
-//! the one it stands for. ``gpu/shaders/threaded.wgsl` lays out the same nodes on the GPU, bit for bit.
+//! the one it stands for. `gpu/shaders/threaded.wgsl` lays out the same nodes on the GPU, bit for bit.
 
 use super::aabb::Aabb;
 use super::layout::{GpuNode, NONE};

@@ -3,7 +3,7 @@
 use super::GpuContext;
 use super::shader::RecordArray;
 use crate::render::Accel;
-use crate::scene::packed::{GpuRecord, PackedScene};
+use crate::scene::packed::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene};
 use anyhow::bail;
 use clap::ValueEnum;
 use wgpu::util::DeviceExt;
@@ -125,6 +125,13 @@ pub fn upload(
                 (buffer_binding(uniform), Resource::Buffer(buffer))
             }
             MemoryMode::Texture => {
+                // Links travel as exact floats, so node indices must stay below 2^24.
+                if name.ends_with("node") && records.len() > MAX_TEXEL_INTEGER as usize {
+                    bail!(
+                        "scene too big for --memory texture: {} {name} records, more than the {MAX_TEXEL_INTEGER} a texel can index; use --memory storage",
+                        records.len()
+                    );
+                }
                 let mut texels = records.texel_data();
                 let rows = texels.len().div_ceil(texels_per_row as usize).max(1);
                 if rows > limits.max_texture_dimension_2d as usize {
