@@ -6,6 +6,7 @@
 //! compiled with.
 
 use super::GpuContext;
+use super::compute::{buffer_entry, grid, kernels};
 use super::readback::read_buffer;
 use super::shader::TYPES;
 use super::timing::PassTimestamps;
@@ -68,7 +69,6 @@ fn pair_bytes(bits: MortonBits) -> u64 {
 const SCRATCH_WORDS_PER_BLOCK: u64 = 16 + 6;
 /// Uniform offsets must be multiples of 256 bytes.
 const PARAMS_STRIDE: u64 = 256;
-const MAX_GROUPS_X: u32 = 65535;
 const PHASES: usize = 5;
 
 #[repr(C)]
@@ -130,60 +130,26 @@ fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) 
     })
 }
 
-/// Workgroups as a 2D grid, since one dimension holds at most 65,535.
-fn grid(groups: u32) -> (u32, u32) {
-    let x = groups.clamp(1, MAX_GROUPS_X);
-    (x, groups.div_ceil(x).max(1))
-}
-
 impl<'a> GpuLbvhBuilder<'a> {
     /// Compiles the kernels for Morton codes of `bits` and sizes the buffers for `spheres` spheres and
     /// `triangles` triangles.
     pub fn new(ctx: &'a GpuContext, bits: MortonBits, spheres: usize, triangles: usize) -> anyhow::Result<Self> {
         ctx.checked("compiling the GPU LBVH build", || {
             let device = &ctx.device;
-            let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty,
-                count: None,
-            };
-            let buffer = |ty, dynamic| wgpu::BindingType::Buffer {
-                ty,
-                has_dynamic_offset: dynamic,
-                min_binding_size: None,
-            };
             let rw = wgpu::BufferBindingType::Storage { read_only: false };
             let read = wgpu::BufferBindingType::Storage { read_only: true };
             let mut entries = vec![
-                entry(0, buffer(wgpu::BufferBindingType::Uniform, true)),
-                entry(1, buffer(read, false)),
+                buffer_entry(0, wgpu::BufferBindingType::Uniform, true),
+                buffer_entry(1, read, false),
             ];
-            entries.extend((2..=8).map(|b| entry(b, buffer(rw, false))));
-            entries.push(entry(9, buffer(read, false)));
+            entries.extend((2..=8).map(|b| buffer_entry(b, rw, false)));
+            entries.push(buffer_entry(9, read, false));
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("lbvh build"),
                 entries: &entries,
             });
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("lbvh"),
-                source: wgpu::ShaderSource::Wgsl(format!("{}\n{TYPES}\n{LBVH}", key_preamble(bits)).into()),
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("lbvh build"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-            let kernel = |entry_point: &str| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry_point),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry_point),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-            };
+            let source = format!("{}\n{TYPES}\n{LBVH}", key_preamble(bits));
+            let kernel = kernels(device, "lbvh", source, &layout);
             let kernels = Kernels {
                 bounds_partial: kernel("bounds_partial"),
                 bounds_final: kernel("bounds_final"),

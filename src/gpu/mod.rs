@@ -1,6 +1,7 @@
 //! The GPU renderer: one full-screen triangle, all tracing in the fragment shader.
 
 pub mod build;
+pub mod compute;
 pub mod context;
 pub mod readback;
 pub mod render;

@@ -4,6 +4,7 @@
 //! round trip to the host.
 
 use super::GpuContext;
+use super::compute::{buffer_entry, grid, kernels};
 use super::readback::read_buffer;
 use super::shader::TYPES;
 use super::timing::PassTimestamps;
@@ -13,7 +14,6 @@ use glam::Vec3;
 
 const LAYOUT: &str = include_str!("shaders/threaded.wgsl");
 const GROUP: u32 = 256;
-const MAX_GROUPS_X: u32 = 65535;
 /// The frame's three vec4 rows, as `GpuGlobals` holds them from `bvh_origin` on.
 const FRAME_BYTES: u64 = 48;
 
@@ -60,46 +60,18 @@ impl GpuThreadedLayout {
             });
             ctx.queue
                 .write_buffer(&params, 0, bytemuck::bytes_of(&[node_count, 0, 0, 0]));
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("threaded layout"),
-                source: wgpu::ShaderSource::Wgsl(format!("{TYPES}\n{LAYOUT}").into()),
-            });
-            let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
             let read_write = wgpu::BufferBindingType::Storage { read_only: false };
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("threaded layout"),
                 entries: &[
-                    entry(0, wgpu::BufferBindingType::Uniform),
-                    entry(1, wgpu::BufferBindingType::Storage { read_only: true }),
-                    entry(2, read_write),
-                    entry(3, read_write),
-                    entry(4, read_write),
+                    buffer_entry(0, wgpu::BufferBindingType::Uniform, false),
+                    buffer_entry(1, wgpu::BufferBindingType::Storage { read_only: true }, false),
+                    buffer_entry(2, read_write, false),
+                    buffer_entry(3, read_write, false),
+                    buffer_entry(4, read_write, false),
                 ],
             });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("threaded layout"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-            let kernel = |entry_point: &str| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry_point),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry_point),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-            };
+            let kernel = kernels(device, "threaded layout", format!("{TYPES}\n{LAYOUT}"), &layout);
             let (order_kernel, nodes_kernel) = (kernel("depth_first_order"), kernel("threaded_nodes"));
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("threaded layout"),
@@ -132,9 +104,7 @@ impl GpuThreadedLayout {
         if self.node_count == 0 {
             return;
         }
-        let groups = self.node_count.div_ceil(GROUP);
-        let x = groups.min(MAX_GROUPS_X);
-        let y = groups.div_ceil(x);
+        let (x, y) = grid(self.node_count.div_ceil(GROUP));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("threaded layout"),
             timestamp_writes: self.timer.as_ref().map(|t| t.compute_writes(0)),

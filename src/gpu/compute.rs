@@ -1,0 +1,53 @@
+//! What the compute passes share: buffer bindings, kernels of one module under one layout, and
+//! workgroup grids.
+
+/// A buffer binding of the compute stage.
+pub fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType, dynamic_offset: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: dynamic_offset,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Compiles `source` and returns a maker of its kernels by entry point, all bound by `layout`.
+pub fn kernels<'a>(
+    device: &'a wgpu::Device,
+    label: &str,
+    source: String,
+    layout: &wgpu::BindGroupLayout,
+) -> impl Fn(&str) -> wgpu::ComputePipeline + 'a {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    move |entry_point| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry_point),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(entry_point),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    }
+}
+
+/// One dimension of a dispatch holds at most 65,535 workgroups.
+const MAX_GROUPS_X: u32 = 65535;
+
+/// `groups` workgroups (at least one) as a 2D grid; kernels flatten it as `wid.y * groups.x + wid.x`.
+pub fn grid(groups: u32) -> (u32, u32) {
+    let x = groups.clamp(1, MAX_GROUPS_X);
+    (x, groups.div_ceil(x).max(1))
+}
