@@ -1,6 +1,7 @@
 //! Host structs against their WGSL twins, and every shader variant through naga's validator: both
 //! run without an adapter.
 
+use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::shader::{ShaderConfig, compose};
 use raypipe::gpu::upload::{MemoryMode, TEXELS_PER_ROW, record_arrays};
 use raypipe::render::Accel;
@@ -77,5 +78,41 @@ fn every_shader_variant_validates() {
                 }
             }
         }
+    }
+}
+
+/// WebGPU lets a shader stage bind 8 storage buffers unless the device asks for more, and browsers
+/// may not grant more: every pipeline keeps within that.
+#[test]
+fn every_pipeline_binds_at_most_8_storage_buffers() {
+    let storage_buffers = |source: &str| {
+        parse(source)
+            .global_variables
+            .iter()
+            .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
+            .count()
+    };
+    for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+        let count = storage_buffers(&raypipe::gpu::build::shader_source(bits));
+        assert!(count <= 8, "the LBVH build binds {count} storage buffers");
+    }
+    let count = storage_buffers(&raypipe::gpu::threaded::shader_source());
+    assert!(count <= 8, "the threaded layout binds {count} storage buffers");
+    let scene = PackedScene::new(&builtin::whitted()).unwrap();
+    for accel in [Accel::Brute, Accel::Stack, Accel::Stackless, Accel::Threaded] {
+        let source = compose(&ShaderConfig {
+            memory: MemoryMode::Storage,
+            accel,
+            max_depth: 5,
+            bvh_depth: 12,
+            arrays: &record_arrays(&scene, accel),
+            texels_per_row: TEXELS_PER_ROW,
+            write_cost: false,
+        });
+        let count = storage_buffers(&source);
+        assert!(
+            count <= 8,
+            "the {accel:?} fragment shader binds {count} storage buffers"
+        );
     }
 }

@@ -58,6 +58,11 @@ fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, p.y, high); }"
 }
 
 /// Bytes of one (code, primitive) pair.
+/// The build kernels' WGSL for codes of `bits`.
+pub fn shader_source(bits: MortonBits) -> String {
+    format!("{}\n{TYPES}\n{LBVH}", key_preamble(bits))
+}
+
 fn pair_bytes(bits: MortonBits) -> u64 {
     match bits {
         MortonBits::Bits30 => 8,
@@ -142,14 +147,13 @@ impl<'a> GpuLbvhBuilder<'a> {
                 buffer_entry(0, wgpu::BufferBindingType::Uniform, true),
                 buffer_entry(1, read, false),
             ];
-            entries.extend((2..=8).map(|b| buffer_entry(b, rw, false)));
-            entries.push(buffer_entry(9, read, false));
+            entries.extend((2..=7).map(|b| buffer_entry(b, rw, false)));
+            entries.push(buffer_entry(8, read, false));
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("lbvh build"),
                 entries: &entries,
             });
-            let source = format!("{}\n{TYPES}\n{LBVH}", key_preamble(bits));
-            let kernel = kernels(device, "lbvh", source, &layout);
+            let kernel = kernels(device, "lbvh", shader_source(bits), &layout);
             let kernels = Kernels {
                 bounds_partial: kernel("bounds_partial"),
                 bounds_final: kernel("bounds_final"),
@@ -398,19 +402,14 @@ impl Buffers {
         );
         let pairs = storage(ctx, "pairs A", n * pair_bytes(bits), wgpu::BufferUsages::COPY_DST);
         let pairs_b = storage(ctx, "pairs B", n * pair_bytes(bits), wgpu::BufferUsages::empty());
+        // The parents follow the per-block words (`parent_slot` in lbvh.wgsl).
         let scratch = storage(
             ctx,
             "build scratch",
-            (8 + SCRATCH_WORDS_PER_BLOCK * blocks) * 4,
+            (8 + SCRATCH_WORDS_PER_BLOCK * blocks + (2 * n).saturating_sub(1)) * 4,
             wgpu::BufferUsages::empty(),
         );
         let ranges = storage(ctx, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
-        let parents = storage(
-            ctx,
-            "parents",
-            (2 * n).saturating_sub(1) * 4,
-            wgpu::BufferUsages::empty(),
-        );
         let climb_words = n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1);
         let climb = storage(ctx, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
         let nodes = storage(ctx, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
@@ -432,7 +431,7 @@ impl Buffers {
         }
         let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
             let resources = [
-                &spheres, pairs_in, pairs_out, &scratch, &ranges, &parents, &climb, &nodes, &triangles,
+                &spheres, pairs_in, pairs_out, &scratch, &ranges, &climb, &nodes, &triangles,
             ];
             let mut entries = vec![wgpu::BindGroupEntry {
                 binding: 0,

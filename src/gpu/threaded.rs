@@ -17,6 +17,11 @@ const GROUP: u32 = 256;
 /// The frame's three vec4 rows, as `GpuGlobals` holds them from `bvh_origin` on.
 const FRAME_BYTES: u64 = 48;
 
+/// The layout kernels' WGSL.
+pub fn shader_source() -> String {
+    format!("{TYPES}\n{LAYOUT}")
+}
+
 pub struct GpuThreadedLayout {
     order: wgpu::ComputePipeline,
     nodes: wgpu::ComputePipeline,
@@ -71,7 +76,7 @@ impl GpuThreadedLayout {
                     buffer_entry(4, read_write, false),
                 ],
             });
-            let kernel = kernels(device, "threaded layout", format!("{TYPES}\n{LAYOUT}"), &layout);
+            let kernel = kernels(device, "threaded layout", shader_source(), &layout);
             let (order_kernel, nodes_kernel) = (kernel("depth_first_order"), kernel("threaded_nodes"));
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("threaded layout"),

@@ -23,7 +23,8 @@ struct BuildParams {
 
 // Layout of `scratch`: centroid bounds; from SCRATCH_HIST, the current sort pass's digit counts per
 // block, digit-major (RADIX * blocks words, scanned in place into where each block's items of each
-// digit go); then per-block partial centroid bounds (6 words each).
+// digit go); then per-block partial centroid bounds (6 words each); then every node's parent. (One
+// buffer for all of them keeps the build within 8 storage buffers, WebGPU's default limit.)
 const SCRATCH_BOUNDS: u32 = 0u;
 const SCRATCH_HIST: u32 = 8u;
 
@@ -35,12 +36,11 @@ const SCRATCH_HIST: u32 = 8u;
 @group(0) @binding(4) var<storage, read_write> scratch: array<u32>;
 // Internal node i: (left child, right child, first, last).
 @group(0) @binding(5) var<storage, read_write> ranges: array<vec4<u32>>;
-@group(0) @binding(6) var<storage, read_write> parents: array<u32>;
 // [0, n - 1): visit counters of internal nodes; then 6 words per node: its box's min and max bits.
-@group(0) @binding(7) var<storage, read_write> climb: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> nodes: array<BvhNode>;
+@group(0) @binding(6) var<storage, read_write> climb: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> nodes: array<BvhNode>;
 // Primitive sphere_count + i is triangle i.
-@group(0) @binding(9) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(8) var<storage, read> triangles: array<Triangle>;
 
 var<workgroup> shared_u32: array<u32, GROUP>;
 // An invocation's digit counts, two 16-bit counts per word, eight words in two vectors: digits 0 and
@@ -63,6 +63,11 @@ fn block_count() -> u32 {
 // Where block `block`'s centroid bounds wait for bounds_final.
 fn partial_bounds(block: u32) -> u32 {
     return SCRATCH_HIST + RADIX * block_count() + block * 6u;
+}
+
+// Where node `node`'s parent is kept.
+fn parent_slot(node: u32) -> u32 {
+    return SCRATCH_HIST + (RADIX + 6u) * block_count() + node;
 }
 
 struct Box {
@@ -393,10 +398,10 @@ fn hierarchy(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gro
         right = leaf_base + split + 1u;
     }
     ranges[i] = vec4<u32>(left, right, first, last);
-    parents[left] = i;
-    parents[right] = i;
+    scratch[parent_slot(left)] = i;
+    scratch[parent_slot(right)] = i;
     if (i == 0u) {
-        parents[0] = NONE;
+        scratch[parent_slot(0)] = NONE;
     }
 }
 
@@ -442,7 +447,7 @@ fn leaves_and_bounds(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     if (n == 1u) {
         return;
     }
-    var node = parents[leaf];
+    var node = scratch[parent_slot(leaf)];
     while (node != NONE) {
         if (atomicAdd(&climb[node], 1u) == 0u) {
             return;
@@ -450,7 +455,7 @@ fn leaves_and_bounds(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
         let children = ranges[node];
         store_box(node, min(load_box_lo(children.x), load_box_lo(children.y)),
                   max(load_box_hi(children.x), load_box_hi(children.y)));
-        node = parents[node];
+        node = scratch[parent_slot(node)];
     }
 }
 
@@ -486,7 +491,7 @@ fn links(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
     }
     var parent = NONE;
     if (n > 1u) {
-        parent = parents[node];
+        parent = scratch[parent_slot(node)];
     }
     nodes[node] = BvhNode(load_box_lo(node), left, load_box_hi(node), right, parent, escape);
 }
