@@ -340,6 +340,58 @@ fn traversals_equal_brute_force() {
     assert!(triangle_hits > 1000, "and hit triangles often ({triangle_hits} hits)");
 }
 
+/// Scenes that strain the threaded walk's 16-bit boxes: small spheres in a frame millions of times
+/// their size (their boxes many times too big), and a small scene far from the origin (the ray's move into
+/// the frame loses the most there). Every walk still finds brute force's hit.
+#[test]
+fn traversals_equal_brute_force_in_coarse_and_far_frames() {
+    let mut rng = SplitMix64::new(5);
+    let sphere = |center: Vec3, radius: f32| GpuSphere {
+        center: center.to_array(),
+        radius,
+        material: 0,
+        _pad: [0; 3],
+    };
+    let mut point = |scale: f32| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * scale;
+    // A cluster of small spheres in a unit cube, and a few spheres 1e5 away that stretch the frame:
+    // a quantum is then several units, wider than the whole cluster.
+    let mut coarse: Vec<GpuSphere> = (0..2000).map(|_| sphere(point(1.0), 0.02)).collect();
+    coarse.extend((0..5).map(|_| sphere(point(1e5), 1.0)));
+    let far: Vec<GpuSphere> = (0..2000).map(|_| sphere(Vec3::splat(3e5) + point(4.0), 0.05)).collect();
+    for (name, spheres, centre, spread) in [
+        ("coarse frame", coarse, Vec3::splat(0.5), 1.0),
+        ("far frame", far, Vec3::splat(3e5 + 2.0), 4.0),
+    ] {
+        let boxes: Vec<Aabb> = spheres.iter().map(GpuSphere::bounds).collect();
+        let trees = Trees::new(Bvh::build_lbvh(&boxes, MortonBits::Bits30).0);
+        assert_eq!(
+            threaded::validate(&trees.frame, &trees.threaded, &boxes),
+            Ok(()),
+            "{name}"
+        );
+        let primitives = Primitives {
+            spheres: &spheres,
+            triangles: &[],
+        };
+        let mut hits = 0;
+        for _ in 0..3000 {
+            let origin = centre + (point(2.0) - Vec3::ONE) * spread;
+            let dir = (point(2.0) - Vec3::ONE).normalize();
+            let ray = Ray { origin, dir };
+            let brute = brute_closest(&primitives, &ray, Hit::none(1e30));
+            hits += (brute.kind == HitKind::Primitive) as u32;
+            for (walk, traverse) in TRAVERSALS {
+                assert_eq!(
+                    traverse(&trees, &primitives, &ray, Hit::none(1e30), false),
+                    brute,
+                    "{name}, {walk}, ray {ray:?}"
+                );
+            }
+        }
+        assert!(hits > 300, "{name}: the test rays should hit often ({hits} hits)");
+    }
+}
+
 #[test]
 fn traversals_handle_one_and_two_spheres() {
     for n in [1usize, 2] {
