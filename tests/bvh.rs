@@ -243,7 +243,7 @@ type Traversal = fn(&Trees, &Primitives, &Ray, Hit, bool) -> Hit;
 
 const TRAVERSALS: [(&str, Traversal); 3] = [
     ("stack", |t, p, ray, best, shadow| {
-        traverse_stack(&t.nodes, p, ray, best, shadow)
+        traverse_stack(&t.threaded, &t.frame, p, ray, best, shadow)
     }),
     ("stackless", |t, p, ray, best, shadow| {
         traverse_stackless(&t.nodes, p, ray, best, shadow)

@@ -51,67 +51,86 @@ pub fn brute_occluded(primitives: &Primitives, ray: &Ray, t_max: f32) -> bool {
 }
 
 /// The closest primitive hit that beats `best`; with `shadow`, the first hit nearer than best.t
-/// (`traverse_stack` in `accel_stack.wgsl`).
-pub fn traverse_stack(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
+/// (`traverse_stack` in `accel_stack.wgsl`): a per-pixel stack, nearer child first, over the
+/// depth-first nodes of [`threaded`], where a node's left child is the next node and its right child
+/// follows the left subtree.
+///
+/// [`threaded`]: crate::bvh::threaded
+pub fn traverse_stack(
+    nodes: &[GpuThreadedNode],
+    frame: &QuantizationFrame,
+    primitives: &Primitives,
+    ray: &Ray,
+    best: Hit,
+    shadow: bool,
+) -> Hit {
     let mut hit = best;
-    if primitives.count() == 0 {
+    let Some(&root) = nodes.first() else {
         return hit;
-    }
-    let inv_dir = safe_inverse(ray.dir);
-    let mut node = nodes[0];
-    if intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) < 0.0 {
+    };
+    // The ray in the quantization frame, where box corners are whole quanta: t is unchanged.
+    let origin = (ray.origin - frame.origin) * frame.inverse_quantum();
+    let inv_dir = safe_inverse(ray.dir) * frame.quantum;
+    let enter = |node: &GpuThreadedNode, t_max: f32| {
+        let (lo, hi) = node.corners();
+        intersect_box(lo, hi, origin, inv_dir, t_max)
+    };
+    let (mut index, mut node) = (0u32, root);
+    if !node.is_leaf() && enter(&node, hit.t) < 0.0 {
         return hit;
     }
     // Nodes waiting to be visited, with the distance where the ray enters them.
     let mut stack: Vec<(u32, f32)> = Vec::with_capacity(64);
     loop {
         if node.is_leaf() {
-            if hit_leaf(primitives, &node, ray, &mut hit) && shadow {
+            if hit_primitive(primitives, node.primitive(), ray, &mut hit) && shadow {
                 return hit;
             }
         } else {
-            let left = nodes[node.left as usize];
-            let right = nodes[node.right as usize];
+            let left_index = index + 1;
+            let left = nodes[left_index as usize];
+            let right_index = if left.is_leaf() { left_index + 1 } else { left.link };
+            let right = nodes[right_index as usize];
             // Leaf children: test their primitives now (no dearer than their boxes); box-test the others.
             let mut t_left = NO_HIT;
             if left.is_leaf() {
-                if hit_leaf(primitives, &left, ray, &mut hit) && shadow {
+                if hit_primitive(primitives, left.primitive(), ray, &mut hit) && shadow {
                     return hit;
                 }
             } else {
-                t_left = intersect_box(v3(left.min), v3(left.max), ray.origin, inv_dir, hit.t);
+                t_left = enter(&left, hit.t);
             }
             let mut t_right = NO_HIT;
             if right.is_leaf() {
-                if hit_leaf(primitives, &right, ray, &mut hit) && shadow {
+                if hit_primitive(primitives, right.primitive(), ray, &mut hit) && shadow {
                     return hit;
                 }
             } else {
-                t_right = intersect_box(v3(right.min), v3(right.max), ray.origin, inv_dir, hit.t);
+                t_right = enter(&right, hit.t);
             }
             if t_left >= 0.0 && t_right >= 0.0 {
                 // Both: go to the nearer (left on a tie), the other waits.
                 if t_right < t_left {
-                    stack.push((node.left, t_left));
-                    node = right;
+                    stack.push((left_index, t_left));
+                    (index, node) = (right_index, right);
                 } else {
-                    stack.push((node.right, t_right));
-                    node = left;
+                    stack.push((right_index, t_right));
+                    (index, node) = (left_index, left);
                 }
                 continue;
             }
             if t_left >= 0.0 {
-                node = left;
+                (index, node) = (left_index, left);
                 continue;
             }
             if t_right >= 0.0 {
-                node = right;
+                (index, node) = (right_index, right);
                 continue;
             }
         }
         // Resume at the next waiting node that the ray enters no farther than the best hit.
         match std::iter::from_fn(|| stack.pop()).find(|&(_, t)| t <= hit.t) {
-            Some((index, _)) => node = nodes[index as usize],
+            Some((waiting, _)) => (index, node) = (waiting, nodes[waiting as usize]),
             None => break,
         }
     }

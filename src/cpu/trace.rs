@@ -65,7 +65,10 @@ impl<'a> Tracer<'a> {
         let primitives = self.primitives();
         match self.accel {
             Accel::Brute => brute_closest(&primitives, ray, best),
-            Accel::Stack => traverse_stack(&scene.nodes, &primitives, ray, best, false),
+            Accel::Stack => {
+                let frame = scene.quantization_frame();
+                traverse_stack(&scene.threaded_nodes, &frame, &primitives, ray, best, false)
+            }
             Accel::Stackless => traverse_stackless(&scene.nodes, &primitives, ray, best, false),
             Accel::Threaded => {
                 let frame = scene.quantization_frame();
@@ -81,7 +84,8 @@ impl<'a> Tracer<'a> {
         match self.accel {
             Accel::Brute => brute_occluded(&primitives, ray, t_max),
             Accel::Stack => {
-                let hit = traverse_stack(&scene.nodes, &primitives, ray, Hit::none(t_max), true);
+                let frame = scene.quantization_frame();
+                let hit = traverse_stack(&scene.threaded_nodes, &frame, &primitives, ray, Hit::none(t_max), true);
                 hit.kind != HitKind::None
             }
             Accel::Stackless => {

@@ -26,7 +26,7 @@ pub struct GpuRenderer<'a> {
     pipeline: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
     globals: wgpu::Buffer,
-    /// With shared buffers and the threaded walk: lays out each frame's rebuilt tree.
+    /// With shared buffers and the stack or threaded walk: lays out each frame's rebuilt tree.
     threaded_layout: Option<GpuThreadedLayout>,
     vertices: wgpu::Buffer,
     targets: [wgpu::Texture; 2],
@@ -62,7 +62,7 @@ impl<'a> GpuRenderer<'a> {
 
     /// A renderer that reads its spheres and nodes from `shared` (storage memory): the buffers of a
     /// GPU LBVH builder. `scene.bvh_depth` must bound the depth of the trees it will build. The
-    /// threaded walk lays out each frame's tree itself, after `render_after`'s `prepare`.
+    /// stack and threaded walks lay out each frame's tree themselves, after `render_after`'s `prepare`.
     pub fn with_shared_buffers(
         ctx: &'a GpuContext,
         scene: &PackedScene,
@@ -97,7 +97,7 @@ impl<'a> GpuRenderer<'a> {
         }
         ctx.checked("uploading the scene and building the pipeline", || {
             let threaded_layout = match shared {
-                Some(shared) if accel == Accel::Threaded => {
+                Some(shared) if matches!(accel, Accel::Stack | Accel::Threaded) => {
                     Some(GpuThreadedLayout::new(ctx, &shared.nodes, scene.primitive_count())?)
                 }
                 _ => None,

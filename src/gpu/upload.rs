@@ -194,8 +194,8 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn R
     ];
     match accel {
         Accel::Brute => {}
-        Accel::Threaded => records.push(("threaded_node", &scene.threaded_nodes)),
-        Accel::Stack | Accel::Stackless => records.push(("node", &scene.nodes)),
+        Accel::Stack | Accel::Threaded => records.push(("threaded_node", &scene.threaded_nodes)),
+        Accel::Stackless => records.push(("node", &scene.nodes)),
     }
     records
 }

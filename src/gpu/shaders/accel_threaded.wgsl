@@ -11,7 +11,7 @@ fn traverse_threaded(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var index = 0u;
     while (index < count) {
         let node = load_threaded_node(index);
-        if ((node.link & LEAF_BIT) != 0u) {
+        if (is_leaf(node)) {
             // A leaf's primitive costs no more to test than its box: test it directly.
             if (hit_primitive(node.link & ~LEAF_BIT, ray, &hit) && shadow) {
                 return hit;
@@ -29,14 +29,6 @@ fn traverse_threaded(ray: Ray, best: Hit, shadow: bool) -> Hit {
 // 2n - 1 nodes for n primitives.
 fn threaded_node_count() -> u32 {
     return max(2u * primitive_count(), 1u) - 1u;
-}
-
-fn quantized_min(node: ThreadedNode) -> vec3<f32> {
-    return vec3<f32>(vec3<u32>(node.bounds.x & 0xffffu, node.bounds.x >> 16u, node.bounds.y & 0xffffu));
-}
-
-fn quantized_max(node: ThreadedNode) -> vec3<f32> {
-    return vec3<f32>(vec3<u32>(node.bounds.y >> 16u, node.bounds.z & 0xffffu, node.bounds.z >> 16u));
 }
 
 fn accel_closest(ray: Ray, best: Hit) -> Hit {

@@ -95,3 +95,16 @@ struct ThreadedNode {
 }
 
 const LEAF_BIT: u32 = 0x80000000u;
+
+fn is_leaf(node: ThreadedNode) -> bool {
+    return (node.link & LEAF_BIT) != 0u;
+}
+
+// A threaded node's box corners, in quanta.
+fn quantized_min(node: ThreadedNode) -> vec3<f32> {
+    return vec3<f32>(vec3<u32>(node.bounds.x & 0xffffu, node.bounds.x >> 16u, node.bounds.y & 0xffffu));
+}
+
+fn quantized_max(node: ThreadedNode) -> vec3<f32> {
+    return vec3<f32>(vec3<u32>(node.bounds.y >> 16u, node.bounds.z & 0xffffu, node.bounds.z >> 16u));
+}
