@@ -31,7 +31,7 @@ pub struct BuildTimings {
     pub hierarchy: f64,
     pub bounds: f64,
     /// Zero where the links are written with the bounds, as the CPU LBVH builder writes them;
-    /// their time is then in `bounds`. A per-frame GPU rebuild for the threaded walk adds its
+    /// their time is then in `bounds`. A per-frame GPU rebuild for the stack and threaded walks adds its
     /// layout of the tree (`gpu::threaded`) here.
     pub links: f64,
 }

@@ -1,10 +1,12 @@
-//! The threaded BVH that `--accel threaded` walks: the tree of [`layout`](super::layout) renumbered
-//! in depth-first order, with boxes quantized to 16 bits, in 16 bytes a node.
+//! The threaded BVH that `--accel threaded` and `--accel stack` walk: the tree of
+//! [`layout`](super::layout) renumbered in depth-first order, with boxes quantized to 16 bits, in 16
+//! bytes a node.
 //!
 //! In depth-first (preorder) numbering the node after a hit box, and after a leaf, is always the
 //! next one, so a node keeps a single link: where to go when the ray misses its box (Smits 1998's
-//! skip link). On a software rasterizer every component a fragment reads is a separate load, so a
-//! node of four words instead of nine is most of the walk's speed (docs/BENCHMARKS.md).
+//! skip link). The stack walk finds a node's children the same way: the next node, and the node
+//! after the left subtree. On a software rasterizer every component a fragment reads is a separate
+//! load, so a node of four words instead of nine is much of a walk's speed (docs/BENCHMARKS.md).
 //!
 //! Boxes are kept in a [`QuantizationFrame`] around the root: integer corners in units of a power
 //! of two per axis, rounded outwards by one more unit. The walk moves the ray into the frame

@@ -218,7 +218,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                         times.push(timed.gpu_ms.unwrap_or(wall));
                         rays = timed.frame.rays();
                         if let Some(b) = &rebuild {
-                            // The threaded walk's layout of the tree is part of its rebuild.
+                            // The 16-byte layout of the tree, for the walks that read it, is part of the rebuild.
                             builds.push(b.read_timings()?.total() + timed.layout_ms.unwrap_or(0.0));
                         }
                     }

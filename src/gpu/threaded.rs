@@ -1,7 +1,7 @@
 //! The threaded BVH laid out on the GPU (`shaders/threaded.wgsl`) from the node array a
 //! [`GpuLbvhBuilder`](super::build::GpuLbvhBuilder) builds there: the per-frame twin of
-//! [`crate::bvh::threaded::threaded_nodes`], so a rebuilt tree reaches the threaded walk with no
-//! round trip to the host.
+//! [`crate::bvh::threaded::threaded_nodes`], so a rebuilt tree reaches the stack and threaded walks
+//! with no round trip to the host.
 
 use super::GpuContext;
 use super::compute::{buffer_entry, grid, kernels};

@@ -307,7 +307,7 @@ pub struct PackedScene {
     pub nodes: Vec<GpuNode>,
     /// Longest root-to-leaf path of `nodes`, in edges: the traversal stack's size.
     pub bvh_depth: u32,
-    /// The same tree as the threaded walk reads it (its frame is in the globals).
+    /// The same tree as the stack and threaded walks read it (its frame is in the globals).
     pub threaded_nodes: Vec<GpuThreadedNode>,
 }
 
