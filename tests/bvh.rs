@@ -7,7 +7,7 @@ use raypipe::bvh::layout::GpuNode;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
-use raypipe::bvh::threaded::{self, GpuThreadedNode, QuantizationFrame, threaded_nodes};
+use raypipe::bvh::threaded::{self, GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use raypipe::cpu::intersect::{Hit, HitKind, Primitives, Ray};
@@ -229,6 +229,13 @@ struct Trees {
 }
 
 impl Trees {
+    fn threaded(&self) -> ThreadedTree<'_> {
+        ThreadedTree {
+            nodes: &self.threaded,
+            frame: self.frame,
+        }
+    }
+
     fn new(bvh: Bvh) -> Self {
         let (frame, threaded) = threaded_nodes(&bvh.nodes);
         Self {
@@ -243,13 +250,13 @@ type Traversal = fn(&Trees, &Primitives, &Ray, Hit, bool) -> Hit;
 
 const TRAVERSALS: [(&str, Traversal); 3] = [
     ("stack", |t, p, ray, best, shadow| {
-        traverse_stack(&t.threaded, &t.frame, p, ray, best, shadow)
+        traverse_stack(t.threaded(), p, ray, best, shadow)
     }),
     ("stackless", |t, p, ray, best, shadow| {
         traverse_stackless(&t.nodes, p, ray, best, shadow)
     }),
     ("threaded", |t, p, ray, best, shadow| {
-        traverse_threaded(&t.threaded, &t.frame, p, ray, best, shadow)
+        traverse_threaded(t.threaded(), p, ray, best, shadow)
     }),
 ];
 

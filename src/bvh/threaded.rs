@@ -56,6 +56,13 @@ impl GpuThreadedNode {
     }
 }
 
+/// A threaded BVH as the walks read it: its nodes, and the frame their boxes are in.
+#[derive(Clone, Copy, Debug)]
+pub struct ThreadedTree<'a> {
+    pub nodes: &'a [GpuThreadedNode],
+    pub frame: QuantizationFrame,
+}
+
 /// Where quantized boxes live: corner q on an axis stands for `origin + q * quantum`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct QuantizationFrame {

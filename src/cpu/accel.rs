@@ -6,7 +6,7 @@ use super::intersect::{
     intersect_sphere, intersect_triangle, safe_inverse, v3,
 };
 use crate::bvh::layout::GpuNode;
-use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame};
+use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree};
 use glam::Vec3;
 
 /// Brute force: every ray against every primitive (`accel_brute.wgsl`).
@@ -56,21 +56,13 @@ pub fn brute_occluded(primitives: &Primitives, ray: &Ray, t_max: f32) -> bool {
 /// follows the left subtree.
 ///
 /// [`threaded`]: crate::bvh::threaded
-pub fn traverse_stack(
-    nodes: &[GpuThreadedNode],
-    frame: &QuantizationFrame,
-    primitives: &Primitives,
-    ray: &Ray,
-    best: Hit,
-    shadow: bool,
-) -> Hit {
+pub fn traverse_stack(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
+    let nodes = tree.nodes;
     let mut hit = best;
     let Some(&root) = nodes.first() else {
         return hit;
     };
-    // The ray in the quantization frame, where box corners are whole quanta: t is unchanged.
-    let origin = (ray.origin - frame.origin) * frame.inverse_quantum();
-    let inv_dir = safe_inverse(ray.dir) * frame.quantum;
+    let (origin, inv_dir) = ray_in_frame(&tree.frame, ray);
     let enter = |node: &GpuThreadedNode, t_max: f32| {
         let (lo, hi) = node.corners();
         intersect_box(lo, hi, origin, inv_dir, t_max)
@@ -137,22 +129,21 @@ pub fn traverse_stack(
     hit
 }
 
+/// The ray's origin and inverse direction in the quantization frame, where box corners are whole
+/// quanta: t along the ray is unchanged.
+fn ray_in_frame(frame: &QuantizationFrame, ray: &Ray) -> (Vec3, Vec3) {
+    let origin = (ray.origin - frame.origin) * frame.inverse_quantum();
+    (origin, safe_inverse(ray.dir) * frame.quantum)
+}
+
 /// Threaded traversal (`accel_threaded.wgsl`) over the depth-first nodes of [`threaded`]: after a
 /// hit box or a leaf the next node, after a missed box the node's link past its subtree.
 ///
 /// [`threaded`]: crate::bvh::threaded
-pub fn traverse_threaded(
-    nodes: &[GpuThreadedNode],
-    frame: &QuantizationFrame,
-    primitives: &Primitives,
-    ray: &Ray,
-    best: Hit,
-    shadow: bool,
-) -> Hit {
+pub fn traverse_threaded(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
+    let nodes = tree.nodes;
     let mut hit = best;
-    // The ray in the quantization frame, where box corners are whole quanta: t is unchanged.
-    let origin = (ray.origin - frame.origin) * frame.inverse_quantum();
-    let inv_dir = safe_inverse(ray.dir) * frame.quantum;
+    let (origin, inv_dir) = ray_in_frame(&tree.frame, ray);
     let mut index = 0;
     while let Some(node) = nodes.get(index as usize) {
         if node.is_leaf() {

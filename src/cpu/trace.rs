@@ -65,15 +65,9 @@ impl<'a> Tracer<'a> {
         let primitives = self.primitives();
         match self.accel {
             Accel::Brute => brute_closest(&primitives, ray, best),
-            Accel::Stack => {
-                let frame = scene.quantization_frame();
-                traverse_stack(&scene.threaded_nodes, &frame, &primitives, ray, best, false)
-            }
+            Accel::Stack => traverse_stack(scene.threaded_tree(), &primitives, ray, best, false),
             Accel::Stackless => traverse_stackless(&scene.nodes, &primitives, ray, best, false),
-            Accel::Threaded => {
-                let frame = scene.quantization_frame();
-                traverse_threaded(&scene.threaded_nodes, &frame, &primitives, ray, best, false)
-            }
+            Accel::Threaded => traverse_threaded(scene.threaded_tree(), &primitives, ray, best, false),
         }
     }
 
@@ -84,8 +78,7 @@ impl<'a> Tracer<'a> {
         match self.accel {
             Accel::Brute => brute_occluded(&primitives, ray, t_max),
             Accel::Stack => {
-                let frame = scene.quantization_frame();
-                let hit = traverse_stack(&scene.threaded_nodes, &frame, &primitives, ray, Hit::none(t_max), true);
+                let hit = traverse_stack(scene.threaded_tree(), &primitives, ray, Hit::none(t_max), true);
                 hit.kind != HitKind::None
             }
             Accel::Stackless => {
@@ -93,8 +86,7 @@ impl<'a> Tracer<'a> {
                 hit.kind != HitKind::None
             }
             Accel::Threaded => {
-                let frame = scene.quantization_frame();
-                let hit = traverse_threaded(&scene.threaded_nodes, &frame, &primitives, ray, Hit::none(t_max), true);
+                let hit = traverse_threaded(scene.threaded_tree(), &primitives, ray, Hit::none(t_max), true);
                 hit.kind != HitKind::None
             }
         }

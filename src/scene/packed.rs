@@ -9,7 +9,7 @@ use super::Scene;
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::GpuNode;
 use crate::bvh::morton::MortonBits;
-use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, threaded_nodes};
+use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
 use crate::bvh::{BuildTimings, Bvh};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -478,10 +478,15 @@ impl PackedScene {
         self.nodes = bvh.nodes;
     }
 
-    pub fn quantization_frame(&self) -> QuantizationFrame {
-        QuantizationFrame {
+    /// The threaded nodes with the frame the globals hold.
+    pub fn threaded_tree(&self) -> ThreadedTree<'_> {
+        let frame = QuantizationFrame {
             origin: Vec3::from_array(self.globals.bvh_origin),
             quantum: Vec3::from_array(self.globals.bvh_quantum),
+        };
+        ThreadedTree {
+            nodes: &self.threaded_nodes,
+            frame,
         }
     }
 
