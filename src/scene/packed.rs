@@ -490,7 +490,7 @@ impl PackedScene {
         }
     }
 
-    pub fn set_quantization_frame(&mut self, frame: QuantizationFrame) {
+    fn set_quantization_frame(&mut self, frame: QuantizationFrame) {
         self.globals.bvh_origin = frame.origin.to_array();
         self.globals.bvh_quantum = frame.quantum.to_array();
         self.globals.bvh_inverse_quantum = frame.inverse_quantum().to_array();
