@@ -6,7 +6,7 @@
 //! compiled with.
 
 use super::GpuContext;
-use super::compute::{buffer_entry, grid, kernels};
+use super::compute::{buffer_entry, grid, kernels, storage_buffer};
 use super::readback::read_buffer;
 use super::shader::TYPES;
 use super::timing::PassTimestamps;
@@ -57,12 +57,12 @@ fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, p.y, high); }"
     )
 }
 
-/// Bytes of one (code, primitive) pair.
 /// The build kernels' WGSL for codes of `bits`.
 pub fn shader_source(bits: MortonBits) -> String {
     format!("{}\n{TYPES}\n{LBVH}", key_preamble(bits))
 }
 
+/// Bytes of one (code, primitive) pair.
 fn pair_bytes(bits: MortonBits) -> u64 {
     match bits {
         MortonBits::Bits30 => 8,
@@ -124,15 +124,6 @@ pub struct Buffers {
     climb: wgpu::Buffer,
     /// The built nodes (STORAGE | COPY_SRC), the layout of `bvh::layout`.
     pub nodes: wgpu::Buffer,
-}
-
-fn storage(ctx: &GpuContext, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
-    ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: size.max(16),
-        usage: wgpu::BufferUsages::STORAGE | extra,
-        mapped_at_creation: false,
-    })
 }
 
 impl<'a> GpuLbvhBuilder<'a> {
@@ -388,31 +379,31 @@ impl Buffers {
         let blocks = n.div_ceil(BLOCK as u64);
         // A binding may not be empty: an absent kind of primitive gets room for one record.
         let record_room = |records: usize, size: usize| records.max(1) as u64 * size as u64;
-        let spheres = storage(
-            ctx,
+        let spheres = storage_buffer(
+            device,
             "build spheres",
             record_room(sphere_count, std::mem::size_of::<GpuSphere>()),
             wgpu::BufferUsages::COPY_DST,
         );
-        let triangles = storage(
-            ctx,
+        let triangles = storage_buffer(
+            device,
             "build triangles",
             record_room(triangle_count, std::mem::size_of::<GpuTriangle>()),
             wgpu::BufferUsages::COPY_DST,
         );
-        let pairs = storage(ctx, "pairs A", n * pair_bytes(bits), wgpu::BufferUsages::COPY_DST);
-        let pairs_b = storage(ctx, "pairs B", n * pair_bytes(bits), wgpu::BufferUsages::empty());
+        let pairs = storage_buffer(device, "pairs A", n * pair_bytes(bits), wgpu::BufferUsages::COPY_DST);
+        let pairs_b = storage_buffer(device, "pairs B", n * pair_bytes(bits), wgpu::BufferUsages::empty());
         // The parents follow the per-block words (`parent_slot` in lbvh.wgsl).
-        let scratch = storage(
-            ctx,
+        let scratch = storage_buffer(
+            device,
             "build scratch",
             (8 + SCRATCH_WORDS_PER_BLOCK * blocks + (2 * n).saturating_sub(1)) * 4,
             wgpu::BufferUsages::empty(),
         );
-        let ranges = storage(ctx, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
+        let ranges = storage_buffer(device, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
         let climb_words = n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1);
-        let climb = storage(ctx, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
-        let nodes = storage(ctx, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
+        let climb = storage_buffer(device, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
+        let nodes = storage_buffer(device, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("build params"),
             size: PARAMS_STRIDE * sort_passes(bits) as u64,

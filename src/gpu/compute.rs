@@ -1,5 +1,15 @@
-//! What the compute passes share: buffer bindings, kernels of one module under one layout, and
+//! What the compute passes share: storage buffers, their bindings, kernels of one module under one layout, and
 //! workgroup grids.
+
+/// A storage buffer with `extra` usages, at least 16 bytes (a binding may not be empty).
+pub fn storage_buffer(device: &wgpu::Device, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: wgpu::BufferUsages::STORAGE | extra,
+        mapped_at_creation: false,
+    })
+}
 
 /// A buffer binding of the compute stage.
 pub fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType, dynamic_offset: bool) -> wgpu::BindGroupLayoutEntry {

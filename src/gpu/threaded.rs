@@ -4,7 +4,7 @@
 //! with no round trip to the host.
 
 use super::GpuContext;
-use super::compute::{buffer_entry, grid, kernels};
+use super::compute::{buffer_entry, grid, kernels, storage_buffer};
 use super::readback::read_buffer;
 use super::shader::TYPES;
 use super::timing::PassTimestamps;
@@ -42,14 +42,7 @@ impl GpuThreadedLayout {
         ctx.checked("compiling the threaded BVH layout", || {
             let device = &ctx.device;
             let node_count = (2 * primitive_count).saturating_sub(1) as u32;
-            let storage = |label, bytes: u64, extra| {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: bytes.max(16),
-                    usage: wgpu::BufferUsages::STORAGE | extra,
-                    mapped_at_creation: false,
-                })
-            };
+            let storage = |label, size, extra| storage_buffer(device, label, size, extra);
             let order = storage("depth-first order", node_count as u64 * 4, wgpu::BufferUsages::empty());
             let threaded = storage(
                 "threaded nodes",
