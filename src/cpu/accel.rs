@@ -2,7 +2,7 @@
 //! whether anything blocks a shadow ray.
 
 use super::intersect::{
-    Hit, HitKind, NO_HIT, Primitives, Ray, closer_primitive, count_box_tests, hit_leaf, hit_primitive, intersect_box,
+    Hit, HitKind, NO_HIT, Primitives, Ray, closer_primitive, count_box_tests, hit_primitive, intersect_box,
     intersect_sphere, intersect_triangle, safe_inverse, v3,
 };
 use crate::bvh::layout::GpuNode;
@@ -200,7 +200,7 @@ pub fn traverse_stackless(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray,
         return hit;
     }
     if root.is_leaf() {
-        hit_leaf(primitives, &root, ray, &mut hit);
+        hit_primitive(primitives, root.left, ray, &mut hit);
         return hit;
     }
     let mut index = near_child(nodes, &root, ray.dir);
@@ -223,7 +223,7 @@ pub fn traverse_stackless(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray,
         // From the parent or the sibling: a leaf's primitive (no dearer to test than its box), or the box.
         let mut descend = false;
         if node.is_leaf() {
-            if hit_leaf(primitives, &node, ray, &mut hit) && shadow {
+            if hit_primitive(primitives, node.left, ray, &mut hit) && shadow {
                 return hit;
             }
         } else {

@@ -1,6 +1,5 @@
 //! Ray-primitive intersection: the twin of `shaders/intersect.wgsl`.
 
-use crate::bvh::layout::GpuNode;
 use crate::scene::packed::{GpuPlane, GpuSphere, GpuTriangle};
 use glam::Vec3;
 
@@ -167,11 +166,6 @@ pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32
     let t_enter = near.x.max(near.y).max(near.z.max(0.0));
     let t_exit = far.x.min(far.y).min(far.z.min(t_max));
     if t_enter <= t_exit { t_enter } else { NO_HIT }
-}
-
-/// Tests a BVH leaf's primitive (`hit_leaf` in `intersect.wgsl`).
-pub fn hit_leaf(primitives: &Primitives, node: &GpuNode, ray: &Ray, hit: &mut Hit) -> bool {
-    hit_primitive(primitives, node.left, ray, hit)
 }
 
 /// Tests a primitive of the BVH; when it beats the best hit, it becomes the best hit and this says

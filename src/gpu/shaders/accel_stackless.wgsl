@@ -31,7 +31,7 @@ fn traverse_stackless(ray: Ray, best: Hit, shadow: bool) -> Hit {
         return hit;
     }
     if (root.right == LEAF) {
-        hit_leaf(root, ray, &hit);
+        hit_primitive(root.left, ray, &hit);
         return hit;
     }
     var index = near_child(root, ray.dir);
@@ -54,7 +54,7 @@ fn traverse_stackless(ray: Ray, best: Hit, shadow: bool) -> Hit {
         // From the parent or the sibling: a leaf's primitive (no dearer to test than its box), or the box.
         var descend = false;
         if (node.right == LEAF) {
-            if (hit_leaf(node, ray, &hit) && shadow) {
+            if (hit_primitive(node.left, ray, &hit) && shadow) {
                 return hit;
             }
         } else {

@@ -117,11 +117,6 @@ fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<
     return NO_HIT;
 }
 
-// Tests a BVH leaf's primitive.
-fn hit_leaf(node: BvhNode, ray: Ray, hit: ptr<function, Hit>) -> bool {
-    return hit_primitive(node.left, ray, hit);
-}
-
 // Tests a primitive of the BVH; when it beats the best hit, it becomes the best hit and this says so.
 fn hit_primitive(index: u32, ray: Ray, hit: ptr<function, Hit>) -> bool {
     box_tests += 1u;
