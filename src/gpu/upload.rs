@@ -125,8 +125,8 @@ pub fn upload(
                 (buffer_binding(uniform), Resource::Buffer(buffer))
             }
             MemoryMode::Texture => {
-                // Links travel as exact floats, so node indices must stay below 2^24.
-                if name.ends_with("node") && records.len() > MAX_TEXEL_INTEGER as usize {
+                // Indices (node links among them) travel as exact floats: below 2^24.
+                if records.len() > MAX_TEXEL_INTEGER as usize {
                     bail!(
                         "scene too big for --memory texture: {} {name} records, more than the {MAX_TEXEL_INTEGER} a texel can index; use --memory storage",
                         records.len()
