@@ -4,7 +4,7 @@ use glam::Vec3;
 use proptest::prelude::*;
 use raypipe::bvh::aabb::Aabb;
 use raypipe::bvh::layout::GpuNode;
-use raypipe::bvh::lbvh::LbvhBuilder;
+use raypipe::bvh::lbvh::{Hierarchy, Key, LbvhBuilder};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
 use raypipe::bvh::threaded::{self, GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
@@ -18,7 +18,35 @@ fn spheres_to_boxes(spheres: &[(Vec3, f32)]) -> Vec<Aabb> {
     spheres.iter().map(|&(c, r)| Aabb::around_sphere(c, r)).collect()
 }
 
+/// The LBVH with its hierarchy found by Karras's searches, and by merges with several chunk sizes
+/// (tiny ones leave most of the tree to the merge that joins the chunks).
+fn lbvh_variants<K: Key>(boxes: &[Aabb], bits: MortonBits) -> Vec<(String, Bvh)> {
+    let searches = LbvhBuilder::<K>::with_hierarchy(Hierarchy::Searches);
+    let mut variants = vec![("searches".to_string(), searches.build_into(boxes, bits).0)];
+    for chunk in [1, 2, 3, 64, 4096] {
+        let merges = LbvhBuilder::<K>::with_hierarchy(Hierarchy::Merges).with_merge_chunk(chunk);
+        variants.push((format!("merges in chunks of {chunk}"), merges.build_into(boxes, bits).0));
+    }
+    variants
+}
+
+/// Both ways of finding the hierarchy, every chunk size: one node array, bit for bit.
+fn check_hierarchies_agree(boxes: &[Aabb]) -> Result<(), TestCaseError> {
+    for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+        let (default, _) = Bvh::build_lbvh(boxes, bits);
+        let variants = match bits {
+            MortonBits::Bits30 => lbvh_variants::<u64>(boxes, bits),
+            MortonBits::Bits63 => lbvh_variants::<u128>(boxes, bits),
+        };
+        for (name, bvh) in variants {
+            prop_assert!(bvh == default, "{:?} {} over {} boxes differs", bits, name, boxes.len());
+        }
+    }
+    Ok(())
+}
+
 fn check_all_builders(boxes: &[Aabb]) -> Result<(), TestCaseError> {
+    check_hierarchies_agree(boxes)?;
     for bits in [MortonBits::Bits30, MortonBits::Bits63] {
         let (bvh, _) = Bvh::build_lbvh(boxes, bits);
         prop_assert_eq!(
@@ -97,6 +125,7 @@ fn zero_one_and_two_primitives() {
         let boxes: Vec<Aabb> = (0..n)
             .map(|i| Aabb::around_sphere(Vec3::splat(i as f32), 0.5))
             .collect();
+        check_hierarchies_agree(&boxes).unwrap();
         let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
         assert_eq!(bvh.nodes.len(), (2 * n).saturating_sub(1));
         bvh.validate(&boxes).unwrap();
@@ -202,6 +231,24 @@ fn given_codes_give_the_same_tree() {
     let (a, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
     let (b, _) = Bvh::build_from_codes(&boxes, &codes, MortonBits::Bits30);
     assert_eq!(a, b);
+}
+
+/// Scenes over several of the default merge chunks, with runs of coincident centroids that cross
+/// chunk boundaries: the merges give the searches' tree.
+#[test]
+fn merges_across_default_chunks_equal_searches() {
+    let mut rng = SplitMix64::new(23);
+    let mut boxes: Vec<Aabb> = (0..70_000)
+        .map(|_| Aabb::around_sphere(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()), 0.001))
+        .collect();
+    // 30,000 coincident spheres: one Morton code over more than a chunk
+    boxes.extend((0..30_000).map(|_| Aabb::around_sphere(Vec3::splat(0.25), 0.001)));
+    for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+        let (merges, _) = Bvh::build_lbvh_with(&boxes, bits, Hierarchy::Merges);
+        let (searches, _) = Bvh::build_lbvh_with(&boxes, bits, Hierarchy::Searches);
+        assert!(merges == searches, "{bits:?}: the merges and the searches differ");
+        assert_eq!(merges.validate(&boxes), Ok(()));
+    }
 }
 
 /// A builder kept from frame to frame must forget the last frame: each build equals a fresh one,

@@ -5,6 +5,7 @@
 
 use super::aabb::Aabb;
 use super::layout::{GpuNode, LEAF, NONE};
+use super::merge::{self, merge_bottom_up};
 use super::morton::{Grid, MortonBits};
 use super::sort::{DisjointWrites, radix_sort_by_key_then};
 use super::{BuildTimings, Bvh};
@@ -183,10 +184,26 @@ fn split(children: &[[u32; 2]], node: u32) -> u32 {
     if left >= leaf_base { left - leaf_base } else { left }
 }
 
+/// How the CPU builder finds the binary radix tree. Both find the same tree and write the same node
+/// array, bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Hierarchy {
+    /// Bottom-up merges (Apetrei 2014, [`super::merge`]), which write the boxes and links in the same
+    /// pass over the leaves.
+    #[default]
+    Merges,
+    /// Karras's searches: every internal node found on its own, as the GPU builder finds them, then
+    /// the boxes and links in a climb of their own.
+    Searches,
+}
+
 /// A reusable LBVH builder: build after build, its buffers keep their capacity. `K` is `u64` for
 /// 30-bit Morton codes and `u128` for 63-bit ones.
 #[derive(Default)]
 pub struct LbvhBuilder<K: Key> {
+    hierarchy: Hierarchy,
+    /// Leaves merged by one task ([`Hierarchy::Merges`]); 0 for [`merge::CHUNK`].
+    merge_chunk: usize,
     keys: Vec<K>,
     scratch: Vec<K>,
     /// The sorted keys with their positions in place of their primitives: what the hierarchy
@@ -204,6 +221,21 @@ pub struct LbvhBuilder<K: Key> {
 impl<K: Key> LbvhBuilder<K> {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    pub fn with_hierarchy(hierarchy: Hierarchy) -> Self {
+        Self {
+            hierarchy,
+            ..Self::default()
+        }
+    }
+
+    /// Merges `leaves` leaves per task ([`Hierarchy::Merges`]): small chunks leave more of the tree
+    /// to the serial merge that joins them, which tests want.
+    pub fn with_merge_chunk(mut self, leaves: usize) -> Self {
+        assert!(leaves > 0);
+        self.merge_chunk = leaves;
+        self
     }
 
     /// Builds over `boxes`, computing Morton codes of their centroids; the tree is in [`Self::nodes`].
@@ -276,10 +308,14 @@ impl<K: Key> LbvhBuilder<K> {
 
         // Sort the keys by code; the index below keeps equal codes in primitive order
         let start = Instant::now();
-        // Each sorted stretch, while in cache, also gives the hierarchy its positioned keys.
-        self.positioned.resize(n, K::default());
+        // Each sorted stretch, while in cache, also gives the searches their positioned keys.
+        let searches = self.hierarchy == Hierarchy::Searches;
+        self.positioned.resize(if searches { n } else { 0 }, K::default());
         let positioned = DisjointWrites::new(&mut self.positioned);
         let position_keys = |start: usize, keys: &[K]| {
+            if !searches {
+                return;
+            }
             for (position, key) in (start..).zip(keys) {
                 // SAFETY: the sorted stretches are disjoint.
                 unsafe { positioned.write(position, key.at_position(position as u32)) };
@@ -298,12 +334,26 @@ impl<K: Key> LbvhBuilder<K> {
         if n == 0 {
             return timings;
         }
-        let start = Instant::now();
-        self.hierarchy();
-        timings.hierarchy = ms_since(start);
-        let start = Instant::now();
-        self.bounds_and_links(boxes);
-        timings.bounds = ms_since(start);
+        match self.hierarchy {
+            Hierarchy::Merges => {
+                let start = Instant::now();
+                let chunk = if self.merge_chunk == 0 {
+                    merge::CHUNK
+                } else {
+                    self.merge_chunk
+                };
+                merge_bottom_up(&self.keys, boxes, &mut self.leaf_boxes, &mut self.nodes, chunk);
+                timings.hierarchy = ms_since(start);
+            }
+            Hierarchy::Searches => {
+                let start = Instant::now();
+                self.hierarchy();
+                timings.hierarchy = ms_since(start);
+                let start = Instant::now();
+                self.bounds_and_links(boxes);
+                timings.bounds = ms_since(start);
+            }
+        }
         timings
     }
 
@@ -341,21 +391,8 @@ impl<K: Key> LbvhBuilder<K> {
     // rule of the GPU's pass.
     fn bounds_and_links(&mut self, boxes: &[Aabb]) {
         let n = self.keys.len();
-        // The primitives' boxes are scattered; a gather with nothing else in flight overlaps their
-        // cache misses better than the climb would with its loads and branches between them.
         let keys = &self.keys;
-        self.leaf_boxes.resize(n, Aabb::EMPTY);
-        self.leaf_boxes
-            .par_chunks_mut(MIN_TASK)
-            .enumerate()
-            .for_each(|(chunk, leaf_boxes)| {
-                for (position, leaf_box) in (chunk * MIN_TASK..).zip(leaf_boxes) {
-                    if let Some(ahead) = keys.get(position + PREFETCH_DISTANCE) {
-                        prefetch(&boxes[ahead.primitive() as usize]);
-                    }
-                    *leaf_box = boxes[keys[position].primitive() as usize];
-                }
-            });
+        gather_leaf_boxes(keys, boxes, &mut self.leaf_boxes);
         let walk = Walk {
             nodes: DisjointWrites::new(&mut self.nodes),
             keys,
@@ -366,6 +403,23 @@ impl<K: Key> LbvhBuilder<K> {
         };
         walk.visit(0, 0, n as u32 - 1);
     }
+}
+
+/// The primitives' boxes in sorted order. They are scattered; a gather with nothing else in flight
+/// overlaps their cache misses better than a climb would with its loads and branches between them.
+pub(crate) fn gather_leaf_boxes<K: Key>(keys: &[K], boxes: &[Aabb], leaf_boxes: &mut Vec<Aabb>) {
+    leaf_boxes.resize(keys.len(), Aabb::EMPTY);
+    leaf_boxes
+        .par_chunks_mut(MIN_TASK)
+        .enumerate()
+        .for_each(|(chunk, leaf_boxes)| {
+            for (position, leaf_box) in (chunk * MIN_TASK..).zip(leaf_boxes) {
+                if let Some(ahead) = keys.get(position + PREFETCH_DISTANCE) {
+                    prefetch(&boxes[ahead.primitive() as usize]);
+                }
+                *leaf_box = boxes[keys[position].primitive() as usize];
+            }
+        });
 }
 
 /// Subtrees with fewer leaves than this are walked on one thread.

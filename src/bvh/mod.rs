@@ -4,6 +4,7 @@
 pub mod aabb;
 pub mod layout;
 pub mod lbvh;
+pub mod merge;
 pub mod morton;
 pub mod sah;
 pub mod sort;
@@ -46,9 +47,14 @@ impl Bvh {
     /// The linear BVH of `boxes`, with the time of each phase. A per-frame rebuild should keep an
     /// [`lbvh::LbvhBuilder`] instead, whose buffers outlive each build.
     pub fn build_lbvh(boxes: &[Aabb], bits: MortonBits) -> (Bvh, BuildTimings) {
+        Self::build_lbvh_with(boxes, bits, lbvh::Hierarchy::default())
+    }
+
+    /// [`Self::build_lbvh`], finding the hierarchy as `hierarchy` says.
+    pub fn build_lbvh_with(boxes: &[Aabb], bits: MortonBits, hierarchy: lbvh::Hierarchy) -> (Bvh, BuildTimings) {
         match bits {
-            MortonBits::Bits30 => lbvh::LbvhBuilder::<u64>::new().build_into(boxes, bits),
-            MortonBits::Bits63 => lbvh::LbvhBuilder::<u128>::new().build_into(boxes, bits),
+            MortonBits::Bits30 => lbvh::LbvhBuilder::<u64>::with_hierarchy(hierarchy).build_into(boxes, bits),
+            MortonBits::Bits63 => lbvh::LbvhBuilder::<u128>::with_hierarchy(hierarchy).build_into(boxes, bits),
         }
     }
 

@@ -1,5 +1,5 @@
 use crate::bvh::aabb::Aabb;
-use crate::bvh::lbvh::{Key, LbvhBuilder};
+use crate::bvh::lbvh::{Hierarchy, Key, LbvhBuilder};
 use crate::bvh::morton::MortonBits;
 use crate::bvh::sah::{build_binned_sah, sah_cost};
 use crate::bvh::{BuildTimings, Bvh};
@@ -43,6 +43,11 @@ pub struct BvhArgs {
     /// Morton code width of the LBVH.
     #[arg(long, value_enum, default_value_t)]
     morton_bits: MortonBits,
+    /// How the CPU LBVH finds its hierarchy: bottom-up merges that also write the bounds and links
+    /// (the default), or Karras's searches for every node, as the GPU finds it, then bounds and links
+    /// in a pass of their own. Both give the same tree.
+    #[arg(long, value_enum)]
+    hierarchy: Option<Hierarchy>,
     /// Timed builds after one warm-up build; the run with the median total is reported.
     #[arg(long, default_value_t = 5)]
     runs: usize,
@@ -77,8 +82,8 @@ struct Report {
 
 /// One builder, built once to warm up (allocations, page faults), then `runs` timed rebuilds: the
 /// per-frame situation.
-fn time_lbvh<K: Key>(boxes: &[Aabb], bits: MortonBits, runs: usize) -> (Bvh, Vec<BuildTimings>) {
-    let mut builder = LbvhBuilder::<K>::new();
+fn time_lbvh<K: Key>(boxes: &[Aabb], bits: MortonBits, hierarchy: Hierarchy, runs: usize) -> (Bvh, Vec<BuildTimings>) {
+    let mut builder = LbvhBuilder::<K>::with_hierarchy(hierarchy);
     builder.build(boxes, bits);
     let timings = (0..runs).map(|_| builder.build(boxes, bits)).collect();
     (builder.into_bvh(), timings)
@@ -90,6 +95,16 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let boxes = packed.primitive_boxes();
     let runs = args.runs.max(1);
     let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
+    let hierarchy = args.hierarchy.unwrap_or_default();
+    match (args.hierarchy, args.builder, args.device) {
+        (Some(_), Builder::Sah, _) => anyhow::bail!("--hierarchy is an option of the LBVH builder"),
+        (Some(Hierarchy::Merges), _, BuildDevice::Gpu) => {
+            anyhow::bail!("the GPU builder finds the hierarchy by searches only (--hierarchy searches)")
+        }
+        _ => {}
+    }
+    // Where the merges find the hierarchy, its time holds the bounds and links too.
+    let fused = args.builder == Builder::Lbvh && args.device == BuildDevice::Cpu && hierarchy == Hierarchy::Merges;
     let (bvh, mut runs) = match (args.builder, args.morton_bits) {
         (Builder::Lbvh, bits) if args.device == BuildDevice::Gpu => {
             let ctx = GpuContext::require(args.backend)?;
@@ -113,8 +128,8 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
         (Builder::Sah, _) if args.device == BuildDevice::Gpu => {
             anyhow::bail!("the binned SAH builder runs on the CPU only")
         }
-        (Builder::Lbvh, MortonBits::Bits30) => time_lbvh::<u64>(&boxes, args.morton_bits, runs),
-        (Builder::Lbvh, MortonBits::Bits63) => time_lbvh::<u128>(&boxes, args.morton_bits, runs),
+        (Builder::Lbvh, MortonBits::Bits30) => time_lbvh::<u64>(&boxes, args.morton_bits, hierarchy, runs),
+        (Builder::Lbvh, MortonBits::Bits63) => time_lbvh::<u128>(&boxes, args.morton_bits, hierarchy, runs),
         (Builder::Sah, _) => {
             let mut bvh = None;
             let timings = (0..runs)
@@ -140,7 +155,14 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let report = Report {
         scene: args.scene.clone(),
         builder: match args.builder {
-            Builder::Lbvh => format!("lbvh ({}-bit Morton codes)", args.morton_bits.total_bits()),
+            Builder::Lbvh => format!(
+                "lbvh ({}-bit Morton codes, hierarchy by {})",
+                args.morton_bits.total_bits(),
+                match hierarchy {
+                    Hierarchy::Merges => "merges",
+                    Hierarchy::Searches => "searches",
+                }
+            ),
             Builder::Sah => "binned SAH (16 bins)".into(),
         },
         device,
@@ -174,7 +196,9 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
         "SAH cost: {:.2} (traversal and intersection cost 1, relative to the root's area)",
         report.sah_cost
     );
-    let bounds_and_links = if b.links == 0.0 {
+    let bounds_and_links = if fused {
+        "bounds and links in the same pass".to_string()
+    } else if b.links == 0.0 {
         format!("bounds and links {:.2} ms", b.bounds)
     } else {
         format!("bounds {:.2} ms, links {:.2} ms", b.bounds, b.links)
