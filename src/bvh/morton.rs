@@ -31,7 +31,7 @@ impl MortonBits {
 }
 
 /// Spreads the low 10 bits of `v` so that two zero bits separate each.
-pub fn spread_bits_10(v: u32) -> u32 {
+pub const fn spread_bits_10(v: u32) -> u32 {
     let mut x = v & 0x3ff;
     x = (x | (x << 16)) & 0x0300_00ff;
     x = (x | (x << 8)) & 0x0300_f00f;
@@ -39,6 +39,18 @@ pub fn spread_bits_10(v: u32) -> u32 {
     x = (x | (x << 2)) & 0x0924_9249;
     x
 }
+
+/// [`spread_bits_10`] of every 10-bit value: three lookups in 4 KiB that stays in cache are cheaper
+/// than three spreads of five shifts and masks each.
+static SPREAD_10: [u32; 1024] = {
+    let mut table = [0; 1024];
+    let mut v = 0;
+    while v < 1024 {
+        table[v] = spread_bits_10(v as u32);
+        v += 1;
+    }
+    table
+};
 
 /// Spreads the low 21 bits of `v` so that two zero bits separate each.
 pub fn spread_bits_21(v: u64) -> u64 {
@@ -97,7 +109,10 @@ impl Grid {
             .min(self.last_cell);
         let (x, y, z) = (cell.x as u32, cell.y as u32, cell.z as u32);
         match self.bits {
-            MortonBits::Bits30 => ((spread_bits_10(x) << 2) | (spread_bits_10(y) << 1) | spread_bits_10(z)) as u64,
+            MortonBits::Bits30 => {
+                let spread = |v: u32| SPREAD_10[v as usize & 0x3ff];
+                ((spread(x) << 2) | (spread(y) << 1) | spread(z)) as u64
+            }
             MortonBits::Bits63 => {
                 (spread_bits_21(x as u64) << 2) | (spread_bits_21(y as u64) << 1) | spread_bits_21(z as u64)
             }
