@@ -47,35 +47,7 @@ pub fn merge_bottom_up<K: Key>(
         .into_par_iter()
         .map(|task| {
             let positions = task * chunk..n.min((task + 1) * chunk);
-            let mut merger = Merger::new(&nodes);
-            let mut before = boundary(keys, positions.start as i64 - 1);
-            let mut after = boundary(keys, positions.start as i64);
-            for position in positions {
-                // The escape link of every subtree that ends here: the right child of the split here.
-                let after_next = boundary(keys, position as i64 + 1);
-                let next = position as u32 + 1;
-                let escape = if next == n as u32 {
-                    NONE
-                } else if after < after_next {
-                    // Leaf `next` is that right child.
-                    n as u32 - 1 + next
-                } else {
-                    next
-                };
-                let bounds = leaf_boxes[position];
-                let primitive = keys[position].primitive();
-                let leaf = Subtree::new(
-                    (bounds.min.into(), bounds.max.into()),
-                    [position as u32, position as u32],
-                    [before, after],
-                    [primitive, LEAF],
-                    escape,
-                    n,
-                );
-                merger.add(leaf, n);
-                (before, after) = (after, after_next);
-            }
-            merger.unfinished()
+            merge_leaves(keys, leaf_boxes, positions, &nodes)
         })
         .collect();
     // Merge what the chunks left, in order, up to the root
@@ -84,6 +56,47 @@ pub fn merge_bottom_up<K: Key>(
         merger.add(subtree, n);
     }
     debug_assert!(merger.unfinished().is_empty(), "the merges end at the root");
+}
+
+/// Merges the leaves at `positions` and returns the subtrees whose sibling lies outside them, in
+/// order.
+#[inline(never)]
+fn merge_leaves<K: Key>(
+    keys: &[K],
+    leaf_boxes: &[Aabb],
+    positions: std::ops::Range<usize>,
+    nodes: &DisjointWrites<GpuNode>,
+) -> Vec<Subtree<K>> {
+    let n = keys.len();
+    let mut merger = Merger::new(nodes);
+    let mut before = boundary(keys, positions.start as i64 - 1);
+    let mut after = boundary(keys, positions.start as i64);
+    for position in positions {
+        // The escape link of every subtree that ends here: the right child of the split here.
+        let after_next = boundary(keys, position as i64 + 1);
+        let next = position as u32 + 1;
+        let escape = if next == n as u32 {
+            NONE
+        } else if after < after_next {
+            // Leaf `next` is that right child.
+            n as u32 - 1 + next
+        } else {
+            next
+        };
+        let bounds = leaf_boxes[position];
+        let primitive = keys[position].primitive();
+        let leaf = Subtree::new(
+            (bounds.min.into(), bounds.max.into()),
+            [position as u32, position as u32],
+            [before, after],
+            [primitive, LEAF],
+            escape,
+            n,
+        );
+        merger.add(leaf, n);
+        (before, after) = (after, after_next);
+    }
+    merger.unfinished()
 }
 
 /// The xor of sorted keys `i` and `i + 1`, each with its position below its code, so that equal
