@@ -1,10 +1,11 @@
-//! BVH build throughput: raypipe's LBVH (CPU, and GPU on the adapter at hand) beside the builders of
-//! the `bvh` crate (binned SAH, parallel) and `obvhs` (PLOC, parallel, fastest settings), all over
-//! the same sphere boxes. Run: `cargo bench -p raypipe-bench`.
+//! BVH build throughput: raypipe's LBVH (CPU, its hierarchy by merges and by searches, and GPU on
+//! the adapter at hand) beside the builders of the `bvh` crate (binned SAH, parallel) and `obvhs`
+//! (PLOC, parallel, fastest settings), all over the same sphere boxes. Run:
+//! `cargo bench -p raypipe-bench`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use raypipe::bvh::aabb::Aabb;
-use raypipe::bvh::lbvh::LbvhBuilder;
+use raypipe::bvh::lbvh::{Hierarchy, LbvhBuilder};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::GpuContext;
 use raypipe::gpu::build::GpuLbvhBuilder;
@@ -66,6 +67,11 @@ fn cpu_builders(c: &mut Criterion) {
         // A builder kept from build to build, as a per-frame rebuild keeps it.
         let mut builder = LbvhBuilder::<u64>::new();
         group.bench_with_input(BenchmarkId::new("raypipe_lbvh", n), &boxes, |b, boxes| {
+            b.iter(|| builder.build(boxes, MortonBits::Bits30))
+        });
+        // The same tree with Karras's searches for the hierarchy, as the GPU finds it.
+        let mut builder = LbvhBuilder::<u64>::with_hierarchy(Hierarchy::Searches);
+        group.bench_with_input(BenchmarkId::new("raypipe_lbvh_searches", n), &boxes, |b, boxes| {
             b.iter(|| builder.build(boxes, MortonBits::Bits30))
         });
         let shapes = bvh_shapes(&boxes);

@@ -1,5 +1,7 @@
-//! Karras (2012): the binary radix tree over sorted Morton codes, every internal node found
-//! independently, then bounds bottom-up and the traversal links. Each phase runs in parallel, and
+//! Karras (2012): the binary radix tree over sorted Morton codes, then bounds bottom-up and the
+//! traversal links. The CPU finds the tree one of two ways ([`Hierarchy`]): every internal node by
+//! Karras's own searches, as the GPU does, then bounds and links in a climb; or by bottom-up merges
+//! ([`super::merge`]) that write bounds and links in the same pass. Each phase runs in parallel, and
 //! the last writes each node of the final array once, whole; `LbvhBuilder` keeps its buffers from
 //! one build to the next, as a per-frame rebuild wants.
 
@@ -33,6 +35,10 @@ pub trait Key: Copy + Default + Ord + BitXor<Output = Self> + Not<Output = Self>
     /// shares more leading bits with a key than these two keys share when its xor with it is at
     /// most this.
     fn below_top_bit(self) -> Self;
+    /// `self` is the xor of two distinct keys: a number that orders such xors as their highest set
+    /// bits do, where those differ. A u64 xor is its own; a u128 xor is ranked by its highest bit,
+    /// which is cheaper to carry and compare than the xor.
+    fn xor_rank(self) -> u64;
 }
 
 impl Key for u64 {
@@ -52,6 +58,10 @@ impl Key for u64 {
     fn below_top_bit(self) -> Self {
         u64::MAX >> self.leading_zeros() >> 1
     }
+    #[inline(always)]
+    fn xor_rank(self) -> u64 {
+        self
+    }
 }
 
 impl Key for u128 {
@@ -70,6 +80,10 @@ impl Key for u128 {
     #[inline(always)]
     fn below_top_bit(self) -> Self {
         u128::MAX >> self.leading_zeros() >> 1
+    }
+    #[inline(always)]
+    fn xor_rank(self) -> u64 {
+        (u128::BITS - self.leading_zeros()) as u64
     }
 }
 

@@ -43,7 +43,7 @@ pub fn merge_bottom_up<K: Key>(
     let leaf_boxes = &leaf_boxes[..];
     let nodes = DisjointWrites::new(nodes);
     // Merge each chunk's leaves
-    let unfinished: Vec<Vec<Subtree<K>>> = (0..n.div_ceil(chunk))
+    let unfinished: Vec<Vec<Subtree>> = (0..n.div_ceil(chunk))
         .into_par_iter()
         .map(|task| {
             let positions = task * chunk..n.min((task + 1) * chunk);
@@ -66,7 +66,7 @@ fn merge_leaves<K: Key>(
     leaf_boxes: &[Aabb],
     positions: std::ops::Range<usize>,
     nodes: &DisjointWrites<GpuNode>,
-) -> Vec<Subtree<K>> {
+) -> Vec<Subtree> {
     let n = keys.len();
     let mut merger = Merger::new(nodes);
     let mut before = boundary(keys, positions.start as i64 - 1);
@@ -99,29 +99,35 @@ fn merge_leaves<K: Key>(
     merger.unfinished()
 }
 
-/// The xor of sorted keys `i` and `i + 1`, each with its position below its code, so that equal
-/// codes still differ (Karras, section 4): the smaller it is, the longer the prefix the two share.
-/// Outside the keys, the largest key of all, which no boundary inside reaches (codes leave the top
-/// bits zero).
+/// How far down sorted keys `i` and `i + 1` agree, as the [`Key::xor_rank`] of their xor, each key
+/// with its position below its code so that equal codes still differ (Karras, section 4): the
+/// smaller it is, the longer their shared prefix. Only the two boundaries of one node are ever
+/// compared, and their xors never have the same highest bit: the keys beyond both differ from the
+/// node's keys within the node's prefix, and at different bits, or the node's first and last key
+/// would differ there too. Outside the keys, [`NO_KEY`], above every boundary inside (codes leave
+/// the keys' top bits zero).
 #[inline(always)]
-fn boundary<K: Key>(keys: &[K], i: i64) -> K {
+fn boundary<K: Key>(keys: &[K], i: i64) -> u64 {
     if i < 0 || i + 1 >= keys.len() as i64 {
-        return !K::default();
+        return NO_KEY;
     }
     let i = i as usize;
-    keys[i].at_position(i as u32) ^ keys[i + 1].at_position(i as u32 + 1)
+    (keys[i].at_position(i as u32) ^ keys[i + 1].at_position(i as u32 + 1)).xor_rank()
 }
+
+/// The boundary beyond the first or last key.
+const NO_KEY: u64 = u64::MAX;
 
 /// A finished subtree, waiting for its parent to be made: its box, the sorted positions it covers,
 /// the boundaries on both sides, and what its node will hold.
 #[derive(Clone, Copy)]
-struct Subtree<K> {
+struct Subtree {
     min: Vec3A,
     max: Vec3A,
     /// The first and last sorted position it covers.
     range: [u32; 2],
     /// [`boundary`] before its first and after its last position.
-    boundaries: [K; 2],
+    boundaries: [u64; 2],
     /// Its node's number, in Karras's numbering.
     node: u32,
     /// Its node's children, as the layout stores them (a leaf's primitive and [`LEAF`]).
@@ -129,14 +135,14 @@ struct Subtree<K> {
     escape: u32,
 }
 
-impl<K: Key> Subtree<K> {
+impl Subtree {
     /// Numbers the subtree as Karras does: a leaf by its position after the n - 1 internal nodes,
     /// the root 0, a left child by its last position, a right child by its first.
     #[inline(always)]
     fn new(
         bounds: (Vec3A, Vec3A),
         range: [u32; 2],
-        boundaries: [K; 2],
+        boundaries: [u64; 2],
         children: [u32; 2],
         escape: u32,
         n: usize,
@@ -164,7 +170,7 @@ impl<K: Key> Subtree<K> {
 
     /// The root alone has no keys on either side.
     fn is_root(&self) -> bool {
-        self.boundaries == [!K::default(); 2]
+        self.boundaries == [NO_KEY; 2]
     }
 
     /// Whether its parent extends it to the right: across the boundary whose keys share the longer
@@ -192,17 +198,17 @@ impl<K: Key> Subtree<K> {
 }
 
 /// The merges over a run of subtrees taken in sorted order.
-struct Merger<'a, K> {
+struct Merger<'a> {
     nodes: &'a DisjointWrites<GpuNode>,
     /// Finished left children whose right sibling is not finished yet, each ending just before the
     /// next.
-    waiting_for_right: Vec<Subtree<K>>,
+    waiting_for_right: Vec<Subtree>,
     /// Finished right children whose left sibling was not in this run, in order. All of them lie
     /// before every subtree in `waiting_for_right`.
-    waiting_for_left: Vec<Subtree<K>>,
+    waiting_for_left: Vec<Subtree>,
 }
 
-impl<'a, K: Key> Merger<'a, K> {
+impl<'a> Merger<'a> {
     fn new(nodes: &'a DisjointWrites<GpuNode>) -> Self {
         Self {
             nodes,
@@ -213,7 +219,7 @@ impl<'a, K: Key> Merger<'a, K> {
 
     /// Takes the next subtree in order and makes every parent that it finishes.
     #[inline(always)]
-    fn add(&mut self, mut subtree: Subtree<K>, n: usize) {
+    fn add(&mut self, mut subtree: Subtree, n: usize) {
         loop {
             if subtree.is_root() {
                 subtree.write(self.nodes, NONE);
@@ -244,7 +250,7 @@ impl<'a, K: Key> Merger<'a, K> {
     }
 
     /// What is left, in order.
-    fn unfinished(mut self) -> Vec<Subtree<K>> {
+    fn unfinished(mut self) -> Vec<Subtree> {
         self.waiting_for_left.append(&mut self.waiting_for_right);
         self.waiting_for_left
     }

@@ -29,10 +29,12 @@ pub struct Bvh {
 pub struct BuildTimings {
     pub morton: f64,
     pub sort: f64,
+    /// With the CPU's bottom-up merges ([`lbvh::Hierarchy::Merges`]), this holds the bounds and
+    /// links too, which are written in the same pass; `bounds` and `links` are then zero.
     pub hierarchy: f64,
     pub bounds: f64,
-    /// Zero where the links are written with the bounds, as the CPU LBVH builder writes them;
-    /// their time is then in `bounds`. A per-frame GPU rebuild for the stack and threaded walks adds its
+    /// Zero where the links are written with the bounds, as the CPU's climb after Karras's searches
+    /// writes them; their time is then in `bounds`. A per-frame GPU rebuild for the stack and threaded walks adds its
     /// layout of the tree (`gpu::threaded`) here.
     pub links: f64,
 }
