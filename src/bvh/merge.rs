@@ -4,8 +4,8 @@
 //!
 //! Every node of the tree covers a run of sorted keys, and its parent is the node that extends the
 //! run across the boundary, on either side, where the keys there share the longer prefix (the
-//! smaller xor). So a finished subtree knows, from its two boundary keys alone, which side its
-//! sibling lies on, what its own number is, and its escape link. Leaves are taken in order with a
+//! smaller xor). So a finished subtree knows, from the keys on either side of it alone, which side
+//! its sibling lies on, what its own number is, and its escape link. Leaves are taken in order with a
 //! stack of finished subtrees that wait for a sibling on their right: a subtree whose sibling is
 //! on its left merges with the top of the stack, which ends just before it, and the merge climbs
 //! on. Each node is written whole, once, when its parent is made (the parent's number is the one
