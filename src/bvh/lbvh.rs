@@ -199,11 +199,12 @@ fn split(children: &[[u32; 2]], node: u32) -> u32 {
 }
 
 /// How the CPU builder finds the binary radix tree. Both find the same tree and write the same node
-/// array, bit for bit.
+/// array, bit for bit. (The variants' texts are `raypipe bvh --hierarchy`'s help; the merges live in
+/// [`super::merge`].)
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Hierarchy {
-    /// Bottom-up merges (Apetrei 2014, [`super::merge`]), which write the boxes and links in the same
-    /// pass over the leaves.
+    /// Bottom-up merges (Apetrei 2014), which write the boxes and links in the same pass over the
+    /// leaves.
     #[default]
     Merges,
     /// Karras's searches: every internal node found on its own, as the GPU builder finds them, then
