@@ -217,8 +217,8 @@ pub enum Hierarchy {
 #[derive(Default)]
 pub struct LbvhBuilder<K: Key> {
     hierarchy: Hierarchy,
-    /// Leaves merged by one task ([`Hierarchy::Merges`]); 0 for [`merge::CHUNK`].
-    merge_chunk: usize,
+    /// Leaves merged by one task ([`Hierarchy::Merges`]); [`merge::CHUNK`] unless set.
+    merge_chunk: Option<usize>,
     keys: Vec<K>,
     scratch: Vec<K>,
     /// The sorted keys with their positions in place of their primitives: what the hierarchy
@@ -249,7 +249,7 @@ impl<K: Key> LbvhBuilder<K> {
     /// to the serial merge that joins them, which tests want.
     pub fn with_merge_chunk(mut self, leaves: usize) -> Self {
         assert!(leaves > 0);
-        self.merge_chunk = leaves;
+        self.merge_chunk = Some(leaves);
         self
     }
 
@@ -352,11 +352,7 @@ impl<K: Key> LbvhBuilder<K> {
         match self.hierarchy {
             Hierarchy::Merges => {
                 let start = Instant::now();
-                let chunk = if self.merge_chunk == 0 {
-                    merge::CHUNK
-                } else {
-                    self.merge_chunk
-                };
+                let chunk = self.merge_chunk.unwrap_or(merge::CHUNK);
                 merge_bottom_up(&self.keys, boxes, &mut self.leaf_boxes, &mut self.nodes, chunk);
                 timings.hierarchy = ms_since(start);
             }

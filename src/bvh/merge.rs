@@ -40,6 +40,9 @@ pub fn merge_bottom_up<K: Key>(
     assert_eq!(nodes.len(), (2 * n).saturating_sub(1));
     assert!(chunk > 0);
     gather_leaf_boxes(keys, boxes, leaf_boxes);
+    if n == 0 {
+        return;
+    }
     let leaf_boxes = &leaf_boxes[..];
     let nodes = DisjointWrites::new(nodes);
     // Merge each chunk's leaves
@@ -51,9 +54,9 @@ pub fn merge_bottom_up<K: Key>(
         })
         .collect();
     // Merge what the chunks left, in order, up to the root
-    let mut merger = Merger::new(&nodes);
+    let mut merger = Merger::new(&nodes, n);
     for subtree in unfinished.into_iter().flatten() {
-        merger.add(subtree, n);
+        merger.add(subtree);
     }
     debug_assert!(merger.unfinished().is_empty(), "the merges end at the root");
 }
@@ -67,19 +70,19 @@ fn merge_leaves<K: Key>(
     positions: std::ops::Range<usize>,
     nodes: &DisjointWrites<GpuNode>,
 ) -> Vec<Subtree> {
-    let n = keys.len();
-    let mut merger = Merger::new(nodes);
+    let mut merger = Merger::new(nodes, keys.len());
+    let leaf_base = merger.leaf_base;
     let mut before = boundary(keys, positions.start as i64 - 1);
     let mut after = boundary(keys, positions.start as i64);
     for position in positions {
         // The escape link of every subtree that ends here: the right child of the split here.
         let after_next = boundary(keys, position as i64 + 1);
         let next = position as u32 + 1;
-        let escape = if next == n as u32 {
+        let escape = if next > leaf_base {
             NONE
         } else if after < after_next {
             // Leaf `next` is that right child.
-            n as u32 - 1 + next
+            leaf_base + next
         } else {
             next
         };
@@ -91,9 +94,9 @@ fn merge_leaves<K: Key>(
             [before, after],
             [primitive, LEAF],
             escape,
-            n,
+            leaf_base,
         );
-        merger.add(leaf, n);
+        merger.add(leaf);
         (before, after) = (after, after_next);
     }
     merger.unfinished()
@@ -136,8 +139,8 @@ struct Subtree {
 }
 
 impl Subtree {
-    /// Numbers the subtree as Karras does: a leaf by its position after the n - 1 internal nodes,
-    /// the root 0, a left child by its last position, a right child by its first.
+    /// Numbers the subtree as Karras does: a leaf by its position after the `leaf_base` (n - 1)
+    /// internal nodes, the root 0, a left child by its last position, a right child by its first.
     #[inline(always)]
     fn new(
         bounds: (Vec3A, Vec3A),
@@ -145,7 +148,7 @@ impl Subtree {
         boundaries: [u64; 2],
         children: [u32; 2],
         escape: u32,
-        n: usize,
+        leaf_base: u32,
     ) -> Self {
         let mut subtree = Subtree {
             min: bounds.0,
@@ -157,7 +160,7 @@ impl Subtree {
             escape,
         };
         subtree.node = if range[0] == range[1] {
-            n as u32 - 1 + range[0]
+            leaf_base + range[0]
         } else if subtree.is_root() {
             0
         } else if subtree.is_left_child() {
@@ -200,6 +203,8 @@ impl Subtree {
 /// The merges over a run of subtrees taken in sorted order.
 struct Merger<'a> {
     nodes: &'a DisjointWrites<GpuNode>,
+    /// n - 1 for n keys: leaf p is node `leaf_base + p`.
+    leaf_base: u32,
     /// Finished left children whose right sibling is not finished yet, each ending just before the
     /// next.
     waiting_for_right: Vec<Subtree>,
@@ -209,9 +214,11 @@ struct Merger<'a> {
 }
 
 impl<'a> Merger<'a> {
-    fn new(nodes: &'a DisjointWrites<GpuNode>) -> Self {
+    /// Merges over `n` keys (at least one).
+    fn new(nodes: &'a DisjointWrites<GpuNode>, n: usize) -> Self {
         Self {
             nodes,
+            leaf_base: n as u32 - 1,
             waiting_for_right: Vec::with_capacity(64),
             waiting_for_left: Vec::new(),
         }
@@ -219,7 +226,7 @@ impl<'a> Merger<'a> {
 
     /// Takes the next subtree in order and makes every parent that it finishes.
     #[inline(always)]
-    fn add(&mut self, mut subtree: Subtree, n: usize) {
+    fn add(&mut self, mut subtree: Subtree) {
         loop {
             if subtree.is_root() {
                 subtree.write(self.nodes, NONE);
@@ -241,7 +248,7 @@ impl<'a> Merger<'a> {
                 [left.boundaries[0], subtree.boundaries[1]],
                 [left.node, subtree.node],
                 subtree.escape,
-                n,
+                self.leaf_base,
             );
             left.write(self.nodes, parent.node);
             subtree.write(self.nodes, parent.node);

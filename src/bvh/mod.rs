@@ -34,8 +34,8 @@ pub struct BuildTimings {
     pub hierarchy: f64,
     pub bounds: f64,
     /// Zero where the links are written with the bounds, as the CPU's climb after Karras's searches
-    /// writes them; their time is then in `bounds`. A per-frame GPU rebuild for the stack and threaded walks adds its
-    /// layout of the tree (`gpu::threaded`) here.
+    /// writes them; their time is then in `bounds`. A per-frame GPU rebuild for the stack and
+    /// threaded walks adds its layout of the tree (`gpu::threaded`) here.
     pub links: f64,
 }
 
