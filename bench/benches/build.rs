@@ -96,7 +96,7 @@ fn cpu_builders(c: &mut Criterion) {
 }
 
 fn gpu_builder(c: &mut Criterion) {
-    let Ok(Some(ctx)) = GpuContext::new(None) else {
+    let Ok(Some(ctx)) = pollster::block_on(GpuContext::new(None)) else {
         eprintln!("no GPU adapter: skipping the GPU build benchmark");
         return;
     };
@@ -112,12 +112,13 @@ fn gpu_builder(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(4));
-    let mut builder = GpuLbvhBuilder::new(&ctx, MortonBits::Bits30, 0, 0).expect("the build compiles");
+    let mut builder =
+        pollster::block_on(GpuLbvhBuilder::new(&ctx, MortonBits::Bits30, 0, 0)).expect("the build compiles");
     // A software adapter takes seconds per million primitives: stop there.
     let software = ctx.info.device_type == wgpu::DeviceType::Cpu;
     for n in SIZES.into_iter().filter(|&n| !software || n <= 1_000_000) {
         let (packed, _) = random_boxes(n);
-        if builder.resize(n, 0).is_err() {
+        if pollster::block_on(builder.resize(n, 0)).is_err() {
             eprintln!("{n} primitives do not fit the adapter's buffers: skipped");
             continue;
         }
@@ -127,7 +128,10 @@ fn gpu_builder(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("raypipe_lbvh_gpu", n), |b| {
             b.iter_custom(|iterations| {
                 (0..iterations)
-                    .map(|_| Duration::from_secs_f64(builder.build(false).expect("the build runs").total() / 1e3))
+                    .map(|_| {
+                        let timings = pollster::block_on(builder.build(false)).expect("the build runs");
+                        Duration::from_secs_f64(timings.total() / 1e3)
+                    })
                     .sum()
             })
         });

@@ -1,7 +1,7 @@
 //! Shared inputs of the benchmarks: the boxes of `random:N` scenes.
 
 use raypipe::bvh::aabb::Aabb;
-use raypipe::scene::packed::PackedScene;
+use raypipe::records::PackedScene;
 
 /// The sphere boxes of the built-in `random:N` scene (seed 1).
 pub fn random_boxes(n: usize) -> (PackedScene, Vec<Aabb>) {

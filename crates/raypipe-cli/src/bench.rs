@@ -1,0 +1,341 @@
+//! `raypipe bench`: frames per second against primitive count, per acceleration and memory mode (the
+//! paper's Figure 4), with every mode's image checked against brute force's before it is timed.
+
+use crate::args::choice;
+use crate::cli::median;
+use crate::plot::{Series, write_fps_plot};
+use anyhow::{Context, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use pollster::block_on;
+use raypipe::Choice;
+use raypipe::bvh::morton::MortonBits;
+use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::image::Frame;
+use raypipe::image::diff::{Tolerance, compare};
+use raypipe::mesh::is_model_path;
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::PackedScene;
+use raypipe::scene::Scene;
+use raypipe::scene::model::{MeshAs, ModelOptions};
+use serde::Serialize;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// A built-in family whose size takes the count (random, sphere, torus or bounce), or a model file
+    /// (.ply, .obj, .off) with that many spheres on its surface.
+    #[arg(default_value = "random")]
+    scene: String,
+    #[arg(long, value_delimiter = ',', default_values_t = [1000, 2000, 5000, 10000, 20000])]
+    counts: Vec<usize>,
+    #[arg(long, value_parser = choice::<Accel>(), value_delimiter = ',', default_values_t = Accel::ALL.to_vec())]
+    accel: Vec<Accel>,
+    #[arg(long, value_parser = choice::<MemoryMode>(), value_delimiter = ',', default_values_t = [MemoryMode::Storage])]
+    memory: Vec<MemoryMode>,
+    #[arg(long, default_value_t = 256)]
+    width: u32,
+    #[arg(long, default_value_t = 256)]
+    height: u32,
+    /// Timed frames per point, after the warm-up frames.
+    #[arg(long, default_value_t = 10)]
+    frames: usize,
+    #[arg(long, default_value_t = 2)]
+    warmup: usize,
+    /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately.
+    #[arg(long)]
+    rebuild: bool,
+    #[arg(long, value_parser = choice::<Backend>())]
+    backend: Option<Backend>,
+    /// Where results.csv, results.json and the plot fps.png (and fps.svg) go.
+    #[arg(long, default_value = "bench-results")]
+    out: PathBuf,
+    /// Also print the JSON array to stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize, Clone)]
+struct Row {
+    count: usize,
+    accel: String,
+    memory: String,
+    width: u32,
+    height: u32,
+    frames: usize,
+    ms_median: f64,
+    ms_min: f64,
+    ms_max: f64,
+    fps: f64,
+    mrays_per_s: f64,
+    /// GPU time of the per-frame LBVH build (median), with --rebuild.
+    build_ms_median: Option<f64>,
+    /// "gpu timestamps" or "wall clock".
+    clock: String,
+    adapter: String,
+    backend: String,
+}
+
+fn name<T: Choice>(value: &T) -> String {
+    value.name().to_string()
+}
+
+fn options(memory: MemoryMode, accel: Accel) -> RendererOptions {
+    RendererOptions {
+        memory,
+        accel,
+        ..Default::default()
+    }
+}
+
+/// The scene of one bench point, at the given size, packed with a CPU-built BVH: a built-in family
+/// at `count` spheres, or a model with `count` spheres on its surface.
+fn scene(family: &str, count: usize, width: u32, height: u32) -> anyhow::Result<PackedScene> {
+    let mut scene = if is_model_path(Path::new(family)) {
+        let options = ModelOptions {
+            as_: Some(MeshAs::Spheres),
+            spheres: Some(count),
+            rotate: None,
+        };
+        Scene::load_with(family, &options)?
+    } else if ["random", "sphere", "torus", "bounce"].contains(&family) {
+        Scene::load(&format!("{family}:{count}"))?
+    } else {
+        bail!(
+            "bench scene '{family}': use a family that takes a count (random, sphere, torus or bounce) or a model file"
+        );
+    };
+    scene.settings.width = width;
+    scene.settings.height = height;
+    let mut packed = PackedScene::new(&scene)?;
+    packed.build_bvh(MortonBits::Bits30);
+    Ok(packed)
+}
+
+/// Brute force's image of a count's scene at a small size: what every mode must reproduce before it
+/// is timed.
+struct Reference {
+    scene: PackedScene,
+    brute: Frame,
+}
+
+impl Reference {
+    fn new(ctx: &GpuContext, family: &str, count: usize) -> anyhow::Result<Self> {
+        let scene = scene(family, count, 64, 48)?;
+        let renderer = block_on(Renderer::new(ctx, &scene, options(MemoryMode::Storage, Accel::Brute)))?;
+        let brute = block_on(renderer.read_frame())?.frame;
+        Ok(Self { scene, brute })
+    }
+
+    /// Renders `accel` in `memory` and requires brute force's image; a mode that cannot run (a scene
+    /// too big for uniform memory, say) reports why.
+    fn check(&self, ctx: &GpuContext, accel: Accel, memory: MemoryMode) -> anyhow::Result<()> {
+        let renderer = block_on(Renderer::new(ctx, &self.scene, options(memory, accel)))?;
+        let frame = block_on(renderer.read_frame())?.frame;
+        let color = compare(&frame.display(), &self.brute.display())?;
+        let depth = compare(&frame.depth(), &self.brute.depth())?;
+        Tolerance::COLOR
+            .check(&color)
+            .and_then(|_| Tolerance::DEPTH.check(&depth))
+            .map_err(|e| anyhow::anyhow!("its image differs from brute force's: {e}"))
+    }
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
+    let ctx = block_on(GpuContext::require(args.backend))?;
+    let clock = if ctx.timestamps { "gpu timestamps" } else { "wall clock" };
+    if !ctx.timestamps {
+        eprintln!(
+            "notice: {} has no timestamp queries; timing with the wall clock",
+            ctx.describe()
+        );
+    }
+    anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
+    anyhow::ensure!(
+        !args.rebuild || args.memory.iter().all(|&m| m == MemoryMode::Storage),
+        "--rebuild builds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
+    );
+    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
+    let points = args.counts.len() * args.accel.len() * args.memory.len();
+    let bar = ProgressBar::new(points as u64);
+    bar.set_style(ProgressStyle::with_template("{spinner} bench {bar:40} {pos}/{len} {msg}").expect("valid template"));
+    let mut rows = Vec::new();
+    let mut refused = Vec::new();
+    for &count in &args.counts {
+        let packed = scene(&args.scene, count, args.width, args.height)?;
+        // The rebuilds read the primitives from the builder's buffers: written once per count.
+        // One rebuild per walk: the stack and threaded walks also lay out its tree.
+        let rebuild_for = |accel: Accel| -> anyhow::Result<Option<SceneRebuild>> {
+            if args.rebuild && accel.uses_bvh() {
+                Ok(Some(block_on(SceneRebuild::new(&ctx, &packed, accel, MortonBits::Bits30))?))
+            } else {
+                Ok(None)
+            }
+        };
+        // Made on first need: a run of brute force alone does not render it.
+        let mut reference: Option<Reference> = None;
+        for &accel in &args.accel {
+            for &memory in &args.memory {
+                let point = format!("{count} {} {}", name(&accel), name(&memory));
+                bar.set_message(point.clone());
+                if accel != Accel::Brute {
+                    if reference.is_none() {
+                        reference = Some(Reference::new(&ctx, &args.scene, count)?);
+                    }
+                    let checked = reference.as_ref().expect("made above").check(&ctx, accel, memory);
+                    if let Err(e) = checked {
+                        refused.push(format!("{point}: {}", crate::cli::message(&e)));
+                        bar.inc(1);
+                        continue;
+                    }
+                }
+                let rebuild = rebuild_for(accel)?;
+                let renderer = match &rebuild {
+                    Some(rebuild) => block_on(Renderer::with_rebuild(&ctx, &packed, rebuild, options(memory, accel))),
+                    None => block_on(Renderer::new(&ctx, &packed, options(memory, accel))),
+                };
+                let renderer = match renderer {
+                    Ok(r) => r,
+                    Err(e) => {
+                        refused.push(format!("{point}: {}", crate::cli::message(&e.into())));
+                        bar.inc(1);
+                        continue;
+                    }
+                };
+                let mut times = Vec::new();
+                let mut builds = Vec::new();
+                let mut rays = 0;
+                for frame in 0..args.warmup + args.frames {
+                    let start = std::time::Instant::now();
+                    let timed = block_on(renderer.read_frame_after(|encoder| {
+                        if let Some(rebuild) = &rebuild {
+                            rebuild.encode(encoder);
+                        }
+                    }))?;
+                    let wall = start.elapsed().as_secs_f64() * 1e3;
+                    if frame >= args.warmup {
+                        times.push(timed.gpu_ms.unwrap_or(wall));
+                        rays = timed.frame.rays();
+                        if let Some(rebuild) = &rebuild {
+                            // The 16-byte layout of the tree, for the walks that read it, is part of the rebuild.
+                            builds.push(block_on(rebuild.read_timings())?.total());
+                        }
+                    }
+                }
+                times.sort_by(f64::total_cmp);
+                let ms = median(times.iter().copied());
+                rows.push(Row {
+                    count,
+                    accel: name(&accel),
+                    memory: name(&memory),
+                    width: args.width,
+                    height: args.height,
+                    frames: args.frames,
+                    ms_median: ms,
+                    ms_min: times[0],
+                    ms_max: times[times.len() - 1],
+                    fps: 1e3 / ms,
+                    mrays_per_s: rays as f64 / (ms * 1e3),
+                    build_ms_median: (!builds.is_empty()).then(|| median(builds.iter().copied())),
+                    clock: clock.into(),
+                    adapter: ctx.info.name.clone(),
+                    backend: format!("{:?}", ctx.info.backend),
+                });
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    write_csv(&args.out.join("results.csv"), &rows)?;
+    let json = serde_json::to_string_pretty(&rows)?;
+    std::fs::write(args.out.join("results.json"), &json)
+        .with_context(|| format!("{}: cannot write", args.out.display()))?;
+    write_plot(&args, &ctx, &rows)?;
+    for line in &refused {
+        eprintln!("refused: {line}");
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        println!("adapter: {} ({clock}), {}x{}", ctx.describe(), args.width, args.height);
+        println!(
+            "{:>8} {:>10} {:>8} {:>10} {:>10} {:>10}",
+            "count", "accel", "memory", "ms", "fps", "Mrays/s"
+        );
+        for r in &rows {
+            println!(
+                "{:>8} {:>10} {:>8} {:>10.3} {:>10.2} {:>10.2}",
+                r.count, r.accel, r.memory, r.ms_median, r.fps, r.mrays_per_s
+            );
+        }
+        println!(
+            "results: {}/results.csv, results.json, fps.png, fps.svg",
+            args.out.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
+    let mut file = std::fs::File::create(path).with_context(|| format!("{}: cannot write", path.display()))?;
+    writeln!(
+        file,
+        "count,accel,memory,width,height,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,clock,adapter,backend"
+    )?;
+    for r in rows {
+        writeln!(
+            file,
+            "{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},\"{}\",{}",
+            r.count,
+            r.accel,
+            r.memory,
+            r.width,
+            r.height,
+            r.frames,
+            r.ms_median,
+            r.ms_min,
+            r.ms_max,
+            r.fps,
+            r.mrays_per_s,
+            r.build_ms_median.map(|b| format!("{b:.4}")).unwrap_or_default(),
+            r.clock,
+            r.adapter.replace('"', "'"),
+            r.backend
+        )?;
+    }
+    Ok(())
+}
+
+/// fps against count, one line per (accel, memory), titled with the adapter and resolution.
+fn write_plot(args: &BenchArgs, ctx: &GpuContext, rows: &[Row]) -> anyhow::Result<()> {
+    let mut series: Vec<Series> = Vec::new();
+    for r in rows {
+        let label = if args.memory.len() > 1 {
+            format!("{} ({})", r.accel, r.memory)
+        } else {
+            r.accel.clone()
+        };
+        match series.iter_mut().find(|s| s.name == label) {
+            Some(s) => s.points.push((r.count as f64, r.fps)),
+            None => series.push(Series {
+                name: label,
+                points: vec![(r.count as f64, r.fps)],
+            }),
+        }
+    }
+    // A model's file name, not its whole path.
+    let scene = Path::new(&args.scene)
+        .file_name()
+        .map_or(args.scene.clone(), |name| name.to_string_lossy().into_owned());
+    let title = format!(
+        "{scene} spheres, {}x{}, {} ({:?}){}",
+        args.width,
+        args.height,
+        ctx.info.name,
+        ctx.info.backend,
+        if args.rebuild { ", BVH rebuilt every frame" } else { "" }
+    );
+    write_fps_plot(&series, &title, &args.out.join("fps.png"), &args.out.join("fps.svg"))
+}

@@ -1,0 +1,222 @@
+use crate::args::choice;
+use clap::{Args, ValueEnum};
+use pollster::block_on;
+use raypipe::bvh::aabb::Aabb;
+use raypipe::bvh::key::Key;
+use raypipe::bvh::lbvh::{Hierarchy, LbvhBuilder};
+use raypipe::bvh::morton::MortonBits;
+use raypipe::bvh::sah::{build_binned_sah, sah_cost};
+use raypipe::bvh::{BuildTimings, Bvh};
+use raypipe::gpu::build::GpuLbvhBuilder;
+use raypipe::gpu::{Backend, GpuContext};
+use raypipe::records::PackedScene;
+use raypipe::scene::Scene;
+use serde::Serialize;
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum Builder {
+    /// The linear BVH (Karras 2012), parallel.
+    #[default]
+    Lbvh,
+    /// Top-down binned SAH, serial: the quality reference.
+    Sah,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BuildDevice {
+    Cpu,
+    Gpu,
+}
+
+#[derive(Args)]
+pub struct BvhArgs {
+    /// A built-in scene or a TOML file; the BVH is built over its spheres.
+    scene: String,
+    #[arg(long, value_enum, default_value_t)]
+    builder: Builder,
+    /// Where the LBVH is built: the CPU (rayon) or the GPU (compute passes).
+    #[arg(long, value_enum, default_value_t = BuildDevice::Cpu)]
+    device: BuildDevice,
+    #[arg(long, value_parser = choice::<Backend>())]
+    backend: Option<Backend>,
+    /// Morton code width of the LBVH.
+    #[arg(long, value_parser = choice::<MortonBits>(), default_value_t)]
+    morton_bits: MortonBits,
+    /// How the CPU LBVH finds its hierarchy: bottom-up merges that also write the bounds and links
+    /// (the default), or Karras's searches for every node, as the GPU finds it, then bounds and links
+    /// in a pass of their own. Both give the same tree.
+    #[arg(long, value_parser = choice::<Hierarchy>())]
+    hierarchy: Option<Hierarchy>,
+    /// Timed builds after one warm-up build; the run with the median total is reported.
+    #[arg(long, default_value_t = 5)]
+    runs: usize,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct BuildMs {
+    morton: f64,
+    sort: f64,
+    hierarchy: f64,
+    bounds: f64,
+    links: f64,
+    total: f64,
+}
+
+#[derive(Serialize)]
+struct Report {
+    scene: String,
+    builder: String,
+    device: String,
+    primitives: usize,
+    nodes: usize,
+    max_depth: u32,
+    mean_leaf_depth: f64,
+    sah_cost: f64,
+    build_ms: BuildMs,
+    mprims_per_s: f64,
+}
+
+/// One builder, built once to warm up (allocations, page faults), then `runs` timed rebuilds: the
+/// per-frame situation.
+fn time_lbvh<K: Key>(boxes: &[Aabb], bits: MortonBits, hierarchy: Hierarchy, runs: usize) -> (Bvh, Vec<BuildTimings>) {
+    let mut builder = LbvhBuilder::<K>::with_hierarchy(hierarchy);
+    builder.build(boxes, bits);
+    let timings = (0..runs).map(|_| builder.build(boxes, bits)).collect();
+    (builder.into_bvh(), timings)
+}
+
+pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
+    let scene = Scene::load(&args.scene)?;
+    let packed = PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene))?;
+    let boxes = packed.primitive_boxes();
+    let runs = args.runs.max(1);
+    let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
+    let hierarchy = args.hierarchy.unwrap_or_default();
+    match (args.hierarchy, args.builder, args.device) {
+        (Some(_), Builder::Sah, _) => anyhow::bail!("--hierarchy is an option of the LBVH builder"),
+        (Some(Hierarchy::Merges), _, BuildDevice::Gpu) => {
+            anyhow::bail!("the GPU builder finds the hierarchy by searches only (--hierarchy searches)")
+        }
+        _ => {}
+    }
+    // Where the merges find the hierarchy, its time holds the bounds and links too.
+    let fused = args.builder == Builder::Lbvh && args.device == BuildDevice::Cpu && hierarchy == Hierarchy::Merges;
+    let (bvh, mut runs) = match (args.builder, args.morton_bits) {
+        (Builder::Lbvh, bits) if args.device == BuildDevice::Gpu => {
+            let ctx = block_on(GpuContext::require(args.backend))?;
+            device = format!("gpu: {}", ctx.describe());
+            anyhow::ensure!(
+                ctx.timestamps,
+                "{device} has no timestamp queries to time the build with"
+            );
+            let mut builder = block_on(GpuLbvhBuilder::new(
+                &ctx,
+                bits,
+                packed.spheres.len(),
+                packed.triangles.len(),
+            ))?;
+            block_on(builder.write_scene(&packed))?;
+            block_on(builder.build(false))?;
+            let timings = (0..runs)
+                .map(|_| block_on(builder.build(false)))
+                .collect::<Result<Vec<_>, _>>()?;
+            let bvh = Bvh {
+                nodes: block_on(builder.read_nodes())?,
+                primitive_count: boxes.len(),
+            };
+            (bvh, timings)
+        }
+        (Builder::Sah, _) if args.device == BuildDevice::Gpu => {
+            anyhow::bail!("the binned SAH builder runs on the CPU only")
+        }
+        (Builder::Lbvh, MortonBits::Bits30) => time_lbvh::<u64>(&boxes, args.morton_bits, hierarchy, runs),
+        (Builder::Lbvh, MortonBits::Bits63) => time_lbvh::<u128>(&boxes, args.morton_bits, hierarchy, runs),
+        (Builder::Sah, _) => {
+            let mut bvh = None;
+            let timings = (0..runs)
+                .map(|_| {
+                    let start = Instant::now();
+                    bvh = Some(build_binned_sah(&boxes));
+                    // The SAH builder has no LBVH phases: its whole time counts as hierarchy.
+                    BuildTimings {
+                        hierarchy: start.elapsed().as_secs_f64() * 1e3,
+                        ..BuildTimings::default()
+                    }
+                })
+                .collect();
+            (bvh.expect("at least one run"), timings)
+        }
+    };
+    runs.sort_by(|a, b| a.total().total_cmp(&b.total()));
+    let t = runs[runs.len() / 2];
+    bvh.validate(&boxes)
+        .map_err(|e| anyhow::anyhow!("the built BVH is invalid: {e}"))?;
+
+    let depths = bvh.leaf_depths();
+    let report = Report {
+        scene: args.scene.clone(),
+        builder: match args.builder {
+            Builder::Lbvh => format!(
+                "lbvh ({}-bit Morton codes, hierarchy by {})",
+                args.morton_bits.total_bits(),
+                match hierarchy {
+                    Hierarchy::Merges => "merges",
+                    Hierarchy::Searches => "searches",
+                }
+            ),
+            Builder::Sah => "binned SAH (16 bins)".into(),
+        },
+        device,
+        primitives: bvh.primitive_count,
+        nodes: bvh.nodes.len(),
+        max_depth: depths.iter().copied().max().unwrap_or(0),
+        mean_leaf_depth: depths.iter().map(|&d| d as f64).sum::<f64>() / depths.len().max(1) as f64,
+        sah_cost: sah_cost(&bvh),
+        build_ms: BuildMs {
+            morton: t.morton,
+            sort: t.sort,
+            hierarchy: t.hierarchy,
+            bounds: t.bounds,
+            links: t.links,
+            total: t.total(),
+        },
+        mprims_per_s: bvh.primitive_count as f64 / (t.total() * 1e3),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    let b = &report.build_ms;
+    println!("scene: {}, {} primitives", report.scene, report.primitives);
+    println!("builder: {}, device {}", report.builder, report.device);
+    println!(
+        "nodes: {}, depth: max {}, mean leaf {:.1}",
+        report.nodes, report.max_depth, report.mean_leaf_depth
+    );
+    println!(
+        "SAH cost: {:.2} (traversal and intersection cost 1, relative to the root's area)",
+        report.sah_cost
+    );
+    let bounds_and_links = if fused {
+        "bounds and links in the same pass".to_string()
+    } else if b.links == 0.0 {
+        format!("bounds and links {:.2} ms", b.bounds)
+    } else {
+        format!("bounds {:.2} ms, links {:.2} ms", b.bounds, b.links)
+    };
+    println!(
+        "build (median of {} runs): morton {:.2} ms, sort {:.2} ms, hierarchy {:.2} ms, {bounds_and_links}, total {:.2} ms, {:.1} Mprims/s",
+        runs.len(),
+        b.morton,
+        b.sort,
+        b.hierarchy,
+        b.total,
+        report.mprims_per_s
+    );
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,88 @@
+//! The subcommands, and the one-line message an error becomes.
+
+use crate::{bench, bvh, diff, info, render};
+use clap::{Parser, Subcommand};
+use raypipe::gpu::GpuError;
+use raypipe::modes::MemoryMode;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "raypipe", version, about = "Whitted ray tracing in the fragment shader")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to PNG (colour, normals) or EXR (colour, depth).
+    Render(render::RenderArgs),
+    /// Compare two images: mean and 99th-percentile error, a difference image, exit 1 above a threshold.
+    Diff(diff::DiffArgs),
+    /// Frames per second against sphere count, per acceleration and memory mode (the paper's Figure 4).
+    Bench(bench::BenchArgs),
+    /// Build a BVH over a scene's spheres and print its size, depth, SAH cost and build time per phase.
+    Bvh(bvh::BvhArgs),
+    /// List GPU adapters, their backends, drivers and the limits that matter here.
+    Info,
+}
+
+/// Runs the command line; errors are returned for `main` to print as one line with exit code 2.
+pub fn run() -> anyhow::Result<ExitCode> {
+    match Cli::parse().command {
+        Command::Render(args) => render::run(args),
+        Command::Diff(args) => diff::run(args),
+        Command::Bvh(args) => bvh::run(args),
+        Command::Bench(args) => bench::run(args),
+        Command::Info => info::run(),
+    }
+}
+
+/// `error` and its causes on one line, with the library's errors worded in terms of the flags that
+/// avoid them.
+pub fn message(error: &anyhow::Error) -> String {
+    let parts: Vec<String> = error
+        .chain()
+        .map(|cause| match cause.downcast_ref::<GpuError>() {
+            Some(gpu) => gpu_message(gpu),
+            None => cause.to_string(),
+        })
+        .collect();
+    raypipe::error::one_line(&parts.join(": "))
+}
+
+fn gpu_message(error: &GpuError) -> String {
+    match error {
+        GpuError::TooBig {
+            memory,
+            array,
+            records,
+            needed,
+            allowed,
+        } => {
+            let hint = if *memory == MemoryMode::Storage {
+                ""
+            } else {
+                "; use --memory storage"
+            };
+            format!(
+                "scene too big for --memory {memory}: {records} {array} records need {needed}, the adapter allows {allowed}{hint}"
+            )
+        }
+        GpuError::RebuildNeedsStorage { .. } => {
+            "the BVH rebuilt on the GPU is read from storage memory: use --memory storage".into()
+        }
+        GpuError::MissingBvh(missing) => format!("--accel {} needs the scene's BVH", missing.accel),
+        other => other.to_string(),
+    }
+}
+
+/// The median of `values` (the upper one of an even count); 0 for none.
+pub fn median(values: impl IntoIterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = values.into_iter().collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}

@@ -1,0 +1,214 @@
+//! One render, on the device the user chose: the GPU, the CPU reference, or the GPU with a CPU
+//! fallback; and sequences of frames with the BVH rebuilt every frame.
+
+use anyhow::ensure;
+use clap::ValueEnum;
+use indicatif::{ProgressBar, ProgressStyle};
+use pollster::block_on;
+use raypipe::bvh::BuildTimings;
+use raypipe::bvh::lbvh::LbvhBuilder;
+use raypipe::bvh::morton::MortonBits;
+use raypipe::cpu::{self, Count};
+use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::image::Frame;
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::PackedScene;
+use raypipe::scene::Scene;
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum DeviceChoice {
+    /// The GPU, or the CPU (with a notice) where no adapter exists.
+    #[default]
+    Auto,
+    Gpu,
+    Cpu,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RenderOptions {
+    pub device: DeviceChoice,
+    pub backend: Option<Backend>,
+    pub memory: MemoryMode,
+    pub accel: Accel,
+    /// Show a progress bar for CPU renders (only drawn on a terminal).
+    pub progress: bool,
+    /// What a frame's fourth colour channel counts.
+    pub count: Count,
+    /// Draw a frame before the timed one: drivers may compile the pipeline at its first draw
+    /// (llvmpipe does), which would otherwise count as render time.
+    pub warm_up: bool,
+}
+
+impl RenderOptions {
+    fn renderer(&self) -> RendererOptions {
+        RendererOptions {
+            memory: self.memory,
+            accel: self.accel,
+            count: self.count,
+        }
+    }
+}
+
+pub struct RenderOutcome {
+    pub frame: Frame,
+    /// The device that rendered, in words.
+    pub device: String,
+    /// Wall-clock time of the render (for the GPU: draw, copy and read back; not the pipeline build).
+    pub wall_ms: f64,
+    /// GPU time of the render pass from timestamp queries, where the adapter has them.
+    pub gpu_ms: Option<f64>,
+}
+
+/// The CPU reference tracer, in words.
+fn cpu_description() -> String {
+    format!("CPU reference ({} threads)", rayon::current_num_threads())
+}
+
+/// The GPU the options ask for: `None` for the CPU (with a notice when `auto` found no adapter).
+fn open_device(options: &RenderOptions) -> anyhow::Result<Option<GpuContext>> {
+    Ok(match options.device {
+        DeviceChoice::Cpu => None,
+        DeviceChoice::Gpu => Some(block_on(GpuContext::require(options.backend))?),
+        DeviceChoice::Auto => {
+            let ctx = block_on(GpuContext::new(options.backend))?;
+            if ctx.is_none() {
+                eprintln!("notice: no GPU adapter found; rendering on the CPU reference tracer");
+            }
+            ctx
+        }
+    })
+}
+
+/// The CPU reference's frame, with a progress bar on a terminal.
+fn render_cpu(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Frame> {
+    let bar = if options.progress {
+        let bar = ProgressBar::new(scene.height() as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} CPU render {bar:40} {pos}/{len} rows, {eta} left")
+                .expect("the template is valid"),
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let frame = cpu::render_with(scene, options.accel, options.count, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    Ok(frame)
+}
+
+pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<RenderOutcome> {
+    match open_device(options)? {
+        Some(ctx) => {
+            let renderer = block_on(Renderer::new(&ctx, scene, options.renderer()))?;
+            if options.warm_up {
+                block_on(renderer.read_frame())?;
+            }
+            let start = Instant::now();
+            let timed = block_on(renderer.read_frame())?;
+            Ok(RenderOutcome {
+                frame: timed.frame,
+                device: ctx.describe(),
+                wall_ms: start.elapsed().as_secs_f64() * 1e3,
+                gpu_ms: timed.gpu_ms,
+            })
+        }
+        None => {
+            let start = Instant::now();
+            let frame = render_cpu(scene, options)?;
+            Ok(RenderOutcome {
+                frame,
+                device: cpu_description(),
+                wall_ms: start.elapsed().as_secs_f64() * 1e3,
+                gpu_ms: None,
+            })
+        }
+    }
+}
+
+/// What a sequence of frames took, frame by frame.
+pub struct FramesOutcome {
+    pub device: String,
+    /// BVH build time per frame, per phase: GPU timestamps on the GPU (zeros without them), wall
+    /// clock on the CPU; empty for brute force.
+    pub builds: Vec<BuildTimings>,
+    /// Render time per frame: GPU timestamps where the adapter has them, else wall clock.
+    pub render_ms: Vec<f64>,
+    /// Rays traced per frame.
+    pub rays: Vec<u64>,
+}
+
+/// Renders `frames` frames of a (moving) scene, rebuilding the BVH every frame, and hands each
+/// frame to `emit`. On the GPU a [`SceneRebuild`] runs in compute passes in the same submission as
+/// the frame; this needs storage memory. On the CPU, one reusable builder serves every frame.
+pub fn render_frames(
+    scene: &Scene,
+    options: &RenderOptions,
+    frames: u32,
+    mut emit: impl FnMut(u32, &Frame) -> anyhow::Result<()>,
+) -> anyhow::Result<FramesOutcome> {
+    ensure!(
+        options.count == Count::Rays,
+        "--aov cost renders single frames; drop --frames"
+    );
+    let first = PackedScene::new(scene)?;
+    let mut outcome = FramesOutcome {
+        device: String::new(),
+        builds: Vec::new(),
+        render_ms: Vec::new(),
+        rays: Vec::new(),
+    };
+    let spheres_at = |frame: u32| -> anyhow::Result<PackedScene> { Ok(PackedScene::new(&scene.at_frame(frame))?) };
+    match open_device(options)? {
+        Some(ctx) => {
+            ensure!(
+                options.memory == MemoryMode::Storage,
+                "--frames rebuilds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
+            );
+            outcome.device = ctx.describe();
+            let rebuild = block_on(SceneRebuild::new(&ctx, &first, options.accel, MortonBits::Bits30))?;
+            let renderer = block_on(Renderer::with_rebuild(&ctx, &first, &rebuild, options.renderer()))?;
+            for frame in 0..frames {
+                if frame > 0 {
+                    rebuild.write_spheres(&spheres_at(frame)?.spheres);
+                }
+                let start = Instant::now();
+                let timed = block_on(renderer.read_frame_after(|encoder| {
+                    if options.accel.uses_bvh() {
+                        rebuild.encode(encoder);
+                    }
+                }))?;
+                let wall = start.elapsed().as_secs_f64() * 1e3;
+                if options.accel.uses_bvh() {
+                    outcome.builds.push(block_on(rebuild.read_timings())?);
+                }
+                outcome.render_ms.push(timed.gpu_ms.unwrap_or(wall));
+                outcome.rays.push(timed.frame.rays());
+                emit(frame, &timed.frame)?;
+            }
+        }
+        None => {
+            outcome.device = cpu_description();
+            let mut builder = LbvhBuilder::<u64>::new();
+            // Frame 0 is packed already.
+            let mut first = Some(first);
+            for frame in 0..frames {
+                let mut packed = match first.take() {
+                    Some(packed) => packed,
+                    None => spheres_at(frame)?,
+                };
+                if options.accel.uses_bvh() {
+                    let timings = builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
+                    packed.set_bvh(builder.to_bvh());
+                    outcome.builds.push(timings);
+                }
+                let start = Instant::now();
+                let frame_image = render_cpu(&packed, options)?;
+                outcome.render_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                outcome.rays.push(frame_image.rays());
+                emit(frame, &frame_image)?;
+            }
+        }
+    }
+    Ok(outcome)
+}

@@ -1,0 +1,50 @@
+use raypipe::gpu::context::{describe, instance};
+use std::process::ExitCode;
+
+pub fn run() -> anyhow::Result<ExitCode> {
+    let instance = instance(wgpu::Backends::all());
+    let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+    if adapters.is_empty() {
+        println!("no GPU adapters found; `render --device auto` will use the CPU reference tracer");
+    }
+    for adapter in adapters {
+        let limits = adapter.limits();
+        let renders_to = |format| {
+            adapter
+                .get_texture_format_features(format)
+                .allowed_usages
+                .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
+        };
+        println!("{}", describe(&adapter.get_info()));
+        println!("  max texture 2D:             {}", limits.max_texture_dimension_2d);
+        println!(
+            "  max uniform binding:        {} bytes",
+            limits.max_uniform_buffer_binding_size
+        );
+        println!(
+            "  max storage binding:        {} bytes",
+            limits.max_storage_buffer_binding_size
+        );
+        println!(
+            "  storage buffers per stage:  {}",
+            limits.max_storage_buffers_per_shader_stage
+        );
+        println!(
+            "  sampled textures per stage: {}",
+            limits.max_sampled_textures_per_shader_stage
+        );
+        println!(
+            "  timestamp queries:          {}",
+            adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
+        );
+        println!(
+            "  rgba32uint render target:   {}",
+            renders_to(wgpu::TextureFormat::Rgba32Uint)
+        );
+        println!(
+            "  rgba32float render target:  {}",
+            renders_to(wgpu::TextureFormat::Rgba32Float)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

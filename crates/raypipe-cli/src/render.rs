@@ -1,0 +1,284 @@
+use crate::args::choice;
+use crate::cli::median;
+use crate::device::{DeviceChoice, RenderOptions, render, render_frames};
+use crate::io;
+use anyhow::bail;
+use clap::{Args, ValueEnum};
+use raypipe::bvh::morton::MortonBits;
+use raypipe::cpu::Count;
+use raypipe::gpu::Backend;
+use raypipe::image::{FloatImage, Frame, heatmap};
+use raypipe::mesh::is_model_path;
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::PackedScene;
+use raypipe::scene::Scene;
+use raypipe::scene::model::{MeshAs, ModelOptions};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum Aov {
+    /// Shaded colour: PNG (sRGB) or EXR (linear).
+    #[default]
+    Color,
+    /// Distance from the eye to the first hit, channel `Z` of a float EXR; +inf where nothing is hit.
+    Depth,
+    /// First-hit shading normals, mapped from [-1, 1] to [0, 1].
+    Normal,
+    /// A heat map of each primary ray's cost: BVH nodes tested (box tests of internal nodes, sphere
+    /// tests of leaves; spheres tested for brute force), with a colour-scale legend. PNG only.
+    Cost,
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// A built-in scene (whitted, sphere-8k, torus-5k, sphere:N, torus:N, random:N[:SEED],
+    /// bounce:N[:SEED]), a TOML scene file, or a model file (.ply, .obj, .off) to frame and render.
+    #[arg(default_value = "whitted")]
+    scene: String,
+    /// With a model file: render its triangles, or spheres on its surface.
+    #[arg(long = "as", value_parser = choice::<MeshAs>())]
+    as_: Option<MeshAs>,
+    /// With a model file: this many spheres, sampled uniformly by area (implies --as spheres).
+    /// Without it, --as spheres puts one sphere on every vertex.
+    #[arg(long)]
+    spheres: Option<usize>,
+    /// With a model file: rotate it first by these Euler angles in degrees, about x, then y, then z
+    /// (say --rotate=-90,0,0 to stand up a model whose up axis is z).
+    #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
+    rotate: Option<glam::Vec3>,
+    /// Output file; the extension picks PNG or EXR. Default: render.png, or depth.exr for --aov depth.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    #[arg(long)]
+    width: Option<u32>,
+    #[arg(long)]
+    height: Option<u32>,
+    /// Maximum bounces after the primary ray (default 5, or the scene's).
+    #[arg(long)]
+    depth: Option<u32>,
+    #[arg(long, value_enum, default_value_t)]
+    device: DeviceChoice,
+    #[arg(long, value_parser = choice::<Backend>())]
+    backend: Option<Backend>,
+    #[arg(long, value_parser = choice::<MemoryMode>(), default_value_t)]
+    memory: MemoryMode,
+    #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
+    accel: Accel,
+    #[arg(long, value_enum, default_value_t)]
+    aov: Aov,
+    /// Print render time and rays per second.
+    #[arg(long)]
+    stats: bool,
+    /// Render this many frames of a moving scene (bounce:N), rebuilding the BVH every frame (on the
+    /// GPU with --memory storage). Writes the last frame, or every frame when the output name holds
+    /// a printf-style number such as frame_%04d.png.
+    #[arg(long)]
+    frames: Option<u32>,
+}
+
+/// Loads a scene the way every subcommand names one; the model options are flags of model files.
+pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
+    if !model.is_default() && !is_model_path(std::path::Path::new(spec)) {
+        bail!(
+            "scene '{spec}': --as, --spheres and --rotate apply to model files ({})",
+            raypipe::mesh::MeshFormat::extension_list()
+        );
+    }
+    if model.as_ == Some(MeshAs::Triangles) && model.spheres.is_some() {
+        bail!("{spec}: --spheres needs --as spheres");
+    }
+    Ok(Scene::load_with(spec, model)?)
+}
+
+/// `X,Y,Z` in degrees.
+fn parse_angles(text: &str) -> Result<glam::Vec3, String> {
+    let angles: Vec<f32> = text
+        .split(',')
+        .map(|a| a.trim().parse::<f32>().map_err(|_| format!("'{a}' is not a number")))
+        .collect::<Result<_, _>>()?;
+    match angles[..] {
+        [x, y, z] if angles.iter().all(|a| a.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err("expected three finite angles in degrees, as in -90,0,0".into()),
+    }
+}
+
+/// `name` with its `%d` or `%0Nd` replaced by `frame`; `None` when it holds no such pattern.
+pub fn numbered(name: &str, frame: u32) -> Option<String> {
+    let start = name.find('%')?;
+    let rest = &name[start + 1..];
+    let digits_end = rest.find(|c: char| !c.is_ascii_digit())?;
+    if !rest[digits_end..].starts_with('d') {
+        return None;
+    }
+    let width: usize = rest[..digits_end].parse().unwrap_or(0);
+    Some(format!("{}{frame:0width$}{}", &name[..start], &rest[digits_end + 1..]))
+}
+
+pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
+    let output = args.output.clone().unwrap_or_else(|| match args.aov {
+        Aov::Depth => "depth.exr".into(),
+        _ => "render.png".into(),
+    });
+    let is_exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let is_png = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !(is_exr || is_png) {
+        bail!("{}: output must end in .png or .exr", output.display());
+    }
+    if args.aov == Aov::Depth && !is_exr {
+        bail!(
+            "{}: --aov depth writes a float EXR; name the output *.exr",
+            output.display()
+        );
+    }
+    if args.aov == Aov::Cost && is_exr {
+        bail!(
+            "{}: --aov cost writes a PNG heat map; name the output *.png",
+            output.display()
+        );
+    }
+
+    let model = ModelOptions {
+        as_: args.as_,
+        spheres: args.spheres,
+        rotate: args.rotate,
+    };
+    let scene = load_scene(&args.scene, &model)?;
+    let mut scene = scene;
+    let settings = &mut scene.settings;
+    settings.width = args.width.unwrap_or(settings.width);
+    settings.height = args.height.unwrap_or(settings.height);
+    settings.max_depth = args.depth.unwrap_or(settings.max_depth);
+    let options = RenderOptions {
+        device: args.device,
+        backend: args.backend,
+        memory: args.memory,
+        accel: args.accel,
+        progress: std::io::stderr().is_terminal(),
+        count: if args.aov == Aov::Cost { Count::Cost } else { Count::Rays },
+        warm_up: args.stats,
+    };
+    if let Some(frames) = args.frames {
+        // No progress bars between frames; sequences time steady frames instead of a warm-up.
+        let options = RenderOptions {
+            progress: false,
+            warm_up: false,
+            ..options
+        };
+        return render_sequence(&args, &scene, &output, is_exr, frames, &options);
+    }
+    let mut packed = PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene))?;
+    if args.accel.uses_bvh() {
+        packed.build_bvh(MortonBits::default());
+    }
+    let outcome = render(&packed, &options)?;
+    let frame = &outcome.frame;
+    io::write(&aov_image(args.aov, is_exr, frame), &output)?;
+
+    if args.stats {
+        let pixels = frame.width as u64 * frame.height as u64;
+        let rays = frame.rays();
+        println!(
+            "scene: {}, {}x{}, {} spheres, {} triangles, {} planes, {} lights, depth {}",
+            args.scene,
+            frame.width,
+            frame.height,
+            packed.spheres.len(),
+            packed.triangles.len(),
+            packed.planes.len(),
+            packed.lights.len(),
+            packed.max_depth
+        );
+        println!(
+            "device: {}, memory {:?}, accel {:?}",
+            outcome.device, args.memory, args.accel
+        );
+        if args.aov == Aov::Cost {
+            let counts = frame.counts();
+            let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
+            let max = counts.iter().copied().max().unwrap_or(0);
+            println!("cost per primary ray: mean {mean:.1}, max {max} nodes tested (spheres tested for brute force)");
+            return Ok(ExitCode::SUCCESS);
+        }
+        let (ms, clock) = match outcome.gpu_ms {
+            Some(ms) => (ms, "GPU timestamps"),
+            None => (outcome.wall_ms, "wall clock"),
+        };
+        println!(
+            "render: {ms:.2} ms ({clock}; wall {:.2} ms), {rays} rays ({:.2} per pixel), {:.2} Mrays/s",
+            outcome.wall_ms,
+            rays as f64 / pixels as f64,
+            rays as f64 / (ms * 1e3)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn aov_image(aov: Aov, is_exr: bool, frame: &Frame) -> FloatImage {
+    match (aov, is_exr) {
+        (Aov::Color, false) => frame.display(),
+        (Aov::Color, true) => frame.radiance(),
+        (Aov::Depth, _) => frame.depth(),
+        (Aov::Normal, _) => frame.normals(),
+        (Aov::Cost, _) => heatmap::heatmap(&frame.counts(), frame.width, frame.height),
+    }
+}
+
+fn render_sequence(
+    args: &RenderArgs,
+    scene: &Scene,
+    output: &Path,
+    is_exr: bool,
+    frames: u32,
+    options: &RenderOptions,
+) -> anyhow::Result<ExitCode> {
+    anyhow::ensure!(frames >= 1, "--frames must be at least 1");
+    let name = output.to_string_lossy().to_string();
+    let pattern = numbered(&name, 0).is_some();
+    let outcome = render_frames(scene, options, frames, |frame, image| {
+        if pattern {
+            let path = numbered(&name, frame).expect("checked above");
+            io::write(&aov_image(args.aov, is_exr, image), Path::new(&path))?;
+        } else if frame + 1 == frames {
+            io::write(&aov_image(args.aov, is_exr, image), output)?;
+        }
+        Ok(())
+    })
+    .map_err(|e| e.context(args.scene.clone()))?;
+    if args.stats {
+        let s = &scene.settings;
+        println!(
+            "scene: {}, {}x{}, {} spheres, {frames} frames",
+            args.scene,
+            s.width,
+            s.height,
+            scene.spheres.len()
+        );
+        println!(
+            "device: {}, memory {:?}, accel {:?}",
+            outcome.device, args.memory, args.accel
+        );
+        // The first frame pays for pipeline compilation on some drivers: medians skip it.
+        let steady = if frames > 1 { 1 } else { 0 };
+        if !outcome.builds.is_empty() {
+            let b = &outcome.builds[steady..];
+            println!(
+                "BVH build per frame (median): morton {:.3} ms, sort {:.3} ms, hierarchy {:.3} ms, bounds {:.3} ms, links {:.3} ms, total {:.3} ms",
+                median(b.iter().map(|t| t.morton)),
+                median(b.iter().map(|t| t.sort)),
+                median(b.iter().map(|t| t.hierarchy)),
+                median(b.iter().map(|t| t.bounds)),
+                median(b.iter().map(|t| t.links)),
+                median(b.iter().map(|t| t.total())),
+            );
+        }
+        let render_ms = median(outcome.render_ms[steady..].iter().copied());
+        let rays = median(outcome.rays[steady..].iter().map(|&r| r as f64));
+        println!(
+            "render per frame (median): {render_ms:.2} ms, {rays:.0} rays, {:.2} Mrays/s",
+            rays / (render_ms * 1e3)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,250 @@
+//! Acceleration modes: the twins of `shaders/accel_*.wgsl`. Each answers the closest primitive hit and
+//! whether anything blocks a shadow ray.
+
+use super::intersect::{
+    Hit, HitKind, NO_HIT, Primitives, Ray, closer_primitive, count_box_tests, hit_primitive, intersect_box,
+    intersect_sphere, intersect_triangle, safe_inverse, v3,
+};
+use crate::bvh::layout::GpuNode;
+use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree};
+use glam::Vec3;
+
+/// Brute force: every ray against every primitive (`accel_brute.wgsl`).
+pub fn brute_closest(primitives: &Primitives, ray: &Ray, best: Hit) -> Hit {
+    let mut hit = best;
+    // The cost of brute force: every primitive tested.
+    count_box_tests(primitives.count() as u32);
+    for (i, sphere) in primitives.spheres.iter().enumerate() {
+        let t = intersect_sphere(sphere, ray, hit.t);
+        if closer_primitive(t, i as u32, &hit) {
+            hit = Hit {
+                t,
+                kind: HitKind::Primitive,
+                index: i as u32,
+            };
+        }
+    }
+    for (i, triangle) in primitives.triangles.iter().enumerate() {
+        let t = intersect_triangle(triangle, ray, hit.t);
+        let index = (primitives.spheres.len() + i) as u32;
+        if closer_primitive(t, index, &hit) {
+            hit = Hit {
+                t,
+                kind: HitKind::Primitive,
+                index,
+            };
+        }
+    }
+    hit
+}
+
+pub fn brute_occluded(primitives: &Primitives, ray: &Ray, t_max: f32) -> bool {
+    let blocks = |t: f32| t > 0.0 && t < t_max;
+    primitives
+        .spheres
+        .iter()
+        .any(|s| blocks(intersect_sphere(s, ray, t_max)))
+        || primitives
+            .triangles
+            .iter()
+            .any(|t| blocks(intersect_triangle(t, ray, t_max)))
+}
+
+/// The closest primitive hit that beats `best`; with `shadow`, the first hit nearer than best.t
+/// (`traverse_stack` in `accel_stack.wgsl`): a per-pixel stack, nearer child first, over the
+/// depth-first nodes of [`threaded`], where a node's left child is the next node and its right child
+/// follows the left subtree.
+///
+/// [`threaded`]: crate::bvh::threaded
+pub fn traverse_stack(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
+    let nodes = tree.nodes;
+    let mut hit = best;
+    let Some(&root) = nodes.first() else {
+        return hit;
+    };
+    let (origin, inv_dir) = ray_in_frame(&tree.frame, ray);
+    let enter = |node: &GpuThreadedNode, t_max: f32| {
+        let (lo, hi) = node.corners();
+        intersect_box(lo, hi, origin, inv_dir, t_max)
+    };
+    let (mut index, mut node) = (0u32, root);
+    if !node.is_leaf() && enter(&node, hit.t) < 0.0 {
+        return hit;
+    }
+    // Nodes waiting to be visited, with the distance where the ray enters them: no more than the
+    // shader's stack holds.
+    let capacity = tree.stack_size as usize;
+    let mut stack: Vec<(u32, f32)> = Vec::with_capacity(capacity);
+    loop {
+        if node.is_leaf() {
+            if hit_primitive(primitives, node.primitive(), ray, &mut hit) && shadow {
+                return hit;
+            }
+        } else {
+            let left_index = index + 1;
+            let left = nodes[left_index as usize];
+            let right_index = if left.is_leaf() { left_index + 1 } else { left.link };
+            let right = nodes[right_index as usize];
+            // Leaf children: test their primitives now (no dearer than their boxes); box-test the others.
+            let mut t_left = NO_HIT;
+            if left.is_leaf() {
+                if hit_primitive(primitives, left.primitive(), ray, &mut hit) && shadow {
+                    return hit;
+                }
+            } else {
+                t_left = enter(&left, hit.t);
+            }
+            let mut t_right = NO_HIT;
+            if right.is_leaf() {
+                if hit_primitive(primitives, right.primitive(), ray, &mut hit) && shadow {
+                    return hit;
+                }
+            } else {
+                t_right = enter(&right, hit.t);
+            }
+            if t_left >= 0.0 && t_right >= 0.0 {
+                // Both: go to the nearer (left on a tie), the other waits.
+                assert!(
+                    stack.len() < capacity,
+                    "the BVH stack of {capacity} overflowed: the tree is deeper than its stated depth"
+                );
+                if t_right < t_left {
+                    stack.push((left_index, t_left));
+                    (index, node) = (right_index, right);
+                } else {
+                    stack.push((right_index, t_right));
+                    (index, node) = (left_index, left);
+                }
+                continue;
+            }
+            if t_left >= 0.0 {
+                (index, node) = (left_index, left);
+                continue;
+            }
+            if t_right >= 0.0 {
+                (index, node) = (right_index, right);
+                continue;
+            }
+        }
+        // Resume at the next waiting node that the ray enters no farther than the best hit.
+        match std::iter::from_fn(|| stack.pop()).find(|&(_, t)| t <= hit.t) {
+            Some((waiting, _)) => (index, node) = (waiting, nodes[waiting as usize]),
+            None => break,
+        }
+    }
+    hit
+}
+
+/// The ray's origin and inverse direction in the quantization frame, where box corners are whole
+/// quanta: t along the ray is unchanged.
+fn ray_in_frame(frame: &QuantizationFrame, ray: &Ray) -> (Vec3, Vec3) {
+    let origin = (ray.origin - frame.origin) * frame.inverse_quantum();
+    (origin, safe_inverse(ray.dir) * frame.quantum)
+}
+
+/// Threaded traversal (`accel_threaded.wgsl`) over the depth-first nodes of [`threaded`]: after a
+/// hit box or a leaf the next node, after a missed box the node's link past its subtree.
+///
+/// [`threaded`]: crate::bvh::threaded
+pub fn traverse_threaded(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
+    let nodes = tree.nodes;
+    let mut hit = best;
+    let (origin, inv_dir) = ray_in_frame(&tree.frame, ray);
+    let mut index = 0;
+    while let Some(node) = nodes.get(index as usize) {
+        if node.is_leaf() {
+            // A leaf's primitive costs no more to test than its box: test it directly.
+            if hit_primitive(primitives, node.primitive(), ray, &mut hit) && shadow {
+                return hit;
+            }
+            index += 1;
+        } else {
+            let (lo, hi) = node.corners();
+            if intersect_box(lo, hi, origin, inv_dir, hit.t) < 0.0 {
+                index = node.link;
+            } else {
+                index += 1;
+            }
+        }
+    }
+    hit
+}
+
+/// How the stackless walk reached the current node.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum From {
+    Parent,
+    Sibling,
+    Child,
+}
+
+/// The near child of an internal node: the one whose box centre comes first along the ray.
+fn near_child(nodes: &[GpuNode], node: &GpuNode, dir: Vec3) -> u32 {
+    let (left, right) = (nodes[node.left as usize], nodes[node.right as usize]);
+    let ahead = ((v3(left.min) + v3(left.max)) - (v3(right.min) + v3(right.max))).dot(dir);
+    if ahead > 0.0 { node.right } else { node.left }
+}
+
+fn sibling(index: u32, parent: &GpuNode) -> u32 {
+    if parent.left == index {
+        parent.right
+    } else {
+        parent.left
+    }
+}
+
+/// Stackless traversal (Hapala et al. 2011, `accel_stackless.wgsl`): parent links and a
+/// three-state automaton, nearer child first.
+pub fn traverse_stackless(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
+    let mut hit = best;
+    if primitives.count() == 0 {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    let root = nodes[0];
+    if intersect_box(v3(root.min), v3(root.max), ray.origin, inv_dir, hit.t) < 0.0 {
+        return hit;
+    }
+    if root.is_leaf() {
+        hit_primitive(primitives, root.left, ray, &mut hit);
+        return hit;
+    }
+    let mut index = near_child(nodes, &root, ray.dir);
+    let mut state = From::Parent;
+    loop {
+        let node = nodes[index as usize];
+        if state == From::Child {
+            if index == 0 {
+                break;
+            }
+            let parent = nodes[node.parent as usize];
+            if index == near_child(nodes, &parent, ray.dir) {
+                index = sibling(index, &parent);
+                state = From::Sibling;
+            } else {
+                index = node.parent;
+            }
+            continue;
+        }
+        // From the parent or the sibling: a leaf's primitive (no dearer to test than its box), or the box.
+        let mut descend = false;
+        if node.is_leaf() {
+            if hit_primitive(primitives, node.left, ray, &mut hit) && shadow {
+                return hit;
+            }
+        } else {
+            descend = intersect_box(v3(node.min), v3(node.max), ray.origin, inv_dir, hit.t) >= 0.0;
+        }
+        if descend {
+            index = near_child(nodes, &node, ray.dir);
+            state = From::Parent;
+        } else if state == From::Parent {
+            index = sibling(index, &nodes[node.parent as usize]);
+            state = From::Sibling;
+        } else {
+            index = node.parent;
+            state = From::Child;
+        }
+    }
+    hit
+}

@@ -1,0 +1,134 @@
+//! Surfaces and Whitted shading: the twin of `shaders/shade.wgsl`.
+
+use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
+use super::trace::Tracer;
+use crate::bvh::layout::NONE;
+use crate::records::constants::RAY_BIAS;
+use crate::records::{GpuMaterial, GpuTriangle};
+use glam::Vec3;
+
+
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    pub position: Vec3,
+    /// Geometric, unit, pointing out of the primitive: it decides inside and outside, and which side
+    /// new rays start on.
+    pub normal: Vec3,
+    /// Unit, on the geometric normal's side: the interpolated vertex normal of a smooth triangle, the
+    /// geometric normal otherwise. Lighting, reflection and refraction use it.
+    pub shading: Vec3,
+    pub material: u32,
+}
+
+/// WGSL's `reflect(e1, e2)`: e1 - 2 dot(e2, e1) e2.
+pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
+    incident - 2.0 * normal.dot(incident) * normal
+}
+
+impl Tracer<'_> {
+    pub fn surface_at(&self, ray: &Ray, hit: &Hit) -> Surface {
+        let position = ray.origin + hit.t * ray.dir;
+        if hit.kind == HitKind::Primitive {
+            if let Some(sphere) = self.scene.spheres.get(hit.index as usize) {
+                let normal = (position - v3(sphere.center)).normalize();
+                return Surface {
+                    position,
+                    normal,
+                    shading: normal,
+                    material: sphere.material,
+                };
+            }
+            let triangle = &self.scene.triangles[hit.index as usize - self.scene.spheres.len()];
+            let normal = v3(triangle.e1).cross(v3(triangle.e2)).normalize();
+            return Surface {
+                position,
+                normal,
+                shading: self.triangle_shading(triangle, ray, normal),
+                material: triangle.material,
+            };
+        }
+        let plane = &self.scene.planes[hit.index as usize];
+        let local = position - v3(plane.point);
+        let cell = (local.dot(v3(plane.tangent)) / plane.checker_size).floor()
+            + (local.dot(v3(plane.bitangent)) / plane.checker_size).floor();
+        let mut material = plane.material;
+        if cell - 2.0 * (cell * 0.5).floor() != 0.0 {
+            material = plane.checker_material;
+        }
+        Surface {
+            position,
+            normal: v3(plane.normal),
+            shading: v3(plane.normal),
+            material,
+        }
+    }
+
+    /// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's
+    /// side; the geometric normal where they cancel out.
+    fn triangle_shading(&self, triangle: &GpuTriangle, ray: &Ray, normal: Vec3) -> Vec3 {
+        if triangle.normals == NONE {
+            return normal;
+        }
+        let uvt = triangle_uvt(triangle, ray);
+        let n = &self.scene.triangle_normals[triangle.normals as usize];
+        let blended = (1.0 - uvt.x - uvt.y) * v3(n.n0) + uvt.x * v3(n.n1) + uvt.y * v3(n.n2);
+        if blended.dot(blended) == 0.0 {
+            return normal;
+        }
+        let shading = blended.normalize();
+        if shading.dot(normal) < 0.0 { -shading } else { shading }
+    }
+
+    /// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
+    /// Phong. `normal` (geometric) and `shading` face the viewer; `view` points from the surface to
+    /// the viewer.
+    pub fn direct_light(
+        &mut self,
+        surface: &Surface,
+        normal: Vec3,
+        shading: Vec3,
+        view: Vec3,
+        material: &GpuMaterial,
+    ) -> Vec3 {
+        let globals = &self.scene.globals.scene;
+        let albedo = v3(material.color);
+        let mut color = globals.ambient * albedo;
+        let origin = offset_origin(surface.position, normal);
+        for light in &self.scene.lights {
+            let to_light = v3(light.position) - surface.position;
+            let distance = to_light.length();
+            let l = to_light / distance;
+            let n_dot_l = shading.dot(l);
+            if n_dot_l <= 0.0 {
+                continue;
+            }
+            self.ray_count += 1;
+            if self.occluded(&Ray { origin, dir: l }, distance) {
+                continue;
+            }
+            let mut highlight = 0.0;
+            let r_dot_v = reflect(-l, shading).dot(view);
+            if r_dot_v > 0.0 && material.specular > 0.0 {
+                highlight = material.specular * r_dot_v.powf(material.shininess);
+            }
+            color += v3(light.color) * (albedo * n_dot_l + Vec3::splat(highlight));
+        }
+        color
+    }
+}
+
+/// `side` points to where the new ray goes: the facing normal for reflection and shadows, its
+/// opposite for refraction.
+pub fn offset_origin(position: Vec3, side: Vec3) -> Vec3 {
+    let magnitude = position.abs().max_element().max(1.0);
+    position + side * (RAY_BIAS * magnitude)
+}
+
+/// Schlick's approximation of the Fresnel reflectance; cos_theta is taken on the less dense side.
+pub fn fresnel_schlick(cos_theta: f32, ior: f32) -> f32 {
+    let r = (1.0 - ior) / (1.0 + ior);
+    let r0 = r * r;
+    let x = 1.0 - cos_theta;
+    let x2 = x * x;
+    r0 + (1.0 - r0) * x2 * x2 * x
+}

@@ -1,0 +1,216 @@
+//! The Whitted tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
+
+use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
+use super::intersect::{Hit, HitKind, Primitives, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
+use super::shade::{fresnel_schlick, offset_origin, reflect};
+use crate::modes::Accel;
+use crate::records::constants::MIN_WEIGHT;
+pub use crate::records::constants::T_FAR;
+use crate::records::{PackedBvh, PackedScene};
+use glam::{Vec2, Vec3};
+
+#[derive(Clone, Copy, Debug)]
+struct RayTask {
+    origin: Vec3,
+    dir: Vec3,
+    weight: Vec3,
+    depth: u32,
+}
+
+/// What one pixel's trace yields: the fragment shader's two outputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelTrace {
+    pub color: Vec3,
+    /// First-hit shading normal; zero where the primary ray escapes.
+    pub normal: Vec3,
+    /// First-hit distance; `None` where the primary ray escapes.
+    pub depth: Option<f32>,
+    /// Primary, shadow and secondary rays traced for this pixel.
+    pub rays: u32,
+    /// Nodes the primary ray tested (box tests of internal nodes, sphere tests of leaves; spheres
+    /// tested for brute force).
+    pub cost: u32,
+}
+
+/// The per-pixel state the shader keeps in private variables.
+pub struct Tracer<'a> {
+    pub scene: &'a PackedScene,
+    pub accel: Accel,
+    /// The scene's BVH; the BVH walks need it.
+    bvh: Option<&'a PackedBvh>,
+    pub ray_count: u32,
+}
+
+/// A BVH walk was asked for on a scene without its BVH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the {accel} walk needs the scene's BVH, which was not built")]
+pub struct MissingBvh {
+    pub accel: Accel,
+}
+
+impl<'a> Tracer<'a> {
+    /// A tracer for one pixel. The BVH walks need the scene's BVH, unless it has no primitives.
+    pub fn new(scene: &'a PackedScene, accel: Accel) -> Result<Self, MissingBvh> {
+        let bvh = scene.bvh.as_ref();
+        if accel.uses_bvh() && bvh.is_none() && scene.primitive_count() > 0 {
+            return Err(MissingBvh { accel });
+        }
+        Ok(Self {
+            scene,
+            accel,
+            bvh,
+            ray_count: 0,
+        })
+    }
+
+    /// The primitives in the BVH's order.
+    pub fn primitives(&self) -> Primitives<'a> {
+        Primitives {
+            spheres: &self.scene.spheres,
+            triangles: &self.scene.triangles,
+        }
+    }
+
+    /// The acceleration mode's closest primitive hit (the shader's `accel_closest`).
+    fn accel_closest(&self, ray: &Ray, best: Hit) -> Hit {
+        let primitives = self.primitives();
+        let Some(bvh) = self.bvh.filter(|_| self.accel.uses_bvh()) else {
+            // Brute force, or a BVH walk over no primitives.
+            return brute_closest(&primitives, ray, best);
+        };
+        match self.accel {
+            Accel::Brute => brute_closest(&primitives, ray, best),
+            Accel::Stack => traverse_stack(bvh.threaded_tree(), &primitives, ray, best, false),
+            Accel::Stackless => traverse_stackless(&bvh.nodes, &primitives, ray, best, false),
+            Accel::Threaded => traverse_threaded(bvh.threaded_tree(), &primitives, ray, best, false),
+        }
+    }
+
+    /// The acceleration mode's shadow query (the shader's `accel_occluded`).
+    fn accel_occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        let primitives = self.primitives();
+        let Some(bvh) = self.bvh.filter(|_| self.accel.uses_bvh()) else {
+            return brute_occluded(&primitives, ray, t_max);
+        };
+        let none = Hit::none(t_max);
+        let hit = match self.accel {
+            Accel::Brute => return brute_occluded(&primitives, ray, t_max),
+            Accel::Stack => traverse_stack(bvh.threaded_tree(), &primitives, ray, none, true),
+            Accel::Stackless => traverse_stackless(&bvh.nodes, &primitives, ray, none, true),
+            Accel::Threaded => traverse_threaded(bvh.threaded_tree(), &primitives, ray, none, true),
+        };
+        hit.kind != HitKind::None
+    }
+
+    /// The ray through a pixel position (pixel centres at +0.5, row 0 at the top).
+    pub fn camera_ray(&self, pixel: Vec2) -> Ray {
+        let g = &self.scene.globals.camera;
+        let x = (2.0 * pixel.x / g.width - 1.0) * g.tan_half_fov * g.aspect;
+        let y = (1.0 - 2.0 * pixel.y / g.height) * g.tan_half_fov;
+        let dir = (v3(g.forward) + x * v3(g.right) + y * v3(g.up)).normalize();
+        Ray { origin: v3(g.eye), dir }
+    }
+
+    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Hit {
+        let planes = closest_plane(&self.scene.planes, ray, Hit::none(t_max));
+        self.accel_closest(ray, planes)
+    }
+
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        any_plane(&self.scene.planes, ray, t_max) || self.accel_occluded(ray, t_max)
+    }
+
+    pub fn trace_pixel(&mut self, primary: Ray) -> PixelTrace {
+        let max_depth = self.scene.max_depth;
+        let stack_size = max_depth as usize + 1;
+        let mut result = PixelTrace {
+            color: Vec3::ZERO,
+            normal: Vec3::ZERO,
+            depth: None,
+            rays: 0,
+            cost: 0,
+        };
+        reset_box_tests();
+        let mut stack = Vec::with_capacity(stack_size);
+        stack.push(RayTask {
+            origin: primary.origin,
+            dir: primary.dir,
+            weight: Vec3::ONE,
+            depth: 0,
+        });
+        while let Some(task) = stack.pop() {
+            let ray = Ray {
+                origin: task.origin,
+                dir: task.dir,
+            };
+            self.ray_count += 1;
+            let hit = self.closest_hit(&ray, T_FAR);
+            if task.depth == 0 {
+                result.cost = box_tests();
+            }
+            if hit.kind == HitKind::None {
+                result.color += task.weight * v3(self.scene.globals.scene.background);
+                continue;
+            }
+            let surface = self.surface_at(&ray, &hit);
+            if task.depth == 0 {
+                result.normal = surface.shading;
+                result.depth = Some(hit.t);
+            }
+            let material = self.scene.materials[surface.material as usize];
+            let entering = surface.normal.dot(ray.dir) < 0.0;
+            // The geometric normal picks the side new rays start on; the shading normal bends them.
+            let normal = if entering { surface.normal } else { -surface.normal };
+            let shading = if entering { surface.shading } else { -surface.shading };
+            let view = -ray.dir;
+            result.color += task.weight * self.direct_light(&surface, normal, shading, view, &material);
+            if task.depth >= max_depth {
+                continue;
+            }
+
+            // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
+            let mut reflect_share = material.reflect;
+            let mut transmit_share = material.transmit;
+            let mut refracted = Vec3::ZERO;
+            if transmit_share > 0.0 {
+                let eta = if entering { 1.0 / material.ior } else { material.ior };
+                let cos_i = view.dot(shading);
+                let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+                if k < 0.0 {
+                    reflect_share += transmit_share;
+                    transmit_share = 0.0;
+                } else {
+                    let cos_t = k.sqrt();
+                    refracted = (eta * ray.dir + (eta * cos_i - cos_t) * shading).normalize();
+                    let fresnel = fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
+                    reflect_share += transmit_share * fresnel;
+                    transmit_share *= 1.0 - fresnel;
+                }
+            }
+            let transmit_weight = task.weight * transmit_share;
+            if worth_tracing(transmit_weight) && stack.len() < stack_size {
+                stack.push(RayTask {
+                    origin: offset_origin(surface.position, -normal),
+                    dir: refracted,
+                    weight: transmit_weight,
+                    depth: task.depth + 1,
+                });
+            }
+            let reflect_weight = task.weight * reflect_share;
+            if worth_tracing(reflect_weight) && stack.len() < stack_size {
+                stack.push(RayTask {
+                    origin: offset_origin(surface.position, normal),
+                    dir: reflect(ray.dir, shading),
+                    weight: reflect_weight,
+                    depth: task.depth + 1,
+                });
+            }
+        }
+        result.rays = self.ray_count;
+        result
+    }
+}
+
+fn worth_tracing(weight: Vec3) -> bool {
+    weight.max_element() >= MIN_WEIGHT
+}

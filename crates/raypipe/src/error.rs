@@ -1,0 +1,126 @@
+//! The library's errors. They are typed and carry where the fault lies (a file or a built-in scene's
+//! name, a line, an element), so that each caller words its own message: the command line prints one
+//! line and adds its flag hints, a viewer shows a banner and keeps its previous scene.
+
+use std::fmt;
+
+/// The part of a scene an error is about.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Element {
+    Camera,
+    /// The render settings (size, depth, background).
+    Render,
+    /// The scene as a whole (its record counts, say).
+    Scene,
+    Sphere(usize),
+    Triangle(usize),
+    Plane(usize),
+    Light(usize),
+    Material(usize),
+    /// A material of a scene file, by its name there.
+    NamedMaterial(String),
+    /// A `[[mesh]]` table of a scene file.
+    Mesh(usize),
+}
+
+impl fmt::Display for Element {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Element::Camera => f.write_str("camera"),
+            Element::Render => f.write_str("render"),
+            Element::Scene => f.write_str("scene"),
+            Element::Sphere(i) => write!(f, "sphere {i}"),
+            Element::Triangle(i) => write!(f, "triangle {i}"),
+            Element::Plane(i) => write!(f, "plane {i}"),
+            Element::Light(i) => write!(f, "light {i}"),
+            Element::Material(i) => write!(f, "material {i}"),
+            Element::NamedMaterial(name) => write!(f, "material '{name}'"),
+            Element::Mesh(i) => write!(f, "mesh {i}"),
+        }
+    }
+}
+
+/// Input that is malformed or breaks an invariant the tracers rely on: a scene file, a model file,
+/// a built-in scene's parameters, or a scene built in code. Displayed as one line,
+/// `ORIGIN:LINE: ELEMENT: message` with the parts that are known.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub struct InputError {
+    /// The file the input came from, or the built-in scene's name, once known.
+    pub origin: Option<String>,
+    pub line: Option<usize>,
+    pub element: Option<Element>,
+    /// What is wrong, on one line.
+    pub message: String,
+}
+
+impl InputError {
+    pub fn new(message: impl Into<String>) -> Self {
+        Self {
+            origin: None,
+            line: None,
+            element: None,
+            message: one_line(&message.into()),
+        }
+    }
+
+    /// An error at `line` (1-based) of a text format.
+    pub fn at(line: usize, message: impl Into<String>) -> Self {
+        Self::new(message).with_line(Some(line))
+    }
+
+    pub fn of(element: Element, message: impl Into<String>) -> Self {
+        Self {
+            element: Some(element),
+            ..Self::new(message)
+        }
+    }
+
+    pub fn with_line(mut self, line: Option<usize>) -> Self {
+        self.line = self.line.or(line);
+        self
+    }
+
+    pub fn with_element(mut self, element: Element) -> Self {
+        self.element.get_or_insert(element);
+        self
+    }
+
+    /// Names the file (or scene) the error came from, unless a deeper one is named already.
+    pub fn in_origin(mut self, origin: impl Into<String>) -> Self {
+        if self.origin.is_none() {
+            self.origin = Some(origin.into());
+        }
+        self
+    }
+
+    /// The error as it reads inside a message about something else: an error of a model file that
+    /// a scene file's mesh table names becomes part of the scene file's error.
+    pub fn nested_in(self, origin: Option<String>, line: Option<usize>, element: Element) -> Self {
+        Self {
+            origin,
+            line,
+            element: Some(element),
+            message: self.to_string(),
+        }
+    }
+}
+
+impl fmt::Display for InputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match (&self.origin, self.line) {
+            (Some(origin), Some(line)) => write!(f, "{origin}:{line}: ")?,
+            (Some(origin), None) => write!(f, "{origin}: ")?,
+            (None, Some(line)) => write!(f, "line {line}: ")?,
+            (None, None) => {}
+        }
+        if let Some(element) = &self.element {
+            write!(f, "{element}: ")?;
+        }
+        f.write_str(&self.message)
+    }
+}
+
+/// Parser and driver messages may span lines; ours are one.
+pub fn one_line(text: &str) -> String {
+    text.split_whitespace().collect::<Vec<_>>().join(" ")
+}

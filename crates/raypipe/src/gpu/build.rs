@@ -1,0 +1,501 @@
+//! The LBVH build on the GPU: `shaders/lbvh.wgsl`'s kernels in five compute passes (morton, sort,
+//! hierarchy, bounds, links), each timed with timestamp queries where the adapter has them. The node
+//! array stays on the GPU, ready for the fragment shader; `read_nodes` fetches it for tests and stats.
+//!
+//! Morton codes are 30-bit or 63-bit, as on the CPU; the width picks the key type the kernels are
+//! compiled with.
+
+use super::compute::{buffer_entry, grid, kernels, storage_buffer};
+use super::readback::read_buffer;
+use super::shader::records_source;
+use super::timing::PassTimestamps;
+use super::upload::SharedBuffers;
+use super::{GpuContext, GpuError};
+use crate::bvh::BuildTimings;
+use crate::bvh::layout::GpuNode;
+use crate::bvh::morton::MortonBits;
+use crate::modes::MemoryMode;
+use crate::records::{GpuSphere, GpuTriangle, PackedScene, StructLayout};
+use crate::struct_layout;
+use std::num::NonZeroU64;
+
+const LBVH: &str = include_str!("shaders/lbvh.wgsl");
+
+/// Invocations per workgroup.
+const GROUP: u32 = 256;
+/// Items per block of the reduction and sort kernels: `BLOCK / GROUP` consecutive items per invocation.
+const BLOCK: u32 = 1024;
+/// The radix sort's digit.
+const DIGIT_BITS: u32 = 4;
+const RADIX: u32 = 1 << DIGIT_BITS;
+/// Where `scratch` holds the centroid bounds (6 words), and where the sort's digit counts start.
+const SCRATCH_BOUNDS: u32 = 0;
+const SCRATCH_HIST: u32 = 8;
+const _: () = assert!(SCRATCH_BOUNDS + 6 <= SCRATCH_HIST);
+/// Passes of the radix sort over codes of each width: even numbers, so that the sorted pairs end
+/// where they started, in pairs A.
+const fn sort_passes(bits: MortonBits) -> u32 {
+    bits.total_bits().div_ceil(DIGIT_BITS)
+}
+const _: () = assert!(sort_passes(MortonBits::Bits30).is_multiple_of(2));
+const _: () = assert!(sort_passes(MortonBits::Bits63).is_multiple_of(2));
+
+/// What lbvh.wgsl needs to know of the code width: the grid, and the (code, primitive) pair.
+fn key_preamble(bits: MortonBits) -> String {
+    let pair = match bits {
+        MortonBits::Bits30 => {
+            "// A 30-bit code and its primitive.
+alias Pair = vec2<u32>;
+fn pair(code: vec2<u32>, primitive: u32) -> Pair { return Pair(code.x, primitive); }
+fn pair_primitive(p: Pair) -> u32 { return p.y; }
+fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, 0u, high); }"
+        }
+        MortonBits::Bits63 => {
+            "// A 63-bit code (low word, high word) and its primitive; w is unused.
+alias Pair = vec4<u32>;
+fn pair(code: vec2<u32>, primitive: u32) -> Pair { return Pair(code, primitive, 0u); }
+fn pair_primitive(p: Pair) -> u32 { return p.z; }
+fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, p.y, high); }"
+        }
+    };
+    format!(
+        "// Generated: the build's sizes (src/gpu/build.rs) and {}-bit Morton codes.
+const GROUP: u32 = {GROUP}u;
+const BLOCK: u32 = {BLOCK}u;
+const ITEMS: u32 = {}u;
+const RADIX: u32 = {RADIX}u;
+const SCRATCH_BOUNDS: u32 = {SCRATCH_BOUNDS}u;
+const SCRATCH_HIST: u32 = {SCRATCH_HIST}u;
+const CELLS: u32 = {}u;
+{pair}
+",
+        bits.total_bits(),
+        BLOCK / GROUP,
+        1u32 << bits.bits_per_axis()
+    )
+}
+
+/// The build kernels' WGSL for codes of `bits`.
+pub fn shader_source(bits: MortonBits) -> String {
+    format!("{}\n{}\n{LBVH}", key_preamble(bits), records_source())
+}
+
+/// Bytes of one (code, primitive) pair.
+fn pair_bytes(bits: MortonBits) -> u64 {
+    match bits {
+        MortonBits::Bits30 => 8,
+        MortonBits::Bits63 => 16,
+    }
+}
+
+/// Words of `scratch` per block: its digit counts and 6 words of centroid bounds.
+const SCRATCH_WORDS_PER_BLOCK: u64 = RADIX as u64 + 6;
+/// Uniform offsets must be multiples of 256 bytes.
+const PARAMS_STRIDE: u64 = 256;
+const PHASES: usize = 5;
+
+/// The kernels' parameters (`BuildParams` in types.wgsl), one per sort pass at `PARAMS_STRIDE`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct BuildParams {
+    /// Primitives: spheres, then triangles.
+    pub count: u32,
+    /// The lowest key bit of the digit a sort pass orders by.
+    pub shift: u32,
+    pub sphere_count: u32,
+}
+
+/// The build's records with a WGSL twin, for the layout test.
+pub const LAYOUTS: &[StructLayout] = &[struct_layout!(BuildParams, "BuildParams", [count, shift, sphere_count])];
+
+struct Kernels {
+    bounds_partial: wgpu::ComputePipeline,
+    bounds_final: wgpu::ComputePipeline,
+    morton: wgpu::ComputePipeline,
+    sort_count: wgpu::ComputePipeline,
+    sort_scan: wgpu::ComputePipeline,
+    sort_scatter: wgpu::ComputePipeline,
+    hierarchy: wgpu::ComputePipeline,
+    leaves_and_bounds: wgpu::ComputePipeline,
+    links: wgpu::ComputePipeline,
+}
+
+/// A GPU LBVH builder: kernels compiled once, buffers kept from build to build while the
+/// primitive count stays the same.
+pub struct GpuLbvhBuilder {
+    ctx: GpuContext,
+    bits: MortonBits,
+    kernels: Kernels,
+    layout: wgpu::BindGroupLayout,
+    buffers: Buffers,
+    timer: Option<PassTimestamps>,
+}
+
+/// The buffers of a build over `count` primitives.
+pub struct Buffers {
+    sphere_count: u32,
+    triangle_count: u32,
+    /// [pairs A in, B out], [B in, A out].
+    bind_groups: [wgpu::BindGroup; 2],
+    /// The spheres the build reads; write new positions here before each build.
+    pub spheres: wgpu::Buffer,
+    /// The triangles the build reads (primitives `sphere_count..`).
+    pub triangles: wgpu::Buffer,
+    pairs: wgpu::Buffer,
+    climb: wgpu::Buffer,
+    /// The built nodes (STORAGE | COPY_SRC), the layout of `bvh::layout`.
+    pub nodes: wgpu::Buffer,
+}
+
+impl GpuLbvhBuilder {
+    /// Compiles the kernels for Morton codes of `bits` and sizes the buffers for `spheres` spheres and
+    /// `triangles` triangles.
+    pub async fn new(ctx: &GpuContext, bits: MortonBits, spheres: usize, triangles: usize) -> Result<Self, GpuError> {
+        ctx.checked("compiling the GPU LBVH build", || {
+            let device = &ctx.device;
+            let rw = wgpu::BufferBindingType::Storage { read_only: false };
+            let read = wgpu::BufferBindingType::Storage { read_only: true };
+            let mut entries = vec![
+                buffer_entry(0, wgpu::BufferBindingType::Uniform, true),
+                buffer_entry(1, read, false),
+            ];
+            entries.extend((2..=7).map(|b| buffer_entry(b, rw, false)));
+            entries.push(buffer_entry(8, read, false));
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("lbvh build"),
+                entries: &entries,
+            });
+            let kernel = kernels(device, "lbvh", shader_source(bits), &layout);
+            let kernels = Kernels {
+                bounds_partial: kernel("bounds_partial"),
+                bounds_final: kernel("bounds_final"),
+                morton: kernel("morton"),
+                sort_count: kernel("sort_count"),
+                sort_scan: kernel("sort_scan"),
+                sort_scatter: kernel("sort_scatter"),
+                hierarchy: kernel("hierarchy"),
+                leaves_and_bounds: kernel("leaves_and_bounds"),
+                links: kernel("links"),
+            };
+            let buffers = Buffers::new(ctx, &layout, bits, spheres, triangles)?;
+            Ok(Self {
+                ctx: ctx.clone(),
+                bits,
+                kernels,
+                layout,
+                buffers,
+                timer: ctx
+                    .timestamps
+                    .then(|| PassTimestamps::new(&ctx.device, "build phases", PHASES as u32)),
+            })
+        })
+        .await
+    }
+
+    /// Sizes the buffers for `spheres` spheres and `triangles` triangles (a no-op when the counts are
+    /// unchanged).
+    pub async fn resize(&mut self, spheres: usize, triangles: usize) -> Result<(), GpuError> {
+        if (spheres, triangles) != (self.buffers.sphere_count as usize, self.buffers.triangle_count as usize) {
+            let ctx = &self.ctx;
+            self.buffers = ctx
+                .checked("sizing the GPU LBVH build", || {
+                    Buffers::new(ctx, &self.layout, self.bits, spheres, triangles)
+                })
+                .await?;
+        }
+        Ok(())
+    }
+
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    pub fn buffers(&self) -> &Buffers {
+        &self.buffers
+    }
+
+    /// Primitives: spheres and triangles.
+    pub fn count(&self) -> usize {
+        self.buffers.count() as usize
+    }
+
+    pub fn write_spheres(&self, spheres: &[GpuSphere]) {
+        assert_eq!(spheres.len(), self.buffers.sphere_count as usize);
+        self.ctx
+            .queue
+            .write_buffer(&self.buffers.spheres, 0, bytemuck::cast_slice(spheres));
+    }
+
+    pub fn write_triangles(&self, triangles: &[GpuTriangle]) {
+        assert_eq!(triangles.len(), self.buffers.triangle_count as usize);
+        self.ctx
+            .queue
+            .write_buffer(&self.buffers.triangles, 0, bytemuck::cast_slice(triangles));
+    }
+
+    /// Writes a scene's primitives, sized for them.
+    pub async fn write_scene(&mut self, scene: &PackedScene) -> Result<(), GpuError> {
+        self.resize(scene.spheres.len(), scene.triangles.len()).await?;
+        self.write_spheres(&scene.spheres);
+        self.write_triangles(&scene.triangles);
+        Ok(())
+    }
+
+    /// The Morton code width the kernels were compiled for.
+    pub fn bits(&self) -> MortonBits {
+        self.bits
+    }
+
+    /// Replaces the Morton phase with given codes (of the builder's width), for comparisons with
+    /// the CPU build.
+    pub fn write_codes(&self, codes: &[u64]) {
+        assert_eq!(codes.len(), self.count());
+        // The words of each pair, as the preamble's `Pair` lays them out.
+        let mut words = Vec::with_capacity(codes.len() * pair_bytes(self.bits) as usize / 4);
+        for (i, &code) in codes.iter().enumerate() {
+            match self.bits {
+                MortonBits::Bits30 => words.extend([code as u32, i as u32]),
+                MortonBits::Bits63 => words.extend([code as u32, (code >> 32) as u32, i as u32, 0]),
+            }
+        }
+        self.ctx
+            .queue
+            .write_buffer(&self.buffers.pairs, 0, bytemuck::cast_slice(&words));
+    }
+
+    /// Records a build into `encoder`: from the spheres, or from the codes of `write_codes` when
+    /// `given_codes` is set.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, given_codes: bool) {
+        let b = &self.buffers;
+        let n = b.count();
+        if n == 0 {
+            return;
+        }
+        if n > 1 {
+            encoder.clear_buffer(&b.climb, 0, Some((n as u64 - 1) * 4));
+        }
+        let blocks = n.div_ceil(BLOCK);
+        let items = n.div_ceil(GROUP);
+        let k = &self.kernels;
+        let a = &b.bind_groups[0];
+        let phase = |encoder: &mut wgpu::CommandEncoder,
+                     index: usize,
+                     steps: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, u32, u32)]| {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(PHASE_NAMES[index]),
+                timestamp_writes: self.timer.as_ref().map(|t| t.compute_writes(index as u32)),
+            });
+            // `pass_index` picks the sort pass's parameters (0 for the other kernels).
+            for &(pipeline, bind_group, pass_index, groups) in steps {
+                let (x, y) = grid(groups);
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, bind_group, &[pass_index * PARAMS_STRIDE as u32]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        };
+        if given_codes {
+            phase(encoder, 0, &[]);
+        } else {
+            phase(
+                encoder,
+                0,
+                &[
+                    (&k.bounds_partial, a, 0, blocks),
+                    (&k.bounds_final, a, 0, 1),
+                    (&k.morton, a, 0, items),
+                ],
+            );
+        }
+        let sort: Vec<_> = (0..sort_passes(self.bits))
+            .flat_map(|pass| {
+                let bind_group = &b.bind_groups[pass as usize % 2];
+                [
+                    (&k.sort_count, bind_group, pass, blocks),
+                    (&k.sort_scan, bind_group, pass, 1),
+                    (&k.sort_scatter, bind_group, pass, blocks),
+                ]
+            })
+            .collect();
+        phase(encoder, 1, &sort);
+        let internal = (n - 1).div_ceil(GROUP);
+        let hierarchy = [(&k.hierarchy, a, 0, internal)];
+        phase(encoder, 2, if n > 1 { &hierarchy[..] } else { &[] });
+        phase(encoder, 3, &[(&k.leaves_and_bounds, a, 0, items)]);
+        phase(encoder, 4, &[(&k.links, a, 0, (2 * n - 1).div_ceil(GROUP))]);
+        if let Some(timer) = &self.timer {
+            timer.resolve(encoder);
+        }
+    }
+
+    /// Builds and waits; returns the GPU time of each phase (zeros where the adapter has no
+    /// timestamp queries).
+    pub async fn build(&self, given_codes: bool) -> Result<BuildTimings, GpuError> {
+        self.ctx
+            .checked("building the LBVH on the GPU", || {
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                self.encode(&mut encoder, given_codes);
+                self.ctx.queue.submit([encoder.finish()]);
+                Ok(())
+            })
+            .await?;
+        // Without timestamps nothing below waits for the build.
+        self.ctx
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        self.read_timings().await
+    }
+
+    /// The GPU time of each phase of the last build that was submitted and finished (zeros where
+    /// the adapter has no timestamp queries).
+    pub async fn read_timings(&self) -> Result<BuildTimings, GpuError> {
+        match &self.timer {
+            Some(timer) if self.count() > 0 => {
+                let ms = timer.read_ms(&self.ctx).await?;
+                Ok(BuildTimings {
+                    morton: ms[0],
+                    sort: ms[1],
+                    hierarchy: ms[2],
+                    bounds: ms[3],
+                    links: ms[4],
+                })
+            }
+            _ => Ok(BuildTimings::default()),
+        }
+    }
+
+    /// The spheres and nodes, for a renderer to read in place.
+    pub fn shared_buffers(&self) -> SharedBuffers {
+        SharedBuffers {
+            spheres: self.buffers.spheres.clone(),
+            nodes: self.buffers.nodes.clone(),
+            threaded_nodes: None,
+            bvh_frame: None,
+        }
+    }
+
+    /// Copies the node array back to the host.
+    pub async fn read_nodes(&self) -> Result<Vec<GpuNode>, GpuError> {
+        let size = (2 * self.count() as u64).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
+        if size == 0 {
+            return Ok(Vec::new());
+        }
+        let bytes = read_buffer(&self.ctx.device, &self.ctx.queue, &self.buffers.nodes, size).await?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
+
+impl Buffers {
+    /// Primitives: spheres, then triangles.
+    fn count(&self) -> u32 {
+        self.sphere_count + self.triangle_count
+    }
+
+    fn new(
+        ctx: &GpuContext,
+        layout: &wgpu::BindGroupLayout,
+        bits: MortonBits,
+        sphere_count: usize,
+        triangle_count: usize,
+    ) -> Result<Self, GpuError> {
+        let count = sphere_count + triangle_count;
+        let limits = ctx.limits();
+        let n = count as u64;
+        let node_bytes = (2 * n).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
+        if node_bytes > limits.max_storage_buffer_binding_size {
+            return Err(GpuError::TooBig {
+                memory: MemoryMode::Storage,
+                array: "node",
+                records: (2 * count).saturating_sub(1),
+                needed: format!("{node_bytes} bytes"),
+                allowed: limits.max_storage_buffer_binding_size.to_string(),
+            });
+        }
+        let device = &ctx.device;
+        let blocks = n.div_ceil(BLOCK as u64);
+        // A binding may not be empty: an absent kind of primitive gets room for one record.
+        let record_room = |records: usize, size: usize| records.max(1) as u64 * size as u64;
+        let spheres = storage_buffer(
+            device,
+            "build spheres",
+            record_room(sphere_count, std::mem::size_of::<GpuSphere>()),
+            wgpu::BufferUsages::COPY_DST,
+        );
+        let triangles = storage_buffer(
+            device,
+            "build triangles",
+            record_room(triangle_count, std::mem::size_of::<GpuTriangle>()),
+            wgpu::BufferUsages::COPY_DST,
+        );
+        let pairs = storage_buffer(device, "pairs A", n * pair_bytes(bits), wgpu::BufferUsages::COPY_DST);
+        let pairs_b = storage_buffer(device, "pairs B", n * pair_bytes(bits), wgpu::BufferUsages::empty());
+        // The parents follow the per-block words (`parent_slot` in lbvh.wgsl).
+        let scratch = storage_buffer(
+            device,
+            "build scratch",
+            (SCRATCH_HIST as u64 + SCRATCH_WORDS_PER_BLOCK * blocks + (2 * n).saturating_sub(1)) * 4,
+            wgpu::BufferUsages::empty(),
+        );
+        let ranges = storage_buffer(device, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
+        let climb_words = n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1);
+        let climb = storage_buffer(device, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
+        let nodes = storage_buffer(device, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("build params"),
+            size: PARAMS_STRIDE * sort_passes(bits) as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        for pass in 0..sort_passes(bits) {
+            let p = BuildParams {
+                count: count as u32,
+                shift: pass * DIGIT_BITS,
+                sphere_count: sphere_count as u32,
+            };
+            ctx.queue
+                .write_buffer(&params, pass as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
+        }
+        let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
+            let resources = [
+                &spheres, pairs_in, pairs_out, &scratch, &ranges, &climb, &nodes, &triangles,
+            ];
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &params,
+                    offset: 0,
+                    size: NonZeroU64::new(std::mem::size_of::<BuildParams>() as u64),
+                }),
+            }];
+            entries.extend(resources.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32 + 1,
+                resource: b.as_entire_binding(),
+            }));
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("lbvh build"),
+                layout,
+                entries: &entries,
+            })
+        };
+        let bind_groups = [bind_group(&pairs, &pairs_b), bind_group(&pairs_b, &pairs)];
+        Ok(Self {
+            sphere_count: sphere_count as u32,
+            triangle_count: triangle_count as u32,
+            bind_groups,
+            spheres,
+            triangles,
+            pairs,
+            climb,
+            nodes,
+        })
+    }
+}
+
+/// A bound on the depth of any LBVH over `count` primitives with codes of `bits`: each level of the
+/// radix tree consumes at least one bit of the (code, position) key, which has bits + ceil(log2 n)
+/// bits. Renderers size their traversal stack with it when the tree is built on the GPU.
+pub fn depth_bound(count: usize, bits: MortonBits) -> u32 {
+    bits.total_bits() + (count.max(1) as u64).next_power_of_two().trailing_zeros()
+}
+
+const PHASE_NAMES: [&str; PHASES] = ["morton", "sort", "hierarchy", "bounds", "links"];

@@ -1,0 +1,261 @@
+//! Adapter and device: which backend, which limits, and turning wgpu's errors into ours.
+//!
+//! Start-up is async, as a browser needs it: the command line blocks on these futures, a web page
+//! awaits them. An adapter can be asked for a surface (WebGL2 has none to offer before its canvas).
+
+use super::GpuError;
+use crate::error::one_line;
+use crate::impl_choice;
+use crate::modes::MemoryMode;
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::{Arc, Mutex};
+use std::task::{Context, Poll, Waker};
+
+/// A backend a caller can ask for; without one, `WGPU_BACKEND` or wgpu's default order decides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    Vulkan,
+    Gl,
+    Metal,
+    Dx12,
+}
+
+impl_choice!(Backend, [
+    (Vulkan, "vulkan", "Vulkan"),
+    (Gl, "gl", "OpenGL or OpenGL ES, through EGL (WebGL2 in a browser)"),
+    (Metal, "metal", "Metal"),
+    (Dx12, "dx12", "Direct3D 12"),
+]);
+
+impl Backend {
+    pub fn backends(self) -> wgpu::Backends {
+        match self {
+            Backend::Vulkan => wgpu::Backends::VULKAN,
+            Backend::Gl => wgpu::Backends::GL,
+            Backend::Metal => wgpu::Backends::METAL,
+            Backend::Dx12 => wgpu::Backends::DX12,
+        }
+    }
+}
+
+/// An instance over `backends`, or over `WGPU_BACKEND`'s where it is set.
+pub fn instance(backends: wgpu::Backends) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    wgpu::Instance::new(desc.with_env())
+}
+
+/// The backends to try, in order: the chosen one; else `WGPU_BACKEND`'s; else the primary ones
+/// (Vulkan, Metal, DX12) and, only where they offer no adapter, GL, whose probing is slow and noisy.
+fn backend_order(backend: Option<Backend>) -> Vec<wgpu::Backends> {
+    match backend {
+        Some(backend) => vec![backend.backends()],
+        None if std::env::var_os("WGPU_BACKEND").is_some() => vec![wgpu::Backends::all()],
+        None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::GL],
+    }
+}
+
+/// An adapter and the device opened on it. Cloning shares them: wgpu's handles are reference
+/// counted, so a renderer, a rebuild and a readback each hold their own.
+#[derive(Clone, Debug)]
+pub struct GpuContext {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// Whether passes can be timed with timestamp queries.
+    pub timestamps: bool,
+}
+
+impl GpuContext {
+    /// The first adapter wgpu offers on the chosen backends, or `None` when there is none.
+    pub async fn new(backend: Option<Backend>) -> Result<Option<Self>, GpuError> {
+        for backends in backend_order(backend) {
+            let instance = instance(backends);
+            if let Ok(adapter) = instance.request_adapter(&wgpu::RequestAdapterOptions::default()).await {
+                return Self::open(adapter).await.map(Some);
+            }
+        }
+        Ok(None)
+    }
+
+    /// Like [`GpuContext::new`], but no adapter is an error.
+    pub async fn require(backend: Option<Backend>) -> Result<Self, GpuError> {
+        Self::new(backend).await?.ok_or(GpuError::NoAdapter { backend })
+    }
+
+    /// An adapter of `instance` that can present to `surface` (a window's, or a canvas's).
+    pub async fn for_surface(instance: &wgpu::Instance, surface: &wgpu::Surface<'_>) -> Result<Self, GpuError> {
+        let adapter = instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                compatible_surface: Some(surface),
+                ..Default::default()
+            })
+            .await
+            .map_err(|_| GpuError::NoAdapter { backend: None })?;
+        Self::open(adapter).await
+    }
+
+    /// Opens a device on `adapter` with every limit it offers (large scenes need its real buffer and
+    /// texture limits) and timestamp queries where it has them.
+    pub async fn open(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
+        let info = adapter.get_info();
+        if let Some(warning) = driver_warning(&info) {
+            log::warn!("{warning}");
+        }
+        let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("raypipe"),
+                required_features,
+                required_limits: adapter.limits(),
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| GpuError::Device {
+                adapter: format!("{} ({:?})", info.name, info.backend),
+                message: one_line(&e.to_string()),
+            })?;
+        // Errors are caught by error scopes around each operation; anything else is reported, not a panic.
+        device.on_uncaptured_error(Arc::new(|error| {
+            log::warn!("GPU error outside an operation: {}", one_line(&error.to_string()));
+        }));
+        Ok(Self {
+            timestamps: required_features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            adapter,
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// One line naming the adapter, its backend and driver.
+    pub fn describe(&self) -> String {
+        describe(&self.info)
+    }
+
+    pub fn limits(&self) -> wgpu::Limits {
+        self.device.limits()
+    }
+
+    /// The memory modes the fragment shader can read on this device: storage buffers only where
+    /// the fragment stage may bind them (WebGL2's may not).
+    pub fn memory_modes(&self) -> Vec<MemoryMode> {
+        let storage = self.limits().max_storage_buffers_per_shader_stage >= 8;
+        [MemoryMode::Uniform, MemoryMode::Storage, MemoryMode::Texture]
+            .into_iter()
+            .filter(|&m| m != MemoryMode::Storage || storage)
+            .collect()
+    }
+
+    /// The memory mode for scenes of any size: storage buffers where the fragment stage has them,
+    /// textures otherwise.
+    pub fn default_memory(&self) -> MemoryMode {
+        if self.memory_modes().contains(&MemoryMode::Storage) {
+            MemoryMode::Storage
+        } else {
+            MemoryMode::Texture
+        }
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes; a wgpu error becomes an `Err`.
+    pub async fn checked<T>(
+        &self,
+        what: &'static str,
+        f: impl FnOnce() -> Result<T, GpuError>,
+    ) -> Result<T, GpuError> {
+        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let result = f();
+        let validation = validation.pop().await;
+        let memory = memory.pop().await;
+        if let Some(error) = validation.or(memory) {
+            return Err(GpuError::Operation {
+                what,
+                message: one_line(&error.to_string()),
+            });
+        }
+        result
+    }
+}
+
+/// The oldest Mesa whose llvmpipe (lavapipe, llvmpipe GL) was seen to run the tracer correctly.
+const MESA_TESTED_GOOD: (u32, u32) = (25, 0);
+
+/// Mesa 22.3.6's llvmpipe ends the fragment shader's ray loop early with rays still on the stack
+/// (reflections and refractions go missing on scenes with small glass spheres); 25.0.7 is correct.
+/// Versions in between were not tested.
+pub fn driver_warning(info: &wgpu::AdapterInfo) -> Option<String> {
+    if !info.name.contains("llvmpipe") {
+        return None;
+    }
+    let text = format!("{} {}", info.driver, info.driver_info);
+    let version = text.split("Mesa ").nth(1)?;
+    let mut numbers = version
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|n| n.parse::<u32>().ok());
+    let found = (numbers.next()?, numbers.next().unwrap_or(0));
+    (found < MESA_TESTED_GOOD).then(|| {
+        format!(
+            "Mesa {}.{} llvmpipe is older than the oldest Mesa seen to trace correctly ({}.{}); Mesa 22.3 drops reflected and refracted rays (on Debian 12, install Mesa from bookworm-backports)",
+            found.0, found.1, MESA_TESTED_GOOD.0, MESA_TESTED_GOOD.1
+        )
+    })
+}
+
+pub fn describe(info: &wgpu::AdapterInfo) -> String {
+    let driver = [info.driver.as_str(), info.driver_info.as_str()]
+        .iter()
+        .filter(|s| !s.is_empty())
+        .copied()
+        .collect::<Vec<_>>()
+        .join(" ");
+    format!(
+        "{} ({:?}, {:?}, driver: {})",
+        info.name, info.backend, info.device_type, driver
+    )
+}
+
+/// A buffer mapping as a future: resolved by wgpu's callback, which a native device fires during
+/// `poll` and a browser fires on its own.
+pub(crate) fn map_future(
+    slice: wgpu::BufferSlice<'_>,
+    mode: wgpu::MapMode,
+) -> impl Future<Output = Result<(), wgpu::BufferAsyncError>> + use<> {
+    let shared = Arc::new(Mutex::new(MapState::default()));
+    let callback = Arc::clone(&shared);
+    slice.map_async(mode, move |result| {
+        let mut state = callback.lock().unwrap_or_else(|e| e.into_inner());
+        state.result = Some(result);
+        if let Some(waker) = state.waker.take() {
+            waker.wake();
+        }
+    });
+    MapFuture { shared }
+}
+
+#[derive(Default)]
+struct MapState {
+    result: Option<Result<(), wgpu::BufferAsyncError>>,
+    waker: Option<Waker>,
+}
+
+struct MapFuture {
+    shared: Arc<Mutex<MapState>>,
+}
+
+impl Future for MapFuture {
+    type Output = Result<(), wgpu::BufferAsyncError>;
+
+    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Self::Output> {
+        let mut state = self.shared.lock().unwrap_or_else(|e| e.into_inner());
+        match state.result.take() {
+            Some(result) => Poll::Ready(result),
+            None => {
+                state.waker = Some(cx.waker().clone());
+                Poll::Pending
+            }
+        }
+    }
+}

@@ -1,0 +1,202 @@
+//! The display pass (`shaders/display.wgsl`): a renderer's frame targets drawn into any colour
+//! target, a window's surface texture or an offscreen one, as a screen shows them. The frame lands
+//! at the target's top-left corner, one fragment per pixel; the rest of the target is cleared.
+
+use super::GpuContext;
+use super::renderer::FrameTargets;
+use crate::impl_choice;
+use crate::records::StructLayout;
+use crate::struct_layout;
+
+const DISPLAY: &str = include_str!("shaders/display.wgsl");
+
+/// What the display pass shows of a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DisplayView {
+    /// Shaded colour, clamped and sRGB-encoded as PNG files hold it.
+    #[default]
+    Color,
+    /// First-hit distance, white near the eye fading to black at `depth_far`.
+    Depth,
+    /// First-hit normals mapped from [-1, 1] to [0, 1].
+    Normal,
+    /// The colour target's count (a cost render's nodes tested) on the heat map's scale.
+    Cost,
+}
+
+impl_choice!(DisplayView, [
+    (Color, "color", "shaded colour"),
+    (Depth, "depth", "distance to the first hit"),
+    (Normal, "normal", "first-hit normals"),
+    (Cost, "cost", "BVH nodes each primary ray tested, as a heat map"),
+]);
+
+/// The pass's parameters (`DisplayParams` in display.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DisplayParams {
+    pub view: u32,
+    pub target_srgb: u32,
+    pub depth_far: f32,
+    pub cost_max: f32,
+}
+
+/// The display pass's records with a WGSL twin, for the layout test.
+pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
+    DisplayParams,
+    "DisplayParams",
+    [view, target_srgb, depth_far, cost_max]
+)];
+
+/// The display pass's WGSL.
+pub fn shader_source() -> &'static str {
+    DISPLAY
+}
+
+/// The display pass for targets of one format.
+pub struct Display {
+    ctx: GpuContext,
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    target_srgb: bool,
+}
+
+impl Display {
+    pub fn new(ctx: &GpuContext, format: wgpu::TextureFormat) -> Self {
+        let device = &ctx.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("display"),
+            source: wgpu::ShaderSource::Wgsl(DISPLAY.into()),
+        });
+        let texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Uint,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("display"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                texture(1),
+                texture(2),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("display"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("display"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_display"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_display"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("display params"),
+            size: std::mem::size_of::<DisplayParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            ctx: ctx.clone(),
+            pipeline,
+            layout,
+            params,
+            target_srgb: format.is_srgb(),
+        }
+    }
+
+    /// Records the pass: `frame` drawn into `view` (at least the frame's size) as `shown`.
+    /// `depth_far` scales the depth view, `cost_max` the cost view.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameTargets,
+        view: &wgpu::TextureView,
+        shown: DisplayView,
+        depth_far: f32,
+        cost_max: f32,
+    ) {
+        let params = DisplayParams {
+            view: shown as u32,
+            target_srgb: self.target_srgb as u32,
+            depth_far,
+            cost_max,
+        };
+        self.ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let bind_group = self.ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("display"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&frame.color_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&frame.surface_view),
+                },
+            ],
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("display"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let (width, height) = frame.size();
+        pass.set_viewport(0.0, 0.0, width as f32, height as f32, 0.0, 1.0);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

@@ -1,0 +1,40 @@
+//! What can go wrong on the GPU, typed so that callers word their own messages and hints.
+
+use super::context::Backend;
+use crate::cpu::MissingBvh;
+use crate::modes::MemoryMode;
+
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("no GPU adapter found{}", match .backend {
+        Some(backend) => format!(" on the {backend} backend"),
+        None => " (install a driver, for example mesa-vulkan-drivers)".to_string(),
+    })]
+    NoAdapter { backend: Option<Backend> },
+    #[error("cannot open a device on adapter {adapter}: {message}")]
+    Device { adapter: String, message: String },
+    /// wgpu reported a validation or out-of-memory error while `what` ran.
+    #[error("{what} failed on the GPU: {message}")]
+    Operation { what: &'static str, message: String },
+    /// One of the scene's record arrays does not fit the memory mode on this adapter.
+    #[error("scene too big for {memory} memory: {records} {array} records need {needed}, the adapter allows {allowed}")]
+    TooBig {
+        memory: MemoryMode,
+        array: &'static str,
+        records: usize,
+        /// What the records need, in words ("640000 bytes", "3 rows of 2048 texels").
+        needed: String,
+        allowed: String,
+    },
+    /// A BVH rebuilt on the GPU reaches the shader through storage buffers only.
+    #[error("a BVH rebuilt on the GPU is read from storage memory, not {memory} memory")]
+    RebuildNeedsStorage { memory: MemoryMode },
+    #[error(transparent)]
+    MissingBvh(#[from] MissingBvh),
+    #[error("image {width}x{height} is larger than the adapter's maximum texture size {max}")]
+    ImageTooLarge { width: u32, height: u32, max: u32 },
+    #[error("adapter {adapter} cannot {what}")]
+    Unsupported { adapter: String, what: &'static str },
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+}

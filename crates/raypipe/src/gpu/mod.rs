@@ -1,0 +1,22 @@
+//! The GPU side: a context (adapter and device, for a surface or none), the renderer that traces
+//! into its targets in the fragment shader, the display pass that shows them, the per-frame LBVH
+//! rebuild in compute passes, and readback for the callers that need pixels.
+
+pub mod build;
+pub mod compute;
+pub mod context;
+pub mod display;
+mod error;
+pub mod readback;
+pub mod rebuild;
+pub mod renderer;
+pub mod shader;
+pub mod threaded;
+pub mod timing;
+pub mod upload;
+
+pub use context::{Backend, GpuContext};
+pub use display::{Display, DisplayView};
+pub use error::GpuError;
+pub use rebuild::SceneRebuild;
+pub use renderer::{Renderer, RendererOptions, TimedFrame};

@@ -1,0 +1,405 @@
+//! The renderer: one full-screen triangle, a passthrough vertex stage, and the tracer in the
+//! fragment stage writing the frame targets (colour and ray count, normal and depth, as f32 bits in
+//! rgba32uint). It owns its handles and its targets, records its work into a caller's encoder, and
+//! never reads back unless asked: a window shows the targets through [`super::display::Display`],
+//! files and tests read them with [`Renderer::read_frame`].
+
+use super::readback::TextureReadback;
+use super::rebuild::SceneRebuild;
+use super::shader::{ShaderConfig, compose};
+use super::threaded::encode_frame_copy;
+use super::timing::PassTimestamps;
+use super::upload::{SceneResources, SharedBuffers, upload};
+use super::{GpuContext, GpuError};
+use crate::cpu::{Count, MissingBvh};
+use crate::image::Frame;
+use crate::modes::{Accel, MemoryMode};
+use crate::records::{GpuCamera, GpuGlobals, PackedScene};
+use crate::scene::Camera;
+use wgpu::util::DeviceExt;
+
+/// f32 bits in an integer format: colour-renderable on every backend, read back bit for bit.
+pub const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
+const TARGET_BYTES_PER_PIXEL: u32 = 16;
+
+/// A triangle whose clip-space corners cover the whole viewport.
+const FULLSCREEN_TRIANGLE: [[f32; 2]; 3] = [[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]];
+
+/// How a renderer traces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RendererOptions {
+    pub memory: MemoryMode,
+    pub accel: Accel,
+    /// What the colour target's fourth channel counts.
+    pub count: Count,
+}
+
+/// The tracer's outputs, one texel per pixel: colour (rgb linear radiance, a the count) and surface
+/// (xyz first-hit normal, w its distance or `DEPTH_MISS`), both f32 bits.
+pub struct FrameTargets {
+    pub color: wgpu::Texture,
+    pub surface: wgpu::Texture,
+    pub color_view: wgpu::TextureView,
+    pub surface_view: wgpu::TextureView,
+}
+
+impl FrameTargets {
+    fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+        let [color, surface] = ["color target", "surface target"].map(|label| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: TARGET_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        });
+        Self {
+            color_view: color.create_view(&Default::default()),
+            surface_view: surface.create_view(&Default::default()),
+            color,
+            surface,
+        }
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.color.width(), self.color.height())
+    }
+}
+
+/// A frame read back and, where the adapter has timestamp queries, the GPU time of its trace pass.
+pub struct TimedFrame {
+    pub frame: Frame,
+    pub gpu_ms: Option<f64>,
+}
+
+/// A scene uploaded and a pipeline built for it, ready to trace frames into its targets.
+pub struct Renderer {
+    ctx: GpuContext,
+    options: RendererOptions,
+    pipeline: wgpu::RenderPipeline,
+    bind_group: wgpu::BindGroup,
+    globals: GpuGlobals,
+    globals_buffer: wgpu::Buffer,
+    vertices: wgpu::Buffer,
+    targets: FrameTargets,
+    /// Where [`Renderer::read_frame`] copies the targets; sized with them.
+    readbacks: [TextureReadback; 2],
+    /// With a rebuild's stack or threaded nodes: their quantization frame, copied into the globals
+    /// every frame.
+    bvh_frame: Option<wgpu::Buffer>,
+    timer: Option<PassTimestamps>,
+}
+
+impl Renderer {
+    /// A renderer over `scene` and its CPU-built BVH (which the BVH walks need), at the scene's
+    /// camera and image size.
+    pub async fn new(ctx: &GpuContext, scene: &PackedScene, options: RendererOptions) -> Result<Self, GpuError> {
+        if options.accel.uses_bvh() && scene.primitive_count() > 0 && scene.bvh.is_none() {
+            return Err(MissingBvh { accel: options.accel }.into());
+        }
+        let depth = scene.bvh.as_ref().map_or(0, |b| b.depth);
+        Self::create(ctx, scene, options, None, depth).await
+    }
+
+    /// A renderer whose spheres and nodes are `rebuild`'s, rebuilt on the GPU before each frame:
+    /// record [`SceneRebuild::encode`] before [`Renderer::encode`] in the same encoder.
+    pub async fn with_rebuild(
+        ctx: &GpuContext,
+        scene: &PackedScene,
+        rebuild: &SceneRebuild,
+        options: RendererOptions,
+    ) -> Result<Self, GpuError> {
+        if options.memory != MemoryMode::Storage {
+            return Err(GpuError::RebuildNeedsStorage { memory: options.memory });
+        }
+        let shared = rebuild.shared_buffers();
+        Self::create(ctx, scene, options, Some(&shared), rebuild.depth_bound()).await
+    }
+
+    async fn create(
+        ctx: &GpuContext,
+        scene: &PackedScene,
+        options: RendererOptions,
+        shared: Option<&SharedBuffers>,
+        bvh_depth: u32,
+    ) -> Result<Self, GpuError> {
+        let (width, height) = (scene.width(), scene.height());
+        check_size(ctx, width, height)?;
+        let features = ctx.adapter.get_texture_format_features(TARGET_FORMAT);
+        if !features.allowed_usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT) {
+            return Err(GpuError::Unsupported {
+                adapter: ctx.describe(),
+                what: "render to rgba32uint targets",
+            });
+        }
+        let RendererOptions { memory, accel, count } = options;
+        ctx.checked("uploading the scene and building the pipeline", || {
+            let resources = upload(ctx, scene, memory, accel, shared)?;
+            let globals = scene.globals;
+            let globals_buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("globals"),
+                contents: bytemuck::bytes_of(&globals),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
+            let source = compose(&ShaderConfig {
+                memory,
+                accel,
+                max_depth: scene.max_depth,
+                bvh_depth,
+                arrays: &resources.arrays,
+                texels_per_row: resources.texels_per_row,
+                write_cost: count == Count::Cost,
+            });
+            let (pipeline, bind_group) = build_pipeline(ctx, &source, &resources, &globals_buffer);
+            let vertices = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("fullscreen triangle"),
+                contents: bytemuck::cast_slice(&FULLSCREEN_TRIANGLE),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+            let targets = FrameTargets::new(&ctx.device, width, height);
+            Ok(Self {
+                ctx: ctx.clone(),
+                options,
+                pipeline,
+                bind_group,
+                globals,
+                globals_buffer,
+                vertices,
+                readbacks: readbacks(&ctx.device, width, height),
+                targets,
+                bvh_frame: shared.and_then(|s| s.bvh_frame.clone()),
+                timer: ctx
+                    .timestamps
+                    .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
+            })
+        })
+        .await
+    }
+
+    pub fn options(&self) -> RendererOptions {
+        self.options
+    }
+
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    /// The frame's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        self.targets.size()
+    }
+
+    pub fn targets(&self) -> &FrameTargets {
+        &self.targets
+    }
+
+    /// The camera as the shader reads it.
+    pub fn camera(&self) -> GpuCamera {
+        self.globals.camera
+    }
+
+    /// Points the camera; the next frame sees it. One uniform write: nothing is re-uploaded.
+    pub fn set_camera(&mut self, camera: &Camera) {
+        let (width, height) = self.size();
+        self.write_camera(GpuCamera::new(camera, width, height));
+    }
+
+    /// Traces frames of `width` x `height` pixels from now on: new targets, and the camera's
+    /// aspect follows.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), GpuError> {
+        if (width, height) == self.size() {
+            return Ok(());
+        }
+        check_size(&self.ctx, width, height)?;
+        self.targets = FrameTargets::new(&self.ctx.device, width, height);
+        self.readbacks = readbacks(&self.ctx.device, width, height);
+        self.write_camera(GpuCamera {
+            aspect: width as f32 / height as f32,
+            width: width as f32,
+            height: height as f32,
+            ..self.globals.camera
+        });
+        Ok(())
+    }
+
+    fn write_camera(&mut self, camera: GpuCamera) {
+        self.globals.camera = camera;
+        let offset = std::mem::offset_of!(GpuGlobals, camera) as u64;
+        self.ctx
+            .queue
+            .write_buffer(&self.globals_buffer, offset, bytemuck::bytes_of(&camera));
+    }
+
+    /// Records one frame into the targets: the trace pass, and before it, where a rebuild feeds
+    /// the walks, the copy of its quantization frame into the globals.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(frame) = &self.bvh_frame {
+            encode_frame_copy(encoder, frame, &self.globals_buffer);
+        }
+        let attachments = [&self.targets.color_view, &self.targets.surface_view].map(|view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("trace"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: None,
+            timestamp_writes: self.timer.as_ref().map(|t| t.render_writes(0)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.draw(0..3, 0..1);
+        drop(pass);
+        if let Some(timer) = &self.timer {
+            timer.resolve(encoder);
+        }
+    }
+
+    /// GPU milliseconds of the last trace pass submitted and finished, where the adapter has
+    /// timestamp queries.
+    pub async fn read_gpu_ms(&self) -> Result<Option<f64>, GpuError> {
+        match &self.timer {
+            Some(timer) => Ok(Some(timer.read_ms(&self.ctx).await?[0])),
+            None => Ok(None),
+        }
+    }
+
+    /// Traces one frame and reads both targets back.
+    pub async fn read_frame(&self) -> Result<TimedFrame, GpuError> {
+        self.read_frame_after(|_| {}).await
+    }
+
+    /// Records `prepare` (a BVH rebuild, say) and then the frame into one command buffer, so that
+    /// the GPU runs both without a round trip to the host; reads both targets back.
+    pub async fn read_frame_after(
+        &self,
+        prepare: impl FnOnce(&mut wgpu::CommandEncoder),
+    ) -> Result<TimedFrame, GpuError> {
+        let ctx = &self.ctx;
+        ctx.checked("rendering", || {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            prepare(&mut encoder);
+            self.encode(&mut encoder);
+            let [color, surface] = &self.readbacks;
+            color.encode_copy(&mut encoder, &self.targets.color);
+            surface.encode_copy(&mut encoder, &self.targets.surface);
+            ctx.queue.submit([encoder.finish()]);
+            Ok(())
+        })
+        .await?;
+        let (width, height) = self.size();
+        let mut frame = Frame::new(width, height);
+        frame.color = bytemuck::pod_collect_to_vec(&self.readbacks[0].read(&ctx.device).await?);
+        frame.surface = bytemuck::pod_collect_to_vec(&self.readbacks[1].read(&ctx.device).await?);
+        Ok(TimedFrame {
+            frame,
+            gpu_ms: self.read_gpu_ms().await?,
+        })
+    }
+}
+
+fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), GpuError> {
+    let max = ctx.limits().max_texture_dimension_2d;
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(GpuError::ImageTooLarge { width, height, max });
+    }
+    Ok(())
+}
+
+fn readbacks(device: &wgpu::Device, width: u32, height: u32) -> [TextureReadback; 2] {
+    [0, 1].map(|_| TextureReadback::new(device, width, height, TARGET_BYTES_PER_PIXEL))
+}
+
+fn build_pipeline(
+    ctx: &GpuContext,
+    source: &str,
+    resources: &SceneResources,
+    globals: &wgpu::Buffer,
+) -> (wgpu::RenderPipeline, wgpu::BindGroup) {
+    let device = &ctx.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("trace"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }];
+    layout_entries.extend_from_slice(&resources.layout_entries);
+    let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("scene"),
+        entries: &layout_entries,
+    });
+    let mut entries = vec![wgpu::BindGroupEntry {
+        binding: 0,
+        resource: globals.as_entire_binding(),
+    }];
+    entries.extend(resources.bind_entries());
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene"),
+        layout: &bind_group_layout,
+        entries: &entries,
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("trace"),
+        bind_group_layouts: &[Some(&bind_group_layout)],
+        immediate_size: 0,
+    });
+    let target = Some(wgpu::ColorTargetState {
+        format: TARGET_FORMAT,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("trace"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: 8,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x2],
+            })],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[target.clone(), target],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    (pipeline, bind_group)
+}

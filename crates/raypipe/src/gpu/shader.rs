@@ -1,0 +1,117 @@
+//! Assembles the fragment shader from its files and a small generated preamble.
+//!
+//! The preamble holds what must be known at compile time (the ray stack size for `--depth`, uniform
+//! array lengths, the texture row width) and the memory mode's `load_*` accessors, so one tracer
+//! source serves every memory mode and acceleration structure.
+
+use crate::modes::{Accel, MemoryMode};
+use crate::records::constants;
+use std::fmt::Write;
+
+/// The records shared with the host.
+pub const TYPES: &str = include_str!("shaders/types.wgsl");
+
+/// What every shader module starts from: the constants shared with the CPU reference, and the
+/// records shared with the host.
+pub fn records_source() -> String {
+    format!("{}\n{TYPES}", constants::wgsl())
+}
+const TEXELS: &str = include_str!("shaders/texels.wgsl");
+const FULLSCREEN: &str = include_str!("shaders/fullscreen.wgsl");
+const INTERSECT: &str = include_str!("shaders/intersect.wgsl");
+const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
+const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
+const ACCEL_STACKLESS: &str = include_str!("shaders/accel_stackless.wgsl");
+const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
+const SHADE: &str = include_str!("shaders/shade.wgsl");
+const TRACE: &str = include_str!("shaders/trace.wgsl");
+
+/// A scene array the shader reads through `load_<name>(i)`, bound at `binding` in group 0.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordArray {
+    pub name: &'static str,
+    pub wgsl_type: &'static str,
+    pub texels: usize,
+    pub binding: u32,
+    /// Records to declare in uniform mode (uniform arrays have a fixed length).
+    pub capacity: usize,
+}
+
+pub struct ShaderConfig<'a> {
+    pub memory: MemoryMode,
+    pub accel: Accel,
+    pub max_depth: u32,
+    /// Longest root-to-leaf path of the BVH: the traversal stack's size.
+    pub bvh_depth: u32,
+    pub arrays: &'a [RecordArray],
+    /// Width of the scene textures, in texels.
+    pub texels_per_row: u32,
+    /// Write each pixel's cost (BVH nodes its primary ray tested) instead of its ray count.
+    pub write_cost: bool,
+}
+
+pub fn compose(config: &ShaderConfig) -> String {
+    let mut source = String::new();
+    let w = &mut source;
+    writeln!(
+        w,
+        "// Generated preamble: memory {:?}, accel {:?}.",
+        config.memory, config.accel
+    )
+    .unwrap();
+    writeln!(w, "const MAX_DEPTH: u32 = {}u;", config.max_depth).unwrap();
+    // Depth-first with two branches keeps at most one waiting sibling per level, plus the pair just pushed.
+    writeln!(w, "const RAY_STACK_SIZE: u32 = {}u;", config.max_depth + 1).unwrap();
+    writeln!(w, "const TEXELS_PER_ROW: u32 = {}u;", config.texels_per_row).unwrap();
+    writeln!(w, "const WRITE_COST: bool = {};", config.write_cost).unwrap();
+    writeln!(w, "const BVH_STACK_SIZE: u32 = {}u;", config.bvh_depth.max(1)).unwrap();
+    writeln!(w, "@group(0) @binding(0) var<uniform> globals: Globals;").unwrap();
+    for array in config.arrays {
+        let (name, ty, binding) = (array.name, array.wgsl_type, array.binding);
+        match config.memory {
+            MemoryMode::Storage => {
+                writeln!(
+                    w,
+                    "@group(0) @binding({binding}) var<storage, read> {name}_records: array<{ty}>;"
+                )
+                .unwrap();
+                writeln!(w, "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}").unwrap();
+            }
+            MemoryMode::Uniform => {
+                let capacity = array.capacity.max(1);
+                writeln!(
+                    w,
+                    "@group(0) @binding({binding}) var<uniform> {name}_records: array<{ty}, {capacity}>;"
+                )
+                .unwrap();
+                writeln!(w, "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}").unwrap();
+            }
+            MemoryMode::Texture => {
+                writeln!(w, "@group(0) @binding({binding}) var {name}_texels: texture_2d<f32>;").unwrap();
+                let loads: Vec<String> = (0..array.texels)
+                    .map(|t| format!("textureLoad({name}_texels, texel_coord(base + {t}u), 0)"))
+                    .collect();
+                writeln!(
+                    w,
+                    "fn load_{name}(i: u32) -> {ty} {{ let base = i * {}u; return {name}_from_texels({}); }}",
+                    array.texels,
+                    loads.join(", ")
+                )
+                .unwrap();
+            }
+        }
+    }
+    let accel = match config.accel {
+        Accel::Brute => ACCEL_BRUTE,
+        Accel::Stack => ACCEL_STACK,
+        Accel::Stackless => ACCEL_STACKLESS,
+        Accel::Threaded => ACCEL_THREADED,
+    };
+    source.push('\n');
+    source.push_str(&records_source());
+    for part in [TEXELS, FULLSCREEN, INTERSECT, accel, SHADE, TRACE] {
+        source.push('\n');
+        source.push_str(part);
+    }
+    source
+}

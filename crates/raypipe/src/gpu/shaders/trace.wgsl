@@ -1,0 +1,137 @@
+// The Whitted tracer, one pixel per fragment. Shaders cannot recurse, so the reflected and refracted
+// branches wait on an explicit stack of MAX_DEPTH + 1 entries (depth-first, at most one waiting
+// sibling per level). Mirrored by src/cpu/trace.rs.
+
+// T_FAR, MIN_WEIGHT (the weight below which a branch cannot change an 8-bit pixel) and DEPTH_MISS
+// (the depth where the primary ray hits nothing; the host reads it as +inf) come from the preamble.
+
+// Rays traced for the current pixel: primary, shadow and secondary, counted where they are cast.
+var<private> ray_count: u32;
+// Nodes tested so far (ray-box tests of internal nodes, ray-sphere tests of leaves; spheres tested for
+// brute force), and their number for the primary ray: the pixel's cost, which a cost render
+// (WRITE_COST) writes instead of the ray count.
+var<private> box_tests: u32;
+var<private> primary_cost: u32;
+
+struct RayTask {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+    depth: u32,
+}
+
+struct PixelTrace {
+    color: vec3<f32>,
+    // First-hit shading normal and distance; DEPTH_MISS where the primary ray escapes.
+    normal: vec3<f32>,
+    depth: f32,
+}
+
+// The ray through a pixel position (pixel centres at +0.5, row 0 at the top).
+fn camera_ray(pixel: vec2<f32>) -> Ray {
+    let x = (2.0 * pixel.x / globals.camera.width - 1.0) * globals.camera.tan_half_fov * globals.camera.aspect;
+    let y = (1.0 - 2.0 * pixel.y / globals.camera.height) * globals.camera.tan_half_fov;
+    let dir = normalize(globals.camera.forward + x * globals.camera.right + y * globals.camera.up);
+    return Ray(globals.camera.eye, dir);
+}
+
+fn closest_hit(ray: Ray, t_max: f32) -> Hit {
+    let planes = closest_plane(ray, Hit(t_max, HIT_NONE, 0u));
+    return accel_closest(ray, planes);
+}
+
+fn occluded(ray: Ray, t_max: f32) -> bool {
+    return any_plane(ray, t_max) || accel_occluded(ray, t_max);
+}
+
+fn worth_tracing(weight: vec3<f32>) -> bool {
+    return max(weight.x, max(weight.y, weight.z)) >= MIN_WEIGHT;
+}
+
+fn trace_pixel(primary: Ray) -> PixelTrace {
+    var result = PixelTrace(vec3<f32>(0.0), vec3<f32>(0.0), DEPTH_MISS);
+    var stack: array<RayTask, RAY_STACK_SIZE>;
+    stack[0] = RayTask(primary.origin, primary.dir, vec3<f32>(1.0), 0u);
+    var top = 1u;
+    while (top > 0u) {
+        top -= 1u;
+        let task = stack[top];
+        let ray = Ray(task.origin, task.dir);
+        ray_count += 1u;
+        let hit = closest_hit(ray, T_FAR);
+        if (task.depth == 0u) {
+            primary_cost = box_tests;
+        }
+        if (hit.kind == HIT_NONE) {
+            result.color += task.weight * globals.scene.background;
+            continue;
+        }
+        let surface = surface_at(ray, hit);
+        if (task.depth == 0u) {
+            result.normal = surface.shading;
+            result.depth = hit.t;
+        }
+        let material = load_material(surface.material);
+        let entering = dot(surface.normal, ray.dir) < 0.0;
+        // The geometric normal picks the side new rays start on; the shading normal bends them.
+        let normal = select(-surface.normal, surface.normal, entering);
+        let shading = select(-surface.shading, surface.shading, entering);
+        let view = -ray.dir;
+        result.color += task.weight * direct_light(surface, normal, shading, view, material);
+        if (task.depth >= MAX_DEPTH) {
+            continue;
+        }
+
+        // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
+        var reflect_share = material.reflect;
+        var transmit_share = material.transmit;
+        var refracted = vec3<f32>(0.0);
+        if (transmit_share > 0.0) {
+            let eta = select(material.ior, 1.0 / material.ior, entering);
+            let cos_i = dot(view, shading);
+            let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+            if (k < 0.0) {
+                reflect_share += transmit_share;
+                transmit_share = 0.0;
+            } else {
+                let cos_t = sqrt(k);
+                refracted = normalize(eta * ray.dir + (eta * cos_i - cos_t) * shading);
+                let fresnel = fresnel_schlick(select(cos_t, cos_i, entering), material.ior);
+                reflect_share += transmit_share * fresnel;
+                transmit_share *= 1.0 - fresnel;
+            }
+        }
+        let transmit_weight = task.weight * transmit_share;
+        if (worth_tracing(transmit_weight) && top < RAY_STACK_SIZE) {
+            stack[top] = RayTask(offset_origin(surface.position, -normal), refracted, transmit_weight, task.depth + 1u);
+            top += 1u;
+        }
+        let reflect_weight = task.weight * reflect_share;
+        if (worth_tracing(reflect_weight) && top < RAY_STACK_SIZE) {
+            stack[top] = RayTask(offset_origin(surface.position, normal), reflect(ray.dir, shading), reflect_weight, task.depth + 1u);
+            top += 1u;
+        }
+    }
+    return result;
+}
+
+// Both targets are rgba32uint holding f32 bits: integer targets are colour-renderable everywhere
+// (float targets are not on GLES/WebGL2 without an extension), and bits read back exactly.
+struct FragmentOutput {
+    // rgb: linear radiance; a: rays traced for this pixel (its cost, with WRITE_COST).
+    @location(0) color: vec4<u32>,
+    // xyz: first-hit normal; w: first-hit distance or DEPTH_MISS.
+    @location(1) surface: vec4<u32>,
+}
+
+@fragment
+fn fs_main(@builtin(position) position: vec4<f32>) -> FragmentOutput {
+    ray_count = 0u;
+    box_tests = 0u;
+    let pixel = trace_pixel(camera_ray(position.xy));
+    let count = select(ray_count, primary_cost, WRITE_COST);
+    return FragmentOutput(
+        bitcast<vec4<u32>>(vec4<f32>(pixel.color, f32(count))),
+        bitcast<vec4<u32>>(vec4<f32>(pixel.normal, pixel.depth)),
+    );
+}

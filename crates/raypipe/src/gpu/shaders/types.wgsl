@@ -1,0 +1,137 @@
+// Twins of the host records in src/records/mod.rs. tests/layout.rs parses this file with naga and
+// checks every struct's size and member offsets against the Rust ones. Tail padding is implicit here.
+
+// The camera basis and image size: rewritten alone when the camera moves or the image is resized.
+struct Camera {
+    eye: vec3<f32>,
+    tan_half_fov: f32,
+    forward: vec3<f32>,
+    aspect: f32,
+    right: vec3<f32>,
+    width: f32,
+    up: vec3<f32>,
+    height: f32,
+}
+
+struct SceneInfo {
+    background: vec3<f32>,
+    ambient: f32,
+    sphere_count: u32,
+    plane_count: u32,
+    light_count: u32,
+    material_count: u32,
+    triangle_count: u32,
+}
+
+// The threaded BVH's quantization frame: root box minimum, quantum per axis, its inverse.
+struct BvhFrame {
+    origin: vec3<f32>,
+    quantum: vec3<f32>,
+    inverse_quantum: vec3<f32>,
+}
+
+struct Globals {
+    camera: Camera,
+    scene: SceneInfo,
+    bvh_frame: BvhFrame,
+}
+
+struct Sphere {
+    center: vec3<f32>,
+    radius: f32,
+    material: u32,
+}
+
+// Möller–Trumbore's form: a corner and the two edges leaving it. BVH primitive sphere_count + i.
+struct Triangle {
+    v0: vec3<f32>,
+    material: u32,
+    e1: vec3<f32>,
+    // Index of the vertex normals, or NONE to shade with the geometric normal.
+    normals: u32,
+    e2: vec3<f32>,
+}
+
+struct TriangleNormals {
+    n0: vec3<f32>,
+    n1: vec3<f32>,
+    n2: vec3<f32>,
+}
+
+struct Plane {
+    point: vec3<f32>,
+    material: u32,
+    normal: vec3<f32>,
+    checker_material: u32,
+    tangent: vec3<f32>,
+    checker_size: f32,
+    bitangent: vec3<f32>,
+}
+
+struct Light {
+    position: vec3<f32>,
+    color: vec3<f32>,
+}
+
+struct Material {
+    color: vec3<f32>,
+    specular: f32,
+    shininess: f32,
+    reflect: f32,
+    transmit: f32,
+    ior: f32,
+}
+
+// A BVH node (src/bvh/layout.rs): internal nodes first, then leaves; the root is node 0.
+struct BvhNode {
+    min: vec3<f32>,
+    // Internal: left child. Leaf: primitive.
+    left: u32,
+    max: vec3<f32>,
+    // Internal: right child. Leaf: LEAF.
+    right: u32,
+    // NONE for the root.
+    parent: u32,
+    // The next node after this subtree in depth-first order; NONE at the end.
+    escape: u32,
+}
+
+// LEAF and NONE (0xffffffff) come from the preamble (src/records/constants.rs).
+
+// A node of the threaded BVH (src/bvh/threaded.rs), in depth-first order: 16-bit box corners in
+// quanta of the globals' frame (min.x | min.y << 16, min.z | max.x << 16, max.y | max.z << 16) and
+// one link: the node after the subtree for an internal node, LEAF_BIT | primitive for a leaf.
+struct ThreadedNode {
+    bounds: vec3<u32>,
+    link: u32,
+}
+
+const LEAF_BIT: u32 = 0x80000000u;
+
+fn is_leaf(node: ThreadedNode) -> bool {
+    return (node.link & LEAF_BIT) != 0u;
+}
+
+// A threaded node's box corners, in quanta.
+fn quantized_min(node: ThreadedNode) -> vec3<f32> {
+    return vec3<f32>(vec3<u32>(node.bounds.x & 0xffffu, node.bounds.x >> 16u, node.bounds.y & 0xffffu));
+}
+
+fn quantized_max(node: ThreadedNode) -> vec3<f32> {
+    return vec3<f32>(vec3<u32>(node.bounds.y >> 16u, node.bounds.z & 0xffffu, node.bounds.z >> 16u));
+}
+
+// The LBVH build's parameters, one per sort pass at a 256-byte stride (src/gpu/build.rs).
+struct BuildParams {
+    // Primitives: spheres, then triangles.
+    count: u32,
+    // The lowest key bit of the digit a sort pass orders by.
+    shift: u32,
+    sphere_count: u32,
+}
+
+// The threaded layout kernels' parameters (src/gpu/threaded.rs).
+struct LayoutParams {
+    // Nodes: 2n - 1 for n primitives.
+    node_count: u32,
+}

@@ -1,0 +1,270 @@
+//! Bringing the scene to the shader: uniform buffers, storage buffers, or rgba32float textures.
+
+use super::shader::RecordArray;
+use super::{GpuContext, GpuError};
+use crate::bvh::layout::GpuNode;
+use crate::bvh::threaded::GpuThreadedNode;
+use crate::modes::{Accel, MemoryMode};
+use crate::records::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene};
+use wgpu::util::DeviceExt;
+
+/// Texture rows are 2048 texels wide: the smallest maximum texture size WebGL2 guarantees.
+pub const TEXELS_PER_ROW: u32 = 2048;
+
+/// Buffers that already live on the GPU and replace the scene's own in storage memory: the spheres
+/// and nodes of a [`super::rebuild::SceneRebuild`], rebuilt there every frame, and the threaded
+/// nodes and their quantization frame laid out from them.
+#[derive(Clone, Debug)]
+pub struct SharedBuffers {
+    pub spheres: wgpu::Buffer,
+    pub nodes: wgpu::Buffer,
+    /// For the stack and threaded walks.
+    pub threaded_nodes: Option<wgpu::Buffer>,
+    /// The threaded nodes' frame, a `GpuBvhFrame` the renderer copies into its globals.
+    pub bvh_frame: Option<wgpu::Buffer>,
+}
+
+/// The scene's arrays on the GPU, ready to bind.
+pub struct SceneResources {
+    pub arrays: Vec<RecordArray>,
+    pub layout_entries: Vec<wgpu::BindGroupLayoutEntry>,
+    resources: Vec<Resource>,
+    pub texels_per_row: u32,
+}
+
+enum Resource {
+    Buffer(wgpu::Buffer),
+    Texture(wgpu::TextureView),
+}
+
+impl SceneResources {
+    pub fn bind_entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
+        self.arrays
+            .iter()
+            .zip(&self.resources)
+            .map(|(array, resource)| wgpu::BindGroupEntry {
+                binding: array.binding,
+                resource: match resource {
+                    Resource::Buffer(buffer) => buffer.as_entire_binding(),
+                    Resource::Texture(view) => wgpu::BindingResource::TextureView(view),
+                },
+            })
+            .collect()
+    }
+}
+
+pub fn upload(
+    ctx: &GpuContext,
+    scene: &PackedScene,
+    memory: MemoryMode,
+    accel: Accel,
+    shared: Option<&SharedBuffers>,
+) -> Result<SceneResources, GpuError> {
+    if shared.is_some() && memory != MemoryMode::Storage {
+        return Err(GpuError::RebuildNeedsStorage { memory });
+    }
+    let limits = ctx.limits();
+    let texels_per_row = TEXELS_PER_ROW.min(limits.max_texture_dimension_2d);
+    let mut out = SceneResources {
+        arrays: Vec::new(),
+        layout_entries: Vec::new(),
+        resources: Vec::new(),
+        texels_per_row,
+    };
+    for (index, (name, records)) in scene_records(scene, accel).into_iter().enumerate() {
+        let array = record_array(index, name, records);
+        let binding = array.binding;
+        let shared_buffer = match (shared, name) {
+            (Some(shared), "sphere") => Some(shared.spheres.clone()),
+            (Some(shared), "node") => Some(shared.nodes.clone()),
+            (Some(shared), "threaded_node") => shared.threaded_nodes.clone(),
+            _ => None,
+        };
+        let (ty, resource) = match memory {
+            MemoryMode::Storage if shared_buffer.is_some() => (
+                buffer_binding(false),
+                Resource::Buffer(shared_buffer.expect("checked by the match guard")),
+            ),
+            MemoryMode::Uniform | MemoryMode::Storage => {
+                let uniform = memory == MemoryMode::Uniform;
+                // Bindings may not be empty: an empty array travels as one zeroed record.
+                let mut bytes = records.bytes().to_vec();
+                if bytes.is_empty() {
+                    bytes.resize(records.record_size(), 0);
+                }
+                let (limit, usage) = if uniform {
+                    (limits.max_uniform_buffer_binding_size, wgpu::BufferUsages::UNIFORM)
+                } else {
+                    (limits.max_storage_buffer_binding_size, wgpu::BufferUsages::STORAGE)
+                };
+                if bytes.len() as u64 > limit {
+                    return Err(GpuError::TooBig {
+                        memory,
+                        array: name,
+                        records: records.len(),
+                        needed: format!("{} bytes", bytes.len()),
+                        allowed: limit.to_string(),
+                    });
+                }
+                let buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(name),
+                    contents: &bytes,
+                    usage,
+                });
+                (buffer_binding(uniform), Resource::Buffer(buffer))
+            }
+            MemoryMode::Texture => {
+                // Indices (node links among them) travel as exact floats: below 2^24.
+                if records.len() > MAX_TEXEL_INTEGER as usize {
+                    return Err(GpuError::TooBig {
+                        memory,
+                        array: name,
+                        records: records.len(),
+                        needed: "exact float indices".into(),
+                        allowed: format!("{MAX_TEXEL_INTEGER} records, what a texel can index exactly"),
+                    });
+                }
+                let mut texels = records.texel_data();
+                let rows = texels.len().div_ceil(texels_per_row as usize).max(1);
+                if rows > limits.max_texture_dimension_2d as usize {
+                    return Err(GpuError::TooBig {
+                        memory,
+                        array: name,
+                        records: records.len(),
+                        needed: format!("{rows} rows of {texels_per_row} texels"),
+                        allowed: format!("{} rows", limits.max_texture_dimension_2d),
+                    });
+                }
+                texels.resize(rows * texels_per_row as usize, [0.0; 4]);
+                let size = wgpu::Extent3d {
+                    width: texels_per_row,
+                    height: rows as u32,
+                    depth_or_array_layers: 1,
+                };
+                let texture = ctx.device.create_texture_with_data(
+                    &ctx.queue,
+                    &wgpu::TextureDescriptor {
+                        label: Some(name),
+                        size,
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: wgpu::TextureFormat::Rgba32Float,
+                        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                        view_formats: &[],
+                    },
+                    wgpu::util::TextureDataOrder::LayerMajor,
+                    bytemuck::cast_slice(&texels),
+                );
+                let ty = wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                };
+                (ty, Resource::Texture(texture.create_view(&Default::default())))
+            }
+        };
+        out.layout_entries.push(wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty,
+            count: None,
+        });
+        out.resources.push(resource);
+        out.arrays.push(array);
+    }
+    Ok(out)
+}
+
+/// The scene's record arrays in binding order (binding 0 is the globals); BVH modes add the nodes.
+fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn RecordSlice)> {
+    let mut records: Vec<(&'static str, &dyn RecordSlice)> = vec![
+        ("sphere", &scene.spheres),
+        ("triangle", &scene.triangles),
+        ("triangle_normals", &scene.triangle_normals),
+        ("plane", &scene.planes),
+        ("light", &scene.lights),
+        ("material", &scene.materials),
+    ];
+    // A scene whose BVH is rebuilt on the GPU has none of its own: its node arrays come shared.
+    static NO_NODES: Vec<GpuNode> = Vec::new();
+    static NO_THREADED_NODES: Vec<GpuThreadedNode> = Vec::new();
+    let bvh = scene.bvh.as_ref();
+    match accel {
+        Accel::Brute => {}
+        Accel::Stack | Accel::Threaded => records.push((
+            "threaded_node",
+            bvh.map_or(&NO_THREADED_NODES, |b| &b.threaded_nodes),
+        )),
+        Accel::Stackless => records.push(("node", bvh.map_or(&NO_NODES, |b| &b.nodes))),
+    }
+    records
+}
+
+/// What the shader declares for each of the scene's arrays.
+pub fn record_arrays(scene: &PackedScene, accel: Accel) -> Vec<RecordArray> {
+    scene_records(scene, accel)
+        .into_iter()
+        .enumerate()
+        .map(|(index, (name, records))| record_array(index, name, records))
+        .collect()
+}
+
+/// The array at `index` among the scene's record arrays: bindings follow the globals' 0.
+fn record_array(index: usize, name: &'static str, records: &dyn RecordSlice) -> RecordArray {
+    RecordArray {
+        name,
+        wgsl_type: records.wgsl_type(),
+        texels: records.texels(),
+        binding: index as u32 + 1,
+        capacity: records.len(),
+    }
+}
+
+/// A read-only buffer binding of the fragment stage: uniform or storage.
+fn buffer_binding(uniform: bool) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty: if uniform {
+            wgpu::BufferBindingType::Uniform
+        } else {
+            wgpu::BufferBindingType::Storage { read_only: true }
+        },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+/// A slice of records of one type, seen without its type so `upload` can loop over arrays.
+trait RecordSlice {
+    fn wgsl_type(&self) -> &'static str;
+    fn texels(&self) -> usize;
+    fn record_size(&self) -> usize;
+    fn len(&self) -> usize;
+    fn bytes(&self) -> &[u8];
+    fn texel_data(&self) -> Vec<[f32; 4]>;
+}
+
+impl<T: GpuRecord> RecordSlice for Vec<T> {
+    fn wgsl_type(&self) -> &'static str {
+        T::WGSL_TYPE
+    }
+    fn texels(&self) -> usize {
+        T::TEXELS
+    }
+    fn record_size(&self) -> usize {
+        std::mem::size_of::<T>()
+    }
+    fn len(&self) -> usize {
+        self.as_slice().len()
+    }
+    fn bytes(&self) -> &[u8] {
+        bytemuck::cast_slice(self)
+    }
+    fn texel_data(&self) -> Vec<[f32; 4]> {
+        let mut out = Vec::with_capacity(self.as_slice().len() * T::TEXELS);
+        for record in self {
+            record.push_texels(&mut out);
+        }
+        out
+    }
+}

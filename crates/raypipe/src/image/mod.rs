@@ -1,0 +1,126 @@
+//! Images: the frame both tracers produce, its AOVs, and their comparison. Files are the caller's.
+
+pub mod diff;
+pub mod heatmap;
+
+pub use crate::records::constants::DEPTH_MISS;
+
+/// What a render produces: the fragment shader's two outputs per pixel, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// rgb: linear radiance; a: rays traced for the pixel (primary, shadow, secondary).
+    pub color: Vec<[f32; 4]>,
+    /// xyz: first-hit geometric normal; w: first-hit distance, or [`DEPTH_MISS`].
+    pub surface: Vec<[f32; 4]>,
+}
+
+/// A float image of any channel count, rows top to bottom, channels interleaved.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FloatImage {
+    pub width: u32,
+    pub height: u32,
+    /// Channel names, as an EXR file would name them.
+    pub channels: Vec<String>,
+    pub data: Vec<f32>,
+}
+
+impl FloatImage {
+    pub fn pixel(&self, index: usize) -> &[f32] {
+        let n = self.channels.len();
+        &self.data[index * n..(index + 1) * n]
+    }
+
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// Linear to sRGB-encoded, the transfer function of PNG output.
+pub fn linear_to_srgb(x: f32) -> f32 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn rgb_names() -> Vec<String> {
+    ["R", "G", "B"].map(String::from).to_vec()
+}
+
+impl Frame {
+    pub fn new(width: u32, height: u32) -> Self {
+        let pixels = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            color: vec![[0.0; 4]; pixels],
+            surface: vec![[0.0, 0.0, 0.0, DEPTH_MISS]; pixels],
+        }
+    }
+
+    /// Rays traced for the whole image, as the tracer counted them.
+    pub fn rays(&self) -> u64 {
+        self.color.iter().map(|c| c[3] as u64).sum()
+    }
+
+    /// Colour as it is displayed: clamped and sRGB-encoded, in [0, 1]. This is what PNG files hold
+    /// (before 8-bit rounding) and what colour comparisons measure.
+    pub fn display(&self) -> FloatImage {
+        let data = self
+            .color
+            .iter()
+            .flat_map(|c| [c[0], c[1], c[2]].map(linear_to_srgb))
+            .collect();
+        self.image(rgb_names(), data)
+    }
+
+    /// Linear radiance, for EXR output.
+    pub fn radiance(&self) -> FloatImage {
+        let data = self.color.iter().flat_map(|c| [c[0], c[1], c[2]]).collect();
+        self.image(rgb_names(), data)
+    }
+
+    /// Distance from the eye to the first hit along the unit primary ray; +inf where it escapes.
+    pub fn depth(&self) -> FloatImage {
+        let data = self
+            .surface
+            .iter()
+            .map(|s| if s[3] < 0.0 { f32::INFINITY } else { s[3] })
+            .collect();
+        self.image(vec!["Z".into()], data)
+    }
+
+    /// The fourth colour channel (rays per pixel, or cost in a cost render) as counts.
+    pub fn counts(&self) -> Vec<u32> {
+        self.color.iter().map(|c| c[3] as u32).collect()
+    }
+
+    /// First-hit normals mapped from [-1, 1] to [0, 1]; black where the primary ray escapes.
+    pub fn normals(&self) -> FloatImage {
+        let data = self
+            .surface
+            .iter()
+            .flat_map(|s| {
+                if s[3] < 0.0 {
+                    [0.0; 3]
+                } else {
+                    [s[0], s[1], s[2]].map(|v| v * 0.5 + 0.5)
+                }
+            })
+            .collect();
+        self.image(rgb_names(), data)
+    }
+
+    fn image(&self, channels: Vec<String>, data: Vec<f32>) -> FloatImage {
+        FloatImage {
+            width: self.width,
+            height: self.height,
+            channels,
+            data,
+        }
+    }
+}

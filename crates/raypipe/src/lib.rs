@@ -1,0 +1,27 @@
+//! raypipe: Whitted ray tracing in the fragment shader of the ordinary graphics pipeline.
+//!
+//! Data flows scene → BVH → GPU records → (GPU upload → full-screen triangle → fragment shader) or
+//! (CPU reference tracer, function by function the shader's twin) → frame. Modules depend
+//! downwards only, in this order: `choice`, `rng`, `parallel`, `error` and `modes` at the bottom;
+//! then `bvh`, `mesh`, `scene`; `records` (what crosses to the GPU); `image` (frames and their
+//! comparison); and the two tracers, `cpu` and `gpu`, which use all of these and not each other.
+//!
+//! The library prints nothing and reads no flags: notices go through the `log` crate, errors are
+//! typed ([`error`], [`gpu::GpuError`]), and it builds for `wasm32-unknown-unknown`.
+
+pub mod bvh;
+pub mod choice;
+pub mod cpu;
+pub mod error;
+pub mod gpu;
+pub mod image;
+pub mod mesh;
+pub mod modes;
+mod parallel;
+pub mod records;
+pub mod rng;
+pub mod scene;
+
+pub use choice::Choice;
+pub use error::{Element, InputError};
+pub use modes::{Accel, MemoryMode};

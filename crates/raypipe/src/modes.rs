@@ -1,0 +1,54 @@
+//! The modes every layer shares: how a ray finds its closest primitive, and how the scene's records
+//! reach the shader. They sit at the bottom of the module graph, so that the CPU tracer, the GPU
+//! renderer and their callers name the same types.
+
+use crate::impl_choice;
+
+/// How a ray finds its closest primitive. The default is the fastest measured mode (docs/BENCHMARKS.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Accel {
+    /// Every ray against every primitive.
+    Brute,
+    /// The linear BVH, walked with a per-pixel stack, nearer child first.
+    Stack,
+    /// The linear BVH, walked without a stack (Hapala et al. 2011): parent links, nearer child first.
+    Stackless,
+    /// The linear BVH, walked without a stack along escape links, in fixed depth-first order.
+    #[default]
+    Threaded,
+}
+
+impl_choice!(Accel, [
+    (Brute, "brute", "every ray against every primitive"),
+    (Stack, "stack", "the linear BVH, walked with a per-pixel stack, nearer child first"),
+    (Stackless, "stackless", "the linear BVH, walked without a stack (Hapala et al. 2011): parent links, nearer child first"),
+    (Threaded, "threaded", "the linear BVH, walked without a stack along escape links, in fixed depth-first order"),
+]);
+
+impl Accel {
+    pub fn uses_bvh(self) -> bool {
+        self != Accel::Brute
+    }
+
+    /// The walks over the BVH, without brute force.
+    pub const BVH: [Accel; 3] = [Accel::Stack, Accel::Stackless, Accel::Threaded];
+}
+
+/// How scene records reach the fragment shader.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum MemoryMode {
+    /// Uniform buffers: fast, but small (64 KiB per array on most adapters).
+    Uniform,
+    /// Storage buffers: up to the adapter's buffer limit.
+    #[default]
+    Storage,
+    /// rgba32float textures read with textureLoad: the route where fragment shaders have no storage
+    /// buffers (WebGL2).
+    Texture,
+}
+
+impl_choice!(MemoryMode, [
+    (Uniform, "uniform", "uniform buffers: fast, but small (64 KiB per array on most adapters)"),
+    (Storage, "storage", "storage buffers: up to the adapter's buffer limit"),
+    (Texture, "texture", "rgba32float textures read with textureLoad: the route where fragment shaders have no storage buffers (WebGL2)"),
+]);

@@ -1,0 +1,60 @@
+//! The numbers the shader and the CPU reference must agree on, defined once here and emitted into
+//! every shader's preamble ([`wgsl`]), so that neither side can drift from the other.
+
+use crate::bvh::layout::{LEAF, NONE};
+use std::fmt::Write;
+
+/// Where a ray that hits nothing ends.
+pub const T_FAR: f32 = 1e30;
+/// A branch whose weight falls below this in every channel cannot change an 8-bit pixel; drop it.
+pub const MIN_WEIGHT: f32 = 1e-3;
+/// The depth channel's value where the primary ray hits nothing (the shader cannot write +inf).
+pub const DEPTH_MISS: f32 = -1.0;
+/// How far secondary rays start off the surface, along its normal.
+pub const RAY_BIAS: f32 = 1e-4;
+/// A ray closer to parallel with a plane than this misses it.
+pub const PARALLEL_EPSILON: f32 = 1e-8;
+/// Direction components smaller than this are replaced by it before inversion, so that the slab
+/// test never computes 0 * inf.
+pub const TINY_DIRECTION: f32 = 1e-20;
+/// What an intersection returns for no hit.
+pub const NO_HIT: f32 = -1.0;
+
+/// The constants above as WGSL declarations. Floats print in Rust's shortest round-trip form, so
+/// the shader's literal is the same f32.
+pub fn wgsl() -> String {
+    let mut out = String::from("// Generated: the constants shared with the CPU reference (records/constants.rs).\n");
+    for (name, value) in [
+        ("T_FAR", T_FAR),
+        ("MIN_WEIGHT", MIN_WEIGHT),
+        ("DEPTH_MISS", DEPTH_MISS),
+        ("RAY_BIAS", RAY_BIAS),
+        ("PARALLEL_EPSILON", PARALLEL_EPSILON),
+        ("TINY_DIRECTION", TINY_DIRECTION),
+        ("NO_HIT", NO_HIT),
+    ] {
+        writeln!(out, "const {name}: f32 = {};", float_literal(value)).unwrap();
+    }
+    for (name, value) in [("LEAF", LEAF), ("NONE", NONE)] {
+        writeln!(out, "const {name}: u32 = {value:#x}u;").unwrap();
+    }
+    out
+}
+
+/// A WGSL float literal that reads back as exactly `value`.
+pub fn float_literal(value: f32) -> String {
+    let text = format!("{value:?}");
+    if text.contains(['.', 'e']) { text } else { format!("{text}.0") }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn literals_read_back_exactly() {
+        for value in [T_FAR, MIN_WEIGHT, DEPTH_MISS, RAY_BIAS, PARALLEL_EPSILON, TINY_DIRECTION, 3.0, 0.1] {
+            assert_eq!(float_literal(value).parse::<f32>().unwrap(), value);
+        }
+    }
+}

@@ -1,0 +1,261 @@
+//! What crosses to the GPU: the scene as flat records that the fragment shader reads, and that the
+//! CPU reference reads too, so both tracers see the same f32 numbers.
+//!
+//! Every record is `repr(C)` + `Pod`, a multiple of 16 bytes, with its WGSL twin in
+//! `src/gpu/shaders/types.wgsl`; the layout test checks sizes and member offsets against naga's for
+//! every struct in [`LAYOUTS`], the build kernels' parameters among them. Fields named `_pad*` are
+//! padding the WGSL struct gets implicitly.
+
+pub mod constants;
+pub mod packed;
+pub mod texels;
+
+pub use packed::{PackedBvh, PackedScene};
+pub use texels::{GpuRecord, MAX_TEXEL_INTEGER};
+
+use crate::bvh::aabb::Aabb;
+use crate::bvh::layout::GpuNode;
+use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame};
+use crate::scene::Camera;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// The pinhole camera as `camera_ray` reads it: its basis and the image size in pixels. Moving the
+/// camera or resizing the image rewrites this record alone.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCamera {
+    pub eye: [f32; 3],
+    /// tan(fov / 2), fov vertical.
+    pub tan_half_fov: f32,
+    /// normalize(target - eye).
+    pub forward: [f32; 3],
+    /// width / height.
+    pub aspect: f32,
+    /// normalize(cross(forward, up)).
+    pub right: [f32; 3],
+    pub width: f32,
+    /// cross(right, forward): the true up.
+    pub up: [f32; 3],
+    pub height: f32,
+}
+
+impl GpuCamera {
+    /// `camera` looking at a `width` x `height` image.
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        let forward = (camera.target - camera.eye).normalize();
+        let right = forward.cross(camera.up).normalize();
+        let up = right.cross(forward);
+        Self {
+            eye: camera.eye.to_array(),
+            tan_half_fov: (camera.fov_degrees.to_radians() * 0.5).tan(),
+            forward: forward.to_array(),
+            aspect: width as f32 / height as f32,
+            right: right.to_array(),
+            width: width as f32,
+            up: up.to_array(),
+            height: height as f32,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width as u32
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height as u32
+    }
+}
+
+/// What stays fixed while the camera moves: the background, the ambient term and the record counts.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSceneInfo {
+    pub background: [f32; 3],
+    pub ambient: f32,
+    pub sphere_count: u32,
+    pub plane_count: u32,
+    pub light_count: u32,
+    pub material_count: u32,
+    pub triangle_count: u32,
+    pub _pad: [u32; 3],
+}
+
+/// The threaded BVH's quantization frame ([`QuantizationFrame`]) as the shader reads it. A tree
+/// rebuilt on the GPU gets its frame there: the layout kernel writes this record, and the renderer
+/// copies it into the globals.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBvhFrame {
+    /// The root box's minimum corner.
+    pub origin: [f32; 3],
+    pub _pad0: u32,
+    /// The quantum of each axis (a power of two).
+    pub quantum: [f32; 3],
+    pub _pad1: u32,
+    /// Its inverse.
+    pub inverse_quantum: [f32; 3],
+    pub _pad2: u32,
+}
+
+impl GpuBvhFrame {
+    pub fn new(frame: &QuantizationFrame) -> Self {
+        Self {
+            origin: frame.origin.to_array(),
+            quantum: frame.quantum.to_array(),
+            inverse_quantum: frame.inverse_quantum().to_array(),
+            ..Default::default()
+        }
+    }
+
+    pub fn frame(&self) -> QuantizationFrame {
+        QuantizationFrame {
+            origin: Vec3::from_array(self.origin),
+            quantum: Vec3::from_array(self.quantum),
+        }
+    }
+}
+
+/// The fragment shader's uniform: camera, scene constants and BVH frame, each written on its own.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuGlobals {
+    pub camera: GpuCamera,
+    pub scene: GpuSceneInfo,
+    pub bvh_frame: GpuBvhFrame,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSphere {
+    pub center: [f32; 3],
+    pub radius: f32,
+    /// Index into the material records.
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+/// A triangle as Möller–Trumbore reads it: a corner and the two edges leaving it. Primitive
+/// `sphere_count + i` of the BVH is triangle `i`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangle {
+    pub v0: [f32; 3],
+    pub material: u32,
+    /// v1 - v0.
+    pub e1: [f32; 3],
+    /// Index of the triangle's vertex normals in the normal records, or `NONE` to shade flat.
+    pub normals: u32,
+    /// v2 - v0.
+    pub e2: [f32; 3],
+    pub _pad: u32,
+}
+
+impl GpuSphere {
+    pub fn bounds(&self) -> Aabb {
+        Aabb::around_sphere(Vec3::from_array(self.center), self.radius)
+    }
+}
+
+impl GpuTriangle {
+    /// The box around the corners the tracers compute: v0, v0 + e1, v0 + e2 (lbvh.wgsl's
+    /// `primitive_box`, to the bit).
+    pub fn bounds(&self) -> Aabb {
+        let v0 = Vec3::from_array(self.v0);
+        let (v1, v2) = (v0 + Vec3::from_array(self.e1), v0 + Vec3::from_array(self.e2));
+        Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
+    }
+}
+
+/// A smooth triangle's vertex normals, interpolated by barycentric coordinates for shading.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangleNormals {
+    pub n0: [f32; 3],
+    pub _pad0: f32,
+    pub n1: [f32; 3],
+    pub _pad1: f32,
+    pub n2: [f32; 3],
+    pub _pad2: f32,
+}
+
+/// An infinite plane with its checkerboard frame precomputed, so no basis is derived in the shader.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPlane {
+    pub point: [f32; 3],
+    /// Material of the even squares (all of the plane when it has no checker).
+    pub material: u32,
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// Material of the odd squares; equal to `material` when the plane has no checker.
+    pub checker_material: u32,
+    /// First in-plane axis of the squares (unit).
+    pub tangent: [f32; 3],
+    /// Edge length of a square.
+    pub checker_size: f32,
+    /// Second in-plane axis: cross(normal, tangent).
+    pub bitangent: [f32; 3],
+    pub _pad: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    pub position: [f32; 3],
+    pub _pad0: f32,
+    pub color: [f32; 3],
+    pub _pad1: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub color: [f32; 3],
+    pub specular: f32,
+    pub shininess: f32,
+    pub reflect: f32,
+    pub transmit: f32,
+    pub ior: f32,
+}
+
+/// One host struct's layout, for the naga layout test.
+pub struct StructLayout {
+    pub wgsl_name: &'static str,
+    pub size: usize,
+    /// (member name, byte offset), padding excluded.
+    pub members: &'static [(&'static str, usize)],
+}
+
+/// A [`StructLayout`] of `$ty` and its WGSL twin `$wgsl`, from the listed fields.
+#[macro_export]
+macro_rules! struct_layout {
+    ($ty:ty, $wgsl:literal, [$($field:ident),* $(,)?]) => {
+        $crate::records::StructLayout {
+            wgsl_name: $wgsl,
+            size: std::mem::size_of::<$ty>(),
+            members: &[$((stringify!($field), std::mem::offset_of!($ty, $field))),*],
+        }
+    };
+}
+
+/// The fragment shader's records, with the WGSL name of each twin in `types.wgsl`. The compute
+/// kernels' parameters have lists of their own beside their modules.
+#[rustfmt::skip]
+pub const LAYOUTS: &[StructLayout] = &[
+    struct_layout!(GpuGlobals, "Globals", [camera, scene, bvh_frame]),
+    struct_layout!(GpuCamera, "Camera", [eye, tan_half_fov, forward, aspect, right, width, up, height]),
+    struct_layout!(GpuSceneInfo, "SceneInfo", [
+        background, ambient, sphere_count, plane_count, light_count, material_count, triangle_count,
+    ]),
+    struct_layout!(GpuBvhFrame, "BvhFrame", [origin, quantum, inverse_quantum]),
+    struct_layout!(GpuSphere, "Sphere", [center, radius, material]),
+    struct_layout!(GpuTriangle, "Triangle", [v0, material, e1, normals, e2]),
+    struct_layout!(GpuTriangleNormals, "TriangleNormals", [n0, n1, n2]),
+    struct_layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
+    struct_layout!(GpuLight, "Light", [position, color]),
+    struct_layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior]),
+    struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
+    struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
+];
+

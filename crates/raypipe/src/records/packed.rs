@@ -1,0 +1,241 @@
+//! A scene packed into records: what both tracers read.
+
+use super::{
+    GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere, GpuTriangle,
+    GpuTriangleNormals, MAX_TEXEL_INTEGER,
+};
+use crate::bvh::aabb::Aabb;
+use crate::bvh::layout::{GpuNode, NONE};
+use crate::bvh::morton::MortonBits;
+use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
+use crate::bvh::{BuildTimings, Bvh};
+use crate::error::{Element, InputError};
+use crate::scene::{Camera, Scene};
+use glam::Vec3;
+
+/// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
+/// read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackedBvh {
+    /// The build layout, with parent and escape links: the stackless walk's.
+    pub nodes: Vec<GpuNode>,
+    /// Longest root-to-leaf path of `nodes`, in edges: the traversal stack's size.
+    pub depth: u32,
+    /// The same tree depth-first in 16-byte nodes, as the stack and threaded walks read it.
+    pub threaded_nodes: Vec<GpuThreadedNode>,
+    /// The frame the threaded nodes' boxes are quantized in.
+    pub frame: QuantizationFrame,
+}
+
+impl PackedBvh {
+    pub fn new(bvh: Bvh) -> Self {
+        let depth = bvh.max_depth();
+        let (frame, threaded_nodes) = threaded_nodes(&bvh.nodes);
+        Self {
+            nodes: bvh.nodes,
+            depth,
+            threaded_nodes,
+            frame,
+        }
+    }
+
+    pub fn threaded_tree(&self) -> ThreadedTree<'_> {
+        ThreadedTree {
+            nodes: &self.threaded_nodes,
+            frame: self.frame,
+            stack_size: self.depth.max(1),
+        }
+    }
+}
+
+/// The scene as the tracers read it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackedScene {
+    /// The camera at the scene's image size, the scene constants, and the BVH's frame where it has
+    /// one. A renderer starts from these and may move the camera or resize the image.
+    pub globals: GpuGlobals,
+    pub max_depth: u32,
+    pub spheres: Vec<GpuSphere>,
+    pub triangles: Vec<GpuTriangle>,
+    /// The vertex normals of the smooth triangles.
+    pub triangle_normals: Vec<GpuTriangleNormals>,
+    pub planes: Vec<GpuPlane>,
+    pub lights: Vec<GpuLight>,
+    pub materials: Vec<GpuMaterial>,
+    /// The BVH, once [`PackedScene::build_bvh`] or [`PackedScene::set_bvh`] made it.
+    pub bvh: Option<PackedBvh>,
+}
+
+impl PackedScene {
+    /// Packs a validated scene with its render settings.
+    pub fn new(scene: &Scene) -> Result<Self, InputError> {
+        scene.validate()?;
+        for (what, count) in [
+            ("primitives", scene.spheres.len() + scene.triangles.len()),
+            ("planes", scene.planes.len()),
+            ("lights", scene.lights.len()),
+            ("materials", scene.materials.len()),
+        ] {
+            if count >= MAX_TEXEL_INTEGER as usize {
+                return Err(InputError::of(
+                    Element::Scene,
+                    format!("{count} {what} is more than the {MAX_TEXEL_INTEGER} a record index can hold"),
+                ));
+            }
+        }
+        let s = &scene.settings;
+        let globals = GpuGlobals {
+            camera: GpuCamera::new(&scene.camera, s.width, s.height),
+            scene: GpuSceneInfo {
+                background: s.background.to_array(),
+                ambient: s.ambient,
+                sphere_count: scene.spheres.len() as u32,
+                plane_count: scene.planes.len() as u32,
+                light_count: scene.lights.len() as u32,
+                material_count: scene.materials.len() as u32,
+                triangle_count: scene.triangles.len() as u32,
+                _pad: [0; 3],
+            },
+            // Set with the BVH.
+            bvh_frame: GpuBvhFrame::default(),
+        };
+        let spheres = scene
+            .spheres
+            .iter()
+            .map(|s| GpuSphere {
+                center: s.center.to_array(),
+                radius: s.radius,
+                material: s.material,
+                _pad: [0; 3],
+            })
+            .collect();
+        let mut triangle_normals = Vec::new();
+        let triangles = scene
+            .triangles
+            .iter()
+            .map(|t| {
+                let [v0, v1, v2] = t.vertices;
+                let normals = match t.normals {
+                    Some([n0, n1, n2]) => {
+                        triangle_normals.push(GpuTriangleNormals {
+                            n0: n0.to_array(),
+                            n1: n1.to_array(),
+                            n2: n2.to_array(),
+                            ..Default::default()
+                        });
+                        triangle_normals.len() as u32 - 1
+                    }
+                    None => NONE,
+                };
+                GpuTriangle {
+                    v0: v0.to_array(),
+                    material: t.material,
+                    e1: (v1 - v0).to_array(),
+                    normals,
+                    e2: (v2 - v0).to_array(),
+                    _pad: 0,
+                }
+            })
+            .collect();
+        let planes = scene
+            .planes
+            .iter()
+            .map(|p| {
+                // Any axis not parallel to the normal spans the plane with it.
+                let helper = if p.normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+                let tangent = helper.cross(p.normal).normalize();
+                let bitangent = p.normal.cross(tangent);
+                let (checker_material, checker_size) = match p.checker {
+                    Some(checker) => (checker.material, checker.size),
+                    None => (p.material, 1.0),
+                };
+                GpuPlane {
+                    point: p.point.to_array(),
+                    material: p.material,
+                    normal: p.normal.to_array(),
+                    checker_material,
+                    tangent: tangent.to_array(),
+                    checker_size,
+                    bitangent: bitangent.to_array(),
+                    _pad: 0.0,
+                }
+            })
+            .collect();
+        let lights = scene
+            .lights
+            .iter()
+            .map(|l| GpuLight {
+                position: l.position.to_array(),
+                _pad0: 0.0,
+                color: l.color.to_array(),
+                _pad1: 0.0,
+            })
+            .collect();
+        let materials = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                color: m.color.to_array(),
+                specular: m.specular,
+                shininess: m.shininess,
+                reflect: m.reflect,
+                transmit: m.transmit,
+                ior: m.ior,
+            })
+            .collect();
+        Ok(Self {
+            globals,
+            max_depth: s.max_depth,
+            spheres,
+            triangles,
+            triangle_normals,
+            planes,
+            lights,
+            materials,
+            bvh: None,
+        })
+    }
+
+    /// Spheres and triangles: the primitives the BVH is built over, in its index order.
+    pub fn primitive_count(&self) -> usize {
+        self.spheres.len() + self.triangles.len()
+    }
+
+    /// The primitives' bounding boxes, spheres first.
+    pub fn primitive_boxes(&self) -> Vec<Aabb> {
+        let spheres = self.spheres.iter().map(GpuSphere::bounds);
+        spheres.chain(self.triangles.iter().map(GpuTriangle::bounds)).collect()
+    }
+
+    /// Builds the linear BVH over the primitives on the CPU.
+    pub fn build_bvh(&mut self, bits: MortonBits) -> BuildTimings {
+        let (bvh, timings) = Bvh::build_lbvh(&self.primitive_boxes(), bits);
+        self.set_bvh(bvh);
+        timings
+    }
+
+    /// Attaches a BVH over this scene's primitives (in their order).
+    pub fn set_bvh(&mut self, bvh: Bvh) {
+        assert_eq!(
+            bvh.primitive_count,
+            self.primitive_count(),
+            "a BVH over another scene's primitives"
+        );
+        let bvh = PackedBvh::new(bvh);
+        self.globals.bvh_frame = GpuBvhFrame::new(&bvh.frame);
+        self.bvh = Some(bvh);
+    }
+
+    /// Points the camera at a `width` x `height` image.
+    pub fn set_camera(&mut self, camera: &Camera, width: u32, height: u32) {
+        self.globals.camera = GpuCamera::new(camera, width, height);
+    }
+
+    pub fn width(&self) -> u32 {
+        self.globals.camera.width()
+    }
+
+    pub fn height(&self) -> u32 {
+        self.globals.camera.height()
+    }
+}

@@ -1,0 +1,370 @@
+//! Scene files in TOML (format: `docs/scene-format.md`).
+//!
+//! Every table denies unknown keys, and every error names the file and, where the element has one,
+//! its line: `scene.toml:12: sphere 3: radius must be positive and finite (got -1)`.
+
+use super::model::{MeshAs, Placement, SphereCount, add_mesh};
+use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere};
+use crate::error::{Element, InputError};
+use glam::Vec3;
+use serde::Deserialize;
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+use toml::Spanned;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneDef {
+    camera: Option<CameraDef>,
+    render: Option<RenderDef>,
+    #[serde(default)]
+    light: Vec<Spanned<LightDef>>,
+    #[serde(default)]
+    material: BTreeMap<String, Spanned<MaterialDef>>,
+    #[serde(default)]
+    sphere: Vec<Spanned<SphereDef>>,
+    #[serde(default)]
+    plane: Vec<Spanned<PlaneDef>>,
+    #[serde(default)]
+    mesh: Vec<Spanned<MeshDef>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDef {
+    eye: [f32; 3],
+    target: [f32; 3],
+    up: Option<[f32; 3]>,
+    fov: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderDef {
+    width: Option<u32>,
+    height: Option<u32>,
+    max_depth: Option<u32>,
+    background: Option<[f32; 3]>,
+    ambient: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightDef {
+    position: [f32; 3],
+    color: Option<[f32; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialDef {
+    color: Option<[f32; 3]>,
+    specular: Option<f32>,
+    shininess: Option<f32>,
+    reflect: Option<f32>,
+    transmit: Option<f32>,
+    ior: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SphereDef {
+    center: [f32; 3],
+    radius: f32,
+    material: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlaneDef {
+    point: [f32; 3],
+    normal: [f32; 3],
+    material: Option<String>,
+    checker_material: Option<String>,
+    checker_size: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshDef {
+    /// Relative to the scene file.
+    file: String,
+    #[serde(rename = "as")]
+    as_: Option<String>,
+    spheres: Option<SpheresDef>,
+    radius: Option<f32>,
+    rotate: Option<[f32; 3]>,
+    normalize: Option<bool>,
+    scale: Option<f32>,
+    translate: Option<[f32; 3]>,
+    seed: Option<u64>,
+    material: Option<String>,
+}
+
+/// `spheres = 20000` or `spheres = "vertices"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum SpheresDef {
+    Count(i64),
+    Word(String),
+}
+
+/// The name elements get when they leave `material` out; a file may define it to change it.
+const DEFAULT_MATERIAL: &str = "default";
+
+/// Reads and parses a scene file; every error is one line that starts with the path.
+pub fn load(path: &Path) -> Result<Scene, InputError> {
+    let shown = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::new(format!("cannot read scene file: {e}")).in_origin(&shown))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    parse_in(&text, base).map_err(|e| e.in_origin(shown))
+}
+
+/// Parses scene TOML whose mesh files are relative to the working directory.
+pub fn parse(text: &str) -> Result<Scene, InputError> {
+    parse_in(text, Path::new("."))
+}
+
+/// Parses scene TOML whose mesh files are relative to `base`. Errors carry the line and element, not
+/// the file, which the caller names.
+pub fn parse_in(text: &str, base: &Path) -> Result<Scene, InputError> {
+    let def: SceneDef = toml::from_str(text).map_err(|e| {
+        let line = e.span().map(|s| line_of(text, s.start));
+        at_line(line, e.message().trim())
+    })?;
+    build(def, text, base)
+}
+
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+fn at_line(line: Option<usize>, message: impl std::fmt::Display) -> InputError {
+    InputError::new(message.to_string()).with_line(line)
+}
+
+fn at_element(line: Option<usize>, element: Element, message: impl std::fmt::Display) -> InputError {
+    InputError::of(element, message.to_string()).with_line(line)
+}
+
+fn vec3(a: [f32; 3]) -> Vec3 {
+    Vec3::from_array(a)
+}
+
+fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
+    let line = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
+    let mut scene = Scene::default();
+
+    if let Some(c) = def.camera {
+        scene.camera = Camera {
+            eye: vec3(c.eye),
+            target: vec3(c.target),
+            up: c.up.map_or(Vec3::Y, vec3),
+            fov_degrees: c.fov.unwrap_or(40.0),
+        };
+    }
+    if let Some(r) = def.render {
+        let d = RenderSettings::default();
+        scene.settings = RenderSettings {
+            width: r.width.unwrap_or(d.width),
+            height: r.height.unwrap_or(d.height),
+            max_depth: r.max_depth.unwrap_or(d.max_depth),
+            background: r.background.map_or(d.background, vec3),
+            ambient: r.ambient.unwrap_or(d.ambient),
+        };
+    }
+
+    for l in &def.light {
+        scene.lights.push(Light {
+            position: vec3(l.get_ref().position),
+            color: l.get_ref().color.map_or(Vec3::ONE, vec3),
+        });
+    }
+
+    let mut material_index: HashMap<&str, u32> = HashMap::new();
+    let mut material_lines = Vec::new();
+    for (name, m) in &def.material {
+        let d = Material::default();
+        let r = m.get_ref();
+        material_index.insert(name.as_str(), scene.materials.len() as u32);
+        material_lines.push((name.as_str(), line(m.span())));
+        scene.materials.push(Material {
+            color: r.color.map_or(d.color, vec3),
+            specular: r.specular.unwrap_or(d.specular),
+            shininess: r.shininess.unwrap_or(d.shininess),
+            reflect: r.reflect.unwrap_or(d.reflect),
+            transmit: r.transmit.unwrap_or(d.transmit),
+            ior: r.ior.unwrap_or(d.ior),
+        });
+    }
+    // Resolves a material name; an element without one gets the default material, added on first use.
+    let mut resolve = |name: &Option<String>, element: &Element, at: Option<usize>| -> Result<u32, InputError> {
+        let name = name.as_deref().unwrap_or(DEFAULT_MATERIAL);
+        if let Some(&index) = material_index.get(name) {
+            return Ok(index);
+        }
+        if name == DEFAULT_MATERIAL {
+            let index = scene.materials.len() as u32;
+            scene.materials.push(Material::default());
+            material_index.insert(DEFAULT_MATERIAL, index);
+            return Ok(index);
+        }
+        Err(at_element(at, element.clone(), format!("unknown material '{name}'")))
+    };
+
+    let mut sphere_lines = Vec::new();
+    for (i, s) in def.sphere.iter().enumerate() {
+        let at = line(s.span());
+        let r = s.get_ref();
+        let material = resolve(&r.material, &Element::Sphere(i), at)?;
+        sphere_lines.push(at);
+        scene.spheres.push(Sphere {
+            center: vec3(r.center),
+            radius: r.radius,
+            material,
+        });
+    }
+    let mut plane_lines = Vec::new();
+    for (i, p) in def.plane.iter().enumerate() {
+        let at = line(p.span());
+        let r = p.get_ref();
+        let element = Element::Plane(i);
+        let material = resolve(&r.material, &element, at)?;
+        let checker = match (&r.checker_material, r.checker_size) {
+            (None, None) => None,
+            (Some(_), _) => Some(Checker {
+                material: resolve(&r.checker_material, &element, at)?,
+                size: r.checker_size.unwrap_or(1.0),
+            }),
+            (None, Some(_)) => {
+                return Err(at_element(at, element, "checker_size needs checker_material"));
+            }
+        };
+        let normal = vec3(r.normal);
+        if normal.length_squared() == 0.0 || !normal.is_finite() {
+            return Err(at_element(at, element, "normal must be finite and not zero"));
+        }
+        plane_lines.push(at);
+        scene.planes.push(Plane {
+            point: vec3(r.point),
+            normal: normal.normalize(),
+            material,
+            checker,
+        });
+    }
+
+    let mut placements = Vec::new();
+    for (i, m) in def.mesh.iter().enumerate() {
+        let at = line(m.span());
+        let element = Element::Mesh(i);
+        placements.push((placement(m.get_ref(), &mut resolve, &element, at)?, element, at));
+    }
+    for (m, (placement, element, at)) in def.mesh.iter().zip(placements) {
+        let path = base.join(&m.get_ref().file);
+        let mesh = crate::mesh::load(&path).map_err(|e| e.nested_in(None, at, element.clone()))?;
+        add_mesh(&mut scene, mesh, &placement).map_err(|e| e.with_element(element).with_line(at))?;
+    }
+
+    // Semantic checks run on the finished scene; the element they name has its line here.
+    scene.validate().map_err(|e| {
+        let at = match &e.element {
+            Some(Element::Sphere(i)) => sphere_lines.get(*i).copied().flatten(),
+            Some(Element::Plane(i)) => plane_lines.get(*i).copied().flatten(),
+            Some(Element::Light(i)) => def.light.get(*i).and_then(|l| line(l.span())),
+            Some(Element::Material(i)) => material_lines.get(*i).and_then(|(_, l)| *l),
+            _ => None,
+        };
+        let element = match &e.element {
+            Some(Element::Material(i)) => material_lines
+                .get(*i)
+                .map(|(name, _)| Element::NamedMaterial(name.to_string())),
+            other => other.clone(),
+        };
+        InputError { element, ..e }.with_line(at)
+    })?;
+    Ok(scene)
+}
+
+/// A mesh table's placement, its material resolved.
+fn placement(
+    def: &MeshDef,
+    resolve: &mut impl FnMut(&Option<String>, &Element, Option<usize>) -> Result<u32, InputError>,
+    element: &Element,
+    at: Option<usize>,
+) -> Result<Placement, InputError> {
+    let fail = |message: String| at_element(at, element.clone(), message);
+    let as_ = match def.as_.as_deref() {
+        None | Some("triangles") => MeshAs::Triangles,
+        Some("spheres") => MeshAs::Spheres,
+        Some(other) => {
+            return Err(fail(format!(
+                "as must be \"triangles\" or \"spheres\" (got \"{other}\")"
+            )));
+        }
+    };
+    let spheres = match &def.spheres {
+        None => SphereCount::Vertices,
+        Some(_) if as_ == MeshAs::Triangles => {
+            return Err(fail("spheres applies to as = \"spheres\"".into()));
+        }
+        Some(SpheresDef::Count(n)) if *n >= 1 => SphereCount::Sampled(*n as usize),
+        Some(SpheresDef::Count(n)) => return Err(fail(format!("spheres must be at least 1 (got {n})"))),
+        Some(SpheresDef::Word(word)) if word == "vertices" => SphereCount::Vertices,
+        Some(SpheresDef::Word(word)) => {
+            return Err(fail(format!(
+                "spheres must be a count or \"vertices\" (got \"{word}\")"
+            )));
+        }
+    };
+    let placement = Placement {
+        as_,
+        spheres,
+        radius: def.radius,
+        rotate: def.rotate.map_or(Vec3::ZERO, vec3),
+        normalize: def.normalize.unwrap_or(true),
+        scale: def.scale.unwrap_or(1.0),
+        translate: def.translate.map_or(Vec3::ZERO, vec3),
+        seed: def.seed.unwrap_or(0),
+        material: resolve(&def.material, element, at)?,
+    };
+    placement
+        .validate()
+        .map_err(|e| e.with_element(element.clone()).with_line(at))?;
+    Ok(placement)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse;
+
+    #[test]
+    fn minimal_scene_parses_with_defaults() {
+        let scene = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\n").unwrap();
+        assert_eq!(scene.spheres.len(), 1);
+        assert_eq!(scene.materials.len(), 1, "the default material is added on use");
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let text = "[camera]\neye = [0, 0, -5]\ntarget = [0, 0, 0]\n\n[[sphere]]\ncenter = [0, 0, 0]\nradius = -1.0\n";
+        let err = parse(text).unwrap_err();
+        assert!(err.starts_with("5: sphere 0: radius"), "{err}");
+
+        let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\nradus = 2.0\n").unwrap_err();
+        assert!(err.starts_with("4: unknown field `radus`"), "{err}");
+
+        let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\nmaterial = \"gold\"\n").unwrap_err();
+        assert!(err.contains("unknown material 'gold'"), "{err}");
+
+        let err = parse("[camera\n").unwrap_err();
+        assert!(err.starts_with("1: "), "{err}");
+        assert!(!err.contains('\n'));
+    }
+
+    #[test]
+    fn nan_radius_is_rejected() {
+        let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = nan\n").unwrap_err();
+        assert!(err.contains("radius must be positive and finite"), "{err}");
+    }
+}

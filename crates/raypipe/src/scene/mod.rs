@@ -1,0 +1,385 @@
+//! Scenes: what is rendered, independent of how it reaches a tracer.
+//!
+//! A [`Scene`] comes from a TOML file ([`file`]) or a built-in generator ([`builtin`]); [`load`] picks
+//! between them. `records::PackedScene` turns it into the flat records that the GPU shader and the CPU
+//! reference read.
+
+pub mod builtin;
+pub mod file;
+pub mod model;
+
+use crate::error::{Element, InputError};
+use glam::Vec3;
+use std::path::Path;
+
+/// A pinhole camera. The ray convention is documented in `docs/scene-format.md` and implemented in
+/// `records::GpuCamera` (basis) and `camera_ray` (per pixel), identically on CPU and GPU.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_degrees: f32,
+}
+
+/// Render settings a scene may carry; command-line flags override them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Maximum number of bounces (reflection or refraction) after the primary ray.
+    pub max_depth: u32,
+    pub background: Vec3,
+    /// Ambient light intensity, multiplied by a surface's diffuse colour.
+    pub ambient: f32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 480,
+            max_depth: 5,
+            background: Vec3::new(0.05, 0.05, 0.1),
+            ambient: 0.1,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub position: Vec3,
+    pub color: Vec3,
+}
+
+/// A Whitted material: Phong local shading plus mirror reflection and Fresnel-weighted refraction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Diffuse albedo.
+    pub color: Vec3,
+    /// Weight of the Phong highlight.
+    pub specular: f32,
+    pub shininess: f32,
+    /// Mirror reflectance, 0..1.
+    pub reflect: f32,
+    /// Transmittance, 0..1; split between reflection and refraction by Schlick's Fresnel term.
+    pub transmit: f32,
+    /// Index of refraction of the inside of the surface (the outside is vacuum, 1.0).
+    pub ior: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            color: Vec3::splat(0.8),
+            specular: 0.0,
+            shininess: 32.0,
+            reflect: 0.0,
+            transmit: 0.0,
+            ior: 1.5,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    pub center: Vec3,
+    pub radius: f32,
+    pub material: u32,
+}
+
+/// A triangle, counter-clockwise seen from its outside (the side its geometric normal points to).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub vertices: [Vec3; 3],
+    /// Vertex normals to interpolate for shading; `None` shades with the geometric normal.
+    pub normals: Option<[Vec3; 3]>,
+    pub material: u32,
+}
+
+/// An infinite plane, optionally a checkerboard of two materials.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    pub point: Vec3,
+    /// Unit normal.
+    pub normal: Vec3,
+    pub material: u32,
+    pub checker: Option<Checker>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Checker {
+    /// The material of the odd squares.
+    pub material: u32,
+    /// Edge length of a square.
+    pub size: f32,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scene {
+    pub camera: Camera,
+    pub settings: RenderSettings,
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    pub spheres: Vec<Sphere>,
+    pub triangles: Vec<Triangle>,
+    pub planes: Vec<Plane>,
+    /// How the spheres move from frame to frame; `None` for a still scene.
+    pub motion: Option<Motion>,
+}
+
+/// Spheres that fly at constant velocities and bounce off the walls of a box.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    /// One per sphere, in units per second.
+    pub velocities: Vec<Vec3>,
+    /// The box the spheres' centres stay in.
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Seconds per frame.
+    pub frame_time: f32,
+}
+
+impl Scene {
+    /// The scene at frame `frame` (frame 0 is the scene as loaded).
+    pub fn at_frame(&self, frame: u32) -> Scene {
+        let mut scene = self.clone();
+        if let Some(motion) = &self.motion {
+            let t = frame as f32 * motion.frame_time;
+            let span = motion.hi - motion.lo;
+            for (sphere, v) in scene.spheres.iter_mut().zip(&motion.velocities) {
+                // Position on a triangle wave: moving on, reflected at each wall.
+                let travelled = (sphere.center - motion.lo + *v * t).rem_euclid(2.0 * span);
+                let folded = Vec3::select(travelled.cmpgt(span), 2.0 * span - travelled, travelled);
+                sphere.center = motion.lo + folded;
+            }
+        }
+        scene
+    }
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self {
+            eye: Vec3::new(0.0, 1.0, -6.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_degrees: 40.0,
+        }
+    }
+}
+
+fn finite_vec(v: Vec3) -> bool {
+    v.is_finite()
+}
+
+/// The farthest a primitive may reach from the origin: beyond it, box extents (and the threaded
+/// BVH's quantization frame) could overflow f32.
+pub const MAX_COORDINATE: f32 = 1e30;
+
+fn within_reach(v: Vec3) -> bool {
+    v.abs().max_element() <= MAX_COORDINATE
+}
+
+impl Scene {
+    /// Loads a scene by built-in name (`whitted`, `random:100:7`, ...), from a TOML file, or from a
+    /// model file (`.ply`, `.obj`, `.off`) with a camera that frames it.
+    pub fn load(spec: &str) -> Result<Scene, InputError> {
+        Self::load_with(spec, &model::ModelOptions::default())
+    }
+
+    /// [`Scene::load`], with the options that apply to a model file; `options` must be the default
+    /// for anything else.
+    pub fn load_with(spec: &str, options: &model::ModelOptions) -> Result<Scene, InputError> {
+        let path = Path::new(spec);
+        if crate::mesh::is_model_path(path) {
+            return model::model_scene(path, options);
+        }
+        if !options.is_default() {
+            return Err(InputError::new(format!(
+                "placement, sphere count and rotation apply to model files ({}) only",
+                crate::mesh::MeshFormat::extension_list()
+            ))
+            .in_origin(spec));
+        }
+        if let Some(scene) = builtin::by_name(spec)? {
+            return Ok(scene);
+        }
+        match path.extension() {
+            Some(ext) if ext == "toml" => return file::load(path),
+            None if path.exists() => return file::load(path),
+            Some(_) if path.exists() => {
+                return Err(InputError::new(format!(
+                    "unknown model format (expected a .toml scene, or a model ending in {})",
+                    crate::mesh::MeshFormat::extension_list()
+                ))
+                .in_origin(spec));
+            }
+            _ => {}
+        }
+        Err(InputError::new(format!(
+            "unknown scene '{spec}': not a file, and not a built-in ({})",
+            builtin::NAMES.join(", ")
+        )))
+    }
+
+    /// Checks every invariant the tracers rely on: finite numbers, positive radii, unit-length normals
+    /// that exist, material indices in range, a camera that can see.
+    pub fn validate(&self) -> Result<(), InputError> {
+        let c = &self.camera;
+        if !(finite_vec(c.eye) && finite_vec(c.target) && finite_vec(c.up)) {
+            return Err(InputError::of(Element::Camera, "eye, target and up must be finite"));
+        }
+        let forward = c.target - c.eye;
+        if forward.length_squared() == 0.0 {
+            return Err(InputError::of(Element::Camera, "eye and target must differ"));
+        }
+        if forward.normalize().cross(c.up).length_squared() < 1e-12 {
+            return Err(InputError::of(
+                Element::Camera,
+                "up must not be parallel to the view direction",
+            ));
+        }
+        if !(c.fov_degrees > 0.0 && c.fov_degrees < 180.0) {
+            return Err(InputError::of(
+                Element::Camera,
+                format!("fov must be in (0, 180) degrees (got {})", c.fov_degrees),
+            ));
+        }
+        self.settings.validate()?;
+        for (i, light) in self.lights.iter().enumerate() {
+            if !(finite_vec(light.position) && finite_vec(light.color)) {
+                return Err(InputError::of(
+                    Element::Light(i),
+                    "position and color must be finite",
+                ));
+            }
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            validate_material(m).map_err(|msg| InputError::of(Element::Material(i), msg))?;
+        }
+        let material_count = self.materials.len() as u32;
+        let check_material = |element: &dyn Fn() -> Element, index: u32| {
+            if index >= material_count {
+                Err(InputError::of(
+                    element(),
+                    format!("material index {index} out of range ({material_count} materials)"),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        for (i, s) in self.spheres.iter().enumerate() {
+            let element = || Element::Sphere(i);
+            if !finite_vec(s.center) {
+                return Err(InputError::of(element(), "center must be finite"));
+            }
+            if !(s.radius > 0.0 && s.radius.is_finite()) {
+                return Err(InputError::of(
+                    element(),
+                    format!("radius must be positive and finite (got {})", s.radius),
+                ));
+            }
+            if !within_reach(s.center.abs() + s.radius) {
+                return Err(InputError::of(
+                    element(),
+                    format!("must lie within {MAX_COORDINATE:e} of the origin"),
+                ));
+            }
+            check_material(&element, s.material)?;
+        }
+        for (i, t) in self.triangles.iter().enumerate() {
+            let element = || Element::Triangle(i);
+            if !t.vertices.iter().all(|v| v.is_finite()) {
+                return Err(InputError::of(element(), "vertices must be finite"));
+            }
+            if !t.vertices.iter().all(|&v| within_reach(v)) {
+                return Err(InputError::of(
+                    element(),
+                    format!("must lie within {MAX_COORDINATE:e} of the origin"),
+                ));
+            }
+            if let Some(normals) = t.normals
+                && !normals.iter().all(|n| n.is_finite())
+            {
+                return Err(InputError::of(element(), "normals must be finite"));
+            }
+            check_material(&element, t.material)?;
+        }
+        for (i, p) in self.planes.iter().enumerate() {
+            let element = || Element::Plane(i);
+            if !(finite_vec(p.point) && finite_vec(p.normal)) {
+                return Err(InputError::of(element(), "point and normal must be finite"));
+            }
+            if (p.normal.length() - 1.0).abs() > 1e-4 {
+                return Err(InputError::of(element(), "normal must have unit length"));
+            }
+            check_material(&element, p.material)?;
+            if let Some(checker) = p.checker {
+                check_material(&element, checker.material)?;
+                if !(checker.size > 0.0 && checker.size.is_finite()) {
+                    return Err(InputError::of(
+                        element(),
+                        format!("checker size must be positive and finite (got {})", checker.size),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The largest image side we accept; far beyond any adapter's texture limit is a typo, not a request.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// The deepest bounce count we accept; the shader keeps a ray stack of this many entries plus one.
+pub const MAX_DEPTH_LIMIT: u32 = 32;
+
+impl RenderSettings {
+    pub fn validate(&self) -> Result<(), InputError> {
+        for (name, value) in [("width", self.width), ("height", self.height)] {
+            if value == 0 || value > MAX_IMAGE_SIDE {
+                return Err(InputError::of(
+                    Element::Render,
+                    format!("{name} must be in 1..={MAX_IMAGE_SIDE} (got {value})"),
+                ));
+            }
+        }
+        if self.max_depth > MAX_DEPTH_LIMIT {
+            return Err(InputError::of(
+                Element::Render,
+                format!("max_depth must be at most {MAX_DEPTH_LIMIT} (got {})", self.max_depth),
+            ));
+        }
+        if !finite_vec(self.background) {
+            return Err(InputError::of(Element::Render, "background must be finite"));
+        }
+        if !(self.ambient.is_finite() && self.ambient >= 0.0) {
+            return Err(InputError::of(Element::Render, "ambient must be finite and not negative"));
+        }
+        Ok(())
+    }
+}
+
+fn validate_material(m: &Material) -> Result<(), String> {
+    if !finite_vec(m.color) {
+        return Err("color must be finite".into());
+    }
+    for (name, value) in [
+        ("specular", m.specular),
+        ("shininess", m.shininess),
+        ("reflect", m.reflect),
+        ("transmit", m.transmit),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(format!("{name} must be finite and not negative (got {value})"));
+        }
+    }
+    if m.reflect > 1.0 || m.transmit > 1.0 {
+        return Err("reflect and transmit must be at most 1".into());
+    }
+    if !(m.ior.is_finite() && m.ior > 0.0) {
+        return Err(format!("ior must be positive and finite (got {})", m.ior));
+    }
+    Ok(())
+}

@@ -1,0 +1,308 @@
+//! Meshes in scenes: a model placed (normalized, scaled, moved) and added as triangles or as spheres
+//! on its surface; and the scene `raypipe render MODEL` gets, which frames one model.
+
+use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, Triangle};
+use crate::bvh::aabb::Aabb;
+use crate::mesh::{self, Mesh};
+use crate::error::InputError;
+use glam::Vec3;
+use std::path::Path;
+
+/// What a mesh becomes in a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MeshAs {
+    /// Its triangles, as primitives of the BVH.
+    #[default]
+    Triangles,
+    /// Spheres placed on its surface, as in the paper's figures.
+    Spheres,
+}
+
+crate::impl_choice!(MeshAs, [
+    (Triangles, "triangles", "its triangles, as primitives of the BVH"),
+    (Spheres, "spheres", "spheres placed on its surface, as in the paper's figures"),
+]);
+
+/// How many spheres a mesh becomes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SphereCount {
+    /// This many, by area-weighted sampling of the surface.
+    Sampled(usize),
+    /// One on every vertex.
+    Vertices,
+}
+
+/// Where and how a mesh enters a scene (the `[[mesh]]` table of a scene file).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Placement {
+    pub as_: MeshAs,
+    pub spheres: SphereCount,
+    /// Sphere radius; by default [`Mesh::default_sphere_radius`] of the placed mesh.
+    pub radius: Option<f32>,
+    /// Euler angles in degrees (about x, then y, then z), applied first, about the model's origin.
+    pub rotate: Vec3,
+    /// Centre the bounding box at the origin, longest side 2, before `scale` and `translate`.
+    pub normalize: bool,
+    pub scale: f32,
+    pub translate: Vec3,
+    /// Seed of the surface sampling.
+    pub seed: u64,
+    pub material: u32,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Self {
+            as_: MeshAs::Triangles,
+            spheres: SphereCount::Vertices,
+            radius: None,
+            rotate: Vec3::ZERO,
+            normalize: true,
+            scale: 1.0,
+            translate: Vec3::ZERO,
+            seed: 0,
+            material: 0,
+        }
+    }
+}
+
+impl Placement {
+    pub fn validate(&self) -> Result<(), InputError> {
+        let fail = |message: String| Err(InputError::new(message));
+        if !(self.scale > 0.0 && self.scale.is_finite()) {
+            return fail(format!("scale must be positive and finite (got {})", self.scale));
+        }
+        if !self.translate.is_finite() {
+            return fail("translate must be finite".into());
+        }
+        if !self.rotate.is_finite() {
+            return fail("rotate must be finite".into());
+        }
+        if self.spheres == SphereCount::Sampled(0) {
+            return fail("spheres must be at least 1".into());
+        }
+        if let Some(radius) = self.radius
+            && !(radius > 0.0 && radius.is_finite())
+        {
+            return fail(format!("radius must be positive and finite (got {radius})"));
+        }
+        Ok(())
+    }
+}
+
+/// Places `mesh` and adds it to `scene`: its triangles, or spheres on its surface.
+pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Result<(), InputError> {
+    placement.validate()?;
+    if placement.rotate != Vec3::ZERO {
+        mesh.rotate(placement.rotate);
+    }
+    if placement.normalize {
+        mesh.normalize();
+    }
+    mesh.transform(placement.scale, placement.translate);
+    let material = placement.material;
+    match placement.as_ {
+        MeshAs::Triangles => {
+            scene.triangles.reserve(mesh.triangles.len());
+            for &t in &mesh.triangles {
+                scene.triangles.push(Triangle {
+                    vertices: mesh.corners(t),
+                    normals: mesh.normals.as_ref().map(|n| t.map(|i| n[i as usize])),
+                    material,
+                });
+            }
+        }
+        MeshAs::Spheres => {
+            let centers = match placement.spheres {
+                SphereCount::Sampled(count) => mesh.sample_surface(count, placement.seed),
+                SphereCount::Vertices => mesh.positions.clone(),
+            };
+            let radius = placement
+                .radius
+                .unwrap_or_else(|| mesh.default_sphere_radius(centers.len()));
+            if !(radius > 0.0 && radius.is_finite()) {
+                return Err(InputError::new("the mesh has no area to size spheres by: give a radius"));
+            }
+            scene.spheres.extend(centers.into_iter().map(|center| Sphere {
+                center,
+                radius,
+                material,
+            }));
+        }
+    }
+    Ok(())
+}
+
+/// What a caller says of a model file it renders alone: triangles or spheres, how many spheres, a
+/// rotation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ModelOptions {
+    pub as_: Option<MeshAs>,
+    pub spheres: Option<usize>,
+    /// Euler angles in degrees, as [`Placement::rotate`].
+    pub rotate: Option<Vec3>,
+}
+
+impl ModelOptions {
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    fn placement(&self) -> Result<Placement, InputError> {
+        let as_ = match (self.as_, self.spheres) {
+            (Some(MeshAs::Triangles), Some(_)) => {
+                return Err(InputError::new("a sphere count needs the model placed as spheres"));
+            }
+            (Some(as_), _) => as_,
+            (None, Some(_)) => MeshAs::Spheres,
+            (None, None) => MeshAs::Triangles,
+        };
+        Ok(Placement {
+            as_,
+            spheres: self.spheres.map_or(SphereCount::Vertices, SphereCount::Sampled),
+            rotate: self.rotate.unwrap_or(Vec3::ZERO),
+            ..Placement::default()
+        })
+    }
+}
+
+/// The scene for `raypipe render MODEL`: the model normalized (longest side 2, centred), clay on a
+/// checkered floor that touches it, two lights, and a camera that frames its bounding sphere.
+pub fn model_scene(path: &Path, options: &ModelOptions) -> Result<Scene, InputError> {
+    let shown = path.display().to_string();
+    let placement = options.placement().map_err(|e| e.in_origin(&shown))?;
+    let mesh = mesh::load(path)?;
+    let mut scene = Scene {
+        settings: RenderSettings::default(),
+        materials: vec![
+            Material {
+                color: Vec3::new(0.85, 0.6, 0.45),
+                specular: 0.25,
+                shininess: 40.0,
+                ..Material::default()
+            },
+            Material {
+                color: Vec3::splat(0.85),
+                ..Material::default()
+            },
+            Material {
+                color: Vec3::splat(0.35),
+                ..Material::default()
+            },
+        ],
+        ..Scene::default()
+    };
+    add_mesh(&mut scene, mesh, &placement).map_err(|e| e.in_origin(&shown))?;
+    let bounds = scene_bounds(&scene);
+    let center = bounds.centroid();
+    let radius = ((bounds.max - bounds.min) * 0.5).length();
+    let fov: f32 = 35.0;
+    // About the distance where the bounding sphere fills the vertical field of view; a bit nearer,
+    // since the bounding box's corners are seldom filled.
+    let distance = 0.85 * radius / (fov.to_radians() * 0.5).sin();
+    let view = Vec3::new(0.0, 0.3, 1.0).normalize();
+    scene.camera = Camera {
+        eye: center + view * distance,
+        target: center,
+        up: Vec3::Y,
+        fov_degrees: fov,
+    };
+    scene.lights = vec![
+        Light {
+            position: center + Vec3::new(3.0, 5.0, 4.0) * radius,
+            color: Vec3::splat(0.8),
+        },
+        Light {
+            position: center + Vec3::new(-4.0, 2.0, 1.0) * radius,
+            color: Vec3::splat(0.3),
+        },
+    ];
+    scene.planes.push(Plane {
+        point: Vec3::new(0.0, bounds.min.y, 0.0),
+        normal: Vec3::Y,
+        material: 1,
+        checker: Some(Checker {
+            material: 2,
+            size: radius * 0.25,
+        }),
+    });
+    scene.validate().map_err(|e| e.in_origin(shown))?;
+    Ok(scene)
+}
+
+/// The box around the scene's spheres and triangles.
+fn scene_bounds(scene: &Scene) -> Aabb {
+    let points = scene
+        .spheres
+        .iter()
+        .flat_map(|s| [s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)])
+        .chain(scene.triangles.iter().flat_map(|t| t.vertices));
+    Aabb::around_points(points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetrahedron() -> Mesh {
+        Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X * 4.0, Vec3::Y * 4.0, Vec3::Z * 4.0],
+            normals: None,
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        }
+    }
+
+    #[test]
+    fn triangles_are_placed_after_normalizing() {
+        let mut scene = Scene::default();
+        let placement = Placement {
+            scale: 0.5,
+            translate: Vec3::new(10.0, 0.0, 0.0),
+            ..Placement::default()
+        };
+        add_mesh(&mut scene, tetrahedron(), &placement).unwrap();
+        assert_eq!(scene.triangles.len(), 4);
+        let bounds = scene_bounds(&scene);
+        assert_eq!(bounds.min, Vec3::new(9.5, -0.5, -0.5));
+        assert_eq!(bounds.max, Vec3::new(10.5, 0.5, 0.5));
+    }
+
+    #[test]
+    fn spheres_sample_the_surface_or_sit_on_vertices() {
+        let mut scene = Scene::default();
+        let sampled = Placement {
+            as_: MeshAs::Spheres,
+            spheres: SphereCount::Sampled(500),
+            ..Placement::default()
+        };
+        add_mesh(&mut scene, tetrahedron(), &sampled).unwrap();
+        assert_eq!(scene.spheres.len(), 500);
+        let radius = scene.spheres[0].radius;
+        assert!(radius > 0.0 && scene.spheres.iter().all(|s| s.radius == radius));
+
+        let mut scene = Scene::default();
+        let on_vertices = Placement {
+            as_: MeshAs::Spheres,
+            radius: Some(0.1),
+            ..Placement::default()
+        };
+        add_mesh(&mut scene, tetrahedron(), &on_vertices).unwrap();
+        assert_eq!(scene.spheres.len(), 4);
+        assert_eq!(scene.spheres[0].radius, 0.1);
+    }
+
+    #[test]
+    fn bad_placements_are_refused() {
+        let zero = Placement {
+            as_: MeshAs::Spheres,
+            spheres: SphereCount::Sampled(0),
+            ..Placement::default()
+        };
+        assert_eq!(zero.validate().unwrap_err(), "spheres must be at least 1");
+        let negative = Placement {
+            scale: -1.0,
+            ..Placement::default()
+        };
+        assert!(negative.validate().unwrap_err().starts_with("scale must be positive"));
+    }
+}

@@ -1,0 +1,196 @@
+//! The LBVH built in compute passes against the CPU build: bit-identical node arrays from the same
+//! Morton codes, 30-bit and 63-bit, and a valid tree from the GPU's own codes.
+
+mod common;
+use common::gpu;
+use raypipe::bvh::aabb::Aabb;
+use raypipe::bvh::layout::GpuNode;
+use raypipe::bvh::morton::MortonBits;
+use raypipe::bvh::threaded::threaded_nodes;
+use raypipe::bvh::{Bvh, centroid_codes};
+use raypipe::gpu::build::GpuLbvhBuilder;
+use raypipe::gpu::threaded::GpuThreadedLayout;
+use raypipe::rng::SplitMix64;
+use raypipe::scene::packed::GpuSphere;
+
+fn random_spheres(n: usize, seed: u64, distinct_centres: usize) -> Vec<GpuSphere> {
+    let mut rng = SplitMix64::new(seed);
+    let centres: Vec<[f32; 3]> = (0..distinct_centres.max(1))
+        .map(|_| {
+            [
+                rng.next_f32() * 10.0 - 5.0,
+                rng.next_f32() * 4.0,
+                rng.next_f32() * 10.0 - 5.0,
+            ]
+        })
+        .collect();
+    (0..n)
+        .map(|i| GpuSphere {
+            center: centres[(rng.next_u64() as usize) % centres.len()],
+            radius: 0.01 + 0.1 * rng.next_f32(),
+            material: i as u32 % 5,
+            _pad: [0; 3],
+        })
+        .collect()
+}
+
+/// Both code widths; each compiles its own kernels.
+const WIDTHS: [MortonBits; 2] = [MortonBits::Bits30, MortonBits::Bits63];
+
+/// `n` spheres within a thousandth of one point, and one a unit away: a 30-bit grid puts the cluster in
+/// a handful of cells, so their codes tie; 63-bit codes tell them apart in their low word.
+fn clustered_spheres(n: usize, seed: u64) -> Vec<GpuSphere> {
+    let mut spheres = random_spheres(n, seed, n);
+    for sphere in &mut spheres {
+        sphere.center = sphere.center.map(|c| 1.0 + c * 1e-4);
+        sphere.radius *= 1e-4;
+    }
+    if let Some(far) = spheres.last_mut() {
+        far.center = [2.0, 2.0, 2.0];
+    }
+    spheres
+}
+
+fn boxes(spheres: &[GpuSphere]) -> Vec<Aabb> {
+    spheres.iter().map(GpuSphere::bounds).collect()
+}
+
+fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &str) {
+    let bits = builder.bits();
+    let what = format!("{what}, {}-bit codes", bits.total_bits());
+    let boxes = boxes(spheres);
+    let codes = centroid_codes(&boxes, bits);
+    let (cpu, _) = Bvh::build_from_codes(&boxes, &codes, bits);
+    builder.resize(spheres.len(), 0).unwrap();
+    builder.write_spheres(spheres);
+    builder.write_codes(&codes);
+    builder.build(true).unwrap();
+    let nodes = builder.read_nodes().unwrap();
+    let first_difference = nodes.iter().zip(&cpu.nodes).position(|(g, c)| g != c);
+    assert_eq!(nodes.len(), cpu.nodes.len(), "{what}: node counts");
+    assert_eq!(first_difference, None, "{what}: first differing node");
+    check_threaded_layout(builder, &cpu.nodes, &what);
+}
+
+/// The threaded layout of the GPU's nodes, laid out on the GPU, against the CPU's of the same nodes.
+fn check_threaded_layout(builder: &GpuLbvhBuilder, nodes: &[GpuNode], what: &str) {
+    let ctx = builder.context();
+    let layout = GpuThreadedLayout::new(ctx, &builder.buffers().nodes, builder.count()).unwrap();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    layout.encode(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    let (frame, threaded) = layout.read(ctx).unwrap();
+    let (cpu_frame, cpu_threaded) = threaded_nodes(nodes);
+    assert_eq!(frame, cpu_frame, "{what}: quantization frames");
+    let first_difference = threaded.iter().zip(&cpu_threaded).position(|(g, c)| g != c);
+    assert_eq!(threaded.len(), cpu_threaded.len(), "{what}: threaded node counts");
+    assert_eq!(first_difference, None, "{what}: first differing threaded node");
+}
+
+#[test]
+fn same_codes_give_identical_nodes() {
+    let Some(ctx) = gpu() else { return };
+    for bits in WIDTHS {
+        let mut builder = GpuLbvhBuilder::new(&ctx, bits, 0, 0).unwrap();
+        for n in [0, 1, 2, 3, 100, 1023, 1024, 1025, 5000] {
+            check_same_codes(
+                &mut builder,
+                &random_spheres(n, n as u64, n),
+                &format!("{n} random spheres"),
+            );
+        }
+        check_same_codes(
+            &mut builder,
+            &random_spheres(30_000, 7, 30_000),
+            "30,000 random spheres",
+        );
+    }
+}
+
+#[test]
+fn same_codes_give_identical_nodes_with_duplicate_centroids() {
+    let Some(ctx) = gpu() else { return };
+    for bits in WIDTHS {
+        let mut builder = GpuLbvhBuilder::new(&ctx, bits, 0, 0).unwrap();
+        check_same_codes(&mut builder, &random_spheres(4000, 3, 7), "4,000 spheres on 7 centres");
+        check_same_codes(&mut builder, &random_spheres(2048, 4, 1), "2,048 coincident spheres");
+        check_same_codes(&mut builder, &clustered_spheres(3000, 5), "3,000 clustered spheres");
+    }
+}
+
+#[test]
+fn wide_codes_split_what_narrow_codes_tie() {
+    let spheres = clustered_spheres(3000, 5);
+    let boxes = boxes(&spheres);
+    let distinct = |bits| {
+        let mut codes = centroid_codes(&boxes, bits);
+        codes.sort_unstable();
+        codes.dedup();
+        codes.len()
+    };
+    // The test above relies on this: the cluster ties in few 30-bit cells, and 63-bit codes tell
+    // apart nearly all of its (about 1,900) distinct centres.
+    let (narrow, wide) = (distinct(MortonBits::Bits30), distinct(MortonBits::Bits63));
+    assert!(narrow < 100, "30-bit codes tell {narrow} cells apart in the cluster");
+    assert!(wide > 1500, "63-bit codes tell only {wide} cells apart in the cluster");
+}
+
+#[test]
+fn own_codes_give_a_valid_tree() {
+    let Some(ctx) = gpu() else { return };
+    for bits in WIDTHS {
+        check_own_codes(GpuLbvhBuilder::new(&ctx, bits, 0, 0).unwrap(), bits);
+    }
+}
+
+fn check_own_codes(mut builder: GpuLbvhBuilder, bits: MortonBits) {
+    for (n, centres) in [(1, 1), (2, 2), (10_000, 10_000), (3000, 5)] {
+        let spheres = random_spheres(n, 11, centres);
+        builder.resize(n, 0).unwrap();
+        builder.write_spheres(&spheres);
+        builder.build(false).unwrap();
+        let bvh = Bvh {
+            nodes: builder.read_nodes().unwrap(),
+            primitive_count: n,
+        };
+        bvh.validate(&boxes(&spheres))
+            .unwrap_or_else(|e| panic!("{n} spheres: {e}"));
+        // The GPU's division may round the quantization scale differently from the CPU's: the
+        // trees may then differ, but both are valid (checked above).
+        let (cpu, _) = Bvh::build_lbvh(&boxes(&spheres), bits);
+        if cpu != bvh {
+            eprintln!(
+                "note: {n} spheres, {}-bit codes: the GPU's own Morton codes gave another valid tree than the CPU's",
+                bits.total_bits()
+            );
+        }
+    }
+}
+
+/// Spheres and triangles in one build: the GPU's triangle boxes are the CPU's to the bit, so the same
+/// codes give the same nodes, and the GPU's own codes give a valid tree over both kinds.
+#[test]
+fn spheres_and_triangles_build_alike() {
+    let Some(ctx) = gpu() else { return };
+    let mut scene = common::models::mixed_scene(16, 8, 700);
+    scene.settings.width = 16;
+    scene.settings.height = 16;
+    let packed = raypipe::scene::packed::PackedScene::new(&scene).unwrap();
+    assert!(!packed.triangles.is_empty() && !packed.spheres.is_empty());
+    let boxes = packed.primitive_boxes();
+    let codes = centroid_codes(&boxes, MortonBits::Bits30);
+    let (cpu, _) = Bvh::build_from_codes(&boxes, &codes, MortonBits::Bits30);
+
+    let mut builder = GpuLbvhBuilder::new(&ctx, MortonBits::Bits30, 0, 0).unwrap();
+    builder.write_scene(&packed).unwrap();
+    builder.write_codes(&codes);
+    builder.build(true).unwrap();
+    assert!(builder.read_nodes().unwrap() == cpu.nodes, "GPU and CPU nodes differ");
+
+    builder.build(false).unwrap();
+    let own = Bvh {
+        nodes: builder.read_nodes().unwrap(),
+        primitive_count: boxes.len(),
+    };
+    own.validate(&boxes).unwrap();
+}
