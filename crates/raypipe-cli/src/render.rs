@@ -282,3 +282,16 @@ fn render_sequence(
     }
     Ok(ExitCode::SUCCESS)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::numbered;
+
+    #[test]
+    fn frame_names_follow_printf_patterns() {
+        assert_eq!(numbered("frame_%04d.png", 7).as_deref(), Some("frame_0007.png"));
+        assert_eq!(numbered("f%d.exr", 12).as_deref(), Some("f12.exr"));
+        assert_eq!(numbered("plain.png", 3), None);
+        assert_eq!(numbered("odd%x.png", 3), None);
+    }
+}

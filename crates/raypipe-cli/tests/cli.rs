@@ -2,6 +2,11 @@
 //! on stderr and exit code 2, never a panic.
 
 mod common;
+// The binary's own image reader, to read back what it wrote.
+#[path = "../src/io.rs"]
+#[allow(dead_code)]
+mod io;
+use common::models::{self, test_dir};
 use common::{assert_clean_error, raypipe};
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -10,6 +15,12 @@ fn temp(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli");
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
+}
+
+fn write_in(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
 }
 
 fn write(name: &str, text: &str) -> PathBuf {
@@ -59,7 +70,7 @@ fn a_good_scene_renders_every_output() {
             "--stats",
         ]);
         assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-        let image = raypipe::image::io::read(&out).unwrap();
+        let image = io::read(&out).unwrap();
         assert_eq!((image.width, image.height), (40, 30));
         if aov == "depth" {
             assert_eq!(image.channels, ["Z"]);
@@ -134,7 +145,7 @@ fn cost_aov_writes_a_heat_map_with_a_legend() {
     ]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     assert!(String::from_utf8_lossy(&output.stdout).contains("cost per primary ray"));
-    let image = raypipe::image::io::read(&out).unwrap();
+    let image = io::read(&out).unwrap();
     assert_eq!(image.width, 40);
     assert!(image.height > 30, "the legend sits under the image");
     let exr = raypipe(&[
@@ -227,4 +238,89 @@ fn depth_needs_exr() {
 fn diff_of_a_missing_image() {
     let output = raypipe(&["diff", "nope-a.png", "nope-b.png"]);
     assert_clean_error(&output, &["nope-a.png"]);
+}
+
+#[test]
+fn broken_models_give_one_line_and_exit_code_2() {
+    let dir = test_dir("meshes-broken");
+    let model = models::torus(6, 4);
+    let render = |path: &Path| {
+        let out = dir.join("out.png");
+        raypipe(&[
+            "render",
+            path.to_str().unwrap(),
+            "--device",
+            "cpu",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+    };
+
+    let binary = models::binary_ply(&model, true);
+    let truncated = write_in(&dir, "truncated.ply", &binary[..binary.len() - 7]);
+    assert_clean_error(&render(&truncated), &["truncated.ply", "face"]);
+
+    let text = String::from_utf8(models::off(&model)).unwrap();
+    let bad_index = write_in(
+        &dir,
+        "bad-index.off",
+        text.replace("4 0 1 5 4", "4 0 1 99 4").as_bytes(),
+    );
+    assert_clean_error(
+        &render(&bad_index),
+        &["bad-index.off:", "face 0", "vertex index 99 out of range"],
+    );
+
+    let text = String::from_utf8(models::ascii_ply(&model)).unwrap();
+    let lying = write_in(
+        &dir,
+        "lying.ply",
+        text.replace("element face 24", "element face 30").as_bytes(),
+    );
+    assert_clean_error(&render(&lying), &["lying.ply", "face"]);
+
+    // The first vertex line, "nx ny nz x y z confidence", gets a NaN x.
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let first_vertex = lines.iter().position(|l| l == "end_header").unwrap() + 1;
+    let mut fields: Vec<String> = lines[first_vertex].split(' ').map(String::from).collect();
+    fields[3] = "nan".into();
+    lines[first_vertex] = fields.join(" ");
+    let nan = write_in(&dir, "nan.ply", (lines.join("\n") + "\n").as_bytes());
+    assert_clean_error(&render(&nan), &["nan.ply:15:", "nan"]);
+    let text = String::from_utf8(models::off(&model)).unwrap();
+    let first_vertex = text.lines().nth(3).unwrap();
+    let nan = text.replacen(first_vertex, "nan 0 0 0 0 1", 1);
+    let nan = write_in(&dir, "nan.off", nan.as_bytes());
+    assert_clean_error(&render(&nan), &["nan.off", "vertex 0", "must be finite"]);
+
+    let empty = write_in(&dir, "empty.off", b"OFF\n0 0 0\n");
+    assert_clean_error(&render(&empty), &["empty.off", "empty mesh"]);
+
+    let obj = String::from_utf8(models::obj(&model)).unwrap();
+    let obj_index = write_in(&dir, "bad-index.obj", format!("{obj}f 1 2 300\n").as_bytes());
+    assert_clean_error(&render(&obj_index), &["bad-index.obj:", "out of bounds"]);
+
+    let unknown = write_in(&dir, "model.stl", b"solid x\n");
+    assert_clean_error(&render(&unknown), &["model.stl", "unknown model format"]);
+
+    let model_file = write_in(&dir, "torus.off", &models::off(&model));
+    let scene = write_in(
+        &dir,
+        "zero.toml",
+        format!(
+            "[[mesh]]\nfile = \"{}\"\nas = \"spheres\"\nspheres = 0\n",
+            model_file.file_name().unwrap().to_str().unwrap()
+        )
+        .as_bytes(),
+    );
+    assert_clean_error(
+        &render(&scene),
+        &["zero.toml:1:", "mesh 0", "spheres must be at least 1"],
+    );
+    let scene = write_in(&dir, "missing.toml", b"[[mesh]]\nfile = \"nowhere.ply\"\n");
+    assert_clean_error(&render(&scene), &["missing.toml:1:", "nowhere.ply", "cannot read"]);
 }

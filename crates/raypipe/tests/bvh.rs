@@ -3,16 +3,17 @@
 use glam::Vec3;
 use proptest::prelude::*;
 use raypipe::bvh::aabb::Aabb;
-use raypipe::bvh::layout::GpuNode;
-use raypipe::bvh::lbvh::{Hierarchy, Key, LbvhBuilder};
+use raypipe::bvh::key::Key;
+use raypipe::bvh::lbvh::{Hierarchy, LbvhBuilder};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
-use raypipe::bvh::threaded::{self, GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
+use raypipe::bvh::threaded::{self, GpuThreadedNode, threaded_nodes};
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use raypipe::cpu::intersect::{Hit, HitKind, Primitives, Ray};
 use raypipe::rng::SplitMix64;
-use raypipe::scene::packed::{GpuSphere, GpuTriangle};
+use raypipe::records::packed::primitive_boxes;
+use raypipe::records::{GpuSphere, GpuTriangle, PackedBvh};
 
 fn spheres_to_boxes(spheres: &[(Vec3, f32)]) -> Vec<Aabb> {
     spheres.iter().map(|&(c, r)| Aabb::around_sphere(c, r)).collect()
@@ -268,42 +269,17 @@ fn a_reused_builder_equals_a_fresh_one() {
     }
 }
 
-/// A built tree in both forms the walks read: the node layout, and the threaded nodes with their frame.
-struct Trees {
-    nodes: Vec<GpuNode>,
-    frame: QuantizationFrame,
-    threaded: Vec<GpuThreadedNode>,
-}
-
-impl Trees {
-    fn threaded(&self) -> ThreadedTree<'_> {
-        ThreadedTree {
-            nodes: &self.threaded,
-            frame: self.frame,
-        }
-    }
-
-    fn new(bvh: Bvh) -> Self {
-        let (frame, threaded) = threaded_nodes(&bvh.nodes);
-        Self {
-            nodes: bvh.nodes,
-            frame,
-            threaded,
-        }
-    }
-}
-
-type Traversal = fn(&Trees, &Primitives, &Ray, Hit, bool) -> Hit;
+type Traversal = fn(&PackedBvh, &Primitives, &Ray, Hit, bool) -> Hit;
 
 const TRAVERSALS: [(&str, Traversal); 3] = [
     ("stack", |t, p, ray, best, shadow| {
-        traverse_stack(t.threaded(), p, ray, best, shadow)
+        traverse_stack(t.threaded_tree(), p, ray, best, shadow)
     }),
     ("stackless", |t, p, ray, best, shadow| {
         traverse_stackless(&t.nodes, p, ray, best, shadow)
     }),
     ("threaded", |t, p, ray, best, shadow| {
-        traverse_threaded(t.threaded(), p, ray, best, shadow)
+        traverse_threaded(t.threaded_tree(), p, ray, best, shadow)
     }),
 ];
 
@@ -319,11 +295,6 @@ fn random_triangle(rng: &mut SplitMix64, material: u32) -> GpuTriangle {
         e2: e2.to_array(),
         _pad: 0,
     }
-}
-
-fn primitive_boxes(spheres: &[GpuSphere], triangles: &[GpuTriangle]) -> Vec<Aabb> {
-    let spheres = spheres.iter().map(GpuSphere::bounds);
-    spheres.chain(triangles.iter().map(GpuTriangle::bounds)).collect()
 }
 
 /// Random rays from random points: every traversal finds exactly brute force's hit (t and
@@ -360,7 +331,7 @@ fn traversals_equal_brute_force() {
         triangles: &triangles,
     };
     let (bvh, _) = Bvh::build_lbvh(&primitive_boxes(&spheres, &triangles), MortonBits::Bits30);
-    let trees = Trees::new(bvh);
+    let trees = PackedBvh::new(bvh);
     let mut triangle_hits = 0;
     let mut hits = 0;
     for _ in 0..20_000 {
@@ -417,9 +388,9 @@ fn traversals_equal_brute_force_in_coarse_and_far_frames() {
         ("far frame", far, Vec3::splat(3e5 + 2.0), 4.0),
     ] {
         let boxes: Vec<Aabb> = spheres.iter().map(GpuSphere::bounds).collect();
-        let trees = Trees::new(Bvh::build_lbvh(&boxes, MortonBits::Bits30).0);
+        let trees = PackedBvh::new(Bvh::build_lbvh(&boxes, MortonBits::Bits30).0);
         assert_eq!(
-            threaded::validate(&trees.frame, &trees.threaded, &boxes),
+            threaded::validate(&trees.frame, &trees.threaded_nodes, &boxes),
             Ok(()),
             "{name}"
         );
@@ -459,7 +430,7 @@ fn traversals_handle_one_and_two_spheres() {
             .collect();
         let boxes: Vec<Aabb> = spheres.iter().map(GpuSphere::bounds).collect();
         let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
-        let trees = Trees::new(bvh);
+        let trees = PackedBvh::new(bvh);
         let primitives = Primitives {
             spheres: &spheres,
             triangles: &[],

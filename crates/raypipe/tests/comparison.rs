@@ -2,13 +2,13 @@
 //! GPU-against-CPU test above proves nothing.
 
 mod common;
-use common::packed;
+use common::{packed, render_cpu};
 use raypipe::image::FloatImage;
 use raypipe::image::diff::{Tolerance, compare};
-use raypipe::render::Accel;
+use raypipe::modes::Accel;
 
 fn reference() -> FloatImage {
-    raypipe::cpu::render(&packed("whitted", 80, 60, 5), Accel::Brute, false).display()
+    render_cpu(&packed("whitted", 80, 60, 5), Accel::Brute).display()
 }
 
 #[test]
@@ -67,7 +67,7 @@ fn one_different_pixel_fails_exact_but_not_color() {
 
 #[test]
 fn a_depth_image_with_a_lost_hit_fails() {
-    let depth = raypipe::cpu::render(&packed("whitted", 80, 60, 0), Accel::Brute, false).depth();
+    let depth = render_cpu(&packed("whitted", 80, 60, 0), Accel::Brute).depth();
     let mut perturbed = depth.clone();
     let hits: Vec<usize> = (0..perturbed.data.len())
         .filter(|&i| perturbed.data[i].is_finite())

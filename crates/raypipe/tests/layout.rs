@@ -1,29 +1,46 @@
 //! Host structs against their WGSL twins, and every shader variant through naga's validator: both
 //! run without an adapter.
 
+use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::shader::{ShaderConfig, compose};
-use raypipe::gpu::upload::{MemoryMode, TEXELS_PER_ROW, record_arrays};
-use raypipe::render::Accel;
-use raypipe::scene::packed::{LAYOUTS, PackedScene};
+use raypipe::gpu::upload::{TEXELS_PER_ROW, record_arrays};
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::{LAYOUTS, PackedScene, StructLayout};
 use raypipe::scene::{Scene, builtin};
 
 fn parse(source: &str) -> naga::Module {
     naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
 }
 
+/// Every struct that crosses to the GPU: the tracer's records, the build's and the threaded
+/// layout's parameters, and the display pass's.
+fn host_layouts() -> Vec<&'static StructLayout> {
+    [
+        LAYOUTS,
+        raypipe::gpu::build::LAYOUTS,
+        raypipe::gpu::threaded::LAYOUTS,
+        raypipe::gpu::display::LAYOUTS,
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
 #[test]
 fn every_host_struct_matches_its_wgsl_twin() {
-    let module = parse(include_str!("../src/gpu/shaders/types.wgsl"));
+    let host_layouts = host_layouts();
     let mut seen = Vec::new();
-    for (_, ty) in module.types.iter() {
+    let types = parse(&raypipe::gpu::shader::records_source());
+    let display = parse(raypipe::gpu::display::shader_source());
+    for (_, ty) in types.types.iter().chain(display.types.iter()) {
         let (Some(name), naga::TypeInner::Struct { members, span }) = (&ty.name, &ty.inner) else {
             continue;
         };
-        let host = LAYOUTS
+        let host = host_layouts
             .iter()
             .find(|l| l.wgsl_name == name)
-            .unwrap_or_else(|| panic!("WGSL struct {name} has no host twin in LAYOUTS"));
+            .unwrap_or_else(|| panic!("WGSL struct {name} has no host twin"));
         assert_eq!(
             *span as usize, host.size,
             "{name}: WGSL size {span}, Rust size {}",
@@ -37,7 +54,7 @@ fn every_host_struct_matches_its_wgsl_twin() {
         assert_eq!(wgsl, rust, "{name}: members (name, offset) differ");
         seen.push(name.clone());
     }
-    for layout in LAYOUTS {
+    for layout in host_layouts {
         assert!(
             seen.iter().any(|s| s == layout.wgsl_name),
             "{} is missing from types.wgsl",
@@ -53,8 +70,8 @@ fn every_shader_variant_validates() {
     empty.lights.clear();
     let empty = PackedScene::new(&empty).unwrap();
     for scene in [&scene, &empty] {
-        for memory in [MemoryMode::Uniform, MemoryMode::Storage, MemoryMode::Texture] {
-            for accel in [Accel::Brute, Accel::Stack, Accel::Stackless, Accel::Threaded] {
+        for &memory in MemoryMode::ALL {
+            for &accel in Accel::ALL {
                 for max_depth in [0, 5] {
                     let source = compose(&ShaderConfig {
                         memory,
@@ -81,6 +98,22 @@ fn every_shader_variant_validates() {
     }
 }
 
+#[test]
+fn the_build_layout_and_display_shaders_validate() {
+    let sources = [
+        ("LBVH build, 30-bit", raypipe::gpu::build::shader_source(MortonBits::Bits30)),
+        ("LBVH build, 63-bit", raypipe::gpu::build::shader_source(MortonBits::Bits63)),
+        ("threaded layout", raypipe::gpu::threaded::shader_source()),
+        ("display", raypipe::gpu::display::shader_source().to_string()),
+    ];
+    for (what, source) in sources {
+        let module = parse(&source);
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{what}: {}", e.emit_to_string(&source)));
+    }
+}
+
 /// WebGPU lets a shader stage bind 8 storage buffers unless the device asks for more, and browsers
 /// may not grant more: every pipeline keeps within that.
 #[test]
@@ -99,7 +132,7 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
     let count = storage_buffers(&raypipe::gpu::threaded::shader_source());
     assert!(count <= 8, "the threaded layout binds {count} storage buffers");
     let scene = PackedScene::new(&builtin::whitted()).unwrap();
-    for accel in [Accel::Brute, Accel::Stack, Accel::Stackless, Accel::Threaded] {
+    for &accel in Accel::ALL {
         let source = compose(&ShaderConfig {
             memory: MemoryMode::Storage,
             accel,

@@ -1,9 +1,9 @@
-//! Model files: every format gives the same mesh, the shared scans load and render, broken files give
-//! one clean line and exit code 2, and no mutation of a file makes a parser panic.
+//! Model files: every format gives the same mesh, scene files place meshes as they say, and no
+//! mutation of a file makes a parser panic. (The shared scans load in the `gpu` harness; the command
+//! line's messages for broken files are the CLI's tests.)
 
 mod common;
-use common::models::{self, TestModel, every_format, shared_model, test_dir};
-use common::{assert_clean_error, raypipe};
+use common::models::{self, TestModel, every_format, test_dir};
 use glam::Vec3;
 use proptest::prelude::*;
 use raypipe::bvh::aabb::Aabb;
@@ -51,127 +51,6 @@ fn every_format_gives_the_same_triangles() {
             }
         }
     }
-}
-
-#[test]
-fn the_shared_scans_load_with_their_published_counts() {
-    for (name, vertices, faces) in [("bunny.ply", 35_947, 69_451), ("fertility.off", 23_188, 46_388)] {
-        let Some(path) = shared_model(name) else { return };
-        let mesh = mesh::load(&path).unwrap();
-        assert_eq!(mesh.positions.len(), vertices, "{name}");
-        assert_eq!(mesh.triangles.len(), faces, "{name}: every face is a triangle");
-    }
-}
-
-#[test]
-fn the_bunny_renders_as_20k_spheres() {
-    let Some(bunny) = shared_model("bunny.ply") else { return };
-    let out = test_dir("meshes-bunny").join("bunny-spheres.png");
-    let output = raypipe(&[
-        "render",
-        bunny.to_str().unwrap(),
-        "--spheres",
-        "20000",
-        "--width",
-        "96",
-        "--height",
-        "72",
-        "--stats",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    assert!(stdout.contains("20000 spheres, 0 triangles"), "{stdout}");
-    // The bunny fills a good part of the frame: clay pixels (red well above blue) are common.
-    let image = image::open(&out).unwrap().to_rgb8();
-    let clay = image.pixels().filter(|p| p[0] as i32 > p[2] as i32 + 40).count();
-    assert!(clay > image.len() / 3 / 20, "{clay} clay pixels of {}", image.len() / 3);
-}
-
-#[test]
-fn broken_models_give_one_line_and_exit_code_2() {
-    let dir = test_dir("meshes-broken");
-    let model = models::torus(6, 4);
-    let render = |path: &Path| {
-        let out = dir.join("out.png");
-        raypipe(&[
-            "render",
-            path.to_str().unwrap(),
-            "--device",
-            "cpu",
-            "--width",
-            "16",
-            "--height",
-            "12",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-    };
-
-    let binary = models::binary_ply(&model, true);
-    let truncated = write(&dir, "truncated.ply", &binary[..binary.len() - 7]);
-    assert_clean_error(&render(&truncated), &["truncated.ply", "face"]);
-
-    let text = String::from_utf8(models::off(&model)).unwrap();
-    let bad_index = write(
-        &dir,
-        "bad-index.off",
-        text.replace("4 0 1 5 4", "4 0 1 99 4").as_bytes(),
-    );
-    assert_clean_error(
-        &render(&bad_index),
-        &["bad-index.off:", "face 0", "vertex index 99 out of range"],
-    );
-
-    let text = String::from_utf8(models::ascii_ply(&model)).unwrap();
-    let lying = write(
-        &dir,
-        "lying.ply",
-        text.replace("element face 24", "element face 30").as_bytes(),
-    );
-    assert_clean_error(&render(&lying), &["lying.ply", "face"]);
-
-    // The first vertex line, "nx ny nz x y z confidence", gets a NaN x.
-    let mut lines: Vec<String> = text.lines().map(String::from).collect();
-    let first_vertex = lines.iter().position(|l| l == "end_header").unwrap() + 1;
-    let mut fields: Vec<String> = lines[first_vertex].split(' ').map(String::from).collect();
-    fields[3] = "nan".into();
-    lines[first_vertex] = fields.join(" ");
-    let nan = write(&dir, "nan.ply", (lines.join("\n") + "\n").as_bytes());
-    assert_clean_error(&render(&nan), &["nan.ply:15:", "nan"]);
-    let text = String::from_utf8(models::off(&model)).unwrap();
-    let first_vertex = text.lines().nth(3).unwrap();
-    let nan = text.replacen(first_vertex, "nan 0 0 0 0 1", 1);
-    let nan = write(&dir, "nan.off", nan.as_bytes());
-    assert_clean_error(&render(&nan), &["nan.off", "vertex 0", "must be finite"]);
-
-    let empty = write(&dir, "empty.off", b"OFF\n0 0 0\n");
-    assert_clean_error(&render(&empty), &["empty.off", "empty mesh"]);
-
-    let obj = String::from_utf8(models::obj(&model)).unwrap();
-    let obj_index = write(&dir, "bad-index.obj", format!("{obj}f 1 2 300\n").as_bytes());
-    assert_clean_error(&render(&obj_index), &["bad-index.obj:", "out of bounds"]);
-
-    let unknown = write(&dir, "model.stl", b"solid x\n");
-    assert_clean_error(&render(&unknown), &["model.stl", "unknown model format"]);
-
-    let model_file = write(&dir, "torus.off", &models::off(&model));
-    let scene = write(
-        &dir,
-        "zero.toml",
-        format!(
-            "[[mesh]]\nfile = \"{}\"\nas = \"spheres\"\nspheres = 0\n",
-            model_file.file_name().unwrap().to_str().unwrap()
-        )
-        .as_bytes(),
-    );
-    assert_clean_error(
-        &render(&scene),
-        &["zero.toml:1:", "mesh 0", "spheres must be at least 1"],
-    );
-    let scene = write(&dir, "missing.toml", b"[[mesh]]\nfile = \"nowhere.ply\"\n");
-    assert_clean_error(&render(&scene), &["missing.toml:1:", "nowhere.ply", "cannot read"]);
 }
 
 /// A scene file places its meshes relative to itself: normalize, scale, translate.

@@ -48,6 +48,12 @@ impl PackedBvh {
     }
 }
 
+/// The boxes of BVH primitives: `spheres`, then `triangles`, as the tracers index them.
+pub fn primitive_boxes(spheres: &[GpuSphere], triangles: &[GpuTriangle]) -> Vec<Aabb> {
+    let spheres = spheres.iter().map(GpuSphere::bounds);
+    spheres.chain(triangles.iter().map(GpuTriangle::bounds)).collect()
+}
+
 /// The scene as the tracers read it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PackedScene {
@@ -203,8 +209,7 @@ impl PackedScene {
 
     /// The primitives' bounding boxes, spheres first.
     pub fn primitive_boxes(&self) -> Vec<Aabb> {
-        let spheres = self.spheres.iter().map(GpuSphere::bounds);
-        spheres.chain(self.triangles.iter().map(GpuTriangle::bounds)).collect()
+        primitive_boxes(&self.spheres, &self.triangles)
     }
 
     /// Builds the linear BVH over the primitives on the CPU.

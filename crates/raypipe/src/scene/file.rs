@@ -337,6 +337,7 @@ fn placement(
 #[cfg(test)]
 mod tests {
     use super::parse;
+    use crate::error::Element;
 
     #[test]
     fn minimal_scene_parses_with_defaults() {
@@ -349,22 +350,26 @@ mod tests {
     fn errors_name_the_line() {
         let text = "[camera]\neye = [0, 0, -5]\ntarget = [0, 0, 0]\n\n[[sphere]]\ncenter = [0, 0, 0]\nradius = -1.0\n";
         let err = parse(text).unwrap_err();
-        assert!(err.starts_with("5: sphere 0: radius"), "{err}");
+        assert_eq!((err.line, &err.element), (Some(5), &Some(Element::Sphere(0))), "{err}");
+        assert!(err.message.starts_with("radius"), "{err}");
 
         let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\nradus = 2.0\n").unwrap_err();
-        assert!(err.starts_with("4: unknown field `radus`"), "{err}");
+        assert_eq!(err.line, Some(4), "{err}");
+        assert!(err.message.starts_with("unknown field `radus`"), "{err}");
 
         let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\nmaterial = \"gold\"\n").unwrap_err();
-        assert!(err.contains("unknown material 'gold'"), "{err}");
+        assert!(err.message.contains("unknown material 'gold'"), "{err}");
 
         let err = parse("[camera\n").unwrap_err();
-        assert!(err.starts_with("1: "), "{err}");
-        assert!(!err.contains('\n'));
+        assert_eq!(err.line, Some(1), "{err}");
+        assert!(!err.to_string().contains('\n'));
+        // Named, the file comes first.
+        assert!(err.in_origin("a.toml").to_string().starts_with("a.toml:1: "));
     }
 
     #[test]
     fn nan_radius_is_rejected() {
         let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = nan\n").unwrap_err();
-        assert!(err.contains("radius must be positive and finite"), "{err}");
+        assert!(err.message.contains("radius must be positive and finite"), "{err}");
     }
 }

@@ -298,11 +298,11 @@ mod tests {
             spheres: SphereCount::Sampled(0),
             ..Placement::default()
         };
-        assert_eq!(zero.validate().unwrap_err(), "spheres must be at least 1");
+        assert_eq!(zero.validate().unwrap_err().message, "spheres must be at least 1");
         let negative = Placement {
             scale: -1.0,
             ..Placement::default()
         };
-        assert!(negative.validate().unwrap_err().starts_with("scale must be positive"));
+        assert!(negative.validate().unwrap_err().message.starts_with("scale must be positive"));
     }
 }

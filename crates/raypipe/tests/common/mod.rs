@@ -1,47 +1,17 @@
-//! Shared test harness: a GPU context or a loud skip, renders at test sizes, and image assertions
-//! that leave the images behind for a human when they fail.
+//! Shared test support: scenes at test sizes, GPU renders, and image assertions that leave the
+//! images behind for a human when they fail.
 #![allow(dead_code)]
 
-use raypipe::gpu::upload::MemoryMode;
-use raypipe::gpu::{GpuContext, GpuRenderer};
+pub mod harness;
+pub mod models;
+
+use raypipe::gpu::{GpuContext, Renderer, RendererOptions};
 use raypipe::image::diff::{self, Tolerance};
-use raypipe::image::{FloatImage, Frame, io};
-use raypipe::render::Accel;
+use raypipe::image::{FloatImage, Frame};
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
-use raypipe::scene::packed::PackedScene;
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-/// Runs the raypipe binary with `args`.
-pub fn raypipe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raypipe")).args(args).output().unwrap()
-}
-
-/// Exit code 2, exactly one line on stderr that starts with `error:` and contains every `needle`.
-pub fn assert_clean_error(output: &Output, needles: &[&str]) {
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
-    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    assert_eq!(lines.len(), 1, "one error line expected: {stderr}");
-    for needle in needles {
-        assert!(lines[0].contains(needle), "{needle:?} not in {:?}", lines[0]);
-    }
-}
-
-/// The adapter wgpu picks (honouring `WGPU_BACKEND`), or `None` with a message. With
-/// `RAYPIPE_REQUIRE_GPU=1` a missing adapter fails the test instead.
-pub fn gpu() -> Option<GpuContext> {
-    let ctx = GpuContext::new(None).unwrap_or_else(|e| panic!("opening the GPU failed: {e:#}"));
-    if ctx.is_none() {
-        assert!(
-            std::env::var("RAYPIPE_REQUIRE_GPU").as_deref() != Ok("1"),
-            "RAYPIPE_REQUIRE_GPU=1 but no GPU adapter was found (install mesa-vulkan-drivers)"
-        );
-        eprintln!("SKIPPED: no GPU adapter found; set RAYPIPE_REQUIRE_GPU=1 to make this a failure");
-    }
-    ctx
-}
+use std::path::{Path, PathBuf};
 
 /// A scene at a test size and depth, packed.
 pub fn packed(spec: &str, width: u32, height: u32, max_depth: u32) -> PackedScene {
@@ -52,12 +22,29 @@ pub fn packed(spec: &str, width: u32, height: u32, max_depth: u32) -> PackedScen
     PackedScene::new(&scene).unwrap()
 }
 
+pub fn renderer(ctx: &GpuContext, scene: &PackedScene, options: RendererOptions) -> Renderer {
+    pollster::block_on(Renderer::new(ctx, scene, options))
+        .unwrap_or_else(|e| panic!("building the renderer failed on {}: {e}", ctx.describe()))
+}
+
 pub fn render_gpu(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode, accel: Accel) -> Frame {
-    GpuRenderer::new(ctx, scene, memory, accel)
-        .and_then(|r| r.render())
-        .unwrap_or_else(|e| panic!("GPU render failed on {}: {e:#}", ctx.describe()))
+    let options = RendererOptions {
+        memory,
+        accel,
+        ..Default::default()
+    };
+    pollster::block_on(renderer(ctx, scene, options).read_frame())
+        .unwrap_or_else(|e| panic!("GPU render failed on {}: {e}", ctx.describe()))
         .frame
 }
+
+/// The CPU reference's frame.
+pub fn render_cpu(scene: &PackedScene, accel: Accel) -> Frame {
+    raypipe::cpu::render(scene, accel).unwrap()
+}
+
+#[allow(unused_imports)]
+pub use models::test_dir;
 
 fn output_dir() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("image-failures");
@@ -65,22 +52,46 @@ fn output_dir() -> PathBuf {
     dir
 }
 
+/// `image` as an 8-bit PNG for a human: display values as they are, anything else (depth) scaled
+/// to [0, 1] over its finite range, +inf black.
+fn write_for_viewing(image: &FloatImage, path: &Path) {
+    let finite = image.data.iter().copied().filter(|v| v.is_finite());
+    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let display = image.data.iter().all(|v| (0.0..=1.0).contains(v));
+    let to_byte = |v: f32| {
+        let v = if display {
+            v
+        } else if v.is_finite() && hi > lo {
+            1.0 - (v - lo) / (hi - lo)
+        } else {
+            0.0
+        };
+        (v.clamp(0.0, 1.0) * 255.0).round() as u8
+    };
+    let channels = image.channels.len();
+    let mut rgb = Vec::with_capacity(image.pixel_count() * 3);
+    for i in 0..image.pixel_count() {
+        let p = image.pixel(i);
+        let pick = |c: usize| to_byte(p[c.min(channels - 1)]);
+        rgb.extend([pick(0), pick(1), pick(2)]);
+    }
+    image::RgbImage::from_raw(image.width, image.height, rgb)
+        .expect("sized to the image")
+        .save(path)
+        .unwrap();
+}
+
 /// Asserts that `actual` matches `expected` within `tolerance`. On failure writes
-/// `NAME-expected.*`, `NAME-actual.*` and `NAME-difference.png` and names them in the panic.
+/// `NAME-expected.png`, `NAME-actual.png` and `NAME-difference.png` and names them in the panic.
 pub fn assert_images_match(name: &str, actual: &FloatImage, expected: &FloatImage, tolerance: Tolerance) {
     let errors = diff::pixel_errors(actual, expected).unwrap();
     let stats = diff::stats(&errors);
     if let Err(message) = tolerance.check(&stats) {
         let dir = output_dir();
-        let ext = if actual.channels.len() == 3 && actual.data.iter().all(|v| (0.0..=1.0).contains(v)) {
-            "png"
-        } else {
-            "exr"
-        };
-        io::write(actual, &dir.join(format!("{name}-actual.{ext}"))).unwrap();
-        io::write(expected, &dir.join(format!("{name}-expected.{ext}"))).unwrap();
+        write_for_viewing(actual, &dir.join(format!("{name}-actual.png")));
+        write_for_viewing(expected, &dir.join(format!("{name}-expected.png")));
         let picture = diff::error_image(&errors, actual.width, actual.height, 0.1);
-        io::write(&picture, &dir.join(format!("{name}-difference.png"))).unwrap();
+        write_for_viewing(&picture, &dir.join(format!("{name}-difference.png")));
         panic!("{name}: {message}; images in {}", dir.display());
     }
 }
@@ -100,4 +111,3 @@ pub fn assert_frames_match(name: &str, actual: &Frame, expected: &Frame) {
         Tolerance::DEPTH,
     );
 }
-pub mod models;

@@ -208,24 +208,3 @@ pub fn test_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
-
-/// The shared test models (`../shared/models`), or `None` with a message; with
-/// `RAYPIPE_REQUIRE_MODELS=1` their absence fails the test instead.
-pub fn shared_model(name: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/models")
-        .join(name);
-    if path.exists() {
-        return Some(path);
-    }
-    assert!(
-        std::env::var("RAYPIPE_REQUIRE_MODELS").as_deref() != Ok("1"),
-        "RAYPIPE_REQUIRE_MODELS=1 but {} is missing",
-        path.display()
-    );
-    eprintln!(
-        "SKIPPED: {} not found (set RAYPIPE_REQUIRE_MODELS=1 to make this a failure)",
-        path.display()
-    );
-    None
-}

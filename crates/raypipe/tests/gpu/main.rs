@@ -1,1 +1,28 @@
-fn main() {}
+//! The tests that need a GPU, on one shared device (see `common::harness`): the fragment shader
+//! against the CPU reference, memory modes against each other, closed-form answers, the GPU LBVH
+//! build against the CPU's, per-frame rebuilds, and the display pass; and the tests of the shared
+//! models.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod analytic;
+mod display;
+mod frames;
+mod gpu_build;
+mod gpu_vs_cpu;
+mod memory_modes;
+mod scans;
+
+fn main() -> std::process::ExitCode {
+    let tests = [
+        analytic::tests(),
+        display::tests(),
+        frames::tests(),
+        gpu_build::tests(),
+        gpu_vs_cpu::tests(),
+        memory_modes::tests(),
+        scans::tests(),
+    ];
+    common::harness::run(tests.into_iter().flatten().collect())
+}

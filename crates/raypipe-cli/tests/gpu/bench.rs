@@ -1,13 +1,10 @@
 //! `raypipe bench`: every point is timed and reported with the documented keys, in CSV and JSON.
 
-mod common;
+use crate::common::harness::Test;
+use raypipe::gpu::GpuContext;
 use std::process::Command;
 
-#[test]
-fn bench_reports_every_point_with_the_documented_keys() {
-    if common::gpu().is_none() {
-        return;
-    }
+fn bench_reports_every_point_with_the_documented_keys(_: &GpuContext) {
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench");
     let output = Command::new(env!("CARGO_BIN_EXE_raypipe"))
         .args([
@@ -64,4 +61,8 @@ fn bench_reports_every_point_with_the_documented_keys() {
         svg.contains("<svg") && svg.contains("stackless"),
         "the SVG names its lines"
     );
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![gpu bench_reports_every_point_with_the_documented_keys]
 }

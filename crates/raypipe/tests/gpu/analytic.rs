@@ -1,12 +1,12 @@
 //! Renders whose answer is known in closed form: a sphere's silhouette area and its distance, and a
 //! quad's depth at every pixel.
 
-mod common;
-use common::*;
-use raypipe::gpu::upload::MemoryMode;
+use crate::common::harness::Test;
+use crate::common::*;
+use raypipe::gpu::GpuContext;
 use raypipe::image::Frame;
-use raypipe::render::Accel;
-use raypipe::scene::packed::PackedScene;
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::PackedScene;
 
 const WIDTH: u32 = 121;
 const HEIGHT: u32 = 81;
@@ -53,27 +53,23 @@ fn check_silhouette_and_depth(frame: &Frame, device: &str) {
     );
 }
 
-#[test]
 fn cpu_sphere_silhouette_and_depth() {
-    check_silhouette_and_depth(&raypipe::cpu::render(&one_sphere(), Accel::Brute, false), "cpu");
+    check_silhouette_and_depth(&render_cpu(&one_sphere(), Accel::Brute), "cpu");
 }
 
-#[test]
-fn gpu_sphere_silhouette_and_depth() {
-    let Some(ctx) = gpu() else { return };
-    let frame = render_gpu(&ctx, &one_sphere(), MemoryMode::Storage, Accel::Brute);
+fn gpu_sphere_silhouette_and_depth(ctx: &GpuContext) {
+    let frame = render_gpu(ctx, &one_sphere(), MemoryMode::Storage, Accel::Brute);
     check_silhouette_and_depth(&frame, &ctx.describe());
 }
 
-#[test]
 fn cpu_renders_do_not_depend_on_the_thread_count() {
     let scene = packed("random:300:5", 48, 32, 5);
-    let many = raypipe::cpu::render(&scene, Accel::Brute, false);
+    let many = render_cpu(&scene, Accel::Brute);
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap()
-        .install(|| raypipe::cpu::render(&scene, Accel::Brute, false));
+        .install(|| render_cpu(&scene, Accel::Brute));
     assert_eq!(many, one);
 }
 
@@ -165,18 +161,25 @@ fn check_quad(frame: &Frame, device: &str) {
     );
 }
 
-#[test]
 fn cpu_triangle_depth_is_exact() {
     for accel in [Accel::Brute, Accel::Threaded] {
-        check_quad(&raypipe::cpu::render(&one_quad(accel), accel, false), "cpu");
+        check_quad(&render_cpu(&one_quad(accel), accel), "cpu");
     }
 }
 
-#[test]
-fn gpu_triangle_depth_is_exact() {
-    let Some(ctx) = gpu() else { return };
+fn gpu_triangle_depth_is_exact(ctx: &GpuContext) {
     for accel in [Accel::Brute, Accel::Threaded] {
-        let frame = render_gpu(&ctx, &one_quad(accel), MemoryMode::Storage, accel);
+        let frame = render_gpu(ctx, &one_quad(accel), MemoryMode::Storage, accel);
         check_quad(&frame, &format!("{} {accel:?}", ctx.describe()));
     }
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![
+        plain cpu_sphere_silhouette_and_depth,
+        gpu gpu_sphere_silhouette_and_depth,
+        plain cpu_renders_do_not_depend_on_the_thread_count,
+        plain cpu_triangle_depth_is_exact,
+        gpu gpu_triangle_depth_is_exact,
+    ]
 }

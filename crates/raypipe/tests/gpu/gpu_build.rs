@@ -1,8 +1,6 @@
 //! The LBVH built in compute passes against the CPU build: bit-identical node arrays from the same
 //! Morton codes, 30-bit and 63-bit, and a valid tree from the GPU's own codes.
 
-mod common;
-use common::gpu;
 use raypipe::bvh::aabb::Aabb;
 use raypipe::bvh::layout::GpuNode;
 use raypipe::bvh::morton::MortonBits;
@@ -11,7 +9,10 @@ use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::gpu::build::GpuLbvhBuilder;
 use raypipe::gpu::threaded::GpuThreadedLayout;
 use raypipe::rng::SplitMix64;
-use raypipe::scene::packed::GpuSphere;
+use crate::common::harness::Test;
+use pollster::block_on;
+use raypipe::gpu::GpuContext;
+use raypipe::records::{GpuSphere, PackedScene};
 
 fn random_spheres(n: usize, seed: u64, distinct_centres: usize) -> Vec<GpuSphere> {
     let mut rng = SplitMix64::new(seed);
@@ -61,11 +62,11 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
     let boxes = boxes(spheres);
     let codes = centroid_codes(&boxes, bits);
     let (cpu, _) = Bvh::build_from_codes(&boxes, &codes, bits);
-    builder.resize(spheres.len(), 0).unwrap();
+    block_on(builder.resize(spheres.len(), 0)).unwrap();
     builder.write_spheres(spheres);
     builder.write_codes(&codes);
-    builder.build(true).unwrap();
-    let nodes = builder.read_nodes().unwrap();
+    block_on(builder.build(true)).unwrap();
+    let nodes = block_on(builder.read_nodes()).unwrap();
     let first_difference = nodes.iter().zip(&cpu.nodes).position(|(g, c)| g != c);
     assert_eq!(nodes.len(), cpu.nodes.len(), "{what}: node counts");
     assert_eq!(first_difference, None, "{what}: first differing node");
@@ -75,11 +76,11 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
 /// The threaded layout of the GPU's nodes, laid out on the GPU, against the CPU's of the same nodes.
 fn check_threaded_layout(builder: &GpuLbvhBuilder, nodes: &[GpuNode], what: &str) {
     let ctx = builder.context();
-    let layout = GpuThreadedLayout::new(ctx, &builder.buffers().nodes, builder.count()).unwrap();
+    let layout = block_on(GpuThreadedLayout::new(ctx, &builder.buffers().nodes, builder.count())).unwrap();
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     layout.encode(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
-    let (frame, threaded) = layout.read(ctx).unwrap();
+    let (frame, threaded) = block_on(layout.read(ctx)).unwrap();
     let (cpu_frame, cpu_threaded) = threaded_nodes(nodes);
     assert_eq!(frame, cpu_frame, "{what}: quantization frames");
     let first_difference = threaded.iter().zip(&cpu_threaded).position(|(g, c)| g != c);
@@ -87,11 +88,9 @@ fn check_threaded_layout(builder: &GpuLbvhBuilder, nodes: &[GpuNode], what: &str
     assert_eq!(first_difference, None, "{what}: first differing threaded node");
 }
 
-#[test]
-fn same_codes_give_identical_nodes() {
-    let Some(ctx) = gpu() else { return };
+fn same_codes_give_identical_nodes(ctx: &GpuContext) {
     for bits in WIDTHS {
-        let mut builder = GpuLbvhBuilder::new(&ctx, bits, 0, 0).unwrap();
+        let mut builder = block_on(GpuLbvhBuilder::new(ctx, bits, 0, 0)).unwrap();
         for n in [0, 1, 2, 3, 100, 1023, 1024, 1025, 5000] {
             check_same_codes(
                 &mut builder,
@@ -107,18 +106,15 @@ fn same_codes_give_identical_nodes() {
     }
 }
 
-#[test]
-fn same_codes_give_identical_nodes_with_duplicate_centroids() {
-    let Some(ctx) = gpu() else { return };
+fn same_codes_give_identical_nodes_with_duplicate_centroids(ctx: &GpuContext) {
     for bits in WIDTHS {
-        let mut builder = GpuLbvhBuilder::new(&ctx, bits, 0, 0).unwrap();
+        let mut builder = block_on(GpuLbvhBuilder::new(ctx, bits, 0, 0)).unwrap();
         check_same_codes(&mut builder, &random_spheres(4000, 3, 7), "4,000 spheres on 7 centres");
         check_same_codes(&mut builder, &random_spheres(2048, 4, 1), "2,048 coincident spheres");
         check_same_codes(&mut builder, &clustered_spheres(3000, 5), "3,000 clustered spheres");
     }
 }
 
-#[test]
 fn wide_codes_split_what_narrow_codes_tie() {
     let spheres = clustered_spheres(3000, 5);
     let boxes = boxes(&spheres);
@@ -135,22 +131,20 @@ fn wide_codes_split_what_narrow_codes_tie() {
     assert!(wide > 1500, "63-bit codes tell only {wide} cells apart in the cluster");
 }
 
-#[test]
-fn own_codes_give_a_valid_tree() {
-    let Some(ctx) = gpu() else { return };
+fn own_codes_give_a_valid_tree(ctx: &GpuContext) {
     for bits in WIDTHS {
-        check_own_codes(GpuLbvhBuilder::new(&ctx, bits, 0, 0).unwrap(), bits);
+        check_own_codes(block_on(GpuLbvhBuilder::new(ctx, bits, 0, 0)).unwrap(), bits);
     }
 }
 
 fn check_own_codes(mut builder: GpuLbvhBuilder, bits: MortonBits) {
     for (n, centres) in [(1, 1), (2, 2), (10_000, 10_000), (3000, 5)] {
         let spheres = random_spheres(n, 11, centres);
-        builder.resize(n, 0).unwrap();
+        block_on(builder.resize(n, 0)).unwrap();
         builder.write_spheres(&spheres);
-        builder.build(false).unwrap();
+        block_on(builder.build(false)).unwrap();
         let bvh = Bvh {
-            nodes: builder.read_nodes().unwrap(),
+            nodes: block_on(builder.read_nodes()).unwrap(),
             primitive_count: n,
         };
         bvh.validate(&boxes(&spheres))
@@ -169,28 +163,36 @@ fn check_own_codes(mut builder: GpuLbvhBuilder, bits: MortonBits) {
 
 /// Spheres and triangles in one build: the GPU's triangle boxes are the CPU's to the bit, so the same
 /// codes give the same nodes, and the GPU's own codes give a valid tree over both kinds.
-#[test]
-fn spheres_and_triangles_build_alike() {
-    let Some(ctx) = gpu() else { return };
-    let mut scene = common::models::mixed_scene(16, 8, 700);
+fn spheres_and_triangles_build_alike(ctx: &GpuContext) {
+    let mut scene = crate::common::models::mixed_scene(16, 8, 700);
     scene.settings.width = 16;
     scene.settings.height = 16;
-    let packed = raypipe::scene::packed::PackedScene::new(&scene).unwrap();
+    let packed = PackedScene::new(&scene).unwrap();
     assert!(!packed.triangles.is_empty() && !packed.spheres.is_empty());
     let boxes = packed.primitive_boxes();
     let codes = centroid_codes(&boxes, MortonBits::Bits30);
     let (cpu, _) = Bvh::build_from_codes(&boxes, &codes, MortonBits::Bits30);
 
-    let mut builder = GpuLbvhBuilder::new(&ctx, MortonBits::Bits30, 0, 0).unwrap();
-    builder.write_scene(&packed).unwrap();
+    let mut builder = block_on(GpuLbvhBuilder::new(ctx, MortonBits::Bits30, 0, 0)).unwrap();
+    block_on(builder.write_scene(&packed)).unwrap();
     builder.write_codes(&codes);
-    builder.build(true).unwrap();
-    assert!(builder.read_nodes().unwrap() == cpu.nodes, "GPU and CPU nodes differ");
+    block_on(builder.build(true)).unwrap();
+    assert!(block_on(builder.read_nodes()).unwrap() == cpu.nodes, "GPU and CPU nodes differ");
 
-    builder.build(false).unwrap();
+    block_on(builder.build(false)).unwrap();
     let own = Bvh {
-        nodes: builder.read_nodes().unwrap(),
+        nodes: block_on(builder.read_nodes()).unwrap(),
         primitive_count: boxes.len(),
     };
     own.validate(&boxes).unwrap();
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![
+        gpu same_codes_give_identical_nodes,
+        gpu same_codes_give_identical_nodes_with_duplicate_centroids,
+        plain wide_codes_split_what_narrow_codes_tie,
+        gpu own_codes_give_a_valid_tree,
+        gpu spheres_and_triangles_build_alike,
+    ]
 }

@@ -1,70 +1,61 @@
 //! The fragment shader against the CPU reference, on every built-in scene, at full depth, in every
 //! acceleration mode; and every BVH mode against brute force on both devices.
 
-mod common;
-use common::*;
+use crate::common::harness::Test;
+use crate::common::*;
 use raypipe::bvh::morton::MortonBits;
-use raypipe::gpu::upload::MemoryMode;
-use raypipe::render::Accel;
-use raypipe::scene::packed::PackedScene;
+use raypipe::cpu::Count;
+use raypipe::gpu::{GpuContext, RendererOptions};
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::PackedScene;
 
-const BVH_MODES: [Accel; 3] = [Accel::Stack, Accel::Stackless, Accel::Threaded];
-
-fn check(spec: &str, width: u32, height: u32) {
+fn check(ctx: &GpuContext, spec: &str, width: u32, height: u32) {
     let mut scene = packed(spec, width, height, 5);
     scene.build_bvh(MortonBits::Bits30);
-    check_scene(&spec.replace(':', "-"), &scene);
+    check_scene(ctx, &spec.replace(':', "-"), &scene);
 }
 
-fn check_scene(name: &str, scene: &PackedScene) {
-    // The CPU needs no adapter: its BVH modes are checked against brute force everywhere.
-    let cpu_brute = raypipe::cpu::render(scene, Accel::Brute, false);
-    for accel in BVH_MODES {
-        let cpu = raypipe::cpu::render(scene, accel, false);
+fn check_scene(ctx: &GpuContext, name: &str, scene: &PackedScene) {
+    let cpu_brute = render_cpu(scene, Accel::Brute);
+    for accel in Accel::BVH {
+        let cpu = render_cpu(scene, accel);
         assert_frames_match(&format!("cpu-{accel:?}-vs-brute-{name}"), &cpu, &cpu_brute);
     }
-    let Some(ctx) = gpu() else { return };
-    let gpu_brute = render_gpu(&ctx, scene, MemoryMode::Storage, Accel::Brute);
+    let gpu_brute = render_gpu(ctx, scene, MemoryMode::Storage, Accel::Brute);
     assert_frames_match(&format!("gpu-vs-cpu-{name}"), &gpu_brute, &cpu_brute);
     // The shader counts its rays; they agree but for the few pixels where devices diverge.
     let (g, c) = (gpu_brute.rays() as f64, cpu_brute.rays() as f64);
     assert!((g - c).abs() <= 0.01 * c, "{name}: GPU traced {g} rays, CPU {c}");
-    for accel in BVH_MODES {
-        let gpu = render_gpu(&ctx, scene, MemoryMode::Storage, accel);
+    for accel in Accel::BVH {
+        let gpu = render_gpu(ctx, scene, MemoryMode::Storage, accel);
         assert_frames_match(&format!("gpu-{accel:?}-vs-brute-{name}"), &gpu, &gpu_brute);
-        let cpu = raypipe::cpu::render(scene, accel, false);
+        let cpu = render_cpu(scene, accel);
         assert_frames_match(&format!("gpu-vs-cpu-{accel:?}-{name}"), &gpu, &cpu);
     }
 }
 
-#[test]
-fn whitted() {
-    check("whitted", 160, 120);
+fn whitted(ctx: &GpuContext) {
+    check(ctx, "whitted", 160, 120);
 }
 
-#[test]
-fn sphere_8k() {
-    check("sphere-8k", 64, 48);
+fn sphere_8k(ctx: &GpuContext) {
+    check(ctx, "sphere-8k", 64, 48);
 }
 
-#[test]
-fn torus_5k() {
-    check("torus-5k", 64, 48);
+fn torus_5k(ctx: &GpuContext) {
+    check(ctx, "torus-5k", 64, 48);
 }
 
-#[test]
-fn random_spheres() {
-    check("random:1000:7", 64, 48);
+fn random_spheres(ctx: &GpuContext) {
+    check(ctx, "random:1000:7", 64, 48);
 }
 
-#[test]
-fn odd_image_sizes_read_back_whole_rows() {
+fn odd_image_sizes_read_back_whole_rows(ctx: &GpuContext) {
     // 67 * 16 bytes is not a multiple of the 256-byte copy alignment: rows must be unpadded right.
-    check("whitted", 67, 33);
+    check(ctx, "whitted", 67, 33);
 }
 
-#[test]
-fn random_spheres_with_duplicates() {
+fn random_spheres_with_duplicates(ctx: &GpuContext) {
     // A tenth of the spheres twice, the copy in another material: ties resolve by index everywhere.
     let mut scene = raypipe::scene::builtin::random(1500, 4);
     for i in 0..150 {
@@ -76,11 +67,10 @@ fn random_spheres_with_duplicates() {
     scene.settings.height = 48;
     let mut scene = PackedScene::new(&scene).unwrap();
     scene.build_bvh(MortonBits::Bits30);
-    check_scene("random-duplicates", &scene);
+    check_scene(ctx, "random-duplicates", &scene);
 }
 
-#[test]
-fn coincident_spheres() {
+fn coincident_spheres(ctx: &GpuContext) {
     let text = "[camera]\neye = [0, 0.5, -4]\ntarget = [0, 0, 0]\n[material.glass]\ntransmit = 0.9\nior = 1.5\n\
         [material.red]\ncolor = [0.9, 0.1, 0.1]\n[[light]]\nposition = [3, 5, -4]\n\
         [[sphere]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"glass\"\n\
@@ -93,25 +83,26 @@ fn coincident_spheres() {
     scene.settings.height = 48;
     let mut scene = PackedScene::new(&scene).unwrap();
     scene.build_bvh(MortonBits::Bits30);
-    check_scene("coincident", &scene);
+    check_scene(ctx, "coincident", &scene);
 }
 
-#[test]
-fn cost_aov_counts_the_same_tests_on_both_devices() {
+fn cost_aov_counts_the_same_tests_on_both_devices(ctx: &GpuContext) {
     let mut scene = packed("random:3000:9", 64, 48, 5);
     scene.build_bvh(MortonBits::Bits30);
-    let brute = raypipe::cpu::render_with(&scene, Accel::Brute, false, true);
+    let cost = |accel| raypipe::cpu::render_with(&scene, accel, Count::Cost, &|| {}).unwrap();
+    let brute = cost(Accel::Brute);
     assert!(
         brute.counts().iter().all(|&c| c == 3000),
         "brute force tests every sphere"
     );
-    let Some(ctx) = gpu() else { return };
-    for accel in BVH_MODES {
-        let cpu = raypipe::cpu::render_with(&scene, accel, false, true);
-        let gpu = raypipe::gpu::GpuRenderer::with_cost(&ctx, &scene, MemoryMode::Storage, accel)
-            .and_then(|r| r.render())
-            .unwrap()
-            .frame;
+    for accel in Accel::BVH {
+        let cpu = cost(accel);
+        let options = RendererOptions {
+            memory: MemoryMode::Storage,
+            accel,
+            count: Count::Cost,
+        };
+        let gpu = pollster::block_on(renderer(ctx, &scene, options).read_frame()).unwrap().frame;
         let (g, c) = (gpu.counts(), cpu.counts());
         let differing = g.iter().zip(&c).filter(|(a, b)| a != b).count();
         // Devices may disagree on a grazing box test: a handful of pixels at most.
@@ -128,13 +119,26 @@ fn cost_aov_counts_the_same_tests_on_both_devices() {
 }
 
 /// Triangles (smooth glass, flat mirror) and spheres in one BVH.
-#[test]
-fn spheres_and_triangles() {
+fn spheres_and_triangles(ctx: &GpuContext) {
     let mut scene = models::mixed_scene(24, 12, 1500);
     scene.settings.width = 96;
     scene.settings.height = 64;
     let mut scene = PackedScene::new(&scene).unwrap();
     assert_eq!((scene.triangles.len(), scene.spheres.len()), (1152, 1500));
     scene.build_bvh(MortonBits::Bits30);
-    check_scene("spheres-and-triangles", &scene);
+    check_scene(ctx, "spheres-and-triangles", &scene);
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![
+        gpu whitted,
+        gpu sphere_8k,
+        gpu torus_5k,
+        gpu random_spheres,
+        gpu odd_image_sizes_read_back_whole_rows,
+        gpu random_spheres_with_duplicates,
+        gpu coincident_spheres,
+        gpu cost_aov_counts_the_same_tests_on_both_devices,
+        gpu spheres_and_triangles,
+    ]
 }

@@ -1,0 +1,132 @@
+//! The display pass against the host's conversions of the same frame: what a window shows is what
+//! a PNG file holds, within one 8-bit step (the shader's `pow` against the host's).
+
+use crate::common::harness::Test;
+use crate::common::*;
+use pollster::block_on;
+use raypipe::bvh::morton::MortonBits;
+use raypipe::cpu::Count;
+use raypipe::gpu::readback::TextureReadback;
+use raypipe::gpu::{Display, DisplayView, GpuContext, Renderer, RendererOptions};
+use raypipe::image::heatmap::color_scale;
+use raypipe::image::{FloatImage, Frame};
+use raypipe::modes::Accel;
+
+/// The frame `renderer` traces, and the display pass's 8-bit image of it in `format`.
+fn displayed(renderer: &Renderer, format: wgpu::TextureFormat, view: DisplayView, cost_max: f32) -> (Frame, Vec<u8>) {
+    let ctx = renderer.context();
+    let frame = block_on(renderer.read_frame()).unwrap().frame;
+    let (width, height) = renderer.size();
+    // A target larger than the frame, as a window with room for a panel: the frame is at its corner.
+    let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("display test target"),
+        size: wgpu::Extent3d {
+            width: width + 13,
+            height: height + 5,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let display = Display::new(ctx, format);
+    let readback = TextureReadback::new(&ctx.device, target.width(), target.height(), 4);
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    // The targets still hold the frame read above.
+    display.encode(
+        &mut encoder,
+        renderer.targets(),
+        &target.create_view(&Default::default()),
+        view,
+        10.0,
+        cost_max,
+    );
+    readback.encode_copy(&mut encoder, &target);
+    ctx.queue.submit([encoder.finish()]);
+    let bytes = block_on(readback.read(&ctx.device)).unwrap();
+    // The frame's rows out of the larger target.
+    let row = target.width() as usize * 4;
+    let pixels = (0..height as usize)
+        .flat_map(|y| bytes[y * row..y * row + width as usize * 4].to_vec())
+        .collect();
+    (frame, pixels)
+}
+
+/// Every pixel's rgb within `steps` 8-bit steps of `expected` (values in [0, 1]).
+fn assert_close(name: &str, rgba: &[u8], expected: &FloatImage, steps: i32) {
+    let mut worst = (0, 0);
+    for (i, pixel) in rgba.chunks(4).enumerate() {
+        for (c, &byte) in pixel[..3].iter().enumerate() {
+            let want = (expected.pixel(i)[c].clamp(0.0, 1.0) * 255.0).round() as i32;
+            let off = (byte as i32 - want).abs();
+            if off > worst.0 {
+                worst = (off, i);
+            }
+        }
+    }
+    assert!(
+        worst.0 <= steps,
+        "{name}: pixel {} is {} steps off (allowed {steps})",
+        worst.1,
+        worst.0
+    );
+}
+
+fn scene_renderer(ctx: &GpuContext, count: Count) -> Renderer {
+    let mut scene = packed("whitted", 64, 48, 5);
+    scene.build_bvh(MortonBits::Bits30);
+    let options = RendererOptions {
+        accel: Accel::Threaded,
+        count,
+        ..Default::default()
+    };
+    renderer(ctx, &scene, options)
+}
+
+fn color_and_normals_match_the_files(ctx: &GpuContext) {
+    let renderer = scene_renderer(ctx, Count::Rays);
+    for format in [wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::Rgba8UnormSrgb] {
+        let (frame, rgba) = displayed(&renderer, format, DisplayView::Color, 1.0);
+        assert_close(&format!("colour into {format:?}"), &rgba, &frame.display(), 1);
+        let (frame, rgba) = displayed(&renderer, format, DisplayView::Normal, 1.0);
+        assert_close(&format!("normals into {format:?}"), &rgba, &frame.normals(), 1);
+    }
+}
+
+fn cost_view_uses_the_heat_map_scale(ctx: &GpuContext) {
+    let renderer = scene_renderer(ctx, Count::Cost);
+    let (frame, rgba) = displayed(&renderer, wgpu::TextureFormat::Rgba8Unorm, DisplayView::Cost, 40.0);
+    let data = frame
+        .counts()
+        .iter()
+        .flat_map(|&c| color_scale(c as f32 / 40.0))
+        .collect();
+    let expected = FloatImage {
+        width: frame.width,
+        height: frame.height,
+        channels: ["R", "G", "B"].map(String::from).to_vec(),
+        data,
+    };
+    assert_close("cost", &rgba, &expected, 1);
+}
+
+/// The check above must fail when the picture is off: one pixel two steps brighter.
+fn a_displayed_image_two_steps_off_fails(ctx: &GpuContext) {
+    let renderer = scene_renderer(ctx, Count::Rays);
+    let (frame, mut rgba) = displayed(&renderer, wgpu::TextureFormat::Rgba8Unorm, DisplayView::Color, 1.0);
+    let pixel = rgba.chunks(4).position(|p| p[0] < 250).expect("a pixel short of white") * 4;
+    rgba[pixel] += 2;
+    let result = std::panic::catch_unwind(|| assert_close("perturbed", &rgba, &frame.display(), 1));
+    assert!(result.is_err(), "a pixel two steps off passed");
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![
+        gpu color_and_normals_match_the_files,
+        gpu cost_view_uses_the_heat_map_scale,
+        gpu a_displayed_image_two_steps_off_fails,
+    ]
+}

@@ -1,0 +1,89 @@
+//! Moving scenes: the BVH rebuilt every frame, on the GPU in the same submission as the frame, must
+//! give the images of the CPU path (which rebuilds with the CPU builder).
+
+use crate::common::harness::Test;
+use crate::common::*;
+use pollster::block_on;
+use raypipe::bvh::lbvh::LbvhBuilder;
+use raypipe::bvh::morton::MortonBits;
+use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::image::Frame;
+use raypipe::modes::Accel;
+use raypipe::records::PackedScene;
+use raypipe::scene::Scene;
+
+/// `count` frames with the BVH rebuilt on the GPU before each, in the frame's submission.
+fn gpu_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32) -> Vec<Frame> {
+    let first = PackedScene::new(scene).unwrap();
+    let rebuild = block_on(SceneRebuild::new(ctx, &first, accel, MortonBits::Bits30)).unwrap();
+    let options = RendererOptions {
+        accel,
+        ..Default::default()
+    };
+    let renderer = block_on(Renderer::with_rebuild(ctx, &first, &rebuild, options)).unwrap();
+    (0..count)
+        .map(|frame| {
+            let moved = PackedScene::new(&scene.at_frame(frame)).unwrap();
+            rebuild.write_spheres(&moved.spheres);
+            block_on(renderer.read_frame_after(|encoder| rebuild.encode(encoder)))
+                .unwrap()
+                .frame
+        })
+        .collect()
+}
+
+/// The same frames on the CPU, one reusable builder rebuilding the BVH before each.
+fn cpu_frames(scene: &Scene, accel: Accel, count: u32) -> Vec<Frame> {
+    let mut builder = LbvhBuilder::<u64>::new();
+    (0..count)
+        .map(|frame| {
+            let mut packed = PackedScene::new(&scene.at_frame(frame)).unwrap();
+            builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
+            packed.set_bvh(builder.to_bvh());
+            render_cpu(&packed, accel)
+        })
+        .collect()
+}
+
+fn gpu_rebuilt_frames_match_the_cpu(ctx: &GpuContext) {
+    let mut scene = Scene::load("bounce:1500:2").unwrap();
+    scene.settings.width = 64;
+    scene.settings.height = 48;
+    let cpu = cpu_frames(&scene, Accel::Stack, 4);
+    assert_ne!(cpu[0], cpu[3], "the spheres move");
+    let cpu_brute = cpu_frames(&scene, Accel::Brute, 4);
+    assert_frames_match("frames-cpu-stack-vs-brute", &cpu[3], &cpu_brute[3]);
+    let gpu = gpu_frames(ctx, &scene, Accel::Stack, 4);
+    for (k, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
+        assert_frames_match(&format!("frames-gpu-vs-cpu-{k}"), g, c);
+    }
+}
+
+/// Spheres flying among standing triangles, rebuilt on the GPU every frame: the CPU's frames.
+fn gpu_rebuilt_frames_with_triangles_match_the_cpu(ctx: &GpuContext) {
+    let mut scene = models::mixed_scene(12, 6, 300);
+    scene.settings.width = 48;
+    scene.settings.height = 32;
+    let velocities = (0..scene.spheres.len())
+        .map(|i| glam::Vec3::new((i % 7) as f32 - 3.0, (i % 5) as f32 - 2.0, (i % 3) as f32 - 1.0))
+        .collect();
+    scene.motion = Some(raypipe::scene::Motion {
+        velocities,
+        lo: glam::Vec3::new(-2.0, -0.5, -1.0),
+        hi: glam::Vec3::new(2.0, 1.0, 2.5),
+        frame_time: 1.0 / 30.0,
+    });
+    let on_gpu = gpu_frames(ctx, &scene, Accel::Threaded, 3);
+    let on_cpu = cpu_frames(&scene, Accel::Threaded, 3);
+    assert_ne!(on_cpu[0], on_cpu[2], "the spheres move");
+    for (k, (g, c)) in on_gpu.iter().zip(&on_cpu).enumerate() {
+        assert_frames_match(&format!("frames-triangles-{k}"), g, c);
+    }
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![
+        gpu gpu_rebuilt_frames_match_the_cpu,
+        gpu gpu_rebuilt_frames_with_triangles_match_the_cpu,
+    ]
+}
