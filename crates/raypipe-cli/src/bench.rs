@@ -169,7 +169,12 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         // One rebuild per walk: the stack and threaded walks also lay out its tree.
         let rebuild_for = |accel: Accel| -> anyhow::Result<Option<SceneRebuild>> {
             if args.rebuild && accel.uses_bvh() {
-                Ok(Some(block_on(SceneRebuild::new(&ctx, &packed, accel, MortonBits::Bits30))?))
+                Ok(Some(block_on(SceneRebuild::new(
+                    &ctx,
+                    &packed,
+                    accel,
+                    MortonBits::Bits30,
+                ))?))
             } else {
                 Ok(None)
             }

@@ -1,6 +1,6 @@
 use crate::io;
-use raypipe::image::diff;
 use clap::Args;
+use raypipe::image::diff;
 use std::path::PathBuf;
 use std::process::ExitCode;
 

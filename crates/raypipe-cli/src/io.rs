@@ -1,8 +1,8 @@
 //! Reading and writing PNG (8-bit, display-encoded) and OpenEXR (32-bit float) images.
 
-use raypipe::image::FloatImage;
 use anyhow::{Context, bail};
 use exr::prelude::{self as exrs, ReadChannels, ReadLayers, WritableImage};
+use raypipe::image::FloatImage;
 use std::path::Path;
 
 fn is_exr(path: &Path) -> bool {

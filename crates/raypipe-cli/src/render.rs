@@ -156,7 +156,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         memory: args.memory,
         accel: args.accel,
         progress: std::io::stderr().is_terminal(),
-        count: if args.aov == Aov::Cost { Count::Cost } else { Count::Rays },
+        count: if args.aov == Aov::Cost {
+            Count::Cost
+        } else {
+            Count::Rays
+        },
         warm_up: args.stats,
     };
     if let Some(frames) = args.frames {

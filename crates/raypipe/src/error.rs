@@ -110,7 +110,7 @@ impl fmt::Display for InputError {
         match (&self.origin, self.line) {
             (Some(origin), Some(line)) => write!(f, "{origin}:{line}: ")?,
             (Some(origin), None) => write!(f, "{origin}: ")?,
-            (None, Some(line)) => write!(f, "line {line}: ")?,
+            (None, Some(line)) => write!(f, "{line}: ")?,
             (None, None) => {}
         }
         if let Some(element) = &self.element {

@@ -18,12 +18,27 @@ pub enum Accel {
     Threaded,
 }
 
-impl_choice!(Accel, [
-    (Brute, "brute", "every ray against every primitive"),
-    (Stack, "stack", "the linear BVH, walked with a per-pixel stack, nearer child first"),
-    (Stackless, "stackless", "the linear BVH, walked without a stack (Hapala et al. 2011): parent links, nearer child first"),
-    (Threaded, "threaded", "the linear BVH, walked without a stack along escape links, in fixed depth-first order"),
-]);
+impl_choice!(
+    Accel,
+    [
+        (Brute, "brute", "every ray against every primitive"),
+        (
+            Stack,
+            "stack",
+            "the linear BVH, walked with a per-pixel stack, nearer child first"
+        ),
+        (
+            Stackless,
+            "stackless",
+            "the linear BVH, walked without a stack (Hapala et al. 2011): parent links, nearer child first"
+        ),
+        (
+            Threaded,
+            "threaded",
+            "the linear BVH, walked without a stack along escape links, in fixed depth-first order"
+        ),
+    ]
+);
 
 impl Accel {
     pub fn uses_bvh(self) -> bool {
@@ -47,8 +62,19 @@ pub enum MemoryMode {
     Texture,
 }
 
-impl_choice!(MemoryMode, [
-    (Uniform, "uniform", "uniform buffers: fast, but small (64 KiB per array on most adapters)"),
-    (Storage, "storage", "storage buffers: up to the adapter's buffer limit"),
-    (Texture, "texture", "rgba32float textures read with textureLoad: the route where fragment shaders have no storage buffers (WebGL2)"),
-]);
+impl_choice!(
+    MemoryMode,
+    [
+        (
+            Uniform,
+            "uniform",
+            "uniform buffers: fast, but small (64 KiB per array on most adapters)"
+        ),
+        (Storage, "storage", "storage buffers: up to the adapter's buffer limit"),
+        (
+            Texture,
+            "texture",
+            "rgba32float textures read with textureLoad: the route where fragment shaders have no storage buffers (WebGL2)"
+        ),
+    ]
+);

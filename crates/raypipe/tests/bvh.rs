@@ -11,9 +11,9 @@ use raypipe::bvh::threaded::{self, GpuThreadedNode, threaded_nodes};
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use raypipe::cpu::intersect::{Hit, HitKind, Primitives, Ray};
-use raypipe::rng::SplitMix64;
 use raypipe::records::packed::primitive_boxes;
 use raypipe::records::{GpuSphere, GpuTriangle, PackedBvh};
+use raypipe::rng::SplitMix64;
 
 fn spheres_to_boxes(spheres: &[(Vec3, f32)]) -> Vec<Aabb> {
     spheres.iter().map(|&(c, r)| Aabb::around_sphere(c, r)).collect()

@@ -101,8 +101,14 @@ fn every_shader_variant_validates() {
 #[test]
 fn the_build_layout_and_display_shaders_validate() {
     let sources = [
-        ("LBVH build, 30-bit", raypipe::gpu::build::shader_source(MortonBits::Bits30)),
-        ("LBVH build, 63-bit", raypipe::gpu::build::shader_source(MortonBits::Bits63)),
+        (
+            "LBVH build, 30-bit",
+            raypipe::gpu::build::shader_source(MortonBits::Bits30),
+        ),
+        (
+            "LBVH build, 63-bit",
+            raypipe::gpu::build::shader_source(MortonBits::Bits63),
+        ),
         ("threaded layout", raypipe::gpu::threaded::shader_source()),
         ("display", raypipe::gpu::display::shader_source().to_string()),
     ];

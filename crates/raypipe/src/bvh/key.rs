@@ -90,4 +90,3 @@ pub(crate) fn gather_leaf_boxes<K: Key>(keys: &[K], boxes: &[Aabb], leaf_boxes: 
             }
         });
 }
-

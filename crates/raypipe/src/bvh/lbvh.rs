@@ -6,17 +6,16 @@
 //! one build to the next, as a per-frame rebuild wants.
 
 use super::aabb::Aabb;
-use super::layout::{GpuNode, LEAF, NONE};
 use super::key::{Key, gather_leaf_boxes};
+use super::layout::{GpuNode, LEAF, NONE};
 use super::merge::{self, merge_bottom_up};
 use super::morton::{Grid, MortonBits};
 use super::sort::radix_sort_by_key_then;
-use crate::parallel::{DisjointWrites, MIN_TASK};
 use super::{BuildTimings, Bvh};
+use crate::parallel::{DisjointWrites, MIN_TASK};
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 use web_time::Instant;
-
 
 /// Whether sorted key j shares more leading bits with key i than `limit` allows (see
 /// [`Key::below_top_bit`]); no key outside the array does. Karras (section 4) makes every key
@@ -142,10 +141,21 @@ pub enum Hierarchy {
     Searches,
 }
 
-crate::impl_choice!(Hierarchy, [
-    (Merges, "merges", "bottom-up merges (Apetrei 2014), which write the boxes and links in the same pass over the leaves"),
-    (Searches, "searches", "Karras's searches: every internal node found on its own, as the GPU builder finds them, then the boxes and links in a climb of their own"),
-]);
+crate::impl_choice!(
+    Hierarchy,
+    [
+        (
+            Merges,
+            "merges",
+            "bottom-up merges (Apetrei 2014), which write the boxes and links in the same pass over the leaves"
+        ),
+        (
+            Searches,
+            "searches",
+            "Karras's searches: every internal node found on its own, as the GPU builder finds them, then the boxes and links in a climb of their own"
+        ),
+    ]
+);
 
 /// A reusable LBVH builder: build after build, its buffers keep their capacity. `K` is `u64` for
 /// 30-bit Morton codes and `u128` for 63-bit ones.
@@ -353,7 +363,6 @@ impl<K: Key> LbvhBuilder<K> {
 
 /// Subtrees with fewer leaves than this are walked on one thread.
 const SERIAL_LEAVES: u32 = 4096;
-
 
 struct Walk<'a, K: Key> {
     nodes: DisjointWrites<GpuNode>,

@@ -16,8 +16,8 @@
 //! last serial merge of the same kind.
 
 use super::aabb::Aabb;
-use super::layout::{GpuNode, LEAF, NONE};
 use super::key::{Key, gather_leaf_boxes};
+use super::layout::{GpuNode, LEAF, NONE};
 use crate::parallel::DisjointWrites;
 use glam::Vec3A;
 use rayon::prelude::*;

@@ -14,10 +14,13 @@ pub enum MortonBits {
     Bits63,
 }
 
-crate::impl_choice!(MortonBits, [
-    (Bits30, "30", "10 bits per axis, in the low 30 bits"),
-    (Bits63, "63", "21 bits per axis, in the low 63 bits"),
-]);
+crate::impl_choice!(
+    MortonBits,
+    [
+        (Bits30, "30", "10 bits per axis, in the low 30 bits"),
+        (Bits63, "63", "21 bits per axis, in the low 63 bits"),
+    ]
+);
 
 impl MortonBits {
     pub const fn bits_per_axis(self) -> u32 {

@@ -22,7 +22,6 @@ const SERIAL_BUCKETS: usize = 1 << SERIAL_DIGIT_BITS;
 /// Buckets up to this many items are sorted on one thread.
 const SERIAL_ITEMS: usize = 1 << 16;
 
-
 /// Sorts `items` by the `bits` low bits of `key(item)`, stably. `scratch` is resized to match and
 /// keeps its capacity for the next sort.
 pub fn radix_sort_by_key<T, K>(items: &mut [T], scratch: &mut Vec<T>, bits: u32, key: K)

@@ -61,7 +61,6 @@ pub fn reset_box_tests() {
     BOX_TESTS.with(|c| c.set(0));
 }
 
-
 /// The nearest t in (0, t_max] where the ray meets the sphere, or [`NO_HIT`]. t_max itself counts, so
 /// that a sphere as near as the best hit so far can still win the tie (see [`closer_primitive`]).
 pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {

@@ -7,7 +7,6 @@ use crate::records::constants::RAY_BIAS;
 use crate::records::{GpuMaterial, GpuTriangle};
 use glam::Vec3;
 
-
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {
     pub position: Vec3,

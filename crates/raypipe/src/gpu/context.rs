@@ -21,12 +21,15 @@ pub enum Backend {
     Dx12,
 }
 
-impl_choice!(Backend, [
-    (Vulkan, "vulkan", "Vulkan"),
-    (Gl, "gl", "OpenGL or OpenGL ES, through EGL (WebGL2 in a browser)"),
-    (Metal, "metal", "Metal"),
-    (Dx12, "dx12", "Direct3D 12"),
-]);
+impl_choice!(
+    Backend,
+    [
+        (Vulkan, "vulkan", "Vulkan"),
+        (Gl, "gl", "OpenGL or OpenGL ES, through EGL (WebGL2 in a browser)"),
+        (Metal, "metal", "Metal"),
+        (Dx12, "dx12", "Direct3D 12"),
+    ]
+);
 
 impl Backend {
     pub fn backends(self) -> wgpu::Backends {
@@ -160,11 +163,7 @@ impl GpuContext {
     }
 
     /// Runs `f` inside validation and out-of-memory error scopes; a wgpu error becomes an `Err`.
-    pub async fn checked<T>(
-        &self,
-        what: &'static str,
-        f: impl FnOnce() -> Result<T, GpuError>,
-    ) -> Result<T, GpuError> {
+    pub async fn checked<T>(&self, what: &'static str, f: impl FnOnce() -> Result<T, GpuError>) -> Result<T, GpuError> {
         let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let result = f();

@@ -24,12 +24,15 @@ pub enum DisplayView {
     Cost,
 }
 
-impl_choice!(DisplayView, [
-    (Color, "color", "shaded colour"),
-    (Depth, "depth", "distance to the first hit"),
-    (Normal, "normal", "first-hit normals"),
-    (Cost, "cost", "BVH nodes each primary ray tested, as a heat map"),
-]);
+impl_choice!(
+    DisplayView,
+    [
+        (Color, "color", "shaded colour"),
+        (Depth, "depth", "distance to the first hit"),
+        (Normal, "normal", "first-hit normals"),
+        (Cost, "cost", "BVH nodes each primary ray tested, as a heat map"),
+    ]
+);
 
 /// The pass's parameters (`DisplayParams` in display.wgsl).
 #[repr(C)]
@@ -158,7 +161,9 @@ impl Display {
             depth_far,
             cost_max,
         };
-        self.ctx.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        self.ctx
+            .queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let bind_group = self.ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("display"),
             layout: &self.layout,

@@ -192,10 +192,9 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn R
     let bvh = scene.bvh.as_ref();
     match accel {
         Accel::Brute => {}
-        Accel::Stack | Accel::Threaded => records.push((
-            "threaded_node",
-            bvh.map_or(&NO_THREADED_NODES, |b| &b.threaded_nodes),
-        )),
+        Accel::Stack | Accel::Threaded => {
+            records.push(("threaded_node", bvh.map_or(&NO_THREADED_NODES, |b| &b.threaded_nodes)))
+        }
         Accel::Stackless => records.push(("node", bvh.map_or(&NO_NODES, |b| &b.nodes))),
     }
     records

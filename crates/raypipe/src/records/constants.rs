@@ -44,7 +44,11 @@ pub fn wgsl() -> String {
 /// A WGSL float literal that reads back as exactly `value`.
 pub fn float_literal(value: f32) -> String {
     let text = format!("{value:?}");
-    if text.contains(['.', 'e']) { text } else { format!("{text}.0") }
+    if text.contains(['.', 'e']) {
+        text
+    } else {
+        format!("{text}.0")
+    }
 }
 
 #[cfg(test)]
@@ -53,7 +57,16 @@ mod tests {
 
     #[test]
     fn literals_read_back_exactly() {
-        for value in [T_FAR, MIN_WEIGHT, DEPTH_MISS, RAY_BIAS, PARALLEL_EPSILON, TINY_DIRECTION, 3.0, 0.1] {
+        for value in [
+            T_FAR,
+            MIN_WEIGHT,
+            DEPTH_MISS,
+            RAY_BIAS,
+            PARALLEL_EPSILON,
+            TINY_DIRECTION,
+            3.0,
+            0.1,
+        ] {
             assert_eq!(float_literal(value).parse::<f32>().unwrap(), value);
         }
     }

@@ -258,4 +258,3 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
     struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
 ];
-

@@ -115,4 +115,3 @@ impl GpuRecord for GpuNode {
         out.push([link_texel(self.parent), link_texel(self.escape), 0.0, 0.0]);
     }
 }
-

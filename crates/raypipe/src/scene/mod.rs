@@ -250,10 +250,7 @@ impl Scene {
         self.settings.validate()?;
         for (i, light) in self.lights.iter().enumerate() {
             if !(finite_vec(light.position) && finite_vec(light.color)) {
-                return Err(InputError::of(
-                    Element::Light(i),
-                    "position and color must be finite",
-                ));
+                return Err(InputError::of(Element::Light(i), "position and color must be finite"));
             }
         }
         for (i, m) in self.materials.iter().enumerate() {
@@ -355,7 +352,10 @@ impl RenderSettings {
             return Err(InputError::of(Element::Render, "background must be finite"));
         }
         if !(self.ambient.is_finite() && self.ambient >= 0.0) {
-            return Err(InputError::of(Element::Render, "ambient must be finite and not negative"));
+            return Err(InputError::of(
+                Element::Render,
+                "ambient must be finite and not negative",
+            ));
         }
         Ok(())
     }

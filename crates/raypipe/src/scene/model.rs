@@ -3,8 +3,8 @@
 
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, Triangle};
 use crate::bvh::aabb::Aabb;
-use crate::mesh::{self, Mesh};
 use crate::error::InputError;
+use crate::mesh::{self, Mesh};
 use glam::Vec3;
 use std::path::Path;
 
@@ -18,10 +18,17 @@ pub enum MeshAs {
     Spheres,
 }
 
-crate::impl_choice!(MeshAs, [
-    (Triangles, "triangles", "its triangles, as primitives of the BVH"),
-    (Spheres, "spheres", "spheres placed on its surface, as in the paper's figures"),
-]);
+crate::impl_choice!(
+    MeshAs,
+    [
+        (Triangles, "triangles", "its triangles, as primitives of the BVH"),
+        (
+            Spheres,
+            "spheres",
+            "spheres placed on its surface, as in the paper's figures"
+        ),
+    ]
+);
 
 /// How many spheres a mesh becomes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,7 +128,9 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
                 .radius
                 .unwrap_or_else(|| mesh.default_sphere_radius(centers.len()));
             if !(radius > 0.0 && radius.is_finite()) {
-                return Err(InputError::new("the mesh has no area to size spheres by: give a radius"));
+                return Err(InputError::new(
+                    "the mesh has no area to size spheres by: give a radius",
+                ));
             }
             scene.spheres.extend(centers.into_iter().map(|center| Sphere {
                 center,
@@ -303,6 +312,12 @@ mod tests {
             scale: -1.0,
             ..Placement::default()
         };
-        assert!(negative.validate().unwrap_err().message.starts_with("scale must be positive"));
+        assert!(
+            negative
+                .validate()
+                .unwrap_err()
+                .message
+                .starts_with("scale must be positive")
+        );
     }
 }

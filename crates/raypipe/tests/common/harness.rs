@@ -1,5 +1,7 @@
 //! One test harness for the tests that need a GPU or the shared models (libtest-mimic): the GPU is
-//! opened once per binary and shared by every test (wgpu's error scopes are per thread), and a test
+//! opened once per binary and shared by every test (wgpu's error scopes are per thread; on GL,
+//! whose context one thread holds at a time and others wait for only a second, the GPU tests take
+//! turns while the others run beside them), and a test
 //! whose GPU or models are missing is reported as *ignored*, with the reason, in the summary a
 //! newcomer sees. `RAYPIPE_REQUIRE_GPU=1` and `RAYPIPE_REQUIRE_MODELS=1` turn a missing one into a
 //! failure.
@@ -8,7 +10,10 @@ use libtest_mimic::{Arguments, Failed, Trial};
 use raypipe::gpu::GpuContext;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
+
+/// Held by each GPU test where the backend cannot serve two threads at once.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 /// A test's body, by what it needs.
 pub enum Body {
@@ -57,7 +62,9 @@ struct Resources {
 /// Runs `tests` as libtest would, with the GPU and the models opened once.
 pub fn run(tests: Vec<Test>) -> ExitCode {
     let args = Arguments::from_args();
-    let needs_gpu = tests.iter().any(|t| matches!(t.body, Body::Gpu(_) | Body::GpuModels(_)));
+    let needs_gpu = tests
+        .iter()
+        .any(|t| matches!(t.body, Body::Gpu(_) | Body::GpuModels(_)));
     let gpu = if needs_gpu {
         pollster::block_on(GpuContext::new(None)).unwrap_or_else(|e| panic!("opening the GPU failed: {e}"))
     } else {
@@ -76,7 +83,9 @@ pub fn run(tests: Vec<Test>) -> ExitCode {
         None => {}
     }
     let models = models_dir();
-    let needs_models = tests.iter().any(|t| matches!(t.body, Body::Models(_) | Body::GpuModels(_)));
+    let needs_models = tests
+        .iter()
+        .any(|t| matches!(t.body, Body::Models(_) | Body::GpuModels(_)));
     if needs_models && models.is_none() {
         eprintln!(
             "../shared/models/ not found: the model tests are ignored{}",
@@ -101,12 +110,14 @@ fn trial(test: Test, resources: &Arc<Resources>) -> Trial {
     };
     let missing_gpu = wants_gpu && resources.gpu.is_none();
     let missing_models = wants_models && resources.models.is_none();
-    let must_fail = (missing_gpu && required("RAYPIPE_REQUIRE_GPU"))
-        || (missing_models && required("RAYPIPE_REQUIRE_MODELS"));
+    let must_fail =
+        (missing_gpu && required("RAYPIPE_REQUIRE_GPU")) || (missing_models && required("RAYPIPE_REQUIRE_MODELS"));
     let ignored = (missing_gpu || missing_models) && !must_fail;
     let resources = Arc::clone(resources);
     Trial::test(test.name, move || {
         let (gpu, models) = (resources.gpu.as_ref(), resources.models.as_deref());
+        let _turn = (wants_gpu && gpu.is_some_and(|g| g.info.backend == wgpu::Backend::Gl))
+            .then(|| ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner()));
         match (test.body, gpu, models) {
             (Body::Plain(f), _, _) => f(),
             (Body::Gpu(f), Some(gpu), _) => f(gpu),

@@ -1,18 +1,18 @@
 //! The LBVH built in compute passes against the CPU build: bit-identical node arrays from the same
 //! Morton codes, 30-bit and 63-bit, and a valid tree from the GPU's own codes.
 
+use crate::common::harness::Test;
+use pollster::block_on;
 use raypipe::bvh::aabb::Aabb;
 use raypipe::bvh::layout::GpuNode;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::threaded::threaded_nodes;
 use raypipe::bvh::{Bvh, centroid_codes};
+use raypipe::gpu::GpuContext;
 use raypipe::gpu::build::GpuLbvhBuilder;
 use raypipe::gpu::threaded::GpuThreadedLayout;
-use raypipe::rng::SplitMix64;
-use crate::common::harness::Test;
-use pollster::block_on;
-use raypipe::gpu::GpuContext;
 use raypipe::records::{GpuSphere, PackedScene};
+use raypipe::rng::SplitMix64;
 
 fn random_spheres(n: usize, seed: u64, distinct_centres: usize) -> Vec<GpuSphere> {
     let mut rng = SplitMix64::new(seed);
@@ -177,7 +177,10 @@ fn spheres_and_triangles_build_alike(ctx: &GpuContext) {
     block_on(builder.write_scene(&packed)).unwrap();
     builder.write_codes(&codes);
     block_on(builder.build(true)).unwrap();
-    assert!(block_on(builder.read_nodes()).unwrap() == cpu.nodes, "GPU and CPU nodes differ");
+    assert!(
+        block_on(builder.read_nodes()).unwrap() == cpu.nodes,
+        "GPU and CPU nodes differ"
+    );
 
     block_on(builder.build(false)).unwrap();
     let own = Bvh {

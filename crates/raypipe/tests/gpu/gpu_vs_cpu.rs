@@ -102,7 +102,9 @@ fn cost_aov_counts_the_same_tests_on_both_devices(ctx: &GpuContext) {
             accel,
             count: Count::Cost,
         };
-        let gpu = pollster::block_on(renderer(ctx, &scene, options).read_frame()).unwrap().frame;
+        let gpu = pollster::block_on(renderer(ctx, &scene, options).read_frame())
+            .unwrap()
+            .frame;
         let (g, c) = (gpu.counts(), cpu.counts());
         let differing = g.iter().zip(&c).filter(|(a, b)| a != b).count();
         // Devices may disagree on a grazing box test: a handful of pixels at most.
