@@ -2,6 +2,7 @@
 //! name, a line, an element), so that each caller words its own message: the command line prints one
 //! line and adds its flag hints, a viewer shows a banner and keeps its previous scene.
 
+use crate::modes::Accel;
 use std::fmt;
 
 /// The part of a scene an error is about.
@@ -118,6 +119,13 @@ impl fmt::Display for InputError {
         }
         f.write_str(&self.message)
     }
+}
+
+/// A BVH walk was asked for on a scene without its BVH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the {accel} walk needs the scene's BVH, which was not built")]
+pub struct MissingBvh {
+    pub accel: Accel,
 }
 
 /// Parser and driver messages may span lines; ours are one.

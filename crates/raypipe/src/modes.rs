@@ -78,3 +78,13 @@ impl_choice!(
         ),
     ]
 );
+
+/// What a pixel's fourth colour channel holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Count {
+    /// The rays traced for the pixel (primary, shadow, secondary).
+    #[default]
+    Rays,
+    /// The cost of its primary ray (BVH nodes tested; spheres tested for brute force), as the shader's cost variant.
+    Cost,
+}

@@ -15,6 +15,7 @@
 
 use super::aabb::Aabb;
 use super::layout::{GpuNode, NONE};
+use super::validate::InvalidTree;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -168,7 +169,19 @@ pub fn threaded_nodes(nodes: &[GpuNode]) -> (QuantizationFrame, Vec<GpuThreadedN
 /// (each internal node's link is the end of its subtree, the next node starts its left subtree, and
 /// the end of that its right one), every primitive is in exactly one leaf, and every box, taken back
 /// out of the frame exactly, holds the boxes of all primitives below it.
-pub fn validate(frame: &QuantizationFrame, nodes: &[GpuThreadedNode], primitive_boxes: &[Aabb]) -> Result<(), String> {
+pub fn validate(
+    frame: &QuantizationFrame,
+    nodes: &[GpuThreadedNode],
+    primitive_boxes: &[Aabb],
+) -> Result<(), InvalidTree> {
+    first_violation(frame, nodes, primitive_boxes).map_err(InvalidTree)
+}
+
+fn first_violation(
+    frame: &QuantizationFrame,
+    nodes: &[GpuThreadedNode],
+    primitive_boxes: &[Aabb],
+) -> Result<(), String> {
     let n = primitive_boxes.len();
     if nodes.len() != (2 * n).saturating_sub(1) {
         return Err(format!("{} nodes for {n} primitives", nodes.len()));

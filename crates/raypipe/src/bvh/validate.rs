@@ -4,12 +4,21 @@ use super::aabb::Aabb;
 use super::layout::NONE;
 use super::{Bvh, node_box};
 
+/// A tree that breaks an invariant the traversals rely on: the first violation found, in words.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct InvalidTree(pub String);
+
 impl Bvh {
     /// Checks that every primitive is in exactly one leaf, that parent and child links agree, that
     /// every internal box is exactly the union of its children's and every leaf box contains its
     /// primitive's (`primitive_boxes`), and that escape links follow depth-first order (left child
     /// first). Returns the first violation found.
-    pub fn validate(&self, primitive_boxes: &[Aabb]) -> Result<(), String> {
+    pub fn validate(&self, primitive_boxes: &[Aabb]) -> Result<(), InvalidTree> {
+        self.first_violation(primitive_boxes).map_err(InvalidTree)
+    }
+
+    fn first_violation(&self, primitive_boxes: &[Aabb]) -> Result<(), String> {
         let n = self.primitive_count;
         if primitive_boxes.len() != n {
             return Err(format!("{} primitive boxes for {n} primitives", primitive_boxes.len()));

@@ -7,7 +7,8 @@ pub mod intersect;
 pub mod shade;
 pub mod trace;
 
-pub use trace::MissingBvh;
+pub use crate::error::MissingBvh;
+pub use crate::modes::Count;
 
 use crate::image::Frame;
 use crate::modes::Accel;
@@ -15,16 +16,6 @@ use crate::records::PackedScene;
 use glam::Vec2;
 use rayon::prelude::*;
 use trace::Tracer;
-
-/// What a pixel's fourth colour channel holds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Count {
-    /// The rays traced for the pixel (primary, shadow, secondary).
-    #[default]
-    Rays,
-    /// The cost of its primary ray (see [`trace::PixelTrace::cost`]), as the shader's cost variant.
-    Cost,
-}
 
 /// Renders every pixel in parallel (rows across rayon's threads); the result does not depend on the
 /// thread count. BVH modes need the scene's BVH.

@@ -3,6 +3,7 @@
 use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use super::intersect::{Hit, HitKind, Primitives, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
 use super::shade::{fresnel_schlick, offset_origin, reflect};
+use crate::error::MissingBvh;
 use crate::modes::Accel;
 use crate::records::constants::MIN_WEIGHT;
 pub use crate::records::constants::T_FAR;
@@ -39,13 +40,6 @@ pub struct Tracer<'a> {
     /// The scene's BVH; the BVH walks need it.
     bvh: Option<&'a PackedBvh>,
     pub ray_count: u32,
-}
-
-/// A BVH walk was asked for on a scene without its BVH.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("the {accel} walk needs the scene's BVH, which was not built")]
-pub struct MissingBvh {
-    pub accel: Accel,
 }
 
 impl<'a> Tracer<'a> {

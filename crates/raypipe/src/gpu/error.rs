@@ -1,7 +1,7 @@
 //! What can go wrong on the GPU, typed so that callers word their own messages and hints.
 
 use super::context::Backend;
-use crate::cpu::MissingBvh;
+use crate::error::MissingBvh;
 use crate::modes::MemoryMode;
 
 #[derive(Debug, thiserror::Error)]
