@@ -1,6 +1,6 @@
 //! The subcommands, and the one-line message an error becomes.
 
-use crate::{bench, bvh, diff, info, render};
+use crate::{bench, bvh, diff, info, render, view};
 use clap::{Parser, Subcommand};
 use raypipe::gpu::GpuError;
 use raypipe::modes::MemoryMode;
@@ -25,6 +25,8 @@ enum Command {
     Bvh(bvh::BvhArgs),
     /// List GPU adapters, their backends, drivers and the limits that matter here.
     Info,
+    /// Trace a scene live in a window: fly through it, switch modes, watch the frame time.
+    View(view::ViewArgs),
 }
 
 /// Runs the command line; errors are returned for `main` to print as one line with exit code 2.
@@ -35,6 +37,7 @@ pub fn run() -> anyhow::Result<ExitCode> {
         Command::Bvh(args) => bvh::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Info => info::run(),
+        Command::View(args) => view::run(args),
     }
 }
 

@@ -12,6 +12,7 @@ mod io;
 mod notices;
 mod plot;
 mod render;
+mod view;
 
 use std::process::ExitCode;
 

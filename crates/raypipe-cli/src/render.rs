@@ -93,7 +93,7 @@ pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
 }
 
 /// `X,Y,Z` in degrees.
-fn parse_angles(text: &str) -> Result<glam::Vec3, String> {
+pub fn parse_angles(text: &str) -> Result<glam::Vec3, String> {
     let angles: Vec<f32> = text
         .split(',')
         .map(|a| a.trim().parse::<f32>().map_err(|_| format!("'{a}' is not a number")))
@@ -219,7 +219,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn aov_image(aov: Aov, is_exr: bool, frame: &Frame) -> FloatImage {
+pub fn aov_image(aov: Aov, is_exr: bool, frame: &Frame) -> FloatImage {
     match (aov, is_exr) {
         (Aov::Color, false) => frame.display(),
         (Aov::Color, true) => frame.radiance(),

@@ -324,3 +324,14 @@ fn broken_models_give_one_line_and_exit_code_2() {
     let scene = write_in(&dir, "missing.toml", b"[[mesh]]\nfile = \"nowhere.ply\"\n");
     assert_clean_error(&render(&scene), &["missing.toml:1:", "nowhere.ply", "cannot read"]);
 }
+
+#[test]
+fn view_without_a_display_is_one_line() {
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_raypipe"))
+        .args(["view", "whitted", "--frames", "1"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_clean_error(&output, &["no display"]);
+}

@@ -4,11 +4,17 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+// The binary's own image reader, to read back what it wrote.
+#[path = "../../src/io.rs"]
+#[allow(dead_code)]
+mod io;
+
 mod bench;
 mod bvh;
 mod models;
+mod view;
 
 fn main() -> std::process::ExitCode {
-    let tests = [bench::tests(), bvh::tests(), models::tests()];
+    let tests = [bench::tests(), bvh::tests(), models::tests(), view::tests()];
     common::harness::run(tests.into_iter().flatten().collect())
 }

@@ -3,8 +3,8 @@
 //! whose context one thread holds at a time and others wait for only a second, the GPU tests take
 //! turns while the others run beside them), and a test
 //! whose GPU or models are missing is reported as *ignored*, with the reason, in the summary a
-//! newcomer sees. `RAYPIPE_REQUIRE_GPU=1` and `RAYPIPE_REQUIRE_MODELS=1` turn a missing one into a
-//! failure.
+//! newcomer sees. `RAYPIPE_REQUIRE_GPU=1`, `RAYPIPE_REQUIRE_MODELS=1` and `RAYPIPE_REQUIRE_DISPLAY=1`
+//! (window tests: Xvfb) turn a missing one into a failure.
 
 use libtest_mimic::{Arguments, Failed, Trial};
 use raypipe::gpu::GpuContext;
@@ -22,6 +22,8 @@ pub enum Body {
     /// The shared models folder.
     Models(fn(&Path)),
     GpuModels(fn(&GpuContext, &Path)),
+    /// A GPU and a virtual X display to open windows on (`xvfb-run`, with imagemagick's `import`).
+    GpuWindow(fn(&GpuContext)),
 }
 
 pub struct Test {
@@ -42,6 +44,7 @@ macro_rules! tests {
     (@body gpu $f:path) => { $crate::common::harness::Body::Gpu($f) };
     (@body models $f:path) => { $crate::common::harness::Body::Models($f) };
     (@body gpu_models $f:path) => { $crate::common::harness::Body::GpuModels($f) };
+    (@body gpu_window $f:path) => { $crate::common::harness::Body::GpuWindow($f) };
 }
 
 fn required(variable: &str) -> bool {
@@ -54,9 +57,17 @@ pub fn models_dir() -> Option<PathBuf> {
     dir.join("bunny.ply").is_file().then_some(dir)
 }
 
+/// Whether `xvfb-run` and imagemagick's `import` are on PATH.
+fn virtual_display() -> bool {
+    ["xvfb-run", "import"].iter().all(|tool| {
+        std::env::var_os("PATH").is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join(tool).is_file()))
+    })
+}
+
 struct Resources {
     gpu: Option<GpuContext>,
     models: Option<PathBuf>,
+    display: bool,
 }
 
 /// Runs `tests` as libtest would, with the GPU and the models opened once.
@@ -96,23 +107,38 @@ pub fn run(tests: Vec<Test>) -> ExitCode {
             }
         );
     }
-    let resources = Arc::new(Resources { gpu, models });
+    let display = virtual_display();
+    let needs_display = tests.iter().any(|t| matches!(t.body, Body::GpuWindow(_)));
+    if needs_display && !display {
+        eprintln!(
+            "xvfb-run or imagemagick's import not found: the window tests are ignored{}",
+            if required("RAYPIPE_REQUIRE_DISPLAY") {
+                ", and fail because RAYPIPE_REQUIRE_DISPLAY=1"
+            } else {
+                " (scripts/install-deps.sh installs them; RAYPIPE_REQUIRE_DISPLAY=1 makes this a failure)"
+            }
+        );
+    }
+    let resources = Arc::new(Resources { gpu, models, display });
     let trials = tests.into_iter().map(|test| trial(test, &resources)).collect();
     libtest_mimic::run(&args, trials).exit_code()
 }
 
 fn trial(test: Test, resources: &Arc<Resources>) -> Trial {
-    let (wants_gpu, wants_models) = match test.body {
-        Body::Plain(_) => (false, false),
-        Body::Gpu(_) => (true, false),
-        Body::Models(_) => (false, true),
-        Body::GpuModels(_) => (true, true),
+    let (wants_gpu, wants_models, wants_display) = match test.body {
+        Body::Plain(_) => (false, false, false),
+        Body::Gpu(_) => (true, false, false),
+        Body::Models(_) => (false, true, false),
+        Body::GpuModels(_) => (true, true, false),
+        Body::GpuWindow(_) => (true, false, true),
     };
     let missing_gpu = wants_gpu && resources.gpu.is_none();
     let missing_models = wants_models && resources.models.is_none();
-    let must_fail =
-        (missing_gpu && required("RAYPIPE_REQUIRE_GPU")) || (missing_models && required("RAYPIPE_REQUIRE_MODELS"));
-    let ignored = (missing_gpu || missing_models) && !must_fail;
+    let missing_display = wants_display && !resources.display;
+    let must_fail = (missing_gpu && required("RAYPIPE_REQUIRE_GPU"))
+        || (missing_models && required("RAYPIPE_REQUIRE_MODELS"))
+        || (missing_display && required("RAYPIPE_REQUIRE_DISPLAY"));
+    let ignored = (missing_gpu || missing_models || missing_display) && !must_fail;
     let resources = Arc::clone(resources);
     Trial::test(test.name, move || {
         let (gpu, models) = (resources.gpu.as_ref(), resources.models.as_deref());
@@ -123,6 +149,8 @@ fn trial(test: Test, resources: &Arc<Resources>) -> Trial {
             (Body::Gpu(f), Some(gpu), _) => f(gpu),
             (Body::Models(f), _, Some(models)) => f(models),
             (Body::GpuModels(f), Some(gpu), Some(models)) => f(gpu, models),
+            (Body::GpuWindow(f), Some(gpu), _) if resources.display => f(gpu),
+            (Body::GpuWindow(_), Some(_), _) => return Err(Failed::from("xvfb-run or import not found")),
             (_, None, _) => return Err(Failed::from("no GPU adapter found")),
             (_, _, None) => return Err(Failed::from("../shared/models/ not found")),
         }

@@ -1,0 +1,136 @@
+//! `raypipe view`: the scene live in a window (the `raypipe-view` crate), with `render`'s scene
+//! flags; this side loads dropped files and writes screenshots.
+
+use crate::args::choice;
+use crate::io;
+use crate::render::{Aov, aov_image, load_scene, parse_angles};
+use clap::Args;
+use raypipe::gpu::{Backend, DisplayView};
+use raypipe::image::Frame;
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::scene::Scene;
+use raypipe::scene::model::{MeshAs, ModelOptions};
+use raypipe_view::{Host, Modes, Script, ViewerOptions};
+use std::cell::Cell;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct ViewArgs {
+    /// What `render` takes: a built-in scene, a TOML scene file, or a model file.
+    #[arg(default_value = "whitted")]
+    scene: String,
+    #[arg(long = "as", value_parser = choice::<MeshAs>())]
+    as_: Option<MeshAs>,
+    #[arg(long)]
+    spheres: Option<usize>,
+    #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
+    rotate: Option<glam::Vec3>,
+    /// The traced frame's size at start (the window's inner size); it follows the window after.
+    #[arg(long)]
+    width: Option<u32>,
+    #[arg(long)]
+    height: Option<u32>,
+    /// Bounces after the primary ray (default 5, or the scene's).
+    #[arg(long)]
+    depth: Option<u32>,
+    #[arg(long, value_parser = choice::<Backend>())]
+    backend: Option<Backend>,
+    #[arg(long, value_parser = choice::<MemoryMode>(), default_value_t)]
+    memory: MemoryMode,
+    #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
+    accel: Accel,
+    /// What the window shows: colour, depth, normals, or the cost heat map.
+    #[arg(long, value_enum, default_value_t)]
+    aov: Aov,
+    /// Draw this many frames, then exit (with --screenshot, after saving the last one).
+    #[arg(long)]
+    frames: Option<u32>,
+    /// With --frames: save the last frame here, as `render` writes it.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// With --frames: turn the camera this many degrees about its target every frame.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    orbit: f32,
+    /// Present without waiting for the display's refresh.
+    #[arg(long)]
+    no_vsync: bool,
+}
+
+/// Dropped files load as `render` loads them; screenshots are written as it writes them.
+struct CliHost {
+    shots: Cell<u32>,
+}
+
+impl Host for CliHost {
+    fn load(&self, path: &Path) -> Result<Scene, String> {
+        let spec = path.to_string_lossy();
+        load_scene(&spec, &ModelOptions::default()).map_err(|e| crate::cli::message(&e))
+    }
+
+    fn save(&self, frame: &Frame, view: DisplayView, path: &Path) -> Result<(), String> {
+        let aov = match view {
+            DisplayView::Color => Aov::Color,
+            DisplayView::Depth => Aov::Depth,
+            DisplayView::Normal => Aov::Normal,
+            DisplayView::Cost => Aov::Cost,
+        };
+        let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        io::write(&aov_image(aov, is_exr, frame), path).map_err(|e| crate::cli::message(&e))
+    }
+
+    fn screenshot_path(&self) -> PathBuf {
+        let n = self.shots.get() + 1;
+        self.shots.set(n);
+        PathBuf::from(format!("raypipe-{n:03}.png"))
+    }
+}
+
+pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
+    if args.screenshot.is_some() && args.frames.is_none() {
+        anyhow::bail!("--screenshot saves the last of --frames N frames: give --frames");
+    }
+    if let Some(path) = &args.screenshot
+        && !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        anyhow::bail!("{}: screenshots are PNG files", path.display());
+    }
+    let model = ModelOptions {
+        as_: args.as_,
+        spheres: args.spheres,
+        rotate: args.rotate,
+    };
+    let mut scene = load_scene(&args.scene, &model)?;
+    let settings = &mut scene.settings;
+    settings.width = args.width.unwrap_or(settings.width);
+    settings.height = args.height.unwrap_or(settings.height);
+    settings.max_depth = args.depth.unwrap_or(settings.max_depth);
+    // Checked here, so that a bad size or depth is one line before any window opens.
+    raypipe::records::PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene))?;
+    let view = match args.aov {
+        Aov::Color => DisplayView::Color,
+        Aov::Depth => DisplayView::Depth,
+        Aov::Normal => DisplayView::Normal,
+        Aov::Cost => DisplayView::Cost,
+    };
+    let options = ViewerOptions {
+        name: args.scene.clone(),
+        modes: Modes {
+            accel: args.accel,
+            memory: args.memory,
+            depth: scene.settings.max_depth,
+            view,
+            paused: false,
+            vsync: !args.no_vsync,
+        },
+        scene,
+        backend: args.backend,
+        script: args.frames.map(|frames| Script {
+            frames,
+            screenshot: args.screenshot.clone(),
+            orbit_degrees: args.orbit,
+        }),
+    };
+    raypipe_view::run(options, Box::new(CliHost { shots: Cell::new(0) }))?;
+    Ok(ExitCode::SUCCESS)
+}

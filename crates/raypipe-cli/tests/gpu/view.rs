@@ -1,0 +1,126 @@
+//! `raypipe view` in a virtual X display (Xvfb): its scripted frames are `raypipe render`'s image,
+//! the window itself shows that image (the surface path, not only the readback), the scripted orbit
+//! and a moving scene change the frames, and a mode that cannot serve the scene is refused.
+
+use crate::common::harness::Test;
+use crate::common::models::test_dir;
+use crate::common::raypipe;
+use crate::io;
+use raypipe::gpu::GpuContext;
+use raypipe::image::diff::{Tolerance, compare};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const XVFB_SCREEN: &str = "-screen 0 1024x768x24";
+
+/// `raypipe ARGS` in a fresh virtual display.
+fn in_xvfb(args: &[&str]) -> Output {
+    Command::new("xvfb-run")
+        .args(["-a", "-s", XVFB_SCREEN, env!("CARGO_BIN_EXE_raypipe")])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn succeeded(output: &Output, what: &str) {
+    assert!(
+        output.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+/// The scripted viewer's last frame of `scene` at `size`.
+fn viewed(dir: &Path, scene: &str, extra: &[&str], frames: u32) -> PathBuf {
+    let shot = dir.join(format!("view-{}-{frames}.png", scene.replace([':', '/'], "-")));
+    let frames = frames.to_string();
+    let mut args = vec!["view", scene, "--width", "160", "--height", "120", "--frames", &frames];
+    args.extend_from_slice(extra);
+    args.extend(["--screenshot", shot.to_str().unwrap()]);
+    succeeded(&in_xvfb(&args), &format!("raypipe {}", args.join(" ")));
+    shot
+}
+
+fn rendered(dir: &Path, scene: &str, extra: &[&str]) -> PathBuf {
+    let out = dir.join(format!("render-{}.png", scene.replace([':', '/'], "-")));
+    let mut args = vec!["render", scene, "--width", "160", "--height", "120", "--device", "gpu"];
+    args.extend_from_slice(extra);
+    args.extend(["-o", out.to_str().unwrap()]);
+    succeeded(&raypipe(&args), "raypipe render");
+    out
+}
+
+fn matches(a: &Path, b: &Path) -> Result<(), String> {
+    let stats = compare(&io::read(a).unwrap(), &io::read(b).unwrap()).map_err(|e| e.to_string())?;
+    Tolerance::COLOR.check(&stats).map_err(|e| e.to_string())
+}
+
+fn scripted_frames_are_the_render(_: &GpuContext) {
+    let dir = test_dir("view-scripted");
+    for (scene, extra) in [("whitted", &[][..]), ("random:2000", &["--accel", "stack"][..])] {
+        let shot = viewed(&dir, scene, extra, 3);
+        let render = rendered(&dir, scene, extra);
+        matches(&shot, &render).unwrap_or_else(|e| panic!("{scene}: the viewer's frame is not render's: {e}"));
+    }
+}
+
+/// The X screen, captured while the viewer draws: the window at the screen's corner shows the frame.
+fn the_window_shows_the_frame(_: &GpuContext) {
+    let dir = test_dir("view-window");
+    let expected = rendered(&dir, "whitted", &[]);
+    let (root, crop) = (dir.join("root.png"), dir.join("window.png"));
+    // Capture until the window has drawn (the first frame may compile shaders for a while).
+    let script = format!(
+        "'{raypipe}' view whitted --width 160 --height 120 --frames 100000000 & pid=$!
+         for i in $(seq 120); do
+           sleep 1
+           import -window root '{root}' && convert '{root}' -crop 160x120+0+0 +repage '{crop}' \
+             && '{raypipe}' diff '{crop}' '{expected}' --threshold 0.01 > /dev/null && break
+         done
+         kill $pid",
+        raypipe = env!("CARGO_BIN_EXE_raypipe"),
+        root = root.display(),
+        crop = crop.display(),
+        expected = expected.display(),
+    );
+    let output = Command::new("xvfb-run")
+        .args(["-a", "-s", XVFB_SCREEN, "sh", "-c", &script])
+        .output()
+        .unwrap();
+    assert!(crop.exists(), "no capture: {}", String::from_utf8_lossy(&output.stderr));
+    matches(&crop, &expected).unwrap_or_else(|e| panic!("the window does not show the frame: {e}"));
+}
+
+fn orbit_and_motion_change_the_frames(_: &GpuContext) {
+    let dir = test_dir("view-motion");
+    let still = viewed(&dir, "whitted", &[], 3);
+    let turned = viewed(&dir, "whitted", &["--orbit", "15"], 4);
+    assert!(matches(&still, &turned).is_err(), "--orbit left the image as it was");
+    let first = viewed(&dir, "bounce:800", &[], 1);
+    let later = viewed(&dir, "bounce:800", &[], 6);
+    assert!(matches(&first, &later).is_err(), "bounce:800 did not move");
+    // The same frame of a moving scene, twice: rebuilt the same way both times.
+    let again = dir.join("again.png");
+    std::fs::rename(&later, &again).unwrap();
+    let later = viewed(&dir, "bounce:800", &[], 6);
+    matches(&later, &again).unwrap();
+}
+
+fn a_mode_that_cannot_serve_the_scene_is_one_line(_: &GpuContext) {
+    let output = in_xvfb(&["view", "bounce:100", "--memory", "texture", "--frames", "1"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("storage memory") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![
+        gpu_window scripted_frames_are_the_render,
+        gpu_window the_window_shows_the_frame,
+        gpu_window orbit_and_motion_change_the_frames,
+        gpu_window a_mode_that_cannot_serve_the_scene_is_one_line,
+    ]
+}

@@ -1,0 +1,578 @@
+//! The native window: winit's event loop, a wgpu surface, and each frame traced, displayed, overlaid
+//! with the panel and presented.
+
+use crate::camera::CameraControl;
+use crate::panel::{self, Readout};
+use crate::tracer::Tracer;
+use crate::{Host, Modes, Script, ViewError, ViewerOptions};
+use pollster::block_on;
+use raypipe::Choice;
+use raypipe::gpu::{Display, DisplayView, GpuContext};
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::PackedScene;
+use raypipe::scene::Scene;
+use std::collections::HashSet;
+use std::sync::Arc;
+use web_time::Instant;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, OwnedDisplayHandle};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+/// Fly speed: the distance to the target per second.
+const FLY_PER_SECOND: f32 = 0.8;
+/// The depth view's far end, in multiples of the distance to the target.
+const DEPTH_FAR: f32 = 3.0;
+/// The cost view's top, in nodes tested.
+const COST_MAX: f32 = 200.0;
+
+pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<(), ViewError> {
+    let event_loop = EventLoop::new().map_err(|e| ViewError::Window(e.to_string()))?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut viewer = Viewer::new(options, host, event_loop.owned_display_handle());
+    event_loop
+        .run_app(&mut viewer)
+        .map_err(|e| ViewError::Window(e.to_string()))?;
+    viewer.outcome
+}
+
+/// What lives on the GPU once the window exists.
+struct Gpu {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    ctx: GpuContext,
+    display: Display,
+    tracer: Tracer,
+    egui: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+}
+
+#[derive(Default)]
+struct Input {
+    orbiting: bool,
+    panning: bool,
+    cursor: Option<(f64, f64)>,
+    held: HashSet<KeyCode>,
+}
+
+struct Viewer {
+    options: ViewerOptions,
+    host: Box<dyn Host>,
+    display_handle: OwnedDisplayHandle,
+    gpu: Option<Gpu>,
+    modes: Modes,
+    camera: CameraControl,
+    input: Input,
+    /// The moving scene's frame, advanced unless paused.
+    motion_frame: u32,
+    frames_drawn: u32,
+    show_panel: bool,
+    message: Option<String>,
+    last_frame: Instant,
+    fps: f64,
+    frame_ms: f64,
+    rays: u64,
+    build_ms: Option<f64>,
+    outcome: Result<(), ViewError>,
+}
+
+impl Viewer {
+    fn new(options: ViewerOptions, host: Box<dyn Host>, display_handle: OwnedDisplayHandle) -> Self {
+        Self {
+            modes: options.modes,
+            camera: CameraControl::new(options.scene.camera),
+            // A scripted run shows what `render` shows: no panel over the frame.
+            show_panel: options.script.is_none(),
+            options,
+            host,
+            display_handle,
+            gpu: None,
+            input: Input::default(),
+            motion_frame: 0,
+            frames_drawn: 0,
+            message: None,
+            last_frame: Instant::now(),
+            fps: 0.0,
+            frame_ms: 0.0,
+            rays: 0,
+            build_ms: None,
+            outcome: Ok(()),
+        }
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: ViewError) {
+        self.outcome = Err(error);
+        event_loop.exit();
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<Gpu, ViewError> {
+        let settings = &self.options.scene.settings;
+        let attributes = Window::default_attributes()
+            .with_title(format!("raypipe · {}", self.options.name))
+            .with_inner_size(winit::dpi::PhysicalSize::new(settings.width, settings.height));
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| ViewError::Window(e.to_string()))?,
+        );
+        // GL needs the display the window lives on; the other backends ignore it.
+        let mut desc =
+            wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(self.display_handle.clone()));
+        if let Some(backend) = self.options.backend {
+            desc.backends = backend.backends();
+        }
+        let instance = wgpu::Instance::new(desc);
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| ViewError::Window(e.to_string()))?;
+        let ctx = block_on(GpuContext::for_surface(&instance, &surface))?;
+        let caps = surface.get_capabilities(&ctx.adapter);
+        // A linear format: the display pass encodes sRGB itself, as PNG files hold it.
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| !f.is_srgb())
+            .or(caps.formats.first().copied())
+            .ok_or_else(|| ViewError::Window(format!("{} cannot present to this window", ctx.describe())))?;
+        let size = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: present_mode(&caps, self.modes.vsync),
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes[0],
+            view_formats: vec![],
+            color_space: Default::default(),
+        };
+        surface.configure(&ctx.device, &config);
+        if !ctx.memory_modes().contains(&self.modes.memory) {
+            self.modes.memory = ctx.default_memory();
+        }
+        let tracer = Tracer::new(
+            &ctx,
+            &self.options.scene,
+            &self.modes,
+            (config.width, config.height),
+            &self.camera.camera,
+        )
+        .map_err(ViewError::Scene)?;
+        self.build_ms = tracer.cpu_build_ms;
+        let egui = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(ctx.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, Default::default());
+        Ok(Gpu {
+            display: Display::new(&ctx, format),
+            window,
+            surface,
+            config,
+            ctx,
+            tracer,
+            egui,
+            egui_state,
+            egui_renderer,
+        })
+    }
+
+    /// Switches to `asked` if it can serve the scene; otherwise keeps the modes and says why.
+    fn set_modes(&mut self, asked: Modes) {
+        let Some(gpu) = &mut self.gpu else { return };
+        if asked.vsync != self.modes.vsync {
+            let caps = gpu.surface.get_capabilities(&gpu.ctx.adapter);
+            gpu.config.present_mode = present_mode(&caps, asked.vsync);
+            gpu.surface.configure(&gpu.ctx.device, &gpu.config);
+        }
+        let retrace = Modes {
+            paused: self.modes.paused,
+            vsync: self.modes.vsync,
+            ..asked
+        } != self.modes;
+        // The cost view needs the shader's cost variant; the other views share one.
+        let same_tracer = !retrace
+            || (asked.accel, asked.memory, asked.depth) == (self.modes.accel, self.modes.memory, self.modes.depth)
+                && (asked.view == DisplayView::Cost) == (self.modes.view == DisplayView::Cost);
+        if !same_tracer {
+            if !gpu.ctx.memory_modes().contains(&asked.memory) {
+                self.message = Some(format!(
+                    "{} has no {} memory for fragment shaders",
+                    gpu.ctx.describe(),
+                    asked.memory
+                ));
+                return;
+            }
+            let size = (gpu.config.width, gpu.config.height);
+            match Tracer::new(&gpu.ctx, &self.options.scene, &asked, size, &self.camera.camera) {
+                Ok(tracer) => {
+                    self.build_ms = tracer.cpu_build_ms;
+                    gpu.tracer = tracer;
+                    self.message = None;
+                }
+                Err(why) => {
+                    self.message = Some(why);
+                    return;
+                }
+            }
+        }
+        self.modes = asked;
+    }
+
+    /// A new scene (a dropped file): the viewer keeps the old one if the new one cannot be traced.
+    fn set_scene(&mut self, name: String, scene: Scene) {
+        let Some(gpu) = &mut self.gpu else { return };
+        let camera = CameraControl::new(scene.camera);
+        let size = (gpu.config.width, gpu.config.height);
+        match Tracer::new(&gpu.ctx, &scene, &self.modes, size, &camera.camera) {
+            Ok(tracer) => {
+                self.build_ms = tracer.cpu_build_ms;
+                gpu.tracer = tracer;
+                gpu.window.set_title(&format!("raypipe · {name}"));
+                self.options.scene = scene;
+                self.options.name = name;
+                self.camera = camera;
+                self.motion_frame = 0;
+                self.message = None;
+            }
+            Err(why) => self.message = Some(format!("{name}: {why}")),
+        }
+    }
+
+    fn key(&mut self, code: KeyCode, pressed: bool) {
+        if pressed {
+            self.input.held.insert(code);
+        } else {
+            self.input.held.remove(&code);
+            return;
+        }
+        let mut asked = self.modes;
+        match code {
+            KeyCode::KeyR => self.camera.reset(),
+            KeyCode::KeyB => asked.accel = next(asked.accel),
+            KeyCode::KeyM => asked.memory = next(asked.memory),
+            KeyCode::KeyV => asked.view = next(asked.view),
+            KeyCode::BracketLeft => asked.depth = asked.depth.saturating_sub(1),
+            KeyCode::BracketRight => asked.depth = (asked.depth + 1).min(raypipe::scene::MAX_DEPTH_LIMIT),
+            KeyCode::Space => asked.paused = !asked.paused,
+            KeyCode::KeyY => asked.vsync = !asked.vsync,
+            KeyCode::KeyH => self.show_panel = !self.show_panel,
+            KeyCode::KeyP => {
+                let path = self.host.screenshot_path();
+                self.message = Some(self.screenshot(&path));
+            }
+            _ => {}
+        }
+        if asked != self.modes {
+            self.set_modes(asked);
+        }
+    }
+
+    /// Saves the current frame (traced again and read back) to `path`; says what happened.
+    fn screenshot(&mut self, path: &std::path::Path) -> String {
+        let Some(gpu) = &self.gpu else {
+            return "no frame yet".into();
+        };
+        let tracer = &gpu.tracer;
+        let frame = block_on(tracer.renderer.read_frame_after(|encoder| {
+            if let Some(rebuild) = &tracer.rebuild
+                && self.modes.accel.uses_bvh()
+            {
+                rebuild.encode(encoder);
+            }
+        }));
+        match frame {
+            Ok(timed) => match self.host.save(&timed.frame, self.modes.view, path) {
+                Ok(()) => format!("saved {}", path.display()),
+                Err(why) => why,
+            },
+            Err(error) => error.to_string(),
+        }
+    }
+
+    /// Applies held keys and the script's orbit to the camera, for a frame `seconds` long.
+    fn move_camera(&mut self, seconds: f32) {
+        let held = |k| self.input.held.contains(&k);
+        let axis = |plus, minus| (held(plus) as i32 - held(minus) as i32) as f32;
+        let step = FLY_PER_SECOND * seconds.min(0.25);
+        let (forward, right, up) = (
+            axis(KeyCode::KeyW, KeyCode::KeyS),
+            axis(KeyCode::KeyD, KeyCode::KeyA),
+            axis(KeyCode::KeyE, KeyCode::KeyQ),
+        );
+        if (forward, right, up) != (0.0, 0.0, 0.0) {
+            self.camera.fly(forward * step, right * step, up * step);
+        }
+        if let Some(script) = &self.options.script
+            && script.orbit_degrees != 0.0
+            && self.frames_drawn > 0
+        {
+            self.camera.orbit_degrees(script.orbit_degrees);
+        }
+    }
+
+    fn draw(&mut self, event_loop: &ActiveEventLoop) {
+        let now = Instant::now();
+        let seconds = (now - self.last_frame).as_secs_f64();
+        self.last_frame = now;
+        self.move_camera(seconds as f32);
+        let moving = self.options.scene.motion.is_some() && !self.modes.paused;
+        if moving && self.frames_drawn > 0 {
+            self.motion_frame += 1;
+        }
+        let Some(gpu) = &mut self.gpu else { return };
+        gpu.tracer.renderer.set_camera(&self.camera.camera);
+        if let Some(rebuild) = &gpu.tracer.rebuild {
+            match PackedScene::new(&self.options.scene.at_frame(self.motion_frame)) {
+                Ok(moved) => rebuild.write_spheres(&moved.spheres),
+                Err(error) => self.message = Some(error.to_string()),
+            }
+        }
+        let surface_texture = match gpu.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(texture) | wgpu::CurrentSurfaceTexture::Suboptimal(texture) => texture,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                gpu.surface.configure(&gpu.ctx.device, &gpu.config);
+                return;
+            }
+            // Minimized, or the compositor is busy: try again next time.
+            _ => return,
+        };
+        let view = surface_texture.texture.create_view(&Default::default());
+        let ctx = gpu.ctx.clone();
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        if let Some(rebuild) = &gpu.tracer.rebuild
+            && self.modes.accel.uses_bvh()
+        {
+            rebuild.encode(&mut encoder);
+        }
+        gpu.tracer.renderer.encode(&mut encoder);
+        let c = self.camera.camera;
+        let depth_far = DEPTH_FAR * (c.eye - c.target).length();
+        gpu.display.encode(
+            &mut encoder,
+            gpu.tracer.renderer.targets(),
+            &view,
+            self.modes.view,
+            depth_far,
+            COST_MAX,
+        );
+        let mut asked = None;
+        if self.show_panel {
+            let raw = gpu.egui_state.take_egui_input(&gpu.window);
+            let adapter = ctx.describe();
+            let readout = Readout {
+                scene: &self.options.name,
+                adapter: &adapter,
+                primitives: gpu.tracer.primitives,
+                size: (gpu.config.width, gpu.config.height),
+                fps: self.fps,
+                frame_ms: self.frame_ms,
+                timestamps: ctx.timestamps,
+                mrays_per_s: self.rays as f64 / (self.frame_ms.max(1e-6) * 1e3),
+                build_ms: self.build_ms,
+                message: self.message.as_deref(),
+            };
+            let modes = self.modes;
+            let output = gpu
+                .egui
+                .run_pass(raw, |ui_ctx| asked = Some(panel::draw(ui_ctx, &modes, &readout)));
+            gpu.egui_state
+                .handle_platform_output(&gpu.window, output.platform_output);
+            let jobs = gpu.egui.tessellate(output.shapes, output.pixels_per_point);
+            let screen = egui_wgpu::ScreenDescriptor {
+                size_in_pixels: [gpu.config.width, gpu.config.height],
+                pixels_per_point: output.pixels_per_point,
+            };
+            for (id, deltas) in &output.textures_delta.set {
+                for delta in deltas {
+                    gpu.egui_renderer.update_texture(&ctx.device, &ctx.queue, *id, delta);
+                }
+            }
+            let extra = gpu
+                .egui_renderer
+                .update_buffers(&ctx.device, &ctx.queue, &mut encoder, &jobs, &screen);
+            let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("panel"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            gpu.egui_renderer.render(&mut pass.forget_lifetime(), &jobs, &screen);
+            ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
+            for id in &output.textures_delta.free {
+                gpu.egui_renderer.free_texture(id);
+            }
+        } else {
+            ctx.queue.submit([encoder.finish()]);
+        }
+        ctx.queue.present(surface_texture);
+        // The frame's GPU time where the adapter has timestamps; this waits for the frame.
+        let gpu_ms = block_on(gpu.tracer.renderer.read_gpu_ms()).ok().flatten();
+        self.frame_ms = gpu_ms.unwrap_or(seconds * 1e3);
+        self.fps = if self.fps == 0.0 {
+            1.0 / seconds.max(1e-6)
+        } else {
+            0.9 * self.fps + 0.1 / seconds.max(1e-6)
+        };
+        if let Some(rebuild) = &gpu.tracer.rebuild
+            && self.modes.accel.uses_bvh()
+            && let Ok(timings) = block_on(rebuild.read_timings())
+        {
+            self.build_ms = Some(timings.total());
+        }
+        let (width, height) = (gpu.config.width as u64, gpu.config.height as u64);
+        // Rays are counted on the CPU side only for screenshots: estimate one primary per pixel.
+        self.rays = width * height;
+        self.frames_drawn += 1;
+        if let Some(asked) = asked
+            && asked != self.modes
+        {
+            self.set_modes(asked);
+        }
+        if let Some(script) = self.options.script.clone() {
+            self.finish_script(event_loop, &script);
+        }
+    }
+
+    fn finish_script(&mut self, event_loop: &ActiveEventLoop, script: &Script) {
+        if self.frames_drawn < script.frames.max(1) {
+            return;
+        }
+        if let Some(path) = &script.screenshot {
+            let said = self.screenshot(path);
+            if !said.starts_with("saved") {
+                return self.fail(event_loop, ViewError::Scene(said));
+            }
+        }
+        event_loop.exit();
+    }
+}
+
+fn next<T: Choice>(value: T) -> T {
+    let all = T::ALL;
+    let i = all.iter().position(|&v| v == value).unwrap_or(0);
+    all[(i + 1) % all.len()]
+}
+
+fn present_mode(caps: &wgpu::SurfaceCapabilities, vsync: bool) -> wgpu::PresentMode {
+    let wanted = if vsync {
+        wgpu::PresentMode::AutoVsync
+    } else {
+        wgpu::PresentMode::AutoNoVsync
+    };
+    if vsync || caps.present_modes.iter().any(|m| *m != wgpu::PresentMode::Fifo) {
+        wanted
+    } else {
+        wgpu::PresentMode::Fifo
+    }
+}
+
+impl ApplicationHandler for Viewer {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gpu.is_some() {
+            return;
+        }
+        match self.open(event_loop) {
+            Ok(gpu) => {
+                gpu.window.request_redraw();
+                self.gpu = Some(gpu);
+            }
+            Err(error) => self.fail(event_loop, error),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let consumed = match &mut self.gpu {
+            Some(gpu) if self.show_panel => gpu.egui_state.on_window_event(&gpu.window, &event).consumed,
+            _ => false,
+        };
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let Some(gpu) = &mut self.gpu
+                    && size.width > 0
+                    && size.height > 0
+                {
+                    gpu.config.width = size.width;
+                    gpu.config.height = size.height;
+                    gpu.surface.configure(&gpu.ctx.device, &gpu.config);
+                    if let Err(error) = gpu.tracer.renderer.resize(size.width, size.height) {
+                        self.message = Some(error.to_string());
+                    }
+                }
+            }
+            WindowEvent::RedrawRequested => self.draw(event_loop),
+            WindowEvent::DroppedFile(path) => {
+                let name = path.display().to_string();
+                match self.host.load(&path) {
+                    Ok(scene) => self.set_scene(name, scene),
+                    Err(why) => self.message = Some(why),
+                }
+            }
+            WindowEvent::KeyboardInput { event, .. } if !consumed => {
+                if let PhysicalKey::Code(code) = event.physical_key
+                    && !event.repeat
+                {
+                    self.key(code, event.state == ElementState::Pressed);
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } if !consumed || state == ElementState::Released => {
+                let down = state == ElementState::Pressed;
+                match button {
+                    MouseButton::Left => self.input.orbiting = down,
+                    MouseButton::Right | MouseButton::Middle => self.input.panning = down,
+                    _ => {}
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let (x, y) = (position.x, position.y);
+                if let Some((px, py)) = self.input.cursor {
+                    let (dx, dy) = ((x - px) as f32, (y - py) as f32);
+                    if self.input.orbiting {
+                        self.camera.orbit(dx, dy);
+                    } else if self.input.panning {
+                        let height = self.gpu.as_ref().map_or(1, |g| g.config.height) as f32;
+                        self.camera.pan(dx, dy, height);
+                    }
+                }
+                self.input.cursor = Some((x, y));
+            }
+            WindowEvent::MouseWheel { delta, .. } if !consumed => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                self.camera.dolly(steps);
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        if let Some(gpu) = &self.gpu {
+            gpu.window.request_redraw();
+        }
+    }
+}
+
+// The lists the panel and keys cycle through are the library's.
+const _: () = assert!(!Accel::ALL.is_empty() && !MemoryMode::ALL.is_empty());

@@ -1,0 +1,86 @@
+//! raypipe's live viewer: the paper's system in a window. Every frame is traced in the fragment
+//! shader and shown by the display pass; moving scenes rebuild their BVH on the GPU every frame;
+//! the camera, the acceleration and memory modes, the bounce depth and the view change live, from
+//! keys and from a small egui panel.
+//!
+//! The viewer reads no files and writes none: its host (the `raypipe view` command) loads dropped
+//! files and saves screenshots, so the same viewer can serve a web page.
+
+mod app;
+mod camera;
+mod panel;
+mod tracer;
+
+pub use camera::CameraControl;
+
+use raypipe::gpu::{Backend, DisplayView, GpuError};
+use raypipe::image::Frame;
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::scene::Scene;
+use std::path::{Path, PathBuf};
+
+/// What the viewer traces with; every field can change while it runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Modes {
+    pub accel: Accel,
+    pub memory: MemoryMode,
+    /// Bounces after the primary ray.
+    pub depth: u32,
+    pub view: DisplayView,
+    /// Whether moving scenes stand still.
+    pub paused: bool,
+    /// Whether presentation waits for the display's refresh.
+    pub vsync: bool,
+}
+
+/// A run that draws a fixed number of frames and exits: for tests and demos.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Script {
+    /// Frames to draw before exiting.
+    pub frames: u32,
+    /// Where the last frame is saved, as `P` saves it.
+    pub screenshot: Option<PathBuf>,
+    /// Degrees the camera turns about its target each frame.
+    pub orbit_degrees: f32,
+}
+
+pub struct ViewerOptions {
+    /// The scene's name, for the title and messages.
+    pub name: String,
+    /// The scene, at its starting image size (the window's inner size) and camera.
+    pub scene: Scene,
+    pub modes: Modes,
+    pub backend: Option<Backend>,
+    pub script: Option<Script>,
+}
+
+/// What the viewer asks of the program that runs it.
+pub trait Host {
+    /// Loads a dropped file as a scene; the error is one line.
+    fn load(&self, path: &Path) -> Result<Scene, String>;
+    /// Saves a frame (the linear frame, as read back) to `path`, as `raypipe render` writes files.
+    fn save(&self, frame: &Frame, view: DisplayView, path: &Path) -> Result<(), String>;
+    /// Where `P` saves its next screenshot.
+    fn screenshot_path(&self) -> PathBuf;
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    #[error("no display to open a window on (neither DISPLAY nor WAYLAND_DISPLAY is set)")]
+    NoDisplay,
+    #[error("cannot open a window: {0}")]
+    Window(String),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error("{0}")]
+    Scene(String),
+}
+
+/// Opens the window and runs until it is closed, or until the script's frames are drawn.
+pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<(), ViewError> {
+    let wayland = std::env::var_os("WAYLAND_DISPLAY").is_some();
+    if std::env::var_os("DISPLAY").is_none() && !wayland {
+        return Err(ViewError::NoDisplay);
+    }
+    app::run(options, host)
+}

@@ -1,0 +1,74 @@
+//! The panel: what runs, how fast, and the switches, in an egui window over the frame.
+
+use crate::Modes;
+use raypipe::Choice;
+use raypipe::gpu::DisplayView;
+use raypipe::modes::{Accel, MemoryMode};
+
+/// What the panel shows.
+pub struct Readout<'a> {
+    pub scene: &'a str,
+    pub adapter: &'a str,
+    pub primitives: usize,
+    pub size: (u32, u32),
+    pub fps: f64,
+    /// Milliseconds per frame, and whether they come from timestamp queries (else the wall clock).
+    pub frame_ms: f64,
+    pub timestamps: bool,
+    pub mrays_per_s: f64,
+    pub build_ms: Option<f64>,
+    pub message: Option<&'a str>,
+}
+
+pub const KEYS: &str = "drag: orbit · right or middle drag: pan · wheel: dolly · WASD/QE: fly · R: reset\n\
+    B: acceleration · M: memory · [ ]: depth · V: view · Space: pause · Y: vsync · P: screenshot · H: panel";
+
+fn choose<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T) {
+    egui::ComboBox::from_label(label)
+        .selected_text(value.name())
+        .show_ui(ui, |ui| {
+            for &option in T::ALL {
+                ui.selectable_value(value, option, option.name())
+                    .on_hover_text(option.about());
+            }
+        });
+}
+
+/// Draws the panel; returns the modes the user asked for.
+pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout) -> Modes {
+    let mut asked = *modes;
+    egui::Window::new("raypipe")
+        .anchor(egui::Align2::LEFT_TOP, [8.0, 8.0])
+        .resizable(false)
+        .collapsible(true)
+        .show(ctx, |ui| {
+            ui.label(format!(
+                "{} · {} primitives · {}x{}",
+                readout.scene, readout.primitives, readout.size.0, readout.size.1
+            ));
+            ui.label(readout.adapter);
+            let clock = if readout.timestamps { "GPU" } else { "wall clock" };
+            ui.label(format!(
+                "{:.1} fps · {:.2} ms per frame ({clock}) · {:.2} Mrays/s",
+                readout.fps, readout.frame_ms, readout.mrays_per_s
+            ));
+            match readout.build_ms {
+                Some(ms) => ui.label(format!("BVH build: {ms:.2} ms")),
+                None => ui.label("BVH build: none (brute force)"),
+            };
+            ui.separator();
+            choose::<Accel>(ui, "acceleration", &mut asked.accel);
+            choose::<MemoryMode>(ui, "memory", &mut asked.memory);
+            choose::<DisplayView>(ui, "view", &mut asked.view);
+            ui.add(egui::Slider::new(&mut asked.depth, 0..=raypipe::scene::MAX_DEPTH_LIMIT).text("depth"));
+            ui.checkbox(&mut asked.paused, "pause motion");
+            ui.checkbox(&mut asked.vsync, "vsync");
+            if let Some(message) = readout.message {
+                ui.separator();
+                ui.colored_label(egui::Color32::from_rgb(255, 120, 100), message);
+            }
+            ui.separator();
+            ui.small(KEYS);
+        });
+    asked
+}
