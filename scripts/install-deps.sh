@@ -8,7 +8,7 @@
 set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
 packages="mesa-vulkan-drivers libgl1-mesa-dri libegl-mesa0 libglx-mesa0 libegl1"
-window_packages="xvfb xauth imagemagick libxkbcommon-x11-0"
+window_packages="xvfb xauth imagemagick xdotool libxkbcommon-x11-0"
 . /etc/os-release
 if [ "${VERSION_CODENAME:-}" = bookworm ]; then
   echo "deb http://deb.debian.org/debian bookworm-backports main" > /etc/apt/sources.list.d/bookworm-backports.list

@@ -8,7 +8,6 @@ use crate::{Host, Modes, Script, ViewError, ViewerOptions};
 use pollster::block_on;
 use raypipe::Choice;
 use raypipe::gpu::{Display, DisplayView, GpuContext};
-use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use std::collections::HashSet;
@@ -220,10 +219,21 @@ impl Viewer {
                     self.message = None;
                 }
                 Err(why) => {
+                    log::warn!("{why}");
                     self.message = Some(why);
                     return;
                 }
             }
+        }
+        if asked != self.modes {
+            log::info!(
+                "acceleration {}, memory {}, depth {}, view {}{}",
+                asked.accel,
+                asked.memory,
+                asked.depth,
+                asked.view,
+                if asked.paused { ", paused" } else { "" }
+            );
         }
         self.modes = asked;
     }
@@ -268,7 +278,9 @@ impl Viewer {
             KeyCode::KeyH => self.show_panel = !self.show_panel,
             KeyCode::KeyP => {
                 let path = self.host.screenshot_path();
-                self.message = Some(self.screenshot(&path));
+                let said = self.screenshot(&path);
+                log::info!("{said}");
+                self.message = Some(said);
             }
             _ => {}
         }
@@ -440,7 +452,7 @@ impl Viewer {
             self.build_ms = Some(timings.total());
         }
         let (width, height) = (gpu.config.width as u64, gpu.config.height as u64);
-        // Rays are counted on the CPU side only for screenshots: estimate one primary per pixel.
+        // The frame's full ray count lives in its targets; the panel counts primary rays only.
         self.rays = width * height;
         self.frames_drawn += 1;
         if let Some(asked) = asked
@@ -573,6 +585,3 @@ impl ApplicationHandler for Viewer {
         }
     }
 }
-
-// The lists the panel and keys cycle through are the library's.
-const _: () = assert!(!Accel::ALL.is_empty() && !MemoryMode::ALL.is_empty());

@@ -49,7 +49,7 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout) -> Modes {
             ui.label(readout.adapter);
             let clock = if readout.timestamps { "GPU" } else { "wall clock" };
             ui.label(format!(
-                "{:.1} fps · {:.2} ms per frame ({clock}) · {:.2} Mrays/s",
+                "{:.1} fps · {:.2} ms per frame ({clock}) · {:.2} M primary rays/s",
                 readout.fps, readout.frame_ms, readout.mrays_per_s
             ));
             match readout.build_ms {

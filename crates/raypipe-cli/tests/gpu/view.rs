@@ -116,11 +116,54 @@ fn a_mode_that_cannot_serve_the_scene_is_one_line(_: &GpuContext) {
     );
 }
 
+/// Keys and a drag through the X server (xdotool): `B` switches the acceleration and the image
+/// stays, a drag orbits and the image changes; `P` saves each state.
+fn synthetic_input_switches_and_orbits(_: &GpuContext) {
+    let dir = test_dir("view-input");
+    let expected = rendered(&dir, "whitted", &[]);
+    let script = format!(
+        "cd '{dir}'
+         '{raypipe}' view whitted --width 160 --height 120 2> view.log & pid=$!
+         for i in $(seq 120); do W=$(xdotool search --name raypipe | head -1); [ -n \"$W\" ] && break; sleep 1; done
+         xdotool windowfocus --sync $W
+         shot() {{ xdotool key p; for i in $(seq 120); do [ -f $1 ] && break; sleep 0.5; done; }}
+         xdotool key h
+         shot raypipe-001.png
+         xdotool key b
+         shot raypipe-002.png
+         xdotool mousemove --window $W 80 60 mousedown 1 mousemove --window $W 110 60 mousemove --window $W 140 60 mouseup 1
+         sleep 1
+         shot raypipe-003.png
+         kill $pid",
+        dir = dir.display(),
+        raypipe = env!("CARGO_BIN_EXE_raypipe"),
+    );
+    let output = Command::new("xvfb-run")
+        .args(["-a", "-s", XVFB_SCREEN, "sh", "-c", &script])
+        .output()
+        .unwrap();
+    let log = std::fs::read_to_string(dir.join("view.log")).unwrap_or_default();
+    let shot = |n: u32| dir.join(format!("raypipe-{n:03}.png"));
+    assert!(
+        shot(3).exists(),
+        "screenshots missing: {log} {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        log.contains("acceleration brute"),
+        "B did not switch to brute force: {log}"
+    );
+    matches(&shot(1), &expected).unwrap();
+    matches(&shot(2), &expected).unwrap_or_else(|e| panic!("brute force's image is not the threaded walk's: {e}"));
+    assert!(matches(&shot(3), &expected).is_err(), "the drag did not orbit");
+}
+
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu_window scripted_frames_are_the_render,
         gpu_window the_window_shows_the_frame,
         gpu_window orbit_and_motion_change_the_frames,
         gpu_window a_mode_that_cannot_serve_the_scene_is_one_line,
+        gpu_window synthetic_input_switches_and_orbits,
     ]
 }

@@ -22,7 +22,8 @@ pub enum Body {
     /// The shared models folder.
     Models(fn(&Path)),
     GpuModels(fn(&GpuContext, &Path)),
-    /// A GPU and a virtual X display to open windows on (`xvfb-run`, with imagemagick's `import`).
+    /// A GPU and a virtual X display to open windows on (`xvfb-run`, with imagemagick's `import` to
+    /// capture it and `xdotool` to type and drag).
     GpuWindow(fn(&GpuContext)),
 }
 
@@ -57,9 +58,9 @@ pub fn models_dir() -> Option<PathBuf> {
     dir.join("bunny.ply").is_file().then_some(dir)
 }
 
-/// Whether `xvfb-run` and imagemagick's `import` are on PATH.
+/// Whether `xvfb-run`, imagemagick's `import` and `xdotool` are on PATH.
 fn virtual_display() -> bool {
-    ["xvfb-run", "import"].iter().all(|tool| {
+    ["xvfb-run", "import", "xdotool"].iter().all(|tool| {
         std::env::var_os("PATH").is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join(tool).is_file()))
     })
 }
@@ -111,7 +112,7 @@ pub fn run(tests: Vec<Test>) -> ExitCode {
     let needs_display = tests.iter().any(|t| matches!(t.body, Body::GpuWindow(_)));
     if needs_display && !display {
         eprintln!(
-            "xvfb-run or imagemagick's import not found: the window tests are ignored{}",
+            "xvfb-run, imagemagick's import or xdotool not found: the window tests are ignored{}",
             if required("RAYPIPE_REQUIRE_DISPLAY") {
                 ", and fail because RAYPIPE_REQUIRE_DISPLAY=1"
             } else {
@@ -150,7 +151,7 @@ fn trial(test: Test, resources: &Arc<Resources>) -> Trial {
             (Body::Models(f), _, Some(models)) => f(models),
             (Body::GpuModels(f), Some(gpu), Some(models)) => f(gpu, models),
             (Body::GpuWindow(f), Some(gpu), _) if resources.display => f(gpu),
-            (Body::GpuWindow(_), Some(_), _) => return Err(Failed::from("xvfb-run or import not found")),
+            (Body::GpuWindow(_), Some(_), _) => return Err(Failed::from("xvfb-run, import or xdotool not found")),
             (_, None, _) => return Err(Failed::from("no GPU adapter found")),
             (_, _, None) => return Err(Failed::from("../shared/models/ not found")),
         }
