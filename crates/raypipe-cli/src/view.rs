@@ -52,6 +52,9 @@ pub struct ViewArgs {
     /// With --frames: turn the camera this many degrees about its target every frame.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     orbit: f32,
+    /// With --frames: after the first frame, open these files as if dropped on the window.
+    #[arg(long)]
+    drop: Vec<PathBuf>,
     /// Present without waiting for the display's refresh.
     #[arg(long)]
     no_vsync: bool,
@@ -129,6 +132,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             frames,
             screenshot: args.screenshot.clone(),
             orbit_degrees: args.orbit,
+            drops: args.drop.clone(),
         }),
     };
     raypipe_view::run(options, Box::new(CliHost { shots: Cell::new(0) }))?;

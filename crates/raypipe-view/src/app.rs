@@ -254,7 +254,24 @@ impl Viewer {
                 self.motion_frame = 0;
                 self.message = None;
             }
-            Err(why) => self.message = Some(format!("{name}: {why}")),
+            Err(why) => {
+                let why = format!("{name}: {why}");
+                log::warn!("{why}");
+                self.message = Some(why);
+            }
+        }
+    }
+
+    /// A dropped file: its scene replaces the current one, or its one-line error shows and the
+    /// current scene stays.
+    fn open_file(&mut self, path: &std::path::Path) {
+        let name = path.display().to_string();
+        match self.host.load(path) {
+            Ok(scene) => self.set_scene(name, scene),
+            Err(why) => {
+                log::warn!("{why}");
+                self.message = Some(why);
+            }
         }
     }
 
@@ -466,6 +483,11 @@ impl Viewer {
     }
 
     fn finish_script(&mut self, event_loop: &ActiveEventLoop, script: &Script) {
+        if self.frames_drawn == 1 {
+            for path in &script.drops {
+                self.open_file(path);
+            }
+        }
         if self.frames_drawn < script.frames.max(1) {
             return;
         }
@@ -533,13 +555,7 @@ impl ApplicationHandler for Viewer {
                 }
             }
             WindowEvent::RedrawRequested => self.draw(event_loop),
-            WindowEvent::DroppedFile(path) => {
-                let name = path.display().to_string();
-                match self.host.load(&path) {
-                    Ok(scene) => self.set_scene(name, scene),
-                    Err(why) => self.message = Some(why),
-                }
-            }
+            WindowEvent::DroppedFile(path) => self.open_file(&path),
             WindowEvent::KeyboardInput { event, .. } if !consumed => {
                 if let PhysicalKey::Code(code) = event.physical_key
                     && !event.repeat

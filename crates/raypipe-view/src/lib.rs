@@ -42,6 +42,8 @@ pub struct Script {
     pub screenshot: Option<PathBuf>,
     /// Degrees the camera turns about its target each frame.
     pub orbit_degrees: f32,
+    /// Files opened after the first frame, as if dropped on the window.
+    pub drops: Vec<PathBuf>,
 }
 
 pub struct ViewerOptions {

@@ -158,6 +158,58 @@ fn synthetic_input_switches_and_orbits(_: &GpuContext) {
     assert!(matches(&shot(3), &expected).is_err(), "the drag did not orbit");
 }
 
+/// A dropped scene replaces the current one; a broken one shows its error and the scene stays.
+fn dropped_files_load_or_leave_the_scene(_: &GpuContext) {
+    let dir = test_dir("view-drop");
+    let broken = dir.join("broken.off");
+    std::fs::write(&broken, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").unwrap();
+    let shot = dir.join("kept.png");
+    let output = in_xvfb(&[
+        "view",
+        "whitted",
+        "--width",
+        "160",
+        "--height",
+        "120",
+        "--frames",
+        "3",
+        "--drop",
+        broken.to_str().unwrap(),
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    succeeded(&output, "a broken drop");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("broken.off:6: face 0: vertex index 7 out of range"),
+        "{stderr}"
+    );
+    matches(&shot, &rendered(&dir, "whitted", &[])).unwrap();
+    let scene = dir.join("one.toml");
+    std::fs::write(
+        &scene,
+        "[[light]]\nposition = [2, 4, -3]\n[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\n",
+    )
+    .unwrap();
+    let shot = dir.join("dropped.png");
+    let output = in_xvfb(&[
+        "view",
+        "whitted",
+        "--width",
+        "160",
+        "--height",
+        "120",
+        "--frames",
+        "3",
+        "--drop",
+        scene.to_str().unwrap(),
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    succeeded(&output, "a good drop");
+    matches(&shot, &rendered(&dir, scene.to_str().unwrap(), &[])).unwrap();
+}
+
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu_window scripted_frames_are_the_render,
@@ -165,5 +217,6 @@ pub fn tests() -> Vec<Test> {
         gpu_window orbit_and_motion_change_the_frames,
         gpu_window a_mode_that_cannot_serve_the_scene_is_one_line,
         gpu_window synthetic_input_switches_and_orbits,
+        gpu_window dropped_files_load_or_leave_the_scene,
     ]
 }
