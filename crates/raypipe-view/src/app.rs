@@ -8,7 +8,6 @@ use crate::{Host, Modes, Script, ViewError, ViewerOptions};
 use pollster::block_on;
 use raypipe::Choice;
 use raypipe::gpu::{Display, DisplayView, GpuContext};
-use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use std::collections::HashSet;
 use std::sync::Arc;
@@ -360,10 +359,14 @@ impl Viewer {
         }
         let Some(gpu) = &mut self.gpu else { return };
         gpu.tracer.renderer.set_camera(&self.camera.camera);
-        if let Some(rebuild) = &gpu.tracer.rebuild {
-            match PackedScene::new(&self.options.scene.at_frame(self.motion_frame)) {
-                Ok(moved) => rebuild.write_spheres(&moved.spheres),
-                Err(error) => self.message = Some(error.to_string()),
+        if self.options.scene.motion.is_some() {
+            match gpu
+                .tracer
+                .advance(&self.options.scene, self.motion_frame, self.modes.accel)
+            {
+                Ok(Some(ms)) => self.build_ms = Some(ms),
+                Ok(None) => {}
+                Err(why) => self.message = Some(why),
             }
         }
         let surface_texture = match gpu.surface.get_current_texture() {

@@ -1,18 +1,25 @@
 //! What the viewer traces with: the scene packed for its modes, a renderer, and for a moving scene
-//! in storage memory the per-frame rebuild. Rebuilt whole when a mode changes.
+//! the per-frame rebuild: on the GPU in storage memory, on the CPU otherwise. Rebuilt whole when a
+//! mode changes.
 
 use crate::Modes;
 use pollster::block_on;
+use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
+use raypipe::gpu::build::depth_bound;
 use raypipe::gpu::{GpuContext, GpuError, Renderer, RendererOptions, SceneRebuild};
-use raypipe::modes::{Count, MemoryMode};
+use raypipe::modes::{Accel, Count, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
 
 pub struct Tracer {
     pub renderer: Renderer,
-    /// For a moving scene in storage memory: its spheres and BVH, rebuilt before every frame.
+    /// For a moving scene in storage memory: its spheres and BVH, rebuilt on the GPU before every
+    /// frame.
     pub rebuild: Option<SceneRebuild>,
+    /// For a moving scene in uniform or texture memory: the CPU builder that rebuilds its BVH
+    /// before every frame, whose records are then rewritten in place.
+    pub cpu_rebuild: Option<LbvhBuilder<u64>>,
     /// The primitives' count, for the panel.
     pub primitives: usize,
     /// The BVH's build time on the CPU, where it was built there (once).
@@ -58,13 +65,25 @@ impl Tracer {
             },
         };
         let primitives = packed.primitive_count();
-        if scene.motion.is_some() {
-            if modes.memory != MemoryMode::Storage {
-                return Err(format!(
-                    "a moving scene rebuilds its BVH on the GPU every frame, which the shader reads from storage memory, not {} memory",
-                    modes.memory
-                ));
+        if scene.motion.is_some() && modes.memory != MemoryMode::Storage {
+            let mut builder = LbvhBuilder::<u64>::new();
+            let mut cpu_build_ms = None;
+            if modes.accel.uses_bvh() {
+                cpu_build_ms = Some(builder.build(&packed.primitive_boxes(), MortonBits::Bits30).total());
+                packed.set_bvh(builder.to_bvh());
             }
+            let bound = depth_bound(primitives, MortonBits::Bits30);
+            let renderer =
+                block_on(Renderer::with_depth_bound(ctx, &packed, options, bound)).map_err(|e| refusal(&e))?;
+            return Ok(Self {
+                renderer,
+                rebuild: None,
+                cpu_rebuild: Some(builder),
+                primitives,
+                cpu_build_ms,
+            });
+        }
+        if scene.motion.is_some() {
             let rebuild =
                 block_on(SceneRebuild::new(ctx, &packed, modes.accel, MortonBits::Bits30)).map_err(|e| refusal(&e))?;
             let renderer =
@@ -72,6 +91,7 @@ impl Tracer {
             return Ok(Self {
                 renderer,
                 rebuild: Some(rebuild),
+                cpu_rebuild: None,
                 primitives,
                 cpu_build_ms: None,
             });
@@ -84,8 +104,29 @@ impl Tracer {
         Ok(Self {
             renderer,
             rebuild: None,
+            cpu_rebuild: None,
             primitives,
             cpu_build_ms,
         })
+    }
+
+    /// Moves the scene to `frame` of its motion: the spheres written to the GPU rebuild's buffers,
+    /// or the BVH rebuilt on the CPU and the records rewritten. Returns the CPU build's time.
+    pub fn advance(&mut self, scene: &Scene, frame: u32, accel: Accel) -> Result<Option<f64>, String> {
+        let mut moved = PackedScene::new(&scene.at_frame(frame)).map_err(|e| e.to_string())?;
+        if let Some(rebuild) = &self.rebuild {
+            rebuild.write_spheres(&moved.spheres);
+            return Ok(None);
+        }
+        let Some(builder) = &mut self.cpu_rebuild else {
+            return Ok(None);
+        };
+        let mut ms = None;
+        if accel.uses_bvh() {
+            ms = Some(builder.build(&moved.primitive_boxes(), MortonBits::Bits30).total());
+            moved.set_bvh(builder.to_bvh());
+        }
+        self.renderer.write_scene(&moved).map_err(|e| e.to_string())?;
+        Ok(ms)
     }
 }

@@ -107,13 +107,24 @@ fn orbit_and_motion_change_the_frames(_: &GpuContext) {
 }
 
 fn a_mode_that_cannot_serve_the_scene_is_one_line(_: &GpuContext) {
-    let output = in_xvfb(&["view", "bounce:100", "--memory", "texture", "--frames", "1"]);
+    let output = in_xvfb(&["view", "sphere-8k", "--memory", "uniform", "--frames", "1"]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("storage memory") && !stderr.contains("panicked"),
+        stderr.contains("uniform memory cannot hold") && !stderr.contains("panicked"),
         "{stderr}"
     );
+}
+
+/// A moving scene in texture memory (its BVH rebuilt on the CPU every frame) shows the frames of
+/// storage memory (rebuilt on the GPU).
+fn a_moving_scene_in_texture_memory_is_the_storage_one(_: &GpuContext) {
+    let dir = test_dir("view-texture-motion");
+    let storage = viewed(&dir, "bounce:800", &[], 5);
+    let moved = dir.join("storage.png");
+    std::fs::rename(&storage, &moved).unwrap();
+    let texture = viewed(&dir, "bounce:800", &["--memory", "texture"], 5);
+    matches(&texture, &moved).unwrap();
 }
 
 /// Keys and a drag through the X server (xdotool): `B` switches the acceleration and the image
@@ -218,5 +229,6 @@ pub fn tests() -> Vec<Test> {
         gpu_window a_mode_that_cannot_serve_the_scene_is_one_line,
         gpu_window synthetic_input_switches_and_orbits,
         gpu_window dropped_files_load_or_leave_the_scene,
+        gpu_window a_moving_scene_in_texture_memory_is_the_storage_one,
     ]
 }

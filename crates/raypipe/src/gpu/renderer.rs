@@ -98,6 +98,8 @@ pub struct Renderer {
     /// With a rebuild's stack or threaded nodes: their quantization frame, copied into the globals
     /// every frame.
     bvh_frame: Option<wgpu::Buffer>,
+    /// The scene's arrays, kept to be rewritten ([`Renderer::write_scene`]).
+    resources: SceneResources,
     timer: Option<PassTimestamps>,
 }
 
@@ -110,6 +112,36 @@ impl Renderer {
         }
         let depth = scene.bvh.as_ref().map_or(0, |b| b.depth);
         Self::create(ctx, scene, options, None, depth).await
+    }
+
+    /// [`Renderer::new`] for a scene whose BVH will be rebuilt on the CPU and rewritten with
+    /// [`Renderer::write_scene`]: the walk's stack is sized for any tree up to `depth_bound`.
+    pub async fn with_depth_bound(
+        ctx: &GpuContext,
+        scene: &PackedScene,
+        options: RendererOptions,
+        depth_bound: u32,
+    ) -> Result<Self, GpuError> {
+        if options.accel.uses_bvh() && scene.primitive_count() > 0 && scene.bvh.is_none() {
+            return Err(MissingBvh { accel: options.accel }.into());
+        }
+        Self::create(ctx, scene, options, None, depth_bound).await
+    }
+
+    /// Rewrites the scene's records in place: the moved spheres of a moving scene and its BVH,
+    /// rebuilt on the CPU (the route where no compute shaders rebuild it, as in WebGL2). The scene
+    /// must have as many records of each kind as the one the renderer was made with, and a tree no
+    /// deeper than the renderer's stack.
+    pub fn write_scene(&mut self, scene: &PackedScene) -> Result<(), GpuError> {
+        self.resources.write(&self.ctx.queue, scene, self.options.accel)?;
+        self.globals.bvh_frame = scene.globals.bvh_frame;
+        let offset = std::mem::offset_of!(GpuGlobals, bvh_frame) as u64;
+        self.ctx.queue.write_buffer(
+            &self.globals_buffer,
+            offset,
+            bytemuck::bytes_of(&self.globals.bvh_frame),
+        );
+        Ok(())
     }
 
     /// A renderer whose spheres and nodes are `rebuild`'s, rebuilt on the GPU before each frame:
@@ -179,6 +211,7 @@ impl Renderer {
                 readbacks: readbacks(&ctx.device, width, height),
                 targets,
                 bvh_frame: shared.and_then(|s| s.bvh_frame.clone()),
+                resources,
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),

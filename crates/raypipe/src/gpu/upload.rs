@@ -34,7 +34,9 @@ pub struct SceneResources {
 
 enum Resource {
     Buffer(wgpu::Buffer),
-    Texture(wgpu::TextureView),
+    /// A buffer another owner writes (a rebuild's spheres and nodes).
+    Shared(wgpu::Buffer),
+    Texture(wgpu::Texture, wgpu::TextureView),
 }
 
 impl SceneResources {
@@ -45,11 +47,54 @@ impl SceneResources {
             .map(|(array, resource)| wgpu::BindGroupEntry {
                 binding: array.binding,
                 resource: match resource {
-                    Resource::Buffer(buffer) => buffer.as_entire_binding(),
-                    Resource::Texture(view) => wgpu::BindingResource::TextureView(view),
+                    Resource::Buffer(buffer) | Resource::Shared(buffer) => buffer.as_entire_binding(),
+                    Resource::Texture(_, view) => wgpu::BindingResource::TextureView(view),
                 },
             })
             .collect()
+    }
+
+    /// Rewrites the arrays in place with `scene`'s records, which must be as many as those
+    /// uploaded (a moving scene, its BVH rebuilt on the CPU): no new buffer, texture or pipeline.
+    pub fn write(&self, queue: &wgpu::Queue, scene: &PackedScene, accel: Accel) -> Result<(), GpuError> {
+        for ((name, records), (array, resource)) in scene_records(scene, accel)
+            .into_iter()
+            .zip(self.arrays.iter().zip(&self.resources))
+        {
+            if records.len() != array.capacity {
+                return Err(GpuError::Operation {
+                    what: "rewriting the scene",
+                    message: format!(
+                        "{} {name} records, where {} were uploaded",
+                        records.len(),
+                        array.capacity
+                    ),
+                });
+            }
+            match resource {
+                Resource::Shared(_) => {}
+                Resource::Buffer(buffer) => {
+                    if !records.bytes().is_empty() {
+                        queue.write_buffer(buffer, 0, records.bytes());
+                    }
+                }
+                Resource::Texture(texture, _) => {
+                    let mut texels = records.texel_data();
+                    texels.resize((texture.width() * texture.height()) as usize, [0.0; 4]);
+                    queue.write_texture(
+                        texture.as_image_copy(),
+                        bytemuck::cast_slice(&texels),
+                        wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(texture.width() * 16),
+                            rows_per_image: Some(texture.height()),
+                        },
+                        texture.size(),
+                    );
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -83,7 +128,7 @@ pub fn upload(
         let (ty, resource) = match memory {
             MemoryMode::Storage if shared_buffer.is_some() => (
                 buffer_binding(false),
-                Resource::Buffer(shared_buffer.expect("checked by the match guard")),
+                Resource::Shared(shared_buffer.expect("checked by the match guard")),
             ),
             MemoryMode::Uniform | MemoryMode::Storage => {
                 let uniform = memory == MemoryMode::Uniform;
@@ -161,7 +206,8 @@ pub fn upload(
                     view_dimension: wgpu::TextureViewDimension::D2,
                     multisampled: false,
                 };
-                (ty, Resource::Texture(texture.create_view(&Default::default())))
+                let view = texture.create_view(&Default::default());
+                (ty, Resource::Texture(texture, view))
             }
         };
         out.layout_entries.push(wgpu::BindGroupLayoutEntry {

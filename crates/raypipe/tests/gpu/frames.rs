@@ -6,9 +6,10 @@ use crate::common::*;
 use pollster::block_on;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
+use raypipe::gpu::build::depth_bound;
 use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
-use raypipe::modes::Accel;
+use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 
@@ -28,6 +29,32 @@ fn gpu_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32) -> Vec<
             block_on(renderer.read_frame_after(|encoder| rebuild.encode(encoder)))
                 .unwrap()
                 .frame
+        })
+        .collect()
+}
+
+/// `count` frames in `memory`, the BVH rebuilt on the CPU before each and the records rewritten in
+/// place: the route of adapters without compute shaders (WebGL2).
+fn rewritten_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, memory: MemoryMode, count: u32) -> Vec<Frame> {
+    let mut builder = LbvhBuilder::<u64>::new();
+    let mut packed_at = |frame: u32| {
+        let mut packed = PackedScene::new(&scene.at_frame(frame)).unwrap();
+        builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
+        packed.set_bvh(builder.to_bvh());
+        packed
+    };
+    let first = packed_at(0);
+    let options = RendererOptions {
+        accel,
+        memory,
+        ..Default::default()
+    };
+    let bound = depth_bound(first.primitive_count(), MortonBits::Bits30);
+    let mut renderer = block_on(Renderer::with_depth_bound(ctx, &first, options, bound)).unwrap();
+    (0..count)
+        .map(|frame| {
+            renderer.write_scene(&packed_at(frame)).unwrap();
+            block_on(renderer.read_frame()).unwrap().frame
         })
         .collect()
 }
@@ -81,9 +108,26 @@ fn gpu_rebuilt_frames_with_triangles_match_the_cpu(ctx: &GpuContext) {
     }
 }
 
+/// A moving scene's records rewritten in texture memory, its BVH rebuilt on the CPU, gives the
+/// frames of the GPU rebuild in storage memory.
+fn rewritten_texture_frames_match_the_gpu_rebuild(ctx: &GpuContext) {
+    let mut scene = Scene::load("bounce:1200:3").unwrap();
+    scene.settings.width = 64;
+    scene.settings.height = 48;
+    for accel in [Accel::Threaded, Accel::Stackless] {
+        let on_gpu = gpu_frames(ctx, &scene, accel, 3);
+        let rewritten = rewritten_frames(ctx, &scene, accel, MemoryMode::Texture, 3);
+        assert_ne!(rewritten[0], rewritten[2], "the spheres move");
+        for (k, (r, g)) in rewritten.iter().zip(&on_gpu).enumerate() {
+            assert_frames_match(&format!("frames-rewritten-{accel:?}-{k}"), r, g);
+        }
+    }
+}
+
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu gpu_rebuilt_frames_match_the_cpu,
         gpu gpu_rebuilt_frames_with_triangles_match_the_cpu,
+        gpu rewritten_texture_frames_match_the_gpu_rebuild,
     ]
 }
