@@ -135,6 +135,16 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             drops: args.drop.clone(),
         }),
     };
-    raypipe_view::run(options, Box::new(CliHost { shots: Cell::new(0) }))?;
+    let scripted = args.frames.is_some();
+    let summary = raypipe_view::run(options, Box::new(CliHost { shots: Cell::new(0) }))?;
+    if scripted {
+        let trace = summary
+            .trace_ms
+            .map_or("no timestamp queries".to_string(), |ms| format!("{ms:.2} ms"));
+        println!(
+            "view: {} frames; median trace pass {trace} (GPU timestamps), median frame {:.2} ms (wall clock: trace, display, present)",
+            summary.frames, summary.frame_ms
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }

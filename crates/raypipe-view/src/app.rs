@@ -4,7 +4,7 @@
 use crate::camera::CameraControl;
 use crate::panel::{self, Readout};
 use crate::tracer::Tracer;
-use crate::{Host, Modes, Script, ViewError, ViewerOptions};
+use crate::{Host, Modes, Script, Summary, ViewError, ViewerOptions};
 use pollster::block_on;
 use raypipe::Choice;
 use raypipe::gpu::{Display, DisplayView, GpuContext};
@@ -25,14 +25,25 @@ const DEPTH_FAR: f32 = 3.0;
 /// The cost view's top, in nodes tested.
 const COST_MAX: f32 = 200.0;
 
-pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<(), ViewError> {
+pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<Summary, ViewError> {
     let event_loop = EventLoop::new().map_err(|e| ViewError::Window(e.to_string()))?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut viewer = Viewer::new(options, host, event_loop.owned_display_handle());
     event_loop
         .run_app(&mut viewer)
         .map_err(|e| ViewError::Window(e.to_string()))?;
-    viewer.outcome
+    viewer.outcome?;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    };
+    // The first frames pay for pipeline compilation on some drivers: the medians skip them.
+    let steady = |v: &[f64]| v.iter().skip(v.len().min(2)).copied().collect::<Vec<_>>();
+    Ok(Summary {
+        frames: viewer.frames_drawn,
+        trace_ms: median(steady(&viewer.trace_times)),
+        frame_ms: median(steady(&viewer.frame_times)).unwrap_or(0.0),
+    })
 }
 
 /// What lives on the GPU once the window exists.
@@ -74,6 +85,9 @@ struct Viewer {
     frame_ms: f64,
     rays: u64,
     build_ms: Option<f64>,
+    /// Per frame: the trace pass's GPU time (with timestamps), and the wall clock between frames.
+    trace_times: Vec<f64>,
+    frame_times: Vec<f64>,
     outcome: Result<(), ViewError>,
 }
 
@@ -97,6 +111,8 @@ impl Viewer {
             frame_ms: 0.0,
             rays: 0,
             build_ms: None,
+            trace_times: Vec::new(),
+            frame_times: Vec::new(),
             outcome: Ok(()),
         }
     }
@@ -460,6 +476,12 @@ impl Viewer {
         // The frame's GPU time where the adapter has timestamps; this waits for the frame.
         let gpu_ms = block_on(gpu.tracer.renderer.read_gpu_ms()).ok().flatten();
         self.frame_ms = gpu_ms.unwrap_or(seconds * 1e3);
+        if let Some(ms) = gpu_ms {
+            self.trace_times.push(ms);
+        }
+        if self.frames_drawn > 0 {
+            self.frame_times.push(seconds * 1e3);
+        }
         self.fps = if self.fps == 0.0 {
             1.0 / seconds.max(1e-6)
         } else {

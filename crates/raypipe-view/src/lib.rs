@@ -78,8 +78,18 @@ pub enum ViewError {
     Scene(String),
 }
 
+/// What a run drew, and how fast.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Summary {
+    pub frames: u32,
+    /// Median GPU time of the trace pass, where the adapter has timestamp queries.
+    pub trace_ms: Option<f64>,
+    /// Median wall-clock time from one frame to the next: trace, display pass, panel and present.
+    pub frame_ms: f64,
+}
+
 /// Opens the window and runs until it is closed, or until the script's frames are drawn.
-pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<(), ViewError> {
+pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<Summary, ViewError> {
     let wayland = std::env::var_os("WAYLAND_DISPLAY").is_some();
     if std::env::var_os("DISPLAY").is_none() && !wayland {
         return Err(ViewError::NoDisplay);
