@@ -82,10 +82,12 @@ impl Host for CliHost {
         io::write(&aov_image(aov, is_exr, frame), path).map_err(|e| crate::cli::message(&e))
     }
 
-    fn screenshot_path(&self) -> PathBuf {
+    fn screenshot_path(&self, view: DisplayView) -> PathBuf {
         let n = self.shots.get() + 1;
         self.shots.set(n);
-        PathBuf::from(format!("raypipe-{n:03}.png"))
+        // Depth is a float image, as `render --aov depth` writes it.
+        let extension = if view == DisplayView::Depth { "exr" } else { "png" };
+        PathBuf::from(format!("raypipe-{n:03}.{extension}"))
     }
 }
 
@@ -93,10 +95,19 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
     if args.screenshot.is_some() && args.frames.is_none() {
         anyhow::bail!("--screenshot saves the last of --frames N frames: give --frames");
     }
-    if let Some(path) = &args.screenshot
-        && !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))
-    {
-        anyhow::bail!("{}: screenshots are PNG files", path.display());
+    if let Some(path) = &args.screenshot {
+        let wanted = if args.aov == Aov::Depth { "exr" } else { "png" };
+        if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case(wanted)) {
+            anyhow::bail!(
+                "{}: the {} view's screenshots are {} files",
+                path.display(),
+                match args.aov {
+                    Aov::Depth => "depth",
+                    _ => "colour, normal and cost",
+                },
+                wanted.to_uppercase()
+            );
+        }
     }
     let model = ModelOptions {
         as_: args.as_,

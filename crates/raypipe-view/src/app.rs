@@ -309,7 +309,7 @@ impl Viewer {
             KeyCode::KeyY => asked.vsync = !asked.vsync,
             KeyCode::KeyH => self.show_panel = !self.show_panel,
             KeyCode::KeyP => {
-                let path = self.host.screenshot_path();
+                let path = self.host.screenshot_path(self.modes.view);
                 let said = self.screenshot(&path);
                 log::info!("{said}");
                 self.message = Some(said);

@@ -62,8 +62,8 @@ pub trait Host {
     fn load(&self, path: &Path) -> Result<Scene, String>;
     /// Saves a frame (the linear frame, as read back) to `path`, as `raypipe render` writes files.
     fn save(&self, frame: &Frame, view: DisplayView, path: &Path) -> Result<(), String>;
-    /// Where `P` saves its next screenshot.
-    fn screenshot_path(&self) -> PathBuf;
+    /// Where `P` saves its next screenshot of `view`.
+    fn screenshot_path(&self, view: DisplayView) -> PathBuf;
 }
 
 #[derive(Debug, thiserror::Error)]
