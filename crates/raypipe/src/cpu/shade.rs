@@ -1,10 +1,9 @@
 //! Surfaces and Whitted shading: the twin of `shaders/shade.wgsl`.
 
 use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
-use super::trace::Tracer;
 use crate::bvh::layout::NONE;
 use crate::records::constants::RAY_BIAS;
-use crate::records::{GpuMaterial, GpuTriangle};
+use crate::records::{GpuMaterial, GpuTriangle, PackedScene};
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug)]
@@ -24,96 +23,95 @@ pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
     incident - 2.0 * normal.dot(incident) * normal
 }
 
-impl Tracer<'_> {
-    pub fn surface_at(&self, ray: &Ray, hit: &Hit) -> Surface {
-        let position = ray.origin + hit.t * ray.dir;
-        if hit.kind == HitKind::Primitive {
-            if let Some(sphere) = self.scene.spheres.get(hit.index as usize) {
-                let normal = (position - v3(sphere.center)).normalize();
-                return Surface {
-                    position,
-                    normal,
-                    shading: normal,
-                    material: sphere.material,
-                };
-            }
-            let triangle = &self.scene.triangles[hit.index as usize - self.scene.spheres.len()];
-            let normal = v3(triangle.e1).cross(v3(triangle.e2)).normalize();
+/// The surface a ray hit: where, its normals, its material.
+pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
+    let position = ray.origin + hit.t * ray.dir;
+    if hit.kind == HitKind::Primitive {
+        if let Some(sphere) = scene.spheres.get(hit.index as usize) {
+            let normal = (position - v3(sphere.center)).normalize();
             return Surface {
                 position,
                 normal,
-                shading: self.triangle_shading(triangle, ray, normal),
-                material: triangle.material,
+                shading: normal,
+                material: sphere.material,
             };
         }
-        let plane = &self.scene.planes[hit.index as usize];
-        let local = position - v3(plane.point);
-        let cell = (local.dot(v3(plane.tangent)) / plane.checker_size).floor()
-            + (local.dot(v3(plane.bitangent)) / plane.checker_size).floor();
-        let mut material = plane.material;
-        if cell - 2.0 * (cell * 0.5).floor() != 0.0 {
-            material = plane.checker_material;
-        }
-        Surface {
+        let triangle = &scene.triangles[hit.index as usize - scene.spheres.len()];
+        let normal = v3(triangle.e1).cross(v3(triangle.e2)).normalize();
+        return Surface {
             position,
-            normal: v3(plane.normal),
-            shading: v3(plane.normal),
-            material,
-        }
+            normal,
+            shading: triangle_shading(scene, triangle, ray, normal),
+            material: triangle.material,
+        };
     }
+    let plane = &scene.planes[hit.index as usize];
+    let local = position - v3(plane.point);
+    let cell = (local.dot(v3(plane.tangent)) / plane.checker_size).floor()
+        + (local.dot(v3(plane.bitangent)) / plane.checker_size).floor();
+    let mut material = plane.material;
+    if cell - 2.0 * (cell * 0.5).floor() != 0.0 {
+        material = plane.checker_material;
+    }
+    Surface {
+        position,
+        normal: v3(plane.normal),
+        shading: v3(plane.normal),
+        material,
+    }
+}
 
-    /// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's
-    /// side; the geometric normal where they cancel out.
-    fn triangle_shading(&self, triangle: &GpuTriangle, ray: &Ray, normal: Vec3) -> Vec3 {
-        if triangle.normals == NONE {
-            return normal;
-        }
-        let uvt = triangle_uvt(triangle, ray);
-        let n = &self.scene.triangle_normals[triangle.normals as usize];
-        let blended = (1.0 - uvt.x - uvt.y) * v3(n.n0) + uvt.x * v3(n.n1) + uvt.y * v3(n.n2);
-        if blended.dot(blended) == 0.0 {
-            return normal;
-        }
-        let shading = blended.normalize();
-        if shading.dot(normal) < 0.0 { -shading } else { shading }
+/// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's
+/// side; the geometric normal where they cancel out.
+fn triangle_shading(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray, normal: Vec3) -> Vec3 {
+    if triangle.normals == NONE {
+        return normal;
     }
+    let uvt = triangle_uvt(triangle, ray);
+    let n = &scene.triangle_normals[triangle.normals as usize];
+    let blended = (1.0 - uvt.x - uvt.y) * v3(n.n0) + uvt.x * v3(n.n1) + uvt.y * v3(n.n2);
+    if blended.dot(blended) == 0.0 {
+        return normal;
+    }
+    let shading = blended.normalize();
+    if shading.dot(normal) < 0.0 { -shading } else { shading }
+}
 
-    /// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
-    /// Phong. `normal` (geometric) and `shading` face the viewer; `view` points from the surface to
-    /// the viewer.
-    pub fn direct_light(
-        &mut self,
-        surface: &Surface,
-        normal: Vec3,
-        shading: Vec3,
-        view: Vec3,
-        material: &GpuMaterial,
-    ) -> Vec3 {
-        let globals = &self.scene.globals.scene;
-        let albedo = v3(material.color);
-        let mut color = globals.ambient * albedo;
-        let origin = offset_origin(surface.position, normal);
-        for light in &self.scene.lights {
-            let to_light = v3(light.position) - surface.position;
-            let distance = to_light.length();
-            let l = to_light / distance;
-            let n_dot_l = shading.dot(l);
-            if n_dot_l <= 0.0 {
-                continue;
-            }
-            self.ray_count += 1;
-            if self.occluded(&Ray { origin, dir: l }, distance) {
-                continue;
-            }
-            let mut highlight = 0.0;
-            let r_dot_v = reflect(-l, shading).dot(view);
-            if r_dot_v > 0.0 && material.specular > 0.0 {
-                highlight = material.specular * r_dot_v.powf(material.shininess);
-            }
-            color += v3(light.color) * (albedo * n_dot_l + Vec3::splat(highlight));
+/// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
+/// Phong. `normal` (geometric) and `shading` face the viewer; `view` points from the surface to
+/// the viewer. `occluded` casts a shadow ray (and counts it).
+pub fn direct_light(
+    scene: &PackedScene,
+    surface: &Surface,
+    normal: Vec3,
+    shading: Vec3,
+    view: Vec3,
+    material: &GpuMaterial,
+    mut occluded: impl FnMut(&Ray, f32) -> bool,
+) -> Vec3 {
+    let globals = &scene.globals.scene;
+    let albedo = v3(material.color);
+    let mut color = globals.ambient * albedo;
+    let origin = offset_origin(surface.position, normal);
+    for light in &scene.lights {
+        let to_light = v3(light.position) - surface.position;
+        let distance = to_light.length();
+        let l = to_light / distance;
+        let n_dot_l = shading.dot(l);
+        if n_dot_l <= 0.0 {
+            continue;
         }
-        color
+        if occluded(&Ray { origin, dir: l }, distance) {
+            continue;
+        }
+        let mut highlight = 0.0;
+        let r_dot_v = reflect(-l, shading).dot(view);
+        if r_dot_v > 0.0 && material.specular > 0.0 {
+            highlight = material.specular * r_dot_v.powf(material.shininess);
+        }
+        color += v3(light.color) * (albedo * n_dot_l + Vec3::splat(highlight));
     }
+    color
 }
 
 /// `side` points to where the new ray goes: the facing normal for reflection and shadows, its

@@ -2,7 +2,7 @@
 
 use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use super::intersect::{Hit, HitKind, Primitives, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
-use super::shade::{fresnel_schlick, offset_origin, reflect};
+use super::shade::{direct_light, fresnel_schlick, offset_origin, reflect, surface_at};
 use crate::error::MissingBvh;
 use crate::modes::Accel;
 use crate::records::constants::MIN_WEIGHT;
@@ -146,7 +146,7 @@ impl<'a> Tracer<'a> {
                 result.color += task.weight * v3(self.scene.globals.scene.background);
                 continue;
             }
-            let surface = self.surface_at(&ray, &hit);
+            let surface = surface_at(self.scene, &ray, &hit);
             if task.depth == 0 {
                 result.normal = surface.shading;
                 result.depth = Some(hit.t);
@@ -157,7 +157,12 @@ impl<'a> Tracer<'a> {
             let normal = if entering { surface.normal } else { -surface.normal };
             let shading = if entering { surface.shading } else { -surface.shading };
             let view = -ray.dir;
-            result.color += task.weight * self.direct_light(&surface, normal, shading, view, &material);
+            let scene = self.scene;
+            let light = direct_light(scene, &surface, normal, shading, view, &material, |ray, t_max| {
+                self.ray_count += 1;
+                self.occluded(ray, t_max)
+            });
+            result.color += task.weight * light;
             if task.depth >= max_depth {
                 continue;
             }
