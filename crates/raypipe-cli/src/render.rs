@@ -31,43 +31,67 @@ pub enum Aov {
     Cost,
 }
 
+/// What names the scene and how it is traced: the flags `render` and `view` share.
 #[derive(Args)]
-pub struct RenderArgs {
+pub struct SceneArgs {
     /// A built-in scene (whitted, sphere-8k, torus-5k, sphere:N, torus:N, random:N[:SEED],
     /// bounce:N[:SEED]), a TOML scene file, or a model file (.ply, .obj, .off) to frame and render.
-    #[arg(default_value = "whitted")]
-    scene: String,
+    #[arg(default_value = "whitted", value_name = "SCENE")]
+    pub spec: String,
     /// With a model file: render its triangles, or spheres on its surface.
     #[arg(long = "as", value_parser = choice::<MeshAs>())]
-    as_: Option<MeshAs>,
+    pub as_: Option<MeshAs>,
     /// With a model file: this many spheres, sampled uniformly by area (implies --as spheres).
     /// Without it, --as spheres puts one sphere on every vertex.
     #[arg(long)]
-    spheres: Option<usize>,
+    pub spheres: Option<usize>,
     /// With a model file: rotate it first by these Euler angles in degrees, about x, then y, then z
     /// (say --rotate=-90,0,0 to stand up a model whose up axis is z).
     #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
-    rotate: Option<glam::Vec3>,
+    pub rotate: Option<glam::Vec3>,
+    #[arg(long)]
+    pub width: Option<u32>,
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Maximum bounces after the primary ray (default 5, or the scene's).
+    #[arg(long)]
+    pub depth: Option<u32>,
+    #[arg(long, value_parser = choice::<Backend>())]
+    pub backend: Option<Backend>,
+    #[arg(long, value_parser = choice::<MemoryMode>(), default_value_t)]
+    pub memory: MemoryMode,
+    #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
+    pub accel: Accel,
+    #[arg(long, value_enum, default_value_t)]
+    pub aov: Aov,
+}
+
+impl SceneArgs {
+    /// The scene, with the size and depth the flags give.
+    pub fn load(&self) -> anyhow::Result<Scene> {
+        let model = ModelOptions {
+            as_: self.as_,
+            spheres: self.spheres,
+            rotate: self.rotate,
+        };
+        let mut scene = load_scene(&self.spec, &model)?;
+        let settings = &mut scene.settings;
+        settings.width = self.width.unwrap_or(settings.width);
+        settings.height = self.height.unwrap_or(settings.height);
+        settings.max_depth = self.depth.unwrap_or(settings.max_depth);
+        Ok(scene)
+    }
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Output file; the extension picks PNG or EXR. Default: render.png, or depth.exr for --aov depth.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    #[arg(long)]
-    width: Option<u32>,
-    #[arg(long)]
-    height: Option<u32>,
-    /// Maximum bounces after the primary ray (default 5, or the scene's).
-    #[arg(long)]
-    depth: Option<u32>,
     #[arg(long, value_enum, default_value_t)]
     device: DeviceChoice,
-    #[arg(long, value_parser = choice::<Backend>())]
-    backend: Option<Backend>,
-    #[arg(long, value_parser = choice::<MemoryMode>(), default_value_t)]
-    memory: MemoryMode,
-    #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
-    accel: Accel,
-    #[arg(long, value_enum, default_value_t)]
-    aov: Aov,
     /// Print render time and rays per second.
     #[arg(long)]
     stats: bool,
@@ -117,7 +141,7 @@ pub fn numbered(name: &str, frame: u32) -> Option<String> {
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
-    let output = args.output.clone().unwrap_or_else(|| match args.aov {
+    let output = args.output.clone().unwrap_or_else(|| match args.scene.aov {
         Aov::Depth => "depth.exr".into(),
         _ => "render.png".into(),
     });
@@ -126,37 +150,27 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     if !(is_exr || is_png) {
         bail!("{}: output must end in .png or .exr", output.display());
     }
-    if args.aov == Aov::Depth && !is_exr {
+    if args.scene.aov == Aov::Depth && !is_exr {
         bail!(
             "{}: --aov depth writes a float EXR; name the output *.exr",
             output.display()
         );
     }
-    if args.aov == Aov::Cost && is_exr {
+    if args.scene.aov == Aov::Cost && is_exr {
         bail!(
             "{}: --aov cost writes a PNG heat map; name the output *.png",
             output.display()
         );
     }
 
-    let model = ModelOptions {
-        as_: args.as_,
-        spheres: args.spheres,
-        rotate: args.rotate,
-    };
-    let scene = load_scene(&args.scene, &model)?;
-    let mut scene = scene;
-    let settings = &mut scene.settings;
-    settings.width = args.width.unwrap_or(settings.width);
-    settings.height = args.height.unwrap_or(settings.height);
-    settings.max_depth = args.depth.unwrap_or(settings.max_depth);
+    let scene = args.scene.load()?;
     let options = RenderOptions {
         device: args.device,
-        backend: args.backend,
-        memory: args.memory,
-        accel: args.accel,
+        backend: args.scene.backend,
+        memory: args.scene.memory,
+        accel: args.scene.accel,
         progress: std::io::stderr().is_terminal(),
-        count: if args.aov == Aov::Cost {
+        count: if args.scene.aov == Aov::Cost {
             Count::Cost
         } else {
             Count::Rays
@@ -172,20 +186,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         };
         return render_sequence(&args, &scene, &output, is_exr, frames, &options);
     }
-    let mut packed = PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene))?;
-    if args.accel.uses_bvh() {
+    let mut packed = PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene.spec))?;
+    if args.scene.accel.uses_bvh() {
         packed.build_bvh(MortonBits::default());
     }
     let outcome = render(&packed, &options)?;
     let frame = &outcome.frame;
-    io::write(&aov_image(args.aov, is_exr, frame), &output)?;
+    io::write(&aov_image(args.scene.aov, is_exr, frame), &output)?;
 
     if args.stats {
         let pixels = frame.width as u64 * frame.height as u64;
         let rays = frame.rays();
         println!(
             "scene: {}, {}x{}, {} spheres, {} triangles, {} planes, {} lights, depth {}",
-            args.scene,
+            args.scene.spec,
             frame.width,
             frame.height,
             packed.spheres.len(),
@@ -196,9 +210,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         );
         println!(
             "device: {}, memory {:?}, accel {:?}",
-            outcome.device, args.memory, args.accel
+            outcome.device, args.scene.memory, args.scene.accel
         );
-        if args.aov == Aov::Cost {
+        if args.scene.aov == Aov::Cost {
             let counts = frame.counts();
             let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
             let max = counts.iter().copied().max().unwrap_or(0);
@@ -243,25 +257,25 @@ fn render_sequence(
     let outcome = render_frames(scene, options, frames, |frame, image| {
         if pattern {
             let path = numbered(&name, frame).expect("checked above");
-            io::write(&aov_image(args.aov, is_exr, image), Path::new(&path))?;
+            io::write(&aov_image(args.scene.aov, is_exr, image), Path::new(&path))?;
         } else if frame + 1 == frames {
-            io::write(&aov_image(args.aov, is_exr, image), output)?;
+            io::write(&aov_image(args.scene.aov, is_exr, image), output)?;
         }
         Ok(())
     })
-    .map_err(|e| e.context(args.scene.clone()))?;
+    .map_err(|e| e.context(args.scene.spec.clone()))?;
     if args.stats {
         let s = &scene.settings;
         println!(
             "scene: {}, {}x{}, {} spheres, {frames} frames",
-            args.scene,
+            args.scene.spec,
             s.width,
             s.height,
             scene.spheres.len()
         );
         println!(
             "device: {}, memory {:?}, accel {:?}",
-            outcome.device, args.memory, args.accel
+            outcome.device, args.scene.memory, args.scene.accel
         );
         // The first frame pays for pipeline compilation on some drivers: medians skip it.
         let steady = if frames > 1 { 1 } else { 0 };

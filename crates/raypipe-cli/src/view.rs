@@ -1,15 +1,13 @@
 //! `raypipe view`: the scene live in a window (the `raypipe-view` crate), with `render`'s scene
 //! flags; this side loads dropped files and writes screenshots.
 
-use crate::args::choice;
 use crate::io;
-use crate::render::{Aov, aov_image, load_scene, parse_angles};
+use crate::render::{Aov, SceneArgs, aov_image, load_scene};
 use clap::Args;
-use raypipe::gpu::{Backend, DisplayView};
+use raypipe::gpu::DisplayView;
 use raypipe::image::Frame;
-use raypipe::modes::{Accel, MemoryMode};
 use raypipe::scene::Scene;
-use raypipe::scene::model::{MeshAs, ModelOptions};
+use raypipe::scene::model::ModelOptions;
 use raypipe_view::{Host, Modes, Script, ViewerOptions};
 use std::cell::Cell;
 use std::path::{Path, PathBuf};
@@ -17,32 +15,10 @@ use std::process::ExitCode;
 
 #[derive(Args)]
 pub struct ViewArgs {
-    /// What `render` takes: a built-in scene, a TOML scene file, or a model file.
-    #[arg(default_value = "whitted")]
-    scene: String,
-    #[arg(long = "as", value_parser = choice::<MeshAs>())]
-    as_: Option<MeshAs>,
-    #[arg(long)]
-    spheres: Option<usize>,
-    #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
-    rotate: Option<glam::Vec3>,
-    /// The traced frame's size at start (the window's inner size); it follows the window after.
-    #[arg(long)]
-    width: Option<u32>,
-    #[arg(long)]
-    height: Option<u32>,
-    /// Bounces after the primary ray (default 5, or the scene's).
-    #[arg(long)]
-    depth: Option<u32>,
-    #[arg(long, value_parser = choice::<Backend>())]
-    backend: Option<Backend>,
-    #[arg(long, value_parser = choice::<MemoryMode>(), default_value_t)]
-    memory: MemoryMode,
-    #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
-    accel: Accel,
-    /// What the window shows: colour, depth, normals, or the cost heat map.
-    #[arg(long, value_enum, default_value_t)]
-    aov: Aov,
+    /// The scene and its flags, as `render` takes them; --width and --height give the window's
+    /// starting size, which the traced frame follows after; --aov picks the view.
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Draw this many frames, then exit (with --screenshot, after saving the last one).
     #[arg(long)]
     frames: Option<u32>,
@@ -79,7 +55,13 @@ impl Host for CliHost {
             DisplayView::Cost => Aov::Cost,
         };
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        io::write(&aov_image(aov, is_exr, frame), path).map_err(|e| crate::cli::message(&e))
+        // Written beside the target and renamed, so that a reader never sees half a file.
+        let name = path
+            .file_name()
+            .map_or("screenshot".into(), |n| n.to_string_lossy().into_owned());
+        let partial = path.with_file_name(format!(".{name}.partial.{}", if is_exr { "exr" } else { "png" }));
+        io::write(&aov_image(aov, is_exr, frame), &partial).map_err(|e| crate::cli::message(&e))?;
+        std::fs::rename(&partial, path).map_err(|e| format!("{}: cannot write: {e}", path.display()))
     }
 
     fn screenshot_path(&self, view: DisplayView) -> PathBuf {
@@ -96,12 +78,12 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
         anyhow::bail!("--screenshot saves the last of --frames N frames: give --frames");
     }
     if let Some(path) = &args.screenshot {
-        let wanted = if args.aov == Aov::Depth { "exr" } else { "png" };
+        let wanted = if args.scene.aov == Aov::Depth { "exr" } else { "png" };
         if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case(wanted)) {
             anyhow::bail!(
                 "{}: the {} view's screenshots are {} files",
                 path.display(),
-                match args.aov {
+                match args.scene.aov {
                     Aov::Depth => "depth",
                     _ => "colour, normal and cost",
                 },
@@ -109,36 +91,27 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             );
         }
     }
-    let model = ModelOptions {
-        as_: args.as_,
-        spheres: args.spheres,
-        rotate: args.rotate,
-    };
-    let mut scene = load_scene(&args.scene, &model)?;
-    let settings = &mut scene.settings;
-    settings.width = args.width.unwrap_or(settings.width);
-    settings.height = args.height.unwrap_or(settings.height);
-    settings.max_depth = args.depth.unwrap_or(settings.max_depth);
+    let scene = args.scene.load()?;
     // Checked here, so that a bad size or depth is one line before any window opens.
-    raypipe::records::PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene))?;
-    let view = match args.aov {
+    raypipe::records::PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene.spec))?;
+    let view = match args.scene.aov {
         Aov::Color => DisplayView::Color,
         Aov::Depth => DisplayView::Depth,
         Aov::Normal => DisplayView::Normal,
         Aov::Cost => DisplayView::Cost,
     };
     let options = ViewerOptions {
-        name: args.scene.clone(),
+        name: args.scene.spec.clone(),
         modes: Modes {
-            accel: args.accel,
-            memory: args.memory,
+            accel: args.scene.accel,
+            memory: args.scene.memory,
             depth: scene.settings.max_depth,
             view,
             paused: false,
             vsync: !args.no_vsync,
         },
         scene,
-        backend: args.backend,
+        backend: args.scene.backend,
         script: args.frames.map(|frames| Script {
             frames,
             screenshot: args.screenshot.clone(),

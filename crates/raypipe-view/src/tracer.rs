@@ -7,7 +7,7 @@ use pollster::block_on;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::build::depth_bound;
-use raypipe::gpu::{GpuContext, GpuError, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::modes::{Accel, Count, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
@@ -24,22 +24,6 @@ pub struct Tracer {
     pub primitives: usize,
     /// The BVH's build time on the CPU, where it was built there (once).
     pub cpu_build_ms: Option<f64>,
-}
-
-/// Why a mode cannot serve a scene: the message the panel shows.
-pub fn refusal(error: &GpuError) -> String {
-    match error {
-        GpuError::TooBig {
-            memory,
-            array,
-            records,
-            needed,
-            allowed,
-        } => format!(
-            "{memory} memory cannot hold this scene: {records} {array} records need {needed}, the adapter allows {allowed}"
-        ),
-        other => other.to_string(),
-    }
 }
 
 impl Tracer {
@@ -74,7 +58,7 @@ impl Tracer {
             }
             let bound = depth_bound(primitives, MortonBits::Bits30);
             let renderer =
-                block_on(Renderer::with_depth_bound(ctx, &packed, options, bound)).map_err(|e| refusal(&e))?;
+                block_on(Renderer::with_depth_bound(ctx, &packed, options, bound)).map_err(|e| e.to_string())?;
             return Ok(Self {
                 renderer,
                 rebuild: None,
@@ -84,10 +68,10 @@ impl Tracer {
             });
         }
         if scene.motion.is_some() {
-            let rebuild =
-                block_on(SceneRebuild::new(ctx, &packed, modes.accel, MortonBits::Bits30)).map_err(|e| refusal(&e))?;
+            let rebuild = block_on(SceneRebuild::new(ctx, &packed, modes.accel, MortonBits::Bits30))
+                .map_err(|e| e.to_string())?;
             let renderer =
-                block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options)).map_err(|e| refusal(&e))?;
+                block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options)).map_err(|e| e.to_string())?;
             return Ok(Self {
                 renderer,
                 rebuild: Some(rebuild),
@@ -100,7 +84,7 @@ impl Tracer {
             .accel
             .uses_bvh()
             .then(|| packed.build_bvh(MortonBits::Bits30).total());
-        let renderer = block_on(Renderer::new(ctx, &packed, options)).map_err(|e| refusal(&e))?;
+        let renderer = block_on(Renderer::new(ctx, &packed, options)).map_err(|e| e.to_string())?;
         Ok(Self {
             renderer,
             rebuild: None,
