@@ -165,8 +165,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     let mut refused = Vec::new();
     for &count in &args.counts {
         let packed = scene(&args.scene, count, args.width, args.height)?;
-        // The rebuilds read the primitives from the builder's buffers: written once per count.
-        // One rebuild per walk: the stack and threaded walks also lay out its tree.
+        // One rebuild per walk, which writes the count's primitives into its own buffers: the stack
+        // and threaded walks also lay out its tree.
         let rebuild_for = |accel: Accel| -> anyhow::Result<Option<SceneRebuild>> {
             if args.rebuild && accel.uses_bvh() {
                 Ok(Some(block_on(SceneRebuild::new(

@@ -83,7 +83,6 @@ struct Viewer {
     last_frame: Instant,
     fps: f64,
     frame_ms: f64,
-    rays: u64,
     build_ms: Option<f64>,
     /// Per frame: the trace pass's GPU time (with timestamps), and the wall clock between frames.
     trace_times: Vec<f64>,
@@ -109,7 +108,6 @@ impl Viewer {
             last_frame: Instant::now(),
             fps: 0.0,
             frame_ms: 0.0,
-            rays: 0,
             build_ms: None,
             trace_times: Vec::new(),
             frame_times: Vec::new(),
@@ -425,7 +423,9 @@ impl Viewer {
                 fps: self.fps,
                 frame_ms: self.frame_ms,
                 timestamps: ctx.timestamps,
-                mrays_per_s: self.rays as f64 / (self.frame_ms.max(1e-6) * 1e3),
+                // The frame's full ray count lives in its targets; the panel counts primary rays.
+                mrays_per_s: (gpu.config.width as u64 * gpu.config.height as u64) as f64
+                    / (self.frame_ms.max(1e-6) * 1e3),
                 build_ms: self.build_ms,
                 message: self.message.as_deref(),
             };
@@ -493,9 +493,6 @@ impl Viewer {
         {
             self.build_ms = Some(timings.total());
         }
-        let (width, height) = (gpu.config.width as u64, gpu.config.height as u64);
-        // The frame's full ray count lives in its targets; the panel counts primary rays only.
-        self.rays = width * height;
         self.frames_drawn += 1;
         if let Some(asked) = asked
             && asked != self.modes

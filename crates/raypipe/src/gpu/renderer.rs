@@ -107,11 +107,8 @@ impl Renderer {
     /// A renderer over `scene` and its CPU-built BVH (which the BVH walks need), at the scene's
     /// camera and image size.
     pub async fn new(ctx: &GpuContext, scene: &PackedScene, options: RendererOptions) -> Result<Self, GpuError> {
-        if options.accel.uses_bvh() && scene.primitive_count() > 0 && scene.bvh.is_none() {
-            return Err(MissingBvh { accel: options.accel }.into());
-        }
         let depth = scene.bvh.as_ref().map_or(0, |b| b.depth);
-        Self::create(ctx, scene, options, None, depth).await
+        Self::with_depth_bound(ctx, scene, options, depth).await
     }
 
     /// [`Renderer::new`] for a scene whose BVH will be rebuilt on the CPU and rewritten with
