@@ -44,6 +44,9 @@ pub struct BenchArgs {
     frames: usize,
     #[arg(long, default_value_t = 2)]
     warmup: usize,
+    /// Samples per pixel of every timed frame (as `render --spp`); times and rays cover them all.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SPP as i64))]
+    spp: u32,
     /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately.
     #[arg(long)]
     rebuild: bool,
@@ -64,6 +67,8 @@ struct Row {
     memory: String,
     width: u32,
     height: u32,
+    /// Samples per pixel of each frame.
+    spp: u32,
     frames: usize,
     ms_median: f64,
     ms_min: f64,
@@ -124,7 +129,7 @@ struct Reference {
 impl Reference {
     fn new(ctx: &GpuContext, family: &str, count: usize) -> anyhow::Result<Self> {
         let scene = scene(family, count, 64, 48)?;
-        let renderer = block_on(Renderer::new(ctx, &scene, options(MemoryMode::Storage, Accel::Brute)))?;
+        let mut renderer = block_on(Renderer::new(ctx, &scene, options(MemoryMode::Storage, Accel::Brute)))?;
         let brute = block_on(renderer.read_frame())?.frame;
         Ok(Self { scene, brute })
     }
@@ -132,7 +137,7 @@ impl Reference {
     /// Renders `accel` in `memory` and requires brute force's image; a mode that cannot run (a scene
     /// too big for uniform memory, say) reports why.
     fn check(&self, ctx: &GpuContext, accel: Accel, memory: MemoryMode) -> anyhow::Result<()> {
-        let renderer = block_on(Renderer::new(ctx, &self.scene, options(memory, accel)))?;
+        let mut renderer = block_on(Renderer::new(ctx, &self.scene, options(memory, accel)))?;
         let frame = block_on(renderer.read_frame())?.frame;
         let color = compare(&frame.display(), &self.brute.display())?;
         let depth = compare(&frame.depth(), &self.brute.depth())?;
@@ -201,7 +206,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     Some(rebuild) => block_on(Renderer::with_rebuild(&ctx, &packed, rebuild, options(memory, accel))),
                     None => block_on(Renderer::new(&ctx, &packed, options(memory, accel))),
                 };
-                let renderer = match renderer {
+                let mut renderer = match renderer {
                     Ok(r) => r,
                     Err(e) => {
                         refused.push(format!("{point}: {}", crate::cli::message(&e.into())));
@@ -214,7 +219,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 let mut rays = 0;
                 for frame in 0..args.warmup + args.frames {
                     let start = std::time::Instant::now();
-                    let timed = block_on(renderer.read_frame_after(|encoder| {
+                    let timed = block_on(renderer.render_samples(args.spp, |encoder| {
                         if let Some(rebuild) = &rebuild {
                             rebuild.encode(encoder);
                         }
@@ -237,6 +242,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     memory: name(&memory),
                     width: args.width,
                     height: args.height,
+                    spp: args.spp,
                     frames: args.frames,
                     ms_median: ms,
                     ms_min: times[0],
@@ -287,17 +293,18 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
     let mut file = std::fs::File::create(path).with_context(|| format!("{}: cannot write", path.display()))?;
     writeln!(
         file,
-        "count,accel,memory,width,height,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,clock,adapter,backend"
+        "count,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,clock,adapter,backend"
     )?;
     for r in rows {
         writeln!(
             file,
-            "{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},\"{}\",{}",
+            "{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},\"{}\",{}",
             r.count,
             r.accel,
             r.memory,
             r.width,
             r.height,
+            r.spp,
             r.frames,
             r.ms_median,
             r.ms_min,

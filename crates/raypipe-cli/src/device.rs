@@ -38,6 +38,8 @@ pub struct RenderOptions {
     /// Draw a frame before the timed one: drivers may compile the pipeline at its first draw
     /// (llvmpipe does), which would otherwise count as render time.
     pub warm_up: bool,
+    /// Samples per pixel (0 counts as 1).
+    pub samples: u32,
 }
 
 impl RenderOptions {
@@ -92,7 +94,7 @@ fn render_cpu(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Fr
     } else {
         ProgressBar::hidden()
     };
-    let frame = cpu::render_with(scene, options.accel, options.count, &|| bar.inc(1))?;
+    let frame = cpu::render_with(scene, options.accel, options.count, options.samples, &|| bar.inc(1))?;
     bar.finish_and_clear();
     Ok(frame)
 }
@@ -100,12 +102,12 @@ fn render_cpu(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Fr
 pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<RenderOutcome> {
     match open_device(options)? {
         Some(ctx) => {
-            let renderer = block_on(Renderer::new(&ctx, scene, options.renderer()))?;
+            let mut renderer = block_on(Renderer::new(&ctx, scene, options.renderer()))?;
             if options.warm_up {
                 block_on(renderer.read_frame())?;
             }
             let start = Instant::now();
-            let timed = block_on(renderer.read_frame())?;
+            let timed = block_on(renderer.render_samples(options.samples, |_| {}))?;
             Ok(RenderOutcome {
                 frame: timed.frame,
                 device: ctx.describe(),
@@ -167,13 +169,13 @@ pub fn render_frames(
             );
             outcome.device = ctx.describe();
             let rebuild = block_on(SceneRebuild::new(&ctx, &first, options.accel, MortonBits::Bits30))?;
-            let renderer = block_on(Renderer::with_rebuild(&ctx, &first, &rebuild, options.renderer()))?;
+            let mut renderer = block_on(Renderer::with_rebuild(&ctx, &first, &rebuild, options.renderer()))?;
             for frame in 0..frames {
                 if frame > 0 {
                     rebuild.write_spheres(&spheres_at(frame)?.spheres);
                 }
                 let start = Instant::now();
-                let timed = block_on(renderer.read_frame_after(|encoder| {
+                let timed = block_on(renderer.render_samples(options.samples, |encoder| {
                     if options.accel.uses_bvh() {
                         rebuild.encode(encoder);
                     }

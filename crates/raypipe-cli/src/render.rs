@@ -92,7 +92,11 @@ pub struct RenderArgs {
     output: Option<PathBuf>,
     #[arg(long, value_enum, default_value_t)]
     device: DeviceChoice,
-    /// Print render time and rays per second.
+    /// Primary rays per pixel, at jittered positions inside it (the first at its centre), averaged:
+    /// anti-aliasing. On the GPU each sample is its own draw, added to a float sum.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    spp: u32,
+    /// Print render time and rays per second (all samples' rays).
     #[arg(long)]
     stats: bool,
     /// Render this many frames of a moving scene (bounce:N), rebuilding the BVH every frame (on the
@@ -101,6 +105,9 @@ pub struct RenderArgs {
     #[arg(long)]
     frames: Option<u32>,
 }
+
+/// The most samples per pixel `--spp` takes: far past where an 8-bit image stops changing.
+pub const MAX_SPP: u32 = 65_536;
 
 /// Loads a scene the way every subcommand names one; the model options are flags of model files.
 pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
@@ -176,6 +183,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             Count::Rays
         },
         warm_up: args.stats,
+        samples: args.spp,
     };
     if let Some(frames) = args.frames {
         // No progress bars between frames; sequences time steady frames instead of a warm-up.
@@ -209,8 +217,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             packed.max_depth
         );
         println!(
-            "device: {}, memory {:?}, accel {:?}",
-            outcome.device, args.scene.memory, args.scene.accel
+            "device: {}, memory {:?}, accel {:?}, {} samples per pixel",
+            outcome.device, args.scene.memory, args.scene.accel, args.spp
         );
         if args.scene.aov == Aov::Cost {
             let counts = frame.counts();
@@ -274,8 +282,8 @@ fn render_sequence(
             scene.spheres.len()
         );
         println!(
-            "device: {}, memory {:?}, accel {:?}",
-            outcome.device, args.scene.memory, args.scene.accel
+            "device: {}, memory {:?}, accel {:?}, {} samples per pixel",
+            outcome.device, args.scene.memory, args.scene.accel, args.spp
         );
         // The first frame pays for pipeline compilation on some drivers: medians skip it.
         let steady = if frames > 1 { 1 } else { 0 };

@@ -34,6 +34,10 @@ pub struct ViewArgs {
     /// Present without waiting for the display's refresh.
     #[arg(long)]
     no_vsync: bool,
+    /// Samples per pixel a still frame gathers, one per frame, before tracing stops (progressive
+    /// anti-aliasing); 1 shows `render`'s image.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SPP as i64))]
+    spp: u32,
 }
 
 /// Dropped files load as `render` loads them; screenshots are written as it writes them.
@@ -111,6 +115,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             vsync: !args.no_vsync,
         },
         scene,
+        samples: args.spp,
         backend: args.scene.backend,
         script: args.frames.map(|frames| Script {
             frames,

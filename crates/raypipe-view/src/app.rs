@@ -319,21 +319,16 @@ impl Viewer {
         }
     }
 
-    /// Saves the current frame (traced again and read back) to `path`; says what happened.
+    /// Saves the current frame (the mean of its samples, read back) to `path`; says what happened.
     fn screenshot(&mut self, path: &std::path::Path) -> String {
         let Some(gpu) = &self.gpu else {
             return "no frame yet".into();
         };
-        let tracer = &gpu.tracer;
-        let frame = block_on(tracer.renderer.read_frame_after(|encoder| {
-            if let Some(rebuild) = &tracer.rebuild
-                && self.modes.accel.uses_bvh()
-            {
-                rebuild.encode(encoder);
-            }
-        }));
-        match frame {
-            Ok(timed) => match self.host.save(&timed.frame, self.modes.view, path) {
+        if gpu.tracer.renderer.targets().samples() == 0 {
+            return "no frame yet".into();
+        }
+        match block_on(gpu.tracer.renderer.read_back()) {
+            Ok(frame) => match self.host.save(&frame, self.modes.view, path) {
                 Ok(()) => format!("saved {}", path.display()),
                 Err(why) => why,
             },
@@ -372,8 +367,9 @@ impl Viewer {
             self.motion_frame += 1;
         }
         let Some(gpu) = &mut self.gpu else { return };
+        // Either restarts the samples if it changes anything.
         gpu.tracer.renderer.set_camera(&self.camera.camera);
-        if self.options.scene.motion.is_some() {
+        if self.options.scene.motion.is_some() && gpu.tracer.motion_frame != Some(self.motion_frame) {
             match gpu
                 .tracer
                 .advance(&self.options.scene, self.motion_frame, self.modes.accel)
@@ -383,6 +379,8 @@ impl Viewer {
                 Err(why) => self.message = Some(why),
             }
         }
+        // A still frame that has its samples is shown again, not traced again.
+        let trace = gpu.tracer.renderer.samples() < self.options.samples.max(1);
         let surface_texture = match gpu.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(texture) | wgpu::CurrentSurfaceTexture::Suboptimal(texture) => texture,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
@@ -395,12 +393,15 @@ impl Viewer {
         let view = surface_texture.texture.create_view(&Default::default());
         let ctx = gpu.ctx.clone();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        if let Some(rebuild) = &gpu.tracer.rebuild
-            && self.modes.accel.uses_bvh()
-        {
-            rebuild.encode(&mut encoder);
+        if trace {
+            if let Some(rebuild) = &gpu.tracer.rebuild
+                && self.modes.accel.uses_bvh()
+                && gpu.tracer.renderer.samples() == 0
+            {
+                rebuild.encode(&mut encoder);
+            }
+            gpu.tracer.renderer.encode(&mut encoder);
         }
-        gpu.tracer.renderer.encode(&mut encoder);
         let c = self.camera.camera;
         let depth_far = DEPTH_FAR * (c.eye - c.target).length();
         gpu.display.encode(
@@ -426,6 +427,7 @@ impl Viewer {
                 // The frame's full ray count lives in its targets; the panel counts primary rays.
                 mrays_per_s: (gpu.config.width as u64 * gpu.config.height as u64) as f64
                     / (self.frame_ms.max(1e-6) * 1e3),
+                samples: (gpu.tracer.renderer.targets().samples(), self.options.samples.max(1)),
                 build_ms: self.build_ms,
                 message: self.message.as_deref(),
             };
@@ -474,10 +476,12 @@ impl Viewer {
         }
         ctx.queue.present(surface_texture);
         // The frame's GPU time where the adapter has timestamps; this waits for the frame.
-        let gpu_ms = block_on(gpu.tracer.renderer.read_gpu_ms()).ok().flatten();
-        self.frame_ms = gpu_ms.unwrap_or(seconds * 1e3);
-        if let Some(ms) = gpu_ms {
-            self.trace_times.push(ms);
+        if trace {
+            let gpu_ms = block_on(gpu.tracer.renderer.read_gpu_ms()).ok().flatten();
+            self.frame_ms = gpu_ms.unwrap_or(seconds * 1e3);
+            if let Some(ms) = gpu_ms {
+                self.trace_times.push(ms);
+            }
         }
         if self.frames_drawn > 0 {
             self.frame_times.push(seconds * 1e3);
@@ -489,6 +493,7 @@ impl Viewer {
         };
         if let Some(rebuild) = &gpu.tracer.rebuild
             && self.modes.accel.uses_bvh()
+            && trace
             && let Ok(timings) = block_on(rebuild.read_timings())
         {
             self.build_ms = Some(timings.total());

@@ -1,7 +1,8 @@
 //! raypipe's live viewer: the paper's system in a window. Every frame is traced in the fragment
 //! shader and shown by the display pass; moving scenes rebuild their BVH on the GPU every frame;
 //! the camera, the acceleration and memory modes, the bounce depth and the view change live, from
-//! keys and from a small egui panel.
+//! keys and from a small egui panel. While nothing moves, each frame adds a jittered sample per
+//! pixel, up to a cap, and the display shows their mean.
 //!
 //! The viewer reads no files and writes none: its host (the `raypipe view` command) loads dropped
 //! files and saves screenshots, so the same viewer can serve a web page.
@@ -52,6 +53,9 @@ pub struct ViewerOptions {
     /// The scene, at its starting image size (the window's inner size) and camera.
     pub scene: Scene,
     pub modes: Modes,
+    /// Samples per pixel a still frame gathers, one per frame, before the viewer stops tracing
+    /// (progressive anti-aliasing; 1 shows `render`'s unjittered image).
+    pub samples: u32,
     pub backend: Option<Backend>,
     pub script: Option<Script>,
 }

@@ -17,6 +17,8 @@ pub struct Readout<'a> {
     pub timestamps: bool,
     pub mrays_per_s: f64,
     pub build_ms: Option<f64>,
+    /// Samples per pixel gathered, and the cap.
+    pub samples: (u32, u32),
     pub message: Option<&'a str>,
 }
 
@@ -52,6 +54,9 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout) -> Modes {
                 "{:.1} fps · {:.2} ms per frame ({clock}) · {:.2} M primary rays/s",
                 readout.fps, readout.frame_ms, readout.mrays_per_s
             ));
+            let (samples, cap) = readout.samples;
+            let done = if samples >= cap { " (done)" } else { "" };
+            ui.label(format!("{samples} of {cap} samples per pixel{done}"));
             match readout.build_ms {
                 Some(ms) => ui.label(format!("BVH build: {ms:.2} ms")),
                 None => ui.label("BVH build: none (brute force)"),

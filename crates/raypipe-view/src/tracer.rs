@@ -24,6 +24,8 @@ pub struct Tracer {
     pub primitives: usize,
     /// The BVH's build time on the CPU, where it was built there (once).
     pub cpu_build_ms: Option<f64>,
+    /// The frame of the motion the scene stands at; `None` until it first moves there.
+    pub motion_frame: Option<u32>,
 }
 
 impl Tracer {
@@ -65,6 +67,7 @@ impl Tracer {
                 cpu_rebuild: Some(builder),
                 primitives,
                 cpu_build_ms,
+                motion_frame: None,
             });
         }
         if scene.motion.is_some() {
@@ -78,6 +81,7 @@ impl Tracer {
                 cpu_rebuild: None,
                 primitives,
                 cpu_build_ms: None,
+                motion_frame: None,
             });
         }
         let cpu_build_ms = modes
@@ -91,13 +95,17 @@ impl Tracer {
             cpu_rebuild: None,
             primitives,
             cpu_build_ms,
+            motion_frame: None,
         })
     }
 
     /// Moves the scene to `frame` of its motion: the spheres written to the GPU rebuild's buffers,
     /// or the BVH rebuilt on the CPU and the records rewritten. Returns the CPU build's time.
+    /// The samples start again.
     pub fn advance(&mut self, scene: &Scene, frame: u32, accel: Accel) -> Result<Option<f64>, String> {
         let mut moved = PackedScene::new(&scene.at_frame(frame)).map_err(|e| e.to_string())?;
+        self.motion_frame = Some(frame);
+        self.renderer.restart();
         if let Some(rebuild) = &self.rebuild {
             rebuild.write_spheres(&moved.spheres);
             return Ok(None);

@@ -1,6 +1,7 @@
 //! `raypipe view` in a virtual X display (Xvfb): its scripted frames are `raypipe render`'s image,
-//! the window itself shows that image (the surface path, not only the readback), the scripted orbit
-//! and a moving scene change the frames, and a mode that cannot serve the scene is refused.
+//! one sample per pixel or many (progressive anti-aliasing against `render --spp`), the window
+//! itself shows that image (the surface path, not only the readback), the scripted orbit and a
+//! moving scene change the frames, and a mode that cannot serve the scene is refused.
 
 use crate::common::harness::Test;
 use crate::common::models::test_dir;
@@ -30,11 +31,15 @@ fn succeeded(output: &Output, what: &str) {
     );
 }
 
-/// The scripted viewer's last frame of `scene` at `size`.
+/// The scripted viewer's last frame of `scene` at 160x120; one sample per pixel unless `extra`
+/// says otherwise.
 fn viewed(dir: &Path, scene: &str, extra: &[&str], frames: u32) -> PathBuf {
     let shot = dir.join(format!("view-{}-{frames}.png", scene.replace([':', '/'], "-")));
     let frames = frames.to_string();
     let mut args = vec!["view", scene, "--width", "160", "--height", "120", "--frames", &frames];
+    if !extra.contains(&"--spp") {
+        args.extend(["--spp", "1"]);
+    }
     args.extend_from_slice(extra);
     args.extend(["--screenshot", shot.to_str().unwrap()]);
     succeeded(&in_xvfb(&args), &format!("raypipe {}", args.join(" ")));
@@ -64,6 +69,21 @@ fn scripted_frames_are_the_render(_: &GpuContext) {
     }
 }
 
+/// A still frame gathers one sample per frame up to --spp, then stays: twelve frames with
+/// `--spp 8` are `render --spp 8`, not its one-sample image.
+fn still_frames_gather_render_spp(_: &GpuContext) {
+    let dir = test_dir("view-samples");
+    let shot = viewed(&dir, "whitted", &["--spp", "8"], 12);
+    let render = rendered(&dir, "whitted", &["--spp", "8"]);
+    matches(&shot, &render).unwrap_or_else(|e| panic!("eight samples in the viewer are not render's: {e}"));
+    let aliased = dir.join("aliased.png");
+    std::fs::rename(rendered(&dir, "whitted", &[]), &aliased).unwrap();
+    assert!(
+        matches(&shot, &aliased).is_err(),
+        "the viewer's frame did not gather samples"
+    );
+}
+
 /// The X screen, captured while the viewer draws: the window at the screen's corner shows the frame.
 fn the_window_shows_the_frame(_: &GpuContext) {
     let dir = test_dir("view-window");
@@ -71,7 +91,7 @@ fn the_window_shows_the_frame(_: &GpuContext) {
     let (root, crop) = (dir.join("root.png"), dir.join("window.png"));
     // Capture until the window has drawn (the first frame may compile shaders for a while).
     let script = format!(
-        "'{raypipe}' view whitted --width 160 --height 120 --frames 100000000 & pid=$!
+        "'{raypipe}' view whitted --width 160 --height 120 --spp 1 --frames 100000000 & pid=$!
          for i in $(seq 120); do
            sleep 1
            import -window root '{root}' && convert '{root}' -crop 160x120+0+0 +repage '{crop}' \
@@ -134,7 +154,7 @@ fn synthetic_input_switches_and_orbits(_: &GpuContext) {
     let expected = rendered(&dir, "whitted", &[]);
     let script = format!(
         "cd '{dir}'
-         '{raypipe}' view whitted --width 160 --height 120 2> view.log & pid=$!
+         '{raypipe}' view whitted --width 160 --height 120 --spp 1 2> view.log & pid=$!
          for i in $(seq 120); do W=$(xdotool search --name raypipe | head -1); [ -n \"$W\" ] && break; sleep 1; done
          xdotool windowfocus --sync $W
          shot() {{ xdotool key p; for i in $(seq 120); do [ -f $1 ] && break; sleep 0.5; done; }}
@@ -181,6 +201,8 @@ fn after_dropping(dir: &Path, file: &Path, shot: &str) -> (PathBuf, Output) {
         "120",
         "--frames",
         "3",
+        "--spp",
+        "1",
         "--drop",
         file.to_str().unwrap(),
         "--screenshot",
@@ -215,6 +237,7 @@ fn dropped_files_load_or_leave_the_scene(_: &GpuContext) {
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu_window scripted_frames_are_the_render,
+        gpu_window still_frames_gather_render_spp,
         gpu_window the_window_shows_the_frame,
         gpu_window orbit_and_motion_change_the_frames,
         gpu_window a_mode_that_cannot_serve_the_scene_is_one_line,

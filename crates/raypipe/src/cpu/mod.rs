@@ -13,35 +13,56 @@ pub use crate::modes::Count;
 use crate::image::Frame;
 use crate::modes::Accel;
 use crate::records::PackedScene;
-use glam::Vec2;
+use glam::{UVec2, Vec4};
 use rayon::prelude::*;
 use trace::Tracer;
 
-/// Renders every pixel in parallel (rows across rayon's threads); the result does not depend on the
-/// thread count. BVH modes need the scene's BVH.
+/// Renders every pixel in parallel (rows across rayon's threads), one sample at each pixel's centre;
+/// the result does not depend on the thread count. BVH modes need the scene's BVH.
 pub fn render(scene: &PackedScene, accel: Accel) -> Result<Frame, MissingBvh> {
-    render_with(scene, accel, Count::Rays, &|| {})
+    render_with(scene, accel, Count::Rays, 1, &|| {})
 }
 
-/// [`render`], with what the fourth channel counts, and `row_done` called as each row finishes
-/// (from rayon's threads), for a progress display.
+/// [`render`] with `samples` samples per pixel (at least 1) and what the fourth channel counts;
+/// `row_done` is called as each row finishes (from rayon's threads), for a progress display.
+///
+/// The GPU renderer's accumulation, sample for sample: colour and count are summed in sample order
+/// and divided by the samples (the ray count stays a total: rays traced for the pixel); normal and
+/// depth are the centre sample's.
 pub fn render_with(
     scene: &PackedScene,
     accel: Accel,
     count: Count,
+    samples: u32,
     row_done: &(dyn Fn() + Sync),
 ) -> Result<Frame, MissingBvh> {
     // Checked once here rather than per pixel.
     Tracer::new(scene, accel)?;
     let (width, height) = (scene.width(), scene.height());
-    let rows: Vec<Vec<trace::PixelTrace>> = (0..height)
+    let samples = samples.max(1);
+    let rows: Vec<Vec<([f32; 4], [f32; 4])>> = (0..height)
         .into_par_iter()
         .map(|j| {
             let row = (0..width)
                 .map(|i| {
-                    let mut tracer = Tracer::new(scene, accel).expect("checked above");
-                    let ray = tracer.camera_ray(Vec2::new(i as f32 + 0.5, j as f32 + 0.5));
-                    tracer.trace_pixel(ray)
+                    let pixel = UVec2::new(i, j);
+                    let mut sum = Vec4::ZERO;
+                    let mut surface = [0.0; 4];
+                    for sample in 0..samples {
+                        let mut tracer = Tracer::new(scene, accel).expect("checked above");
+                        let position = pixel.as_vec2() + trace::sample_offset(pixel, sample);
+                        let trace = tracer.trace_pixel(tracer.camera_ray(position));
+                        let counted = match count {
+                            Count::Rays => trace.rays,
+                            Count::Cost => trace.cost,
+                        };
+                        sum += trace.color.extend(counted as f32);
+                        if sample == 0 {
+                            let depth = trace.depth.unwrap_or(crate::image::DEPTH_MISS);
+                            surface = trace.normal.extend(depth).to_array();
+                        }
+                    }
+                    (average(sum, samples, count), surface)
                 })
                 .collect();
             row_done();
@@ -49,18 +70,20 @@ pub fn render_with(
         })
         .collect();
     let mut frame = Frame::new(width, height);
-    for (pixel, trace) in rows.into_iter().flatten().enumerate() {
-        let counted = match count {
-            Count::Rays => trace.rays,
-            Count::Cost => trace.cost,
-        };
-        frame.color[pixel] = [trace.color.x, trace.color.y, trace.color.z, counted as f32];
-        frame.surface[pixel] = [
-            trace.normal.x,
-            trace.normal.y,
-            trace.normal.z,
-            trace.depth.unwrap_or(crate::image::DEPTH_MISS),
-        ];
+    for (pixel, (color, surface)) in rows.into_iter().flatten().enumerate() {
+        frame.color[pixel] = color;
+        frame.surface[pixel] = surface;
     }
     Ok(frame)
+}
+
+/// A pixel's colour sums over `samples` samples as a frame holds them: the mean radiance, and the
+/// count's total (rays) or mean (cost per primary ray). The GPU's readback divides the same way.
+pub fn average(sum: Vec4, samples: u32, count: Count) -> [f32; 4] {
+    let n = samples as f32;
+    let counted = match count {
+        Count::Rays => sum.w,
+        Count::Cost => sum.w / n,
+    };
+    [sum.x / n, sum.y / n, sum.z / n, counted]
 }

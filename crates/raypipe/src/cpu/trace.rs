@@ -5,10 +5,10 @@ use super::intersect::{Hit, HitKind, Primitives, Ray, any_plane, box_tests, clos
 use super::shade::{direct_light, fresnel_schlick, offset_origin, reflect, surface_at};
 use crate::error::MissingBvh;
 use crate::modes::Accel;
-use crate::records::constants::MIN_WEIGHT;
 pub use crate::records::constants::T_FAR;
+use crate::records::constants::{MIN_WEIGHT, R2_STEP};
 use crate::records::{PackedBvh, PackedScene};
-use glam::{Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug)]
 struct RayTask {
@@ -208,6 +208,29 @@ impl<'a> Tracer<'a> {
         result.rays = self.ray_count;
         result
     }
+}
+
+/// A 32-bit integer hash (PCG's output permutation, after Jarzynski and Olano 2020), for the
+/// per-pixel scramble of the sample sequence (`hash_u32`).
+pub fn hash_u32(value: u32) -> u32 {
+    let state = value.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
+/// Where in its pixel sample `index` looks, in [0, 1)^2 (`sample_offset`). Sample 0 is the centre,
+/// so one sample is the unjittered image; later samples follow the R2 sequence, shifted per pixel
+/// by a hash (a Cranley-Patterson rotation). Integer arithmetic in 0.32 fixed point, so the shader
+/// computes the same bits.
+pub fn sample_offset(pixel: UVec2, index: u32) -> Vec2 {
+    if index == 0 {
+        return Vec2::splat(0.5);
+    }
+    let scramble_x = hash_u32(pixel.x ^ hash_u32(pixel.y));
+    let scramble_y = hash_u32(scramble_x);
+    let x = scramble_x.wrapping_add(index.wrapping_mul(R2_STEP[0]));
+    let y = scramble_y.wrapping_add(index.wrapping_mul(R2_STEP[1]));
+    Vec2::new((x >> 8) as f32, (y >> 8) as f32) * (1.0 / 16_777_216.0)
 }
 
 fn worth_tracing(weight: Vec3) -> bool {

@@ -42,13 +42,18 @@ pub struct DisplayParams {
     pub target_srgb: u32,
     pub depth_far: f32,
     pub cost_max: f32,
+    /// Samples summed in the colour target: the pass shows their mean.
+    pub samples: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// The display pass's records with a WGSL twin, for the layout test.
 pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
     DisplayParams,
     "DisplayParams",
-    [view, target_srgb, depth_far, cost_max]
+    [view, target_srgb, depth_far, cost_max, samples, _pad0, _pad1, _pad2]
 )];
 
 /// The display pass's WGSL.
@@ -144,8 +149,8 @@ impl Display {
         }
     }
 
-    /// Records the pass: `frame` drawn into `view` (at least the frame's size) as `shown`.
-    /// `depth_far` scales the depth view, `cost_max` the cost view.
+    /// Records the pass: `frame` (the mean of its samples) drawn into `view` (at least the frame's
+    /// size) as `shown`. `depth_far` scales the depth view, `cost_max` the cost view.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -160,6 +165,8 @@ impl Display {
             target_srgb: self.target_srgb as u32,
             depth_far,
             cost_max,
+            samples: frame.samples().max(1),
+            ..Default::default()
         };
         self.ctx
             .queue

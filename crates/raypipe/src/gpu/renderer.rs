@@ -3,6 +3,10 @@
 //! rgba32uint). It owns its handles and its targets, records its work into a caller's encoder, and
 //! never reads back unless asked: a window shows the targets through [`super::display::Display`],
 //! files and tests read them with [`Renderer::read_frame`].
+//!
+//! Samples accumulate: the targets come in two pairs, and each draw adds one sample per pixel to
+//! the sums in one pair while writing the other ([`Renderer::encode`]); a camera, scene or size
+//! change starts again from the pixel centres ([`Renderer::restart`]).
 
 use super::readback::TextureReadback;
 use super::rebuild::SceneRebuild;
@@ -35,13 +39,16 @@ pub struct RendererOptions {
     pub count: Count,
 }
 
-/// The tracer's outputs, one texel per pixel: colour (rgb linear radiance, a the count) and surface
-/// (xyz first-hit normal, w its distance or `DEPTH_MISS`), both f32 bits.
+/// The tracer's outputs, one texel per pixel: colour (rgb linear radiance, a the count, both summed
+/// over the samples so far) and surface (xyz first-hit normal, w its distance or `DEPTH_MISS`, of
+/// the centre sample), both f32 bits.
 pub struct FrameTargets {
     pub color: wgpu::Texture,
     pub surface: wgpu::Texture,
     pub color_view: wgpu::TextureView,
     pub surface_view: wgpu::TextureView,
+    /// Samples per pixel summed in the colour target (0 before the first draw).
+    samples: u32,
 }
 
 impl FrameTargets {
@@ -69,11 +76,56 @@ impl FrameTargets {
             surface_view: surface.create_view(&Default::default()),
             color,
             surface,
+            samples: 0,
         }
     }
 
     pub fn size(&self) -> (u32, u32) {
         (self.color.width(), self.color.height())
+    }
+
+    /// Samples per pixel summed in the colour target (0 before the first draw).
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+}
+
+/// Two pairs of targets that take turns: a draw reads the sums in one and writes the other.
+struct Accumulation {
+    targets: [FrameTargets; 2],
+    /// `reads[k]` binds `targets[k]` as the previous sample's, for a draw into `targets[1 - k]`.
+    reads: [wgpu::BindGroup; 2],
+    /// The pair holding the latest sums.
+    current: usize,
+    /// The next draw starts the sums again.
+    restarted: bool,
+}
+
+impl Accumulation {
+    fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, width: u32, height: u32) -> Self {
+        let targets = [0, 1].map(|_| FrameTargets::new(device, width, height));
+        let reads = [0, 1].map(|k| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("previous sample"),
+                layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&targets[k].color_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&targets[k].surface_view),
+                    },
+                ],
+            })
+        });
+        Self {
+            targets,
+            reads,
+            current: 0,
+            restarted: true,
+        }
     }
 }
 
@@ -89,10 +141,12 @@ pub struct Renderer {
     options: RendererOptions,
     pipeline: wgpu::RenderPipeline,
     bind_group: wgpu::BindGroup,
+    /// The layout of the previous sample's targets (group 1).
+    previous_layout: wgpu::BindGroupLayout,
     globals: GpuGlobals,
     globals_buffer: wgpu::Buffer,
     vertices: wgpu::Buffer,
-    targets: FrameTargets,
+    accumulation: Accumulation,
     /// Where [`Renderer::read_frame`] copies the targets; sized with them.
     readbacks: [TextureReadback; 2],
     /// With a rebuild's stack or threaded nodes: their quantization frame, copied into the globals
@@ -131,6 +185,7 @@ impl Renderer {
     /// deeper than the renderer's stack.
     pub fn write_scene(&mut self, scene: &PackedScene) -> Result<(), GpuError> {
         self.resources.write(&self.ctx.queue, scene, self.options.accel)?;
+        self.restart();
         self.globals.bvh_frame = scene.globals.bvh_frame;
         let offset = std::mem::offset_of!(GpuGlobals, bvh_frame) as u64;
         self.ctx.queue.write_buffer(
@@ -190,23 +245,24 @@ impl Renderer {
                 texels_per_row: resources.texels_per_row,
                 write_cost: count == Count::Cost,
             });
-            let (pipeline, bind_group) = build_pipeline(ctx, &source, &resources, &globals_buffer);
+            let previous_layout = previous_sample_layout(&ctx.device);
+            let (pipeline, bind_group) = build_pipeline(ctx, &source, &resources, &globals_buffer, &previous_layout);
             let vertices = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("fullscreen triangle"),
                 contents: bytemuck::cast_slice(&FULLSCREEN_TRIANGLE),
                 usage: wgpu::BufferUsages::VERTEX,
             });
-            let targets = FrameTargets::new(&ctx.device, width, height);
             Ok(Self {
                 ctx: ctx.clone(),
                 options,
                 pipeline,
                 bind_group,
+                accumulation: Accumulation::new(&ctx.device, &previous_layout, width, height),
+                previous_layout,
                 globals,
                 globals_buffer,
                 vertices,
                 readbacks: readbacks(&ctx.device, width, height),
-                targets,
                 bvh_frame: shared.and_then(|s| s.bvh_frame.clone()),
                 resources,
                 timer: ctx
@@ -227,11 +283,27 @@ impl Renderer {
 
     /// The frame's size in pixels.
     pub fn size(&self) -> (u32, u32) {
-        self.targets.size()
+        self.targets().size()
     }
 
+    /// The targets holding the latest sums.
     pub fn targets(&self) -> &FrameTargets {
-        &self.targets
+        &self.accumulation.targets[self.accumulation.current]
+    }
+
+    /// Samples per pixel the next draw adds to: those summed in [`Renderer::targets`], or 0 after
+    /// a restart.
+    pub fn samples(&self) -> u32 {
+        if self.accumulation.restarted {
+            0
+        } else {
+            self.targets().samples
+        }
+    }
+
+    /// The next draw starts the sums again, at the pixel centres.
+    pub fn restart(&mut self) {
+        self.accumulation.restarted = true;
     }
 
     /// The camera as the shader reads it.
@@ -239,10 +311,17 @@ impl Renderer {
         self.globals.camera
     }
 
-    /// Points the camera; the next frame sees it. One uniform write: nothing is re-uploaded.
+    /// Points the camera; the next frame sees it, and starts the sums again. One uniform write:
+    /// nothing is re-uploaded. The camera it points already changes nothing.
     pub fn set_camera(&mut self, camera: &Camera) {
         let (width, height) = self.size();
-        self.write_camera(GpuCamera::new(camera, width, height));
+        let camera = GpuCamera {
+            sample: self.globals.camera.sample,
+            ..GpuCamera::new(camera, width, height)
+        };
+        if camera != self.globals.camera {
+            self.write_camera(camera);
+        }
     }
 
     /// Traces frames of `width` x `height` pixels from now on: new targets, and the camera's
@@ -252,7 +331,7 @@ impl Renderer {
             return Ok(());
         }
         check_size(&self.ctx, width, height)?;
-        self.targets = FrameTargets::new(&self.ctx.device, width, height);
+        self.accumulation = Accumulation::new(&self.ctx.device, &self.previous_layout, width, height);
         self.readbacks = readbacks(&self.ctx.device, width, height);
         self.write_camera(GpuCamera {
             aspect: width as f32 / height as f32,
@@ -264,6 +343,7 @@ impl Renderer {
     }
 
     fn write_camera(&mut self, camera: GpuCamera) {
+        self.restart();
         self.globals.camera = camera;
         let offset = std::mem::offset_of!(GpuGlobals, camera) as u64;
         self.ctx
@@ -271,13 +351,23 @@ impl Renderer {
             .write_buffer(&self.globals_buffer, offset, bytemuck::bytes_of(&camera));
     }
 
-    /// Records one frame into the targets: the trace pass, and before it, where a rebuild feeds
-    /// the walks, the copy of its quantization frame into the globals.
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
+    /// Records the next sample per pixel (the first after a restart) into the targets: the trace
+    /// pass, and before it, where a rebuild feeds the walks, the copy of its quantization frame into
+    /// the globals. The sample's index reaches the shader through a queue write, as a camera does:
+    /// submit each frame before encoding the next.
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
         if let Some(frame) = &self.bvh_frame {
             encode_frame_copy(encoder, frame, &self.globals_buffer);
         }
-        let attachments = [&self.targets.color_view, &self.targets.surface_view].map(|view| {
+        let sample = self.samples();
+        self.globals.camera.sample = sample;
+        let offset = (std::mem::offset_of!(GpuGlobals, camera) + std::mem::offset_of!(GpuCamera, sample)) as u64;
+        self.ctx
+            .queue
+            .write_buffer(&self.globals_buffer, offset, bytemuck::bytes_of(&sample));
+        let read = self.accumulation.current;
+        let written = &self.accumulation.targets[1 - read];
+        let attachments = [&written.color_view, &written.surface_view].map(|view| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
                 depth_slice: None,
@@ -298,12 +388,17 @@ impl Renderer {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_bind_group(1, &self.accumulation.reads[read], &[]);
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.draw(0..3, 0..1);
         drop(pass);
         if let Some(timer) = &self.timer {
             timer.resolve(encoder);
         }
+        let accumulation = &mut self.accumulation;
+        accumulation.current = 1 - read;
+        accumulation.targets[1 - read].samples = sample + 1;
+        accumulation.restarted = false;
     }
 
     /// GPU milliseconds of the last trace pass submitted and finished, where the adapter has
@@ -315,37 +410,77 @@ impl Renderer {
         }
     }
 
-    /// Traces one frame and reads both targets back.
-    pub async fn read_frame(&self) -> Result<TimedFrame, GpuError> {
+    /// Traces one frame, one sample per pixel at the centres, and reads both targets back.
+    pub async fn read_frame(&mut self) -> Result<TimedFrame, GpuError> {
         self.read_frame_after(|_| {}).await
     }
 
     /// Records `prepare` (a BVH rebuild, say) and then the frame into one command buffer, so that
     /// the GPU runs both without a round trip to the host; reads both targets back.
     pub async fn read_frame_after(
-        &self,
+        &mut self,
         prepare: impl FnOnce(&mut wgpu::CommandEncoder),
     ) -> Result<TimedFrame, GpuError> {
+        self.render_samples(1, prepare).await
+    }
+
+    /// Traces `samples` samples per pixel from the start (at least 1), one submission each so that
+    /// no submission runs long, with `prepare` recorded before the first; reads the average back
+    /// (as [`crate::cpu::render_with`] computes it). The GPU time is the sum of the trace passes'.
+    pub async fn render_samples(
+        &mut self,
+        samples: u32,
+        prepare: impl FnOnce(&mut wgpu::CommandEncoder),
+    ) -> Result<TimedFrame, GpuError> {
+        self.restart();
+        let mut prepare = Some(prepare);
+        let mut gpu_ms = self.timer.as_ref().map(|_| 0.0);
+        let ctx = self.ctx.clone();
+        for _ in 0..samples.max(1) {
+            ctx.checked("rendering", || {
+                let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                if let Some(prepare) = prepare.take() {
+                    prepare(&mut encoder);
+                }
+                self.encode(&mut encoder);
+                ctx.queue.submit([encoder.finish()]);
+                Ok(())
+            })
+            .await?;
+            if let (Some(total), Some(ms)) = (gpu_ms.as_mut(), self.read_gpu_ms().await?) {
+                *total += ms;
+            }
+        }
+        Ok(TimedFrame {
+            frame: self.read_back().await?,
+            gpu_ms,
+        })
+    }
+
+    /// Reads the targets' sums back as a frame: mean radiance, the count's total (rays) or mean
+    /// (cost), the centre sample's normal and depth.
+    pub async fn read_back(&self) -> Result<Frame, GpuError> {
         let ctx = &self.ctx;
-        ctx.checked("rendering", || {
+        let targets = self.targets();
+        ctx.checked("reading the frame back", || {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            prepare(&mut encoder);
-            self.encode(&mut encoder);
             let [color, surface] = &self.readbacks;
-            color.encode_copy(&mut encoder, &self.targets.color);
-            surface.encode_copy(&mut encoder, &self.targets.surface);
+            color.encode_copy(&mut encoder, &targets.color);
+            surface.encode_copy(&mut encoder, &targets.surface);
             ctx.queue.submit([encoder.finish()]);
             Ok(())
         })
         .await?;
         let (width, height) = self.size();
         let mut frame = Frame::new(width, height);
-        frame.color = bytemuck::pod_collect_to_vec(&self.readbacks[0].read(&ctx.device).await?);
+        let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&self.readbacks[0].read(&ctx.device).await?);
+        let samples = targets.samples().max(1);
+        frame.color = sums
+            .into_iter()
+            .map(|sum| crate::cpu::average(glam::Vec4::from_array(sum), samples, self.options.count))
+            .collect();
         frame.surface = bytemuck::pod_collect_to_vec(&self.readbacks[1].read(&ctx.device).await?);
-        Ok(TimedFrame {
-            frame,
-            gpu_ms: self.read_gpu_ms().await?,
-        })
+        Ok(frame)
     }
 }
 
@@ -361,11 +496,30 @@ fn readbacks(device: &wgpu::Device, width: u32, height: u32) -> [TextureReadback
     [0, 1].map(|_| TextureReadback::new(device, width, height, TARGET_BYTES_PER_PIXEL))
 }
 
+/// Group 1: the previous sample's colour and surface targets.
+fn previous_sample_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let texture = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("previous sample"),
+        entries: &[texture(0), texture(1)],
+    })
+}
+
 fn build_pipeline(
     ctx: &GpuContext,
     source: &str,
     resources: &SceneResources,
     globals: &wgpu::Buffer,
+    previous_layout: &wgpu::BindGroupLayout,
 ) -> (wgpu::RenderPipeline, wgpu::BindGroup) {
     let device = &ctx.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -399,7 +553,7 @@ fn build_pipeline(
     });
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("trace"),
-        bind_group_layouts: &[Some(&bind_group_layout)],
+        bind_group_layouts: &[Some(&bind_group_layout), Some(previous_layout)],
         immediate_size: 0,
     });
     let target = Some(wgpu::ColorTargetState {

@@ -19,6 +19,9 @@ pub const PARALLEL_EPSILON: f32 = 1e-8;
 pub const TINY_DIRECTION: f32 = 1e-20;
 /// What an intersection returns for no hit.
 pub const NO_HIT: f32 = -1.0;
+/// The R2 sequence's steps per sample (Roberts 2018: 1/g and 1/g², g the plastic number) in 0.32
+/// fixed point, so that sample positions are integer arithmetic: the same bits on every device.
+pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
 
 /// The constants above as WGSL declarations. Floats print in Rust's shortest round-trip form, so
 /// the shader's literal is the same f32.
@@ -35,7 +38,12 @@ pub fn wgsl() -> String {
     ] {
         writeln!(out, "const {name}: f32 = {};", float_literal(value)).unwrap();
     }
-    for (name, value) in [("LEAF", LEAF), ("NONE", NONE)] {
+    for (name, value) in [
+        ("LEAF", LEAF),
+        ("NONE", NONE),
+        ("R2_STEP_X", R2_STEP[0]),
+        ("R2_STEP_Y", R2_STEP[1]),
+    ] {
         writeln!(out, "const {name}: u32 = {value:#x}u;").unwrap();
     }
     out

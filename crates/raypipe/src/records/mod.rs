@@ -38,6 +38,10 @@ pub struct GpuCamera {
     /// cross(right, forward): the true up.
     pub up: [f32; 3],
     pub height: f32,
+    /// Which of each pixel's samples this draw traces: 0 is the pixel centre, later ones are
+    /// jittered (`sample_offset`). The renderer writes it before every draw.
+    pub sample: u32,
+    pub _pad: [u32; 3],
 }
 
 impl GpuCamera {
@@ -55,6 +59,8 @@ impl GpuCamera {
             width: width as f32,
             up: up.to_array(),
             height: height as f32,
+            sample: 0,
+            _pad: [0; 3],
         }
     }
 
@@ -244,7 +250,7 @@ macro_rules! struct_layout {
 #[rustfmt::skip]
 pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuGlobals, "Globals", [camera, scene, bvh_frame]),
-    struct_layout!(GpuCamera, "Camera", [eye, tan_half_fov, forward, aspect, right, width, up, height]),
+    struct_layout!(GpuCamera, "Camera", [eye, tan_half_fov, forward, aspect, right, width, up, height, sample]),
     struct_layout!(GpuSceneInfo, "SceneInfo", [
         background, ambient, sphere_count, plane_count, light_count, material_count, triangle_count,
     ]),

@@ -12,10 +12,17 @@ use raypipe::image::heatmap::color_scale;
 use raypipe::image::{FloatImage, Frame};
 use raypipe::modes::Accel;
 
-/// The frame `renderer` traces, and the display pass's 8-bit image of it in `format`.
-fn displayed(renderer: &Renderer, format: wgpu::TextureFormat, view: DisplayView, cost_max: f32) -> (Frame, Vec<u8>) {
+/// The frame `renderer` traces with `samples` samples per pixel, and the display pass's 8-bit image
+/// of it in `format`.
+fn displayed(
+    renderer: &mut Renderer,
+    samples: u32,
+    format: wgpu::TextureFormat,
+    view: DisplayView,
+    cost_max: f32,
+) -> (Frame, Vec<u8>) {
+    let frame = block_on(renderer.render_samples(samples, |_| {})).unwrap().frame;
     let ctx = renderer.context();
-    let frame = block_on(renderer.read_frame()).unwrap().frame;
     let (width, height) = renderer.size();
     // A target larger than the frame, as a window with room for a panel: the frame is at its corner.
     let target = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -94,18 +101,38 @@ fn scene_renderer(ctx: &GpuContext, count: Count) -> Renderer {
 }
 
 fn color_and_normals_match_the_files(ctx: &GpuContext) {
-    let renderer = scene_renderer(ctx, Count::Rays);
+    let mut renderer = scene_renderer(ctx, Count::Rays);
     for format in [wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::Rgba8UnormSrgb] {
-        let (frame, rgba) = displayed(&renderer, format, DisplayView::Color, 1.0);
+        let (frame, rgba) = displayed(&mut renderer, 1, format, DisplayView::Color, 1.0);
         assert_close(&format!("colour into {format:?}"), &rgba, &frame.display(), 1);
-        let (frame, rgba) = displayed(&renderer, format, DisplayView::Normal, 1.0);
+        let (frame, rgba) = displayed(&mut renderer, 1, format, DisplayView::Normal, 1.0);
         assert_close(&format!("normals into {format:?}"), &rgba, &frame.normals(), 1);
     }
 }
 
+/// Accumulated samples show as their mean, as the frame read back holds it.
+fn accumulated_samples_show_their_mean(ctx: &GpuContext) {
+    let mut renderer = scene_renderer(ctx, Count::Rays);
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let (frame, rgba) = displayed(&mut renderer, 5, format, DisplayView::Color, 1.0);
+    assert_eq!(renderer.samples(), 5);
+    assert_close("five samples", &rgba, &frame.display(), 1);
+    let (single, _) = displayed(&mut renderer, 1, format, DisplayView::Color, 1.0);
+    assert_ne!(
+        frame.color, single.color,
+        "five jittered samples must differ from the centre's one"
+    );
+}
+
 fn cost_view_uses_the_heat_map_scale(ctx: &GpuContext) {
-    let renderer = scene_renderer(ctx, Count::Cost);
-    let (frame, rgba) = displayed(&renderer, wgpu::TextureFormat::Rgba8Unorm, DisplayView::Cost, 40.0);
+    let mut renderer = scene_renderer(ctx, Count::Cost);
+    let (frame, rgba) = displayed(
+        &mut renderer,
+        1,
+        wgpu::TextureFormat::Rgba8Unorm,
+        DisplayView::Cost,
+        40.0,
+    );
     let data = frame
         .counts()
         .iter()
@@ -122,8 +149,14 @@ fn cost_view_uses_the_heat_map_scale(ctx: &GpuContext) {
 
 /// The check above must fail when the picture is off: one pixel two steps brighter.
 fn a_displayed_image_two_steps_off_fails(ctx: &GpuContext) {
-    let renderer = scene_renderer(ctx, Count::Rays);
-    let (frame, mut rgba) = displayed(&renderer, wgpu::TextureFormat::Rgba8Unorm, DisplayView::Color, 1.0);
+    let mut renderer = scene_renderer(ctx, Count::Rays);
+    let (frame, mut rgba) = displayed(
+        &mut renderer,
+        1,
+        wgpu::TextureFormat::Rgba8Unorm,
+        DisplayView::Color,
+        1.0,
+    );
     let pixel = rgba.chunks(4).position(|p| p[0] < 250).expect("a pixel short of white") * 4;
     assert!(worst_difference(&rgba, &frame.display()).0 <= 1);
     rgba[pixel] += 2;
@@ -134,6 +167,7 @@ fn a_displayed_image_two_steps_off_fails(ctx: &GpuContext) {
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu color_and_normals_match_the_files,
+        gpu accumulated_samples_show_their_mean,
         gpu cost_view_uses_the_heat_map_scale,
         gpu a_displayed_image_two_steps_off_fails,
     ]

@@ -21,7 +21,7 @@ fn gpu_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32) -> Vec<
         accel,
         ..Default::default()
     };
-    let renderer = block_on(Renderer::with_rebuild(ctx, &first, &rebuild, options)).unwrap();
+    let mut renderer = block_on(Renderer::with_rebuild(ctx, &first, &rebuild, options)).unwrap();
     (0..count)
         .map(|frame| {
             let moved = PackedScene::new(&scene.at_frame(frame)).unwrap();

@@ -38,6 +38,42 @@ fn whitted(ctx: &GpuContext) {
     check(ctx, "whitted", 160, 120);
 }
 
+/// Sixteen jittered samples per pixel: the shader's sequence is the CPU's, bit for bit, so the
+/// averages agree as single samples do, in every memory mode that holds the scene; and the cost
+/// view's mean per sample too.
+fn sixteen_samples_agree(ctx: &GpuContext) {
+    let mut scene = packed("random:300", 96, 72, 5);
+    scene.build_bvh(MortonBits::Bits30);
+    for (memory, count) in [
+        (MemoryMode::Storage, Count::Rays),
+        (MemoryMode::Texture, Count::Rays),
+        (MemoryMode::Storage, Count::Cost),
+    ] {
+        let options = RendererOptions {
+            memory,
+            accel: Accel::Threaded,
+            count,
+        };
+        let mut gpu = renderer(ctx, &scene, options);
+        let frame = pollster::block_on(gpu.render_samples(16, |_| {})).unwrap().frame;
+        assert_eq!(gpu.samples(), 16);
+        let cpu = raypipe::cpu::render_with(&scene, Accel::Threaded, count, 16, &|| {}).unwrap();
+        let name = format!("spp-16-{memory}-{count:?}");
+        assert_frames_match(&name, &frame, &cpu);
+        if count == Count::Cost {
+            let total_cost = |f: &raypipe::image::Frame| f.color.iter().map(|c| c[3] as f64).sum::<f64>();
+            let (g, c) = (total_cost(&frame), total_cost(&cpu));
+            assert!(
+                (g - c).abs() <= 1e-3 * c,
+                "{name}: mean cost {g} on the GPU, {c} on the CPU"
+            );
+        } else {
+            let (g, c) = (frame.rays() as f64, cpu.rays() as f64);
+            assert!((g - c).abs() <= 0.01 * c, "{name}: GPU traced {g} rays, CPU {c}");
+        }
+    }
+}
+
 fn sphere_8k(ctx: &GpuContext) {
     check(ctx, "sphere-8k", 64, 48);
 }
@@ -89,7 +125,7 @@ fn coincident_spheres(ctx: &GpuContext) {
 fn cost_aov_counts_the_same_tests_on_both_devices(ctx: &GpuContext) {
     let mut scene = packed("random:3000:9", 64, 48, 5);
     scene.build_bvh(MortonBits::Bits30);
-    let cost = |accel| raypipe::cpu::render_with(&scene, accel, Count::Cost, &|| {}).unwrap();
+    let cost = |accel| raypipe::cpu::render_with(&scene, accel, Count::Cost, 1, &|| {}).unwrap();
     let brute = cost(Accel::Brute);
     assert!(
         brute.counts().iter().all(|&c| c == 3000),
@@ -134,6 +170,7 @@ fn spheres_and_triangles(ctx: &GpuContext) {
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu whitted,
+        gpu sixteen_samples_agree,
         gpu sphere_8k,
         gpu torus_5k,
         gpu random_spheres,

@@ -11,6 +11,11 @@ struct DisplayParams {
     depth_far: f32,
     // Cost view: the count at the top of the scale.
     cost_max: f32,
+    // Samples summed in the colour target: the pass shows their mean.
+    samples: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 const DISPLAY_COLOR: u32 = 0u;
@@ -63,7 +68,7 @@ fn color_scale(x: f32) -> vec3<f32> {
 @fragment
 fn fs_display(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     let texel = vec2<i32>(position.xy);
-    let color = bitcast<vec4<f32>>(textureLoad(color_target, texel, 0));
+    let color = bitcast<vec4<f32>>(textureLoad(color_target, texel, 0)) / f32(params.samples);
     let surface = bitcast<vec4<f32>>(textureLoad(surface_target, texel, 0));
     let hit = surface.w >= 0.0;
     var shown = vec3<f32>(0.0);

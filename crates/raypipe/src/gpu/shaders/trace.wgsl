@@ -27,6 +27,28 @@ struct PixelTrace {
     depth: f32,
 }
 
+// A 32-bit integer hash (PCG's output permutation, after Jarzynski and Olano 2020), for the per-pixel
+// scramble of the sample sequence.
+fn hash_u32(value: u32) -> u32 {
+    let state = value * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// Where in its pixel sample `index` looks, in [0, 1)^2. Sample 0 is the centre, so one sample is the
+// unjittered image; later samples follow the R2 sequence, shifted per pixel by a hash (a
+// Cranley-Patterson rotation) so that neighbouring pixels do not repeat one pattern. Integer
+// arithmetic in 0.32 fixed point, so every device computes the same bits.
+fn sample_offset(pixel: vec2<u32>, index: u32) -> vec2<f32> {
+    if (index == 0u) {
+        return vec2<f32>(0.5);
+    }
+    let scramble_x = hash_u32(pixel.x ^ hash_u32(pixel.y));
+    let scramble_y = hash_u32(scramble_x);
+    let fixed = vec2<u32>(scramble_x + index * R2_STEP_X, scramble_y + index * R2_STEP_Y);
+    return vec2<f32>(fixed >> vec2<u32>(8u)) * (1.0 / 16777216.0);
+}
+
 // The ray through a pixel position (pixel centres at +0.5, row 0 at the top).
 fn camera_ray(pixel: vec2<f32>) -> Ray {
     let x = (2.0 * pixel.x / globals.camera.width - 1.0) * globals.camera.tan_half_fov * globals.camera.aspect;
@@ -116,22 +138,33 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
 }
 
 // Both targets are rgba32uint holding f32 bits: integer targets are colour-renderable everywhere
-// (float targets are not on GLES/WebGL2 without an extension), and bits read back exactly.
+// (float targets are not on GLES/WebGL2 without an extension), and bits read back exactly. They hold
+// sums over the samples so far: each draw reads the previous pair and writes the other one.
 struct FragmentOutput {
-    // rgb: linear radiance; a: rays traced for this pixel (its cost, with WRITE_COST).
+    // rgb: linear radiance; a: rays traced for this pixel (its cost, with WRITE_COST); summed.
     @location(0) color: vec4<u32>,
-    // xyz: first-hit normal; w: first-hit distance or DEPTH_MISS.
+    // xyz: first-hit normal; w: first-hit distance or DEPTH_MISS; the centre sample's.
     @location(1) surface: vec4<u32>,
 }
+
+// The targets the previous sample wrote; unread by sample 0.
+@group(1) @binding(0) var previous_color: texture_2d<u32>;
+@group(1) @binding(1) var previous_surface: texture_2d<u32>;
 
 @fragment
 fn fs_main(@builtin(position) position: vec4<f32>) -> FragmentOutput {
     ray_count = 0u;
     box_tests = 0u;
-    let pixel = trace_pixel(camera_ray(position.xy));
+    let pixel = vec2<u32>(position.xy);
+    let sample = globals.camera.sample;
+    let traced = trace_pixel(camera_ray(vec2<f32>(pixel) + sample_offset(pixel, sample)));
     let count = select(ray_count, primary_cost, WRITE_COST);
-    return FragmentOutput(
-        bitcast<vec4<u32>>(vec4<f32>(pixel.color, f32(count))),
-        bitcast<vec4<u32>>(vec4<f32>(pixel.normal, pixel.depth)),
-    );
+    var color = vec4<f32>(traced.color, f32(count));
+    var surface = vec4<f32>(traced.normal, traced.depth);
+    if (sample > 0u) {
+        let texel = vec2<i32>(pixel);
+        color = bitcast<vec4<f32>>(textureLoad(previous_color, texel, 0)) + color;
+        surface = bitcast<vec4<f32>>(textureLoad(previous_surface, texel, 0));
+    }
+    return FragmentOutput(bitcast<vec4<u32>>(color), bitcast<vec4<u32>>(surface));
 }

@@ -11,6 +11,8 @@ struct Camera {
     width: f32,
     up: vec3<f32>,
     height: f32,
+    // Which of each pixel's samples this draw traces (0: the pixel centre).
+    sample: u32,
 }
 
 struct SceneInfo {
