@@ -102,7 +102,7 @@ fn scene(family: &str, count: usize, width: u32, height: u32) -> anyhow::Result<
         let options = ModelOptions {
             as_: Some(MeshAs::Spheres),
             spheres: Some(count),
-            rotate: None,
+            ..Default::default()
         };
         Scene::load_with(family, &options)?
     } else if ["random", "sphere", "torus", "bounce"].contains(&family) {

@@ -12,7 +12,7 @@ use raypipe::mesh::is_model_path;
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
-use raypipe::scene::model::{MeshAs, ModelOptions};
+use raypipe::scene::model::{MeshAs, ModelOptions, Normals};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -49,6 +49,15 @@ pub struct SceneArgs {
     /// (say --rotate=-90,0,0 to stand up a model whose up axis is z).
     #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
     pub rotate: Option<glam::Vec3>,
+    /// With a model file's triangles: shade with the file's vertex normals where it has them, else
+    /// smooth ones (auto); with each face's own normal (flat); or with smooth normals computed from
+    /// the faces (smooth).
+    #[arg(long, value_parser = choice::<Normals>())]
+    pub normals: Option<Normals>,
+    /// With smooth normals: faces meeting at more than this many degrees keep a sharp edge
+    /// (default 60).
+    #[arg(long, value_name = "DEGREES")]
+    pub crease: Option<f32>,
     #[arg(long)]
     pub width: Option<u32>,
     #[arg(long)]
@@ -73,6 +82,8 @@ impl SceneArgs {
             as_: self.as_,
             spheres: self.spheres,
             rotate: self.rotate,
+            normals: self.normals,
+            crease: self.crease,
         };
         let mut scene = load_scene(&self.spec, &model)?;
         let settings = &mut scene.settings;
@@ -113,7 +124,7 @@ pub const MAX_SPP: u32 = 65_536;
 pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
     if !model.is_default() && !is_model_path(std::path::Path::new(spec)) {
         bail!(
-            "scene '{spec}': --as, --spheres and --rotate apply to model files ({})",
+            "scene '{spec}': --as, --spheres, --rotate, --normals and --crease apply to model files ({})",
             raypipe::mesh::MeshFormat::extension_list()
         );
     }

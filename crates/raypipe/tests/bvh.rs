@@ -290,9 +290,9 @@ fn random_triangle(rng: &mut SplitMix64, material: u32) -> GpuTriangle {
     GpuTriangle {
         v0: v0.to_array(),
         material,
-        e1: e1.to_array(),
+        v1: (v0 + e1).to_array(),
         normals: u32::MAX,
-        e2: e2.to_array(),
+        v2: (v0 + e2).to_array(),
         _pad: 0,
     }
 }

@@ -81,6 +81,105 @@ fn scene_meshes_are_placed_as_the_file_says() {
     }
 }
 
+/// Smooth normals computed from a torus's faces are its analytic normals, to within the facets'
+/// spread (24 x 12 quads: faces 15 and 30 degrees apart).
+#[test]
+fn smooth_normals_follow_the_surface() {
+    let model = models::torus(24, 12);
+    let mesh = mesh::parse(&models::flat_off(&model), MeshFormat::Off, &mut Vec::new()).unwrap();
+    assert!(mesh.normals.is_none());
+    let smooth = mesh.smooth_normals(60.0);
+    for (t, corners) in mesh.triangles.iter().zip(&smooth) {
+        for (&i, n) in t.iter().zip(corners) {
+            let exact = Vec3::from_array(model.normals[i as usize]);
+            assert!(n.dot(exact) > 0.995, "vertex {i}: {n} against {exact}");
+            assert!((n.length() - 1.0).abs() < 1e-5);
+        }
+    }
+}
+
+/// A cube's edges are 90 degrees: a 60-degree crease keeps every face flat, a 180-degree one
+/// blends a corner's three faces equally (the angle weights make it independent of how the faces
+/// are cut into triangles).
+#[test]
+fn the_crease_angle_keeps_sharp_edges_sharp() {
+    let positions: Vec<Vec3> = (0..8)
+        .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32) * 2.0 - 1.0)
+        .collect();
+    // Two triangles per face, counter-clockwise from outside.
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    let cube = Mesh {
+        positions,
+        normals: None,
+        triangles,
+    };
+    for (t, corners) in cube.triangles.iter().zip(cube.smooth_normals(60.0)) {
+        let [a, b, c] = cube.corners(*t);
+        let face = (b - a).cross(c - a).normalize();
+        assert!(
+            corners.iter().all(|n| n.dot(face) > 1.0 - 1e-6),
+            "{corners:?} against {face}"
+        );
+    }
+    for (t, corners) in cube.triangles.iter().zip(cube.smooth_normals(180.0)) {
+        for (&i, n) in t.iter().zip(corners) {
+            let diagonal = cube.positions[i as usize].normalize();
+            assert!(n.dot(diagonal) > 1.0 - 1e-5, "corner {i}: {n} against {diagonal}");
+        }
+    }
+}
+
+/// `normals` in a `[[mesh]]`: by default the file's where it has them and smooth ones where not;
+/// "flat" none; a name that is not a mode is one line naming the mesh.
+#[test]
+fn scene_meshes_get_the_normals_they_ask_for() {
+    let dir = test_dir("meshes-normals");
+    let model = models::torus(8, 4);
+    write(&dir, "with.ply", &models::binary_ply(&model, true));
+    write(&dir, "without.off", &models::flat_off(&model));
+    let load = |table: &str| {
+        let path = write(&dir, "scene.toml", format!("[[mesh]]\n{table}\n").as_bytes());
+        raypipe::scene::Scene::load(path.to_str().unwrap())
+    };
+    let normals =
+        |table: &str| -> Vec<Option<[Vec3; 3]>> { load(table).unwrap().triangles.iter().map(|t| t.normals).collect() };
+    let from_file = normals("file = \"with.ply\"");
+    let smooth = normals("file = \"without.off\"");
+    assert!(from_file.iter().chain(&smooth).all(Option::is_some));
+    assert_ne!(from_file, smooth, "the file's normals are not the computed ones");
+    assert_eq!(smooth, normals("file = \"with.ply\"\nnormals = \"smooth\""));
+    assert!(
+        normals("file = \"with.ply\"\nnormals = \"flat\"")
+            .iter()
+            .all(Option::is_none)
+    );
+    let creased = normals("file = \"without.off\"\ncrease = 10");
+    assert_ne!(creased, smooth, "a 10-degree crease keeps the 4-sided torus's edges");
+    let error = load("file = \"with.ply\"\nnormals = \"shiny\"")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains(":1: mesh 0: normals must be one of auto, flat, smooth (got \"shiny\")"),
+        "{error}"
+    );
+    let error = load("file = \"with.ply\"\ncrease = 200").unwrap_err().to_string();
+    assert!(
+        error.contains("crease must be an angle from 0 to 180 degrees"),
+        "{error}"
+    );
+}
+
 fn on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> bool {
     let n = (b - a).cross(c - a);
     let in_plane = (p - a).dot(n).abs() <= 1e-5 * n.length();

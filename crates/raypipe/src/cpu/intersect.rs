@@ -84,28 +84,83 @@ pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
     NO_HIT
 }
 
-/// Möller–Trumbore: (u, v, t) where v0 + u e1 + v e2 = origin + t dir. A ray in the triangle's
-/// plane (or a degenerate triangle) has det 0 and gets a u that fails every test.
+/// The shear that takes a ray to the frame where it starts at the origin and runs along +z (Woop,
+/// Benthin and Wald 2013): `axes[2]` is the direction's dominant axis, `axes[0]` and `axes[1]` the
+/// other two (swapped where the ray points down that axis, which keeps the triangles' winding); `s`
+/// holds (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in those axes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayShear {
+    pub axes: [usize; 3],
+    pub s: Vec3,
+}
+
+pub fn ray_shear(dir: Vec3) -> RayShear {
+    let a = dir.abs();
+    let kz = if a.x > a.y && a.x > a.z {
+        0
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    if dir[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    let sz = 1.0 / dir[kz];
+    RayShear {
+        axes: [kx, ky, kz],
+        s: Vec3::new(dir[kx] * sz, dir[ky] * sz, sz),
+    }
+}
+
+/// A corner in the ray's sheared frame: xy where the ray passes through (0, 0), z scaled so that
+/// the hit's t comes out of the barycentric blend of the corners' z.
+pub fn sheared(corner: Vec3, ray: &Ray, shear: &RayShear) -> Vec3 {
+    let p = corner - ray.origin;
+    let [kx, ky, kz] = shear.axes;
+    let z = p[kz];
+    Vec3::new(p[kx] - shear.s.x * z, p[ky] - shear.s.y * z, shear.s.z * z)
+}
+
+/// p.x q.y - p.y q.x, with the pair taken in one fixed order: the triangle across an edge meets it
+/// as (q, p) and gets exactly the negated value, as in the shader, where the compiler may fuse
+/// multiply-adds.
+pub fn edge_function(p: glam::Vec2, q: glam::Vec2) -> f32 {
+    if p.x < q.x || (p.x == q.x && p.y < q.y) {
+        p.x * q.y - p.y * q.x
+    } else {
+        -(q.x * p.y - q.y * p.x)
+    }
+}
+
+/// The watertight ray-triangle test (Woop, Benthin and Wald 2013): (u, v, t) where
+/// (1 - u - v) v0 + u v1 + v v2 = origin + t dir, or [`NO_HIT`] in every component where the ray
+/// passes outside. Two triangles sharing an edge compute that edge's function from the same sheared
+/// corners, so a ray through the edge hits one of them (or both), never neither. A ray in the
+/// triangle's plane (or a degenerate triangle) has det 0 and misses.
 pub fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
-    let (e1, e2) = (v3(triangle.e1), v3(triangle.e2));
-    let p = ray.dir.cross(e2);
-    let det = e1.dot(p);
+    let shear = ray_shear(ray.dir);
+    let [a, b, c] = triangle.corners().map(|corner| sheared(corner, ray, &shear));
+    let u = edge_function(c.truncate(), b.truncate());
+    let v = edge_function(a.truncate(), c.truncate());
+    let w = edge_function(b.truncate(), a.truncate());
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return Vec3::splat(NO_HIT);
+    }
+    let det = u + v + w;
     if det == 0.0 {
         return Vec3::splat(NO_HIT);
     }
     let inv_det = 1.0 / det;
-    let s = ray.origin - v3(triangle.v0);
-    let q = s.cross(e1);
-    Vec3::new(s.dot(p) * inv_det, ray.dir.dot(q) * inv_det, e2.dot(q) * inv_det)
+    Vec3::new(v * inv_det, w * inv_det, (u * a.z + v * b.z + w * c.z) * inv_det)
 }
 
 /// The t in (0, t_max] where the ray meets the triangle, or [`NO_HIT`]; t_max counts, as for spheres.
 pub fn intersect_triangle(triangle: &GpuTriangle, ray: &Ray, t_max: f32) -> f32 {
-    let uvt = triangle_uvt(triangle, ray);
-    if uvt.x >= 0.0 && uvt.y >= 0.0 && uvt.x + uvt.y <= 1.0 && uvt.z > 0.0 && uvt.z <= t_max {
-        return uvt.z;
-    }
-    NO_HIT
+    let t = triangle_uvt(triangle, ray).z;
+    if t > 0.0 && t <= t_max { t } else { NO_HIT }
 }
 
 /// The primitives in the BVH's order: spheres, then triangles.

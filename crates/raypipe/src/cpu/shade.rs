@@ -37,7 +37,8 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
             };
         }
         let triangle = &scene.triangles[hit.index as usize - scene.spheres.len()];
-        let normal = v3(triangle.e1).cross(v3(triangle.e2)).normalize();
+        let [v0, v1, v2] = triangle.corners();
+        let normal = (v1 - v0).cross(v2 - v0).normalize();
         return Surface {
             position,
             normal,

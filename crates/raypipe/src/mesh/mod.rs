@@ -190,6 +190,59 @@ impl Mesh {
         triangle.map(|i| self.positions[i as usize])
     }
 
+    /// Each triangle's corner normals from the faces around each corner: the unit face normals of
+    /// the faces that share the corner's position (by value, so that files that repeat vertices
+    /// smooth too), weighted by the angle each makes at that corner (Thürmer and Wüthrich 1998).
+    /// Only faces within `crease_degrees` of the corner's own face join in, so sharper edges stay
+    /// sharp. A corner with nothing to blend (a degenerate face) gets its face's normal.
+    pub fn smooth_normals(&self, crease_degrees: f32) -> Vec<[Vec3; 3]> {
+        let face_normals: Vec<Vec3> = self
+            .triangles
+            .iter()
+            .map(|&t| {
+                let [a, b, c] = self.corners(t);
+                (b - a).cross(c - a).normalize_or_zero()
+            })
+            .collect();
+        let corner_angle = |t: [u32; 3], k: usize| {
+            let corners = self.corners(t);
+            let (p, q, r) = (corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]);
+            (q - p).normalize_or_zero().angle_between((r - p).normalize_or_zero())
+        };
+        // Faces around each position, with their angle there.
+        let mut around: std::collections::HashMap<[u32; 3], Vec<(u32, f32)>> = Default::default();
+        for (f, &t) in self.triangles.iter().enumerate() {
+            for (k, &i) in t.iter().enumerate() {
+                let key = self.positions[i as usize].to_array().map(f32::to_bits);
+                let angle = corner_angle(t, k);
+                if angle.is_finite() {
+                    around.entry(key).or_default().push((f as u32, angle));
+                }
+            }
+        }
+        let min_cos = crease_degrees.to_radians().cos();
+        self.triangles
+            .iter()
+            .enumerate()
+            .map(|(f, &t)| {
+                let own = face_normals[f];
+                t.map(|i| {
+                    let key = self.positions[i as usize].to_array().map(f32::to_bits);
+                    let blended: Vec3 = around
+                        .get(&key)
+                        .into_iter()
+                        .flatten()
+                        .map(|&(g, angle)| (face_normals[g as usize], angle))
+                        .filter(|(n, _)| n.dot(own) >= min_cos)
+                        .map(|(n, angle)| n * angle)
+                        .sum();
+                    let normal = blended.normalize_or_zero();
+                    if normal == Vec3::ZERO { own } else { normal }
+                })
+            })
+            .collect()
+    }
+
     pub fn triangle_area(&self, triangle: [u32; 3]) -> f32 {
         let [a, b, c] = self.corners(triangle);
         0.5 * (b - a).cross(c - a).length()

@@ -141,19 +141,18 @@ pub struct GpuSphere {
     pub _pad: [u32; 3],
 }
 
-/// A triangle as Möller–Trumbore reads it: a corner and the two edges leaving it. Primitive
+/// A triangle by its three corners, as the watertight test reads them: two triangles that share an
+/// edge hold its corners bit for bit, which is what keeps rays from slipping between them. Primitive
 /// `sphere_count + i` of the BVH is triangle `i`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTriangle {
     pub v0: [f32; 3],
     pub material: u32,
-    /// v1 - v0.
-    pub e1: [f32; 3],
+    pub v1: [f32; 3],
     /// Index of the triangle's vertex normals in the normal records, or `NONE` to shade flat.
     pub normals: u32,
-    /// v2 - v0.
-    pub e2: [f32; 3],
+    pub v2: [f32; 3],
     pub _pad: u32,
 }
 
@@ -164,12 +163,14 @@ impl GpuSphere {
 }
 
 impl GpuTriangle {
-    /// The box around the corners the tracers compute: v0, v0 + e1, v0 + e2 (lbvh.wgsl's
-    /// `primitive_box`, to the bit).
+    /// The box around the corners (lbvh.wgsl's `primitive_box`, to the bit).
     pub fn bounds(&self) -> Aabb {
-        let v0 = Vec3::from_array(self.v0);
-        let (v1, v2) = (v0 + Vec3::from_array(self.e1), v0 + Vec3::from_array(self.e2));
+        let [v0, v1, v2] = self.corners();
         Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
+    }
+
+    pub fn corners(&self) -> [Vec3; 3] {
+        [self.v0, self.v1, self.v2].map(Vec3::from_array)
     }
 }
 
@@ -256,7 +257,7 @@ pub const LAYOUTS: &[StructLayout] = &[
     ]),
     struct_layout!(GpuBvhFrame, "BvhFrame", [origin, quantum, inverse_quantum]),
     struct_layout!(GpuSphere, "Sphere", [center, radius, material]),
-    struct_layout!(GpuTriangle, "Triangle", [v0, material, e1, normals, e2]),
+    struct_layout!(GpuTriangle, "Triangle", [v0, material, v1, normals, v2]),
     struct_layout!(GpuTriangleNormals, "TriangleNormals", [n0, n1, n2]),
     struct_layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
     struct_layout!(GpuLight, "Light", [position, color]),

@@ -136,9 +136,9 @@ impl PackedScene {
                 GpuTriangle {
                     v0: v0.to_array(),
                     material: t.material,
-                    e1: (v1 - v0).to_array(),
+                    v1: v1.to_array(),
                     normals,
-                    e2: (v2 - v0).to_array(),
+                    v2: v2.to_array(),
                     _pad: 0,
                 }
             })

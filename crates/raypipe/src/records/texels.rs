@@ -33,8 +33,8 @@ impl GpuRecord for GpuTriangle {
     const WGSL_TYPE: &'static str = "Triangle";
     fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
         let [ax, ay, az] = self.v0;
-        let [bx, by, bz] = self.e1;
-        let [cx, cy, cz] = self.e2;
+        let [bx, by, bz] = self.v1;
+        let [cx, cy, cz] = self.v2;
         out.push([ax, ay, az, self.material as f32]);
         out.push([bx, by, bz, link_texel(self.normals)]);
         out.push([cx, cy, cz, 0.0]);

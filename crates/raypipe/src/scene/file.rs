@@ -3,8 +3,9 @@
 //! Every table denies unknown keys, and every error names the file and, where the element has one,
 //! its line: `scene.toml:12: sphere 3: radius must be positive and finite (got -1)`.
 
-use super::model::{MeshAs, Placement, SphereCount, add_mesh};
+use super::model::{DEFAULT_CREASE_DEGREES, MeshAs, Normals, Placement, SphereCount, add_mesh};
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere};
+use crate::choice::Choice;
 use crate::error::{Element, InputError};
 use glam::Vec3;
 use serde::Deserialize;
@@ -99,6 +100,8 @@ struct MeshDef {
     translate: Option<[f32; 3]>,
     seed: Option<u64>,
     material: Option<String>,
+    normals: Option<String>,
+    crease: Option<f32>,
 }
 
 /// `spheres = 20000` or `spheres = "vertices"`.
@@ -317,9 +320,16 @@ fn placement(
             )));
         }
     };
+    let normals = match def.normals.as_deref() {
+        None => Normals::Auto,
+        Some(name) => Normals::from_name(name)
+            .ok_or_else(|| fail(format!("normals must be one of {} (got \"{name}\")", Normals::names())))?,
+    };
     let placement = Placement {
         as_,
         spheres,
+        normals,
+        crease_degrees: def.crease.unwrap_or(DEFAULT_CREASE_DEGREES),
         radius: def.radius,
         rotate: def.rotate.map_or(Vec3::ZERO, vec3),
         normalize: def.normalize.unwrap_or(true),

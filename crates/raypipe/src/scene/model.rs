@@ -30,6 +30,34 @@ crate::impl_choice!(
     ]
 );
 
+/// Where a mesh's triangles get the normals they shade with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Normals {
+    /// The file's vertex normals where it has them, else smooth.
+    #[default]
+    Auto,
+    /// The face's own normal: faceted.
+    Flat,
+    /// Angle-weighted vertex normals computed from the faces, with the crease angle.
+    Smooth,
+}
+
+crate::impl_choice!(
+    Normals,
+    [
+        (Auto, "auto", "the file's vertex normals where it has them, else smooth"),
+        (Flat, "flat", "each face's own normal: faceted"),
+        (
+            Smooth,
+            "smooth",
+            "angle-weighted vertex normals from the faces; edges sharper than the crease angle stay sharp"
+        ),
+    ]
+);
+
+/// The crease angle's default: edges between faces further apart than this stay sharp.
+pub const DEFAULT_CREASE_DEGREES: f32 = 60.0;
+
 /// How many spheres a mesh becomes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SphereCount {
@@ -55,6 +83,10 @@ pub struct Placement {
     /// Seed of the surface sampling.
     pub seed: u64,
     pub material: u32,
+    /// The triangles' shading normals.
+    pub normals: Normals,
+    /// For smooth normals: faces further apart than this many degrees do not blend.
+    pub crease_degrees: f32,
 }
 
 impl Default for Placement {
@@ -69,6 +101,8 @@ impl Default for Placement {
             translate: Vec3::ZERO,
             seed: 0,
             material: 0,
+            normals: Normals::Auto,
+            crease_degrees: DEFAULT_CREASE_DEGREES,
         }
     }
 }
@@ -93,6 +127,17 @@ impl Placement {
         {
             return fail(format!("radius must be positive and finite (got {radius})"));
         }
+        if !(0.0..=180.0).contains(&self.crease_degrees) {
+            return fail(format!(
+                "crease must be an angle from 0 to 180 degrees (got {})",
+                self.crease_degrees
+            ));
+        }
+        if self.as_ == MeshAs::Spheres
+            && (self.normals != Normals::Auto || self.crease_degrees != DEFAULT_CREASE_DEGREES)
+        {
+            return fail("normals and crease apply to a mesh placed as triangles".into());
+        }
         Ok(())
     }
 }
@@ -110,11 +155,20 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
     let material = placement.material;
     match placement.as_ {
         MeshAs::Triangles => {
+            let smooth = match (placement.normals, &mesh.normals) {
+                (Normals::Flat, _) | (Normals::Auto, Some(_)) => None,
+                (Normals::Smooth, _) | (Normals::Auto, None) => Some(mesh.smooth_normals(placement.crease_degrees)),
+            };
             scene.triangles.reserve(mesh.triangles.len());
-            for &t in &mesh.triangles {
+            for (f, &t) in mesh.triangles.iter().enumerate() {
+                let normals = match (&smooth, placement.normals) {
+                    (Some(smooth), _) => Some(smooth[f]),
+                    (None, Normals::Flat) => None,
+                    (None, _) => mesh.normals.as_ref().map(|n| t.map(|i| n[i as usize])),
+                };
                 scene.triangles.push(Triangle {
                     vertices: mesh.corners(t),
-                    normals: mesh.normals.as_ref().map(|n| t.map(|i| n[i as usize])),
+                    normals,
                     material,
                 });
             }
@@ -150,6 +204,9 @@ pub struct ModelOptions {
     pub spheres: Option<usize>,
     /// Euler angles in degrees, as [`Placement::rotate`].
     pub rotate: Option<Vec3>,
+    pub normals: Option<Normals>,
+    /// Degrees, as [`Placement::crease_degrees`].
+    pub crease: Option<f32>,
 }
 
 impl ModelOptions {
@@ -170,6 +227,8 @@ impl ModelOptions {
             as_,
             spheres: self.spheres.map_or(SphereCount::Vertices, SphereCount::Sampled),
             rotate: self.rotate.unwrap_or(Vec3::ZERO),
+            normals: self.normals.unwrap_or_default(),
+            crease_degrees: self.crease.unwrap_or(DEFAULT_CREASE_DEGREES),
             ..Placement::default()
         })
     }

@@ -2,6 +2,7 @@
 //! images behind for a human when they fail.
 #![allow(dead_code)]
 
+pub mod closed;
 pub mod harness;
 pub mod models;
 

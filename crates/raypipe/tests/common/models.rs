@@ -155,7 +155,7 @@ pub fn mixed_scene(rings: u32, sides: u32, spheres: usize) -> raypipe::scene::Sc
          [material.light_tile]\n[material.dark_tile]\ncolor = [0.3, 0.3, 0.3]\n\
          [[plane]]\npoint = [0, -0.6, 0]\nnormal = [0, 1, 0]\nmaterial = \"light_tile\"\nchecker_material = \"dark_tile\"\nchecker_size = 0.5\n\
          [[mesh]]\nfile = \"smooth.ply\"\nscale = 0.8\ntranslate = [-1.1, 0, 0]\nmaterial = \"glass\"\n\
-         [[mesh]]\nfile = \"flat.off\"\nscale = 0.8\ntranslate = [1.1, 0, 0]\nmaterial = \"mirror\"\n\
+         [[mesh]]\nfile = \"flat.off\"\nnormals = \"flat\"\nscale = 0.8\ntranslate = [1.1, 0, 0]\nmaterial = \"mirror\"\n\
          [[mesh]]\nfile = \"smooth.ply\"\nas = \"spheres\"\nspheres = {spheres}\nscale = 0.7\ntranslate = [0, 0, 1.6]\nmaterial = \"clay\"\n"
     );
     let path = dir.join("mixed.toml");

@@ -1,6 +1,6 @@
 //! The tests that need a GPU, on one shared device (see `common::harness`): the fragment shader
 //! against the CPU reference, memory modes against each other, closed-form answers, the GPU LBVH
-//! build against the CPU's, per-frame rebuilds, and the display pass; and the tests of the shared
+//! build against the CPU's, per-frame rebuilds, the display pass, and watertight triangles; and the tests of the shared
 //! models.
 
 #[path = "../common/mod.rs"]
@@ -13,6 +13,7 @@ mod gpu_build;
 mod gpu_vs_cpu;
 mod memory_modes;
 mod scans;
+mod watertight;
 
 fn main() -> std::process::ExitCode {
     let tests = [
@@ -23,6 +24,7 @@ fn main() -> std::process::ExitCode {
         gpu_vs_cpu::tests(),
         memory_modes::tests(),
         scans::tests(),
+        watertight::tests(),
     ];
     common::harness::run(tests.into_iter().flatten().collect())
 }

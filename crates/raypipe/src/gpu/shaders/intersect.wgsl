@@ -43,25 +43,80 @@ fn intersect_sphere(sphere: Sphere, ray: Ray, t_max: f32) -> f32 {
     return NO_HIT;
 }
 
-// Möller–Trumbore: (u, v, t) where v0 + u e1 + v e2 = origin + t dir. A ray in the triangle's plane
-// (or a degenerate triangle) has det 0 and gets a u that fails every test.
+// The shear that takes a ray to the frame where it starts at the origin and runs along +z (Woop,
+// Benthin and Wald 2013): axes.z is the direction's dominant axis, axes.x and axes.y the other two
+// (swapped where the ray points down that axis, which keeps the triangles' winding); s holds
+// (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in those axes.
+struct RayShear {
+    axes: vec3<u32>,
+    s: vec3<f32>,
+}
+
+fn ray_shear(dir: vec3<f32>) -> RayShear {
+    let a = abs(dir);
+    var kz = 2u;
+    if (a.x > a.y && a.x > a.z) {
+        kz = 0u;
+    } else if (a.y > a.z) {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    if (dir[kz] < 0.0) {
+        let k = kx;
+        kx = ky;
+        ky = k;
+    }
+    let sz = 1.0 / dir[kz];
+    return RayShear(vec3<u32>(kx, ky, kz), vec3<f32>(dir[kx] * sz, dir[ky] * sz, sz));
+}
+
+// A corner in the ray's sheared frame: xy where the ray passes through (0, 0), z scaled so that the
+// hit's t comes out of the barycentric blend of the corners' z.
+fn sheared(corner: vec3<f32>, ray: Ray, shear: RayShear) -> vec3<f32> {
+    let p = corner - ray.origin;
+    let z = p[shear.axes.z];
+    return vec3<f32>(p[shear.axes.x] - shear.s.x * z, p[shear.axes.y] - shear.s.y * z, shear.s.z * z);
+}
+
+// p.x q.y - p.y q.x, with the pair taken in one fixed order: the triangle across an edge meets it
+// as (q, p) and gets exactly the negated value, even where the compiler fuses multiply-adds.
+fn edge_function(p: vec2<f32>, q: vec2<f32>) -> f32 {
+    if (p.x < q.x || (p.x == q.x && p.y < q.y)) {
+        return p.x * q.y - p.y * q.x;
+    }
+    return -(q.x * p.y - q.y * p.x);
+}
+
+// The watertight ray-triangle test (Woop, Benthin and Wald 2013): (u, v, t) where
+// (1 - u - v) v0 + u v1 + v v2 = origin + t dir, or NO_HIT in every component where the ray passes
+// outside. Two triangles sharing an edge compute that edge's function from the same sheared corners,
+// so a ray through the edge hits one of them (or both), never neither. A ray in the triangle's
+// plane (or a degenerate triangle) has det 0 and misses.
 fn triangle_uvt(triangle: Triangle, ray: Ray) -> vec3<f32> {
-    let p = cross(ray.dir, triangle.e2);
-    let det = dot(triangle.e1, p);
+    let shear = ray_shear(ray.dir);
+    let a = sheared(triangle.v0, ray, shear);
+    let b = sheared(triangle.v1, ray, shear);
+    let c = sheared(triangle.v2, ray, shear);
+    let u = edge_function(c.xy, b.xy);
+    let v = edge_function(a.xy, c.xy);
+    let w = edge_function(b.xy, a.xy);
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
+        return vec3<f32>(NO_HIT);
+    }
+    let det = u + v + w;
     if (det == 0.0) {
         return vec3<f32>(NO_HIT);
     }
     let inv_det = 1.0 / det;
-    let s = ray.origin - triangle.v0;
-    let q = cross(s, triangle.e1);
-    return vec3<f32>(dot(s, p) * inv_det, dot(ray.dir, q) * inv_det, dot(triangle.e2, q) * inv_det);
+    return vec3<f32>(v * inv_det, w * inv_det, (u * a.z + v * b.z + w * c.z) * inv_det);
 }
 
 // The t in (0, t_max] where the ray meets the triangle, or NO_HIT; t_max counts, as for spheres.
 fn intersect_triangle(triangle: Triangle, ray: Ray, t_max: f32) -> f32 {
-    let uvt = triangle_uvt(triangle, ray);
-    if (uvt.x >= 0.0 && uvt.y >= 0.0 && uvt.x + uvt.y <= 1.0 && uvt.z > 0.0 && uvt.z <= t_max) {
-        return uvt.z;
+    let t = triangle_uvt(triangle, ray).z;
+    if (t > 0.0 && t <= t_max) {
+        return t;
     }
     return NO_HIT;
 }

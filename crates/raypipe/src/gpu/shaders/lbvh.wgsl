@@ -71,9 +71,7 @@ fn primitive_box(i: u32) -> Box {
         return Box(s.center - vec3<f32>(s.radius), s.center + vec3<f32>(s.radius));
     }
     let t = triangles[i - params.sphere_count];
-    let v1 = t.v0 + t.e1;
-    let v2 = t.v0 + t.e2;
-    return Box(min(min(t.v0, v1), v2), max(max(t.v0, v1), v2));
+    return Box(min(min(t.v0, t.v1), t.v2), max(max(t.v0, t.v1), t.v2));
 }
 
 fn centroid(i: u32) -> vec3<f32> {

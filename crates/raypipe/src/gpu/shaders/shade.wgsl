@@ -40,7 +40,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
             return Surface(position, normal, normal, sphere.material);
         }
         let triangle = load_triangle(hit.index - globals.scene.sphere_count);
-        let normal = normalize(cross(triangle.e1, triangle.e2));
+        let normal = normalize(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
         return Surface(position, normal, triangle_shading(triangle, ray, normal), triangle.material);
     }
     let plane = load_plane(hit.index);

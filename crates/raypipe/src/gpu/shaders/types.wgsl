@@ -44,14 +44,14 @@ struct Sphere {
     material: u32,
 }
 
-// Möller–Trumbore's form: a corner and the two edges leaving it. BVH primitive sphere_count + i.
+// The three corners, as the watertight test reads them. BVH primitive sphere_count + i.
 struct Triangle {
     v0: vec3<f32>,
     material: u32,
-    e1: vec3<f32>,
+    v1: vec3<f32>,
     // Index of the vertex normals, or NONE to shade with the geometric normal.
     normals: u32,
-    e2: vec3<f32>,
+    v2: vec3<f32>,
 }
 
 struct TriangleNormals {
