@@ -341,7 +341,7 @@ fn traversals_equal_brute_force() {
             rng.next_f32() * 6.0 - 3.0,
         );
         let dir = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5).normalize();
-        let ray = Ray { origin, dir };
+        let ray = Ray::new(origin, dir);
         let brute = brute_closest(&primitives, &ray, Hit::none(1e30));
         hits += (brute.kind == HitKind::Primitive) as u32;
         triangle_hits += (brute.kind == HitKind::Primitive && brute.index as usize >= spheres.len()) as u32;
@@ -402,7 +402,7 @@ fn traversals_equal_brute_force_in_coarse_and_far_frames() {
         for _ in 0..3000 {
             let origin = centre + (point(2.0) - Vec3::ONE) * spread;
             let dir = (point(2.0) - Vec3::ONE).normalize();
-            let ray = Ray { origin, dir };
+            let ray = Ray::new(origin, dir);
             let brute = brute_closest(&primitives, &ray, Hit::none(1e30));
             hits += (brute.kind == HitKind::Primitive) as u32;
             for (walk, traverse) in TRAVERSALS {
@@ -436,10 +436,7 @@ fn traversals_handle_one_and_two_spheres() {
             triangles: &[],
         };
         for x in [-3.0f32, 0.0, 0.5, 3.0, 6.0] {
-            let ray = Ray {
-                origin: Vec3::new(x, 0.2, -5.0),
-                dir: Vec3::Z,
-            };
+            let ray = Ray::new(Vec3::new(x, 0.2, -5.0), Vec3::Z);
             let brute = brute_closest(&primitives, &ray, Hit::none(1e30));
             for (name, traverse) in TRAVERSALS {
                 assert_eq!(

@@ -10,6 +10,50 @@ pub struct Ray {
     pub origin: Vec3,
     /// Unit length: t is a distance.
     pub dir: Vec3,
+    /// For the triangle test, worked out once per ray.
+    pub shear: RayShear,
+}
+
+impl Ray {
+    /// The shader's `make_ray`.
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self {
+            origin,
+            dir,
+            shear: ray_shear(dir),
+        }
+    }
+}
+
+/// The shear that takes a ray to the frame where it starts at the origin and runs along +z (Woop,
+/// Benthin and Wald 2013): `axes[2]` is the direction's dominant axis, `axes[0]` and `axes[1]` the
+/// other two (swapped where the ray points down that axis, which keeps the triangles' winding); `s`
+/// holds (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in those axes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayShear {
+    pub axes: [usize; 3],
+    pub s: Vec3,
+}
+
+pub fn ray_shear(dir: Vec3) -> RayShear {
+    let a = dir.abs();
+    let kz = if a.x > a.y && a.x > a.z {
+        0
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    if dir[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    let sz = 1.0 / dir[kz];
+    RayShear {
+        axes: [kx, ky, kz],
+        s: Vec3::new(dir[kx] * sz, dir[ky] * sz, sz),
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -84,44 +128,14 @@ pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
     NO_HIT
 }
 
-/// The shear that takes a ray to the frame where it starts at the origin and runs along +z (Woop,
-/// Benthin and Wald 2013): `axes[2]` is the direction's dominant axis, `axes[0]` and `axes[1]` the
-/// other two (swapped where the ray points down that axis, which keeps the triangles' winding); `s`
-/// holds (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in those axes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RayShear {
-    pub axes: [usize; 3],
-    pub s: Vec3,
-}
-
-pub fn ray_shear(dir: Vec3) -> RayShear {
-    let a = dir.abs();
-    let kz = if a.x > a.y && a.x > a.z {
-        0
-    } else if a.y > a.z {
-        1
-    } else {
-        2
-    };
-    let mut kx = (kz + 1) % 3;
-    let mut ky = (kx + 1) % 3;
-    if dir[kz] < 0.0 {
-        std::mem::swap(&mut kx, &mut ky);
-    }
-    let sz = 1.0 / dir[kz];
-    RayShear {
-        axes: [kx, ky, kz],
-        s: Vec3::new(dir[kx] * sz, dir[ky] * sz, sz),
-    }
-}
-
 /// A corner in the ray's sheared frame: xy where the ray passes through (0, 0), z scaled so that
 /// the hit's t comes out of the barycentric blend of the corners' z.
-pub fn sheared(corner: Vec3, ray: &Ray, shear: &RayShear) -> Vec3 {
+pub fn sheared(corner: Vec3, ray: &Ray) -> Vec3 {
     let p = corner - ray.origin;
-    let [kx, ky, kz] = shear.axes;
+    let [kx, ky, kz] = ray.shear.axes;
+    let s = ray.shear.s;
     let z = p[kz];
-    Vec3::new(p[kx] - shear.s.x * z, p[ky] - shear.s.y * z, shear.s.z * z)
+    Vec3::new(p[kx] - s.x * z, p[ky] - s.y * z, s.z * z)
 }
 
 /// p.x q.y - p.y q.x, with the pair taken in one fixed order: the triangle across an edge meets it
@@ -141,8 +155,7 @@ pub fn edge_function(p: glam::Vec2, q: glam::Vec2) -> f32 {
 /// corners, so a ray through the edge hits one of them (or both), never neither. A ray in the
 /// triangle's plane (or a degenerate triangle) has det 0 and misses.
 pub fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
-    let shear = ray_shear(ray.dir);
-    let [a, b, c] = triangle.corners().map(|corner| sheared(corner, ray, &shear));
+    let [a, b, c] = triangle.corners().map(|corner| sheared(corner, ray));
     let u = edge_function(c.truncate(), b.truncate());
     let v = edge_function(a.truncate(), c.truncate());
     let w = edge_function(b.truncate(), a.truncate());

@@ -102,7 +102,7 @@ pub fn direct_light(
         if n_dot_l <= 0.0 {
             continue;
         }
-        if occluded(&Ray { origin, dir: l }, distance) {
+        if occluded(&Ray::new(origin, l), distance) {
             continue;
         }
         let mut highlight = 0.0;

@@ -102,7 +102,7 @@ impl<'a> Tracer<'a> {
         let x = (2.0 * pixel.x / g.width - 1.0) * g.tan_half_fov * g.aspect;
         let y = (1.0 - 2.0 * pixel.y / g.height) * g.tan_half_fov;
         let dir = (v3(g.forward) + x * v3(g.right) + y * v3(g.up)).normalize();
-        Ray { origin: v3(g.eye), dir }
+        Ray::new(v3(g.eye), dir)
     }
 
     pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Hit {
@@ -133,10 +133,7 @@ impl<'a> Tracer<'a> {
             depth: 0,
         });
         while let Some(task) = stack.pop() {
-            let ray = Ray {
-                origin: task.origin,
-                dir: task.dir,
-            };
+            let ray = Ray::new(task.origin, task.dir);
             self.ray_count += 1;
             let hit = self.closest_hit(&ray, T_FAR);
             if task.depth == 0 {

@@ -1,9 +1,43 @@
 // Ray-primitive intersection. Mirrored by src/cpu/intersect.rs.
 
+// The shear that takes a ray to the frame where it starts at the origin and runs along +z (Woop,
+// Benthin and Wald 2013): axes.z is the direction's dominant axis, axes.x and axes.y the other two
+// (swapped where the ray points down that axis, which keeps the triangles' winding); s holds
+// (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in those axes.
+struct RayShear {
+    axes: vec3<u32>,
+    s: vec3<f32>,
+}
+
+fn ray_shear(dir: vec3<f32>) -> RayShear {
+    let a = abs(dir);
+    var kz = 2u;
+    if (a.x > a.y && a.x > a.z) {
+        kz = 0u;
+    } else if (a.y > a.z) {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    if (dir[kz] < 0.0) {
+        let k = kx;
+        kx = ky;
+        ky = k;
+    }
+    let sz = 1.0 / dir[kz];
+    return RayShear(vec3<u32>(kx, ky, kz), vec3<f32>(dir[kx] * sz, dir[ky] * sz, sz));
+}
+
 struct Ray {
     origin: vec3<f32>,
     // Unit length: t is a distance.
     dir: vec3<f32>,
+    // For the triangle test, worked out once per ray.
+    shear: RayShear,
+}
+
+fn make_ray(origin: vec3<f32>, dir: vec3<f32>) -> Ray {
+    return Ray(origin, dir, ray_shear(dir));
 }
 
 const HIT_NONE: u32 = 0u;
@@ -43,40 +77,14 @@ fn intersect_sphere(sphere: Sphere, ray: Ray, t_max: f32) -> f32 {
     return NO_HIT;
 }
 
-// The shear that takes a ray to the frame where it starts at the origin and runs along +z (Woop,
-// Benthin and Wald 2013): axes.z is the direction's dominant axis, axes.x and axes.y the other two
-// (swapped where the ray points down that axis, which keeps the triangles' winding); s holds
-// (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in those axes.
-struct RayShear {
-    axes: vec3<u32>,
-    s: vec3<f32>,
-}
-
-fn ray_shear(dir: vec3<f32>) -> RayShear {
-    let a = abs(dir);
-    var kz = 2u;
-    if (a.x > a.y && a.x > a.z) {
-        kz = 0u;
-    } else if (a.y > a.z) {
-        kz = 1u;
-    }
-    var kx = (kz + 1u) % 3u;
-    var ky = (kx + 1u) % 3u;
-    if (dir[kz] < 0.0) {
-        let k = kx;
-        kx = ky;
-        ky = k;
-    }
-    let sz = 1.0 / dir[kz];
-    return RayShear(vec3<u32>(kx, ky, kz), vec3<f32>(dir[kx] * sz, dir[ky] * sz, sz));
-}
-
 // A corner in the ray's sheared frame: xy where the ray passes through (0, 0), z scaled so that the
 // hit's t comes out of the barycentric blend of the corners' z.
-fn sheared(corner: vec3<f32>, ray: Ray, shear: RayShear) -> vec3<f32> {
+fn sheared(corner: vec3<f32>, ray: Ray) -> vec3<f32> {
     let p = corner - ray.origin;
-    let z = p[shear.axes.z];
-    return vec3<f32>(p[shear.axes.x] - shear.s.x * z, p[shear.axes.y] - shear.s.y * z, shear.s.z * z);
+    let axes = ray.shear.axes;
+    let s = ray.shear.s;
+    let z = p[axes.z];
+    return vec3<f32>(p[axes.x] - s.x * z, p[axes.y] - s.y * z, s.z * z);
 }
 
 // p.x q.y - p.y q.x, with the pair taken in one fixed order: the triangle across an edge meets it
@@ -94,10 +102,9 @@ fn edge_function(p: vec2<f32>, q: vec2<f32>) -> f32 {
 // so a ray through the edge hits one of them (or both), never neither. A ray in the triangle's
 // plane (or a degenerate triangle) has det 0 and misses.
 fn triangle_uvt(triangle: Triangle, ray: Ray) -> vec3<f32> {
-    let shear = ray_shear(ray.dir);
-    let a = sheared(triangle.v0, ray, shear);
-    let b = sheared(triangle.v1, ray, shear);
-    let c = sheared(triangle.v2, ray, shear);
+    let a = sheared(triangle.v0, ray);
+    let b = sheared(triangle.v1, ray);
+    let c = sheared(triangle.v2, ray);
     let u = edge_function(c.xy, b.xy);
     let v = edge_function(a.xy, c.xy);
     let w = edge_function(b.xy, a.xy);

@@ -85,7 +85,7 @@ fn direct_light(surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: v
             continue;
         }
         ray_count += 1u;
-        if (occluded(Ray(origin, l), distance)) {
+        if (occluded(make_ray(origin, l), distance)) {
             continue;
         }
         var highlight = 0.0;

@@ -54,7 +54,7 @@ fn camera_ray(pixel: vec2<f32>) -> Ray {
     let x = (2.0 * pixel.x / globals.camera.width - 1.0) * globals.camera.tan_half_fov * globals.camera.aspect;
     let y = (1.0 - 2.0 * pixel.y / globals.camera.height) * globals.camera.tan_half_fov;
     let dir = normalize(globals.camera.forward + x * globals.camera.right + y * globals.camera.up);
-    return Ray(globals.camera.eye, dir);
+    return make_ray(globals.camera.eye, dir);
 }
 
 fn closest_hit(ray: Ray, t_max: f32) -> Hit {
@@ -78,7 +78,7 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
     while (top > 0u) {
         top -= 1u;
         let task = stack[top];
-        let ray = Ray(task.origin, task.dir);
+        let ray = make_ray(task.origin, task.dir);
         ray_count += 1u;
         let hit = closest_hit(ray, T_FAR);
         if (task.depth == 0u) {
