@@ -123,6 +123,99 @@ fn diff_exits_by_threshold_and_writes_a_difference_image() {
     assert!(d.exists());
 }
 
+/// A grey ramp, and the same ramp with a white 16x16 square: images whose FLIP is known.
+fn ramps() -> (PathBuf, PathBuf) {
+    let ramp = |patch: bool| raypipe::image::FloatImage {
+        width: 64,
+        height: 64,
+        channels: ["R", "G", "B"].map(String::from).to_vec(),
+        data: (0..64 * 64)
+            .flat_map(|i| {
+                let (x, y) = (i % 64, i / 64);
+                let inside = patch && (24..40).contains(&x) && (24..40).contains(&y);
+                [if inside { 1.0 } else { x as f32 / 63.0 }; 3]
+            })
+            .collect(),
+    };
+    let (a, b) = (temp("ramp.png"), temp("ramp-patched.png"));
+    io::write(&ramp(false), &a).unwrap();
+    io::write(&ramp(true), &b).unwrap();
+    (a, b)
+}
+
+/// The FLIP figure printed with the rest, and what `--metric flip` does with it.
+fn flip_mean(output: &Output) -> f64 {
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let after = stdout
+        .split("FLIP mean ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no FLIP in {stdout}"));
+    after.split_whitespace().next().unwrap().parse().unwrap()
+}
+
+/// An image against itself is FLIP 0; the ramp against the patched ramp is FLIP 0.081 (measured
+/// with nv-flip 0.1.2: the patch is 6 % of the pixels, plainly visible on the dark half); the
+/// threshold applies to the metric asked for, and `--out` writes FLIP's error map.
+#[test]
+fn diff_reports_flip_and_can_pass_on_it() {
+    let (a, b) = ramps();
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let same = raypipe(&["diff", a, a, "--metric", "flip"]);
+    assert_eq!(same.status.code(), Some(0));
+    assert_eq!(flip_mean(&same), 0.0);
+    let map = temp("flip-map.png");
+    let differ = raypipe(&["diff", a, b, "--metric", "flip", "--out", map.to_str().unwrap()]);
+    assert_eq!(differ.status.code(), Some(1));
+    let flip = flip_mean(&differ);
+    assert!((flip - FLIP_OF_THE_PATCH).abs() < 0.005, "FLIP {flip}");
+    let written = io::read(&map).unwrap();
+    assert_eq!((written.width, written.height), (64, 64));
+    let loose = raypipe(&["diff", a, b, "--metric", "flip", "--threshold", "0.2"]);
+    assert_eq!(
+        loose.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&loose.stdout)
+    );
+    // The per-pixel p99 of the same pair: the patch covers more than 1 % of the pixels.
+    let p99 = raypipe(&["diff", a, b, "--metric", "p99", "--threshold", "0.2"]);
+    assert_eq!(p99.status.code(), Some(1));
+}
+
+const FLIP_OF_THE_PATCH: f64 = 0.081;
+
+#[test]
+fn flip_of_a_depth_image_is_one_line() {
+    let depth = temp("flip-depth.exr");
+    let output = raypipe(&[
+        "render",
+        "whitted",
+        "--device",
+        "cpu",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--aov",
+        "depth",
+        "-o",
+        depth.to_str().unwrap(),
+    ]);
+    assert!(output.status.success());
+    let depth = depth.to_str().unwrap();
+    let output = raypipe(&["diff", depth, depth, "--metric", "flip"]);
+    assert_clean_error(&output, &["--metric flip compares colour images"]);
+}
+
+#[test]
+fn model_flags_on_a_scene_that_is_no_model_are_one_line() {
+    for flag in [&["--normals", "flat"][..], &["--crease", "30"][..]] {
+        let mut args = vec!["render", "whitted", "--device", "cpu"];
+        args.extend_from_slice(flag);
+        assert_clean_error(&raypipe(&args), &["apply to model files"]);
+    }
+}
+
 #[test]
 fn cost_aov_writes_a_heat_map_with_a_legend() {
     let out = temp("cost.png");
