@@ -7,6 +7,10 @@
 # Debian 12's own Mesa (22.3) miscompiles the tracer's ray loop (it ends the loop with rays still on
 # the stack, so reflections and refractions go missing); Mesa 25 from bookworm-backports is correct.
 set -euo pipefail
+if [ "$(id -u)" != 0 ]; then
+  echo "scripts/install-deps.sh: run it as root (sudo scripts/install-deps.sh; in a container without sudo, as root)" >&2
+  exit 2
+fi
 export DEBIAN_FRONTEND=noninteractive
 packages="mesa-vulkan-drivers libgl1-mesa-dri libegl-mesa0 libglx-mesa0 libegl1"
 window_packages="xvfb xauth imagemagick xdotool libxkbcommon-x11-0"

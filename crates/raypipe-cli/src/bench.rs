@@ -268,20 +268,30 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         eprintln!("refused: {line}");
     }
     if args.json {
-        println!("{json}");
+        crate::say!("{json}");
     } else {
-        println!("adapter: {} ({clock}), {}x{}", ctx.describe(), args.width, args.height);
-        println!(
+        crate::say!("adapter: {} ({clock}), {}x{}", ctx.describe(), args.width, args.height);
+        crate::say!(
             "{:>8} {:>10} {:>8} {:>10} {:>10} {:>10}",
-            "count", "accel", "memory", "ms", "fps", "Mrays/s"
+            "count",
+            "accel",
+            "memory",
+            "ms",
+            "fps",
+            "Mrays/s"
         );
         for r in &rows {
-            println!(
+            crate::say!(
                 "{:>8} {:>10} {:>8} {:>10.3} {:>10.2} {:>10.2}",
-                r.count, r.accel, r.memory, r.ms_median, r.fps, r.mrays_per_s
+                r.count,
+                r.accel,
+                r.memory,
+                r.ms_median,
+                r.fps,
+                r.mrays_per_s
             );
         }
-        println!(
+        crate::say!(
             "results: {}/results.csv, results.json, fps.png, fps.svg",
             args.out.display()
         );

@@ -188,17 +188,19 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
         mprims_per_s: bvh.primitive_count as f64 / (t.total() * 1e3),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        crate::say!("{}", serde_json::to_string(&report)?);
         return Ok(ExitCode::SUCCESS);
     }
     let b = &report.build_ms;
-    println!("scene: {}, {} primitives", report.scene, report.primitives);
-    println!("builder: {}, device {}", report.builder, report.device);
-    println!(
+    crate::say!("scene: {}, {} primitives", report.scene, report.primitives);
+    crate::say!("builder: {}, device {}", report.builder, report.device);
+    crate::say!(
         "nodes: {}, depth: max {}, mean leaf {:.1}",
-        report.nodes, report.max_depth, report.mean_leaf_depth
+        report.nodes,
+        report.max_depth,
+        report.mean_leaf_depth
     );
-    println!(
+    crate::say!(
         "SAH cost: {:.2} (traversal and intersection cost 1, relative to the root's area)",
         report.sah_cost
     );
@@ -209,7 +211,7 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     } else {
         format!("bounds {:.2} ms, links {:.2} ms", b.bounds, b.links)
     };
-    println!(
+    crate::say!(
         "build (median of {} runs): morton {:.2} ms, sort {:.2} ms, hierarchy {:.2} ms, {bounds_and_links}, total {:.2} ms, {:.1} Mprims/s",
         runs.len(),
         b.morton,

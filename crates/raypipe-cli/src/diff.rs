@@ -28,11 +28,19 @@ pub struct DiffArgs {
     /// Write a picture of the per-pixel error here (FLIP's error map, magma, with --metric flip).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Largest value of --metric that passes.
-    #[arg(long, default_value_t = 0.01)]
+    /// Largest value of --metric that passes: a finite number, 0 or more.
+    #[arg(long, default_value_t = 0.01, value_parser = threshold)]
     threshold: f64,
     #[arg(long, value_enum, default_value_t)]
     metric: Metric,
+}
+
+fn threshold(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
+        Ok(_) => Err("the threshold must be a finite number, 0 or more".into()),
+        Err(_) => Err(format!("'{text}' is not a number")),
+    }
 }
 
 /// FLIP's figures of two images and its error map, one value per pixel in [0, 1].
@@ -83,9 +91,13 @@ pub fn run(args: DiffArgs) -> anyhow::Result<ExitCode> {
         Some(f) => format!("FLIP mean {:.6}  p99 {:.6}", f.mean, f.p99),
         None => "FLIP n/a (not colour images)".into(),
     };
-    println!(
+    crate::say!(
         "mean {:.6}  p99 {:.6}  max {:.6}  differing pixels {} of {}  {flip_figures}",
-        stats.mean, stats.p99, stats.max, stats.differing, stats.pixels
+        stats.mean,
+        stats.p99,
+        stats.max,
+        stats.differing,
+        stats.pixels
     );
     let measured = match (args.metric, &flip) {
         (Metric::Mean, _) => stats.mean,
@@ -107,7 +119,7 @@ pub fn run(args: DiffArgs) -> anyhow::Result<ExitCode> {
     }
     if measured > args.threshold {
         let metric = args.metric.to_possible_value().expect("no variant is skipped");
-        println!(
+        crate::say!(
             "FAIL: {} {measured:.6} is above the threshold {}",
             metric.get_name(),
             args.threshold

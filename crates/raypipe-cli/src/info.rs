@@ -5,7 +5,7 @@ pub fn run() -> anyhow::Result<ExitCode> {
     let instance = instance(wgpu::Backends::all());
     let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
     if adapters.is_empty() {
-        println!("no GPU adapters found; `render --device auto` will use the CPU reference tracer");
+        crate::say!("no GPU adapters found; `render --device auto` will use the CPU reference tracer");
     }
     for adapter in adapters {
         let limits = adapter.limits();
@@ -15,33 +15,33 @@ pub fn run() -> anyhow::Result<ExitCode> {
                 .allowed_usages
                 .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
         };
-        println!("{}", describe(&adapter.get_info()));
-        println!("  max texture 2D:             {}", limits.max_texture_dimension_2d);
-        println!(
+        crate::say!("{}", describe(&adapter.get_info()));
+        crate::say!("  max texture 2D:             {}", limits.max_texture_dimension_2d);
+        crate::say!(
             "  max uniform binding:        {} bytes",
             limits.max_uniform_buffer_binding_size
         );
-        println!(
+        crate::say!(
             "  max storage binding:        {} bytes",
             limits.max_storage_buffer_binding_size
         );
-        println!(
+        crate::say!(
             "  storage buffers per stage:  {}",
             limits.max_storage_buffers_per_shader_stage
         );
-        println!(
+        crate::say!(
             "  sampled textures per stage: {}",
             limits.max_sampled_textures_per_shader_stage
         );
-        println!(
+        crate::say!(
             "  timestamp queries:          {}",
             adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
         );
-        println!(
+        crate::say!(
             "  rgba32uint render target:   {}",
             renders_to(wgpu::TextureFormat::Rgba32Uint)
         );
-        println!(
+        crate::say!(
             "  rgba32float render target:  {}",
             renders_to(wgpu::TextureFormat::Rgba32Float)
         );

@@ -21,6 +21,12 @@ fn main() -> ExitCode {
     match cli::run() {
         Ok(code) => code,
         Err(error) => {
+            if error
+                .downcast_ref::<cli::StdoutError>()
+                .is_some_and(|e| e.reader_left())
+            {
+                return ExitCode::from(2);
+            }
             // One line, whatever the chain of causes: `error: FILE:LINE: what went wrong`.
             eprintln!("error: {}", cli::message(&error));
             ExitCode::from(2)

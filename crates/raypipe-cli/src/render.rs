@@ -62,8 +62,8 @@ pub struct SceneArgs {
     pub width: Option<u32>,
     #[arg(long)]
     pub height: Option<u32>,
-    /// Maximum bounces after the primary ray (default 5, or the scene's).
-    #[arg(long)]
+    /// Maximum bounces after the primary ray (default 5, or the scene's; at most 32).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=raypipe::scene::MAX_DEPTH_LIMIT as i64))]
     pub depth: Option<u32>,
     #[arg(long, value_parser = choice::<Backend>())]
     pub backend: Option<Backend>,
@@ -146,16 +146,36 @@ pub fn parse_angles(text: &str) -> Result<glam::Vec3, String> {
     }
 }
 
-/// `name` with its `%d` or `%0Nd` replaced by `frame`; `None` when it holds no such pattern.
-pub fn numbered(name: &str, frame: u32) -> Option<String> {
+/// The widest frame number `-o NAME_%0Nd.png` takes: more digits than any u32 has.
+const MAX_NUMBER_WIDTH: usize = 10;
+
+/// Where `name`'s `%d` or `%0Nd` is: the text before it, the width N (0 for `%d`; `usize::MAX` for
+/// more digits than a usize holds), and the text after.
+fn number_pattern(name: &str) -> Option<(&str, usize, &str)> {
     let start = name.find('%')?;
     let rest = &name[start + 1..];
     let digits_end = rest.find(|c: char| !c.is_ascii_digit())?;
     if !rest[digits_end..].starts_with('d') {
         return None;
     }
-    let width: usize = rest[..digits_end].parse().unwrap_or(0);
-    Some(format!("{}{frame:0width$}{}", &name[..start], &rest[digits_end + 1..]))
+    let digits = &rest[..digits_end];
+    let width = if digits.is_empty() {
+        0
+    } else {
+        digits.parse().unwrap_or(usize::MAX)
+    };
+    Some((&name[..start], width, &rest[digits_end + 1..]))
+}
+
+fn number_width(name: &str) -> Option<usize> {
+    number_pattern(name).map(|(_, width, _)| width)
+}
+
+/// `name` with its `%d` or `%0Nd` replaced by `frame`; `None` when it holds no such pattern.
+pub fn numbered(name: &str, frame: u32) -> Option<String> {
+    let (before, width, after) = number_pattern(name)?;
+    let width = width.min(MAX_NUMBER_WIDTH);
+    Some(format!("{before}{frame:0width$}{after}"))
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
@@ -163,8 +183,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         Aov::Depth => "depth.exr".into(),
         _ => "render.png".into(),
     });
-    let is_exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let is_png = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    // A device or FIFO (-o /dev/null) has no extension to go by: it gets the AOV's own format.
+    let device = std::fs::metadata(&output).is_ok_and(|m| !m.is_file());
+    let is_exr =
+        output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) || device && args.scene.aov == Aov::Depth;
+    let is_png = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) || device && !is_exr;
     if !(is_exr || is_png) {
         bail!("{}: output must end in .png or .exr", output.display());
     }
@@ -181,6 +204,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         );
     }
 
+    // A frame-number width beyond any frame count would only make a name too long to create.
+    if let Some(width) = number_width(&output.to_string_lossy())
+        && width > MAX_NUMBER_WIDTH
+    {
+        bail!(
+            "{}: a frame number {width} digits wide; at most {MAX_NUMBER_WIDTH}",
+            output.display()
+        );
+    }
+    // Found before the render, not after it.
+    match numbered(&output.to_string_lossy(), 0) {
+        Some(first) if args.frames.is_some() => io::check_writable(Path::new(&first))?,
+        _ => io::check_writable(&output)?,
+    }
     let scene = args.scene.load()?;
     let options = RenderOptions {
         device: args.device,
@@ -211,12 +248,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     }
     let outcome = render(&packed, &options)?;
     let frame = &outcome.frame;
-    io::write(&aov_image(args.scene.aov, is_exr, frame), &output)?;
+    io::write_as(&aov_image(args.scene.aov, is_exr, frame), &output, is_exr)?;
 
     if args.stats {
         let pixels = frame.width as u64 * frame.height as u64;
         let rays = frame.rays();
-        println!(
+        crate::say!(
             "scene: {}, {}x{}, {} spheres, {} triangles, {} planes, {} lights, depth {}",
             args.scene.spec,
             frame.width,
@@ -227,22 +264,27 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             packed.lights.len(),
             packed.max_depth
         );
-        println!(
+        crate::say!(
             "device: {}, memory {:?}, accel {:?}, {} samples per pixel",
-            outcome.device, args.scene.memory, args.scene.accel, args.spp
+            outcome.device,
+            args.scene.memory,
+            args.scene.accel,
+            args.spp
         );
         if args.scene.aov == Aov::Cost {
             let counts = frame.counts();
             let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
             let max = counts.iter().copied().max().unwrap_or(0);
-            println!("cost per primary ray: mean {mean:.1}, max {max} nodes tested (spheres tested for brute force)");
+            crate::say!(
+                "cost per primary ray: mean {mean:.1}, max {max} nodes tested (spheres tested for brute force)"
+            );
             return Ok(ExitCode::SUCCESS);
         }
         let (ms, clock) = match outcome.gpu_ms {
             Some(ms) => (ms, "GPU timestamps"),
             None => (outcome.wall_ms, "wall clock"),
         };
-        println!(
+        crate::say!(
             "render: {ms:.2} ms ({clock}; wall {:.2} ms), {rays} rays ({:.2} per pixel), {:.2} Mrays/s",
             outcome.wall_ms,
             rays as f64 / pixels as f64,
@@ -276,31 +318,34 @@ fn render_sequence(
     let outcome = render_frames(scene, options, frames, |frame, image| {
         if pattern {
             let path = numbered(&name, frame).expect("checked above");
-            io::write(&aov_image(args.scene.aov, is_exr, image), Path::new(&path))?;
+            io::write_as(&aov_image(args.scene.aov, is_exr, image), Path::new(&path), is_exr)?;
         } else if frame + 1 == frames {
-            io::write(&aov_image(args.scene.aov, is_exr, image), output)?;
+            io::write_as(&aov_image(args.scene.aov, is_exr, image), output, is_exr)?;
         }
         Ok(())
     })
     .map_err(|e| e.context(args.scene.spec.clone()))?;
     if args.stats {
         let s = &scene.settings;
-        println!(
+        crate::say!(
             "scene: {}, {}x{}, {} spheres, {frames} frames",
             args.scene.spec,
             s.width,
             s.height,
             scene.spheres.len()
         );
-        println!(
+        crate::say!(
             "device: {}, memory {:?}, accel {:?}, {} samples per pixel",
-            outcome.device, args.scene.memory, args.scene.accel, args.spp
+            outcome.device,
+            args.scene.memory,
+            args.scene.accel,
+            args.spp
         );
         // The first frame pays for pipeline compilation on some drivers: medians skip it.
         let steady = if frames > 1 { 1 } else { 0 };
         if !outcome.builds.is_empty() {
             let b = &outcome.builds[steady..];
-            println!(
+            crate::say!(
                 "BVH build per frame (median): morton {:.3} ms, sort {:.3} ms, hierarchy {:.3} ms, bounds {:.3} ms, links {:.3} ms, total {:.3} ms",
                 median(b.iter().map(|t| t.morton)),
                 median(b.iter().map(|t| t.sort)),
@@ -312,7 +357,7 @@ fn render_sequence(
         }
         let render_ms = median(outcome.render_ms[steady..].iter().copied());
         let rays = median(outcome.rays[steady..].iter().map(|&r| r as f64));
-        println!(
+        crate::say!(
             "render per frame (median): {render_ms:.2} ms, {rays:.0} rays, {:.2} Mrays/s",
             rays / (render_ms * 1e3)
         );

@@ -59,13 +59,7 @@ impl Host for CliHost {
             DisplayView::Cost => Aov::Cost,
         };
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        // Written beside the target and renamed, so that a reader never sees half a file.
-        let name = path
-            .file_name()
-            .map_or("screenshot".into(), |n| n.to_string_lossy().into_owned());
-        let partial = path.with_file_name(format!(".{name}.partial.{}", if is_exr { "exr" } else { "png" }));
-        io::write(&aov_image(aov, is_exr, frame), &partial).map_err(|e| crate::cli::message(&e))?;
-        std::fs::rename(&partial, path).map_err(|e| format!("{}: cannot write: {e}", path.display()))
+        io::write(&aov_image(aov, is_exr, frame), path).map_err(|e| crate::cli::message(&e))
     }
 
     fn screenshot_path(&self, view: DisplayView) -> PathBuf {
@@ -94,6 +88,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
                 wanted.to_uppercase()
             );
         }
+        io::check_writable(path)?;
     }
     let scene = args.scene.load()?;
     // Checked here, so that a bad size or depth is one line before any window opens.
@@ -130,9 +125,10 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
         let trace = summary
             .trace_ms
             .map_or("no timestamp queries".to_string(), |ms| format!("{ms:.2} ms"));
-        println!(
+        crate::say!(
             "view: {} frames; median trace pass {trace} (GPU timestamps), median frame {:.2} ms (wall clock: trace, display, present)",
-            summary.frames, summary.frame_ms
+            summary.frames,
+            summary.frame_ms
         );
     }
     Ok(ExitCode::SUCCESS)

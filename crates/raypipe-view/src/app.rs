@@ -24,6 +24,8 @@ const FLY_PER_SECOND: f32 = 0.8;
 const DEPTH_FAR: f32 = 3.0;
 /// The cost view's top, in nodes tested.
 const COST_MAX: f32 = 200.0;
+/// How often an idle viewer (nothing to trace, nothing moving) redraws its panel.
+const IDLE_REDRAW: std::time::Duration = std::time::Duration::from_millis(100);
 
 pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<Summary, ViewError> {
     let event_loop = EventLoop::new().map_err(|e| ViewError::Window(e.to_string()))?;
@@ -81,6 +83,9 @@ struct Viewer {
     show_panel: bool,
     message: Option<String>,
     last_frame: Instant,
+    /// The last frame traced nothing (its samples were all gathered) and nothing moves: the next
+    /// may wait for input or the panel's refresh.
+    idle: bool,
     fps: f64,
     frame_ms: f64,
     build_ms: Option<f64>,
@@ -106,6 +111,7 @@ impl Viewer {
             frames_drawn: 0,
             message: None,
             last_frame: Instant::now(),
+            idle: false,
             fps: 0.0,
             frame_ms: 0.0,
             build_ms: None,
@@ -320,14 +326,25 @@ impl Viewer {
     }
 
     /// Saves the current frame (the mean of its samples, read back) to `path`; says what happened.
+    /// A tracer that has drawn nothing yet (a mode switched this very frame) traces its first
+    /// sample now.
     fn screenshot(&mut self, path: &std::path::Path) -> String {
-        let Some(gpu) = &self.gpu else {
+        let Some(gpu) = &mut self.gpu else {
             return "no frame yet".into();
         };
-        if gpu.tracer.renderer.targets().samples() == 0 {
-            return "no frame yet".into();
+        let tracer = &mut gpu.tracer;
+        if tracer.renderer.samples() == 0 {
+            let ctx = gpu.ctx.clone();
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            if let Some(rebuild) = &tracer.rebuild
+                && self.modes.accel.uses_bvh()
+            {
+                rebuild.encode(&mut encoder);
+            }
+            tracer.renderer.encode(&mut encoder);
+            ctx.queue.submit([encoder.finish()]);
         }
-        match block_on(gpu.tracer.renderer.read_back()) {
+        match block_on(tracer.renderer.read_back()) {
             Ok(frame) => match self.host.save(&frame, self.modes.view, path) {
                 Ok(()) => format!("saved {}", path.display()),
                 Err(why) => why,
@@ -381,6 +398,7 @@ impl Viewer {
         }
         // A still frame that has its samples is shown again, not traced again.
         let trace = gpu.tracer.renderer.samples() < self.options.samples.max(1);
+        self.idle = !trace && !moving && self.input.held.is_empty();
         let surface_texture = match gpu.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(texture) | wgpu::CurrentSurfaceTexture::Suboptimal(texture) => texture,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
@@ -581,7 +599,7 @@ impl ApplicationHandler for Viewer {
                     }
                 }
             }
-            WindowEvent::RedrawRequested => self.draw(event_loop),
+            WindowEvent::RedrawRequested => return self.draw(event_loop),
             WindowEvent::DroppedFile(path) => self.open_file(&path),
             WindowEvent::KeyboardInput { event, .. } if !consumed => {
                 if let PhysicalKey::Code(code) = event.physical_key
@@ -620,11 +638,25 @@ impl ApplicationHandler for Viewer {
             }
             _ => {}
         }
-    }
-
-    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        // Input may change what is shown: draw now, not at the idle pace.
         if let Some(gpu) = &self.gpu {
             gpu.window.request_redraw();
         }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(gpu) = &self.gpu else { return };
+        // A still frame with all its samples is only shown again: a few times a second keeps the
+        // panel current without spinning a core. Input wakes the loop at once (`window_event`).
+        if self.idle && self.options.script.is_none() {
+            let next = self.last_frame + IDLE_REDRAW;
+            event_loop.set_control_flow(ControlFlow::WaitUntil(next));
+            if Instant::now() < next {
+                return;
+            }
+        } else {
+            event_loop.set_control_flow(ControlFlow::Poll);
+        }
+        gpu.window.request_redraw();
     }
 }

@@ -130,5 +130,22 @@ pub struct MissingBvh {
 
 /// Parser and driver messages may span lines; ours are one.
 pub fn one_line(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
+    shortened(&text.split_whitespace().collect::<Vec<_>>().join(" "), MAX_MESSAGE)
+}
+
+/// The longest message a line keeps, in characters: a parser that quotes its input must not turn
+/// one bad file into a screenful.
+pub const MAX_MESSAGE: usize = 300;
+
+/// Input quoted in a message: control characters escaped, at most 40 characters of it.
+pub fn quoted(input: &str) -> String {
+    shortened(&input.escape_debug().to_string(), 40)
+}
+
+/// `text` cut to `max` characters, with an ellipsis where it was cut.
+fn shortened(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        Some((end, _)) => format!("{}…", &text[..end]),
+        None => text.to_string(),
+    }
 }

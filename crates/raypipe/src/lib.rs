@@ -15,6 +15,7 @@ pub mod cpu;
 pub mod error;
 pub mod gpu;
 pub mod image;
+pub mod input;
 pub mod mesh;
 pub mod modes;
 mod parallel;

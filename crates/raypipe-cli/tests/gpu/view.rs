@@ -189,6 +189,87 @@ fn synthetic_input_switches_and_orbits(_: &GpuContext) {
     assert!(matches(&shot(3), &expected).is_err(), "the drag did not orbit");
 }
 
+/// Asks an X window to close, as a window manager's close button does: WM_DELETE_WINDOW through
+/// libX11 (xdotool's windowclose destroys the window instead, which no user does).
+const CLOSE_WINDOW: &str = r#"
+import ctypes, sys
+x = ctypes.cdll.LoadLibrary("libX11.so.6")
+x.XOpenDisplay.restype = ctypes.c_void_p
+x.XOpenDisplay.argtypes = [ctypes.c_char_p]
+x.XFlush.argtypes = [ctypes.c_void_p]
+x.XInternAtom.restype = ctypes.c_ulong
+x.XInternAtom.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int]
+class ClientMessage(ctypes.Structure):
+    _fields_ = [("type", ctypes.c_int), ("serial", ctypes.c_ulong), ("send_event", ctypes.c_int),
+                ("display", ctypes.c_void_p), ("window", ctypes.c_ulong), ("message_type", ctypes.c_ulong),
+                ("format", ctypes.c_int), ("data", ctypes.c_long * 5)]
+class Event(ctypes.Union):
+    _fields_ = [("xclient", ClientMessage), ("pad", ctypes.c_long * 24)]
+x.XSendEvent.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int, ctypes.c_long, ctypes.POINTER(Event)]
+display = x.XOpenDisplay(None)
+window = int(sys.argv[1])
+event = Event()
+event.xclient.type = 33
+event.xclient.window = window
+event.xclient.message_type = x.XInternAtom(display, b"WM_PROTOCOLS", 0)
+event.xclient.format = 32
+event.xclient.data[0] = x.XInternAtom(display, b"WM_DELETE_WINDOW", 0)
+x.XSendEvent(display, window, 0, 0, ctypes.byref(event))
+x.XFlush(display)
+"#;
+
+/// Window life under Xvfb: hidden and shown again (unmapped and mapped, which is what minimizing
+/// does to an X window), then resized, the viewer still draws, now at the new size and with the
+/// camera's aspect following it; asked to close, it exits 0.
+fn the_window_survives_hiding_resizing_and_closes_cleanly(_: &GpuContext) {
+    let dir = test_dir("view-window-life");
+    let close = dir.join("close.py");
+    std::fs::write(&close, CLOSE_WINDOW).unwrap();
+    let script = format!(
+        "cd '{dir}'
+         '{raypipe}' view whitted --width 160 --height 120 --spp 1 2> view.log & pid=$!
+         for i in $(seq 120); do W=$(xdotool search --name raypipe | head -1); [ -n \"$W\" ] && break; sleep 1; done
+         sleep 2
+         xdotool windowunmap --sync $W
+         sleep 2
+         xdotool windowmap --sync $W
+         xdotool windowsize --sync $W 200 150
+         sleep 2
+         xdotool windowfocus --sync $W
+         xdotool key p
+         for i in $(seq 120); do [ -f raypipe-001.png ] && break; sleep 0.5; done
+         python3 '{close}' $W
+         wait $pid
+         echo exit=$?",
+        dir = dir.display(),
+        raypipe = env!("CARGO_BIN_EXE_raypipe"),
+        close = close.display(),
+    );
+    let output = Command::new("xvfb-run")
+        .args(["-a", "-s", XVFB_SCREEN, "sh", "-c", &script])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let log = std::fs::read_to_string(dir.join("view.log")).unwrap_or_default();
+    assert!(stdout.contains("exit=0"), "closing did not exit 0: {stdout} {log}");
+    let shot = dir.join("raypipe-001.png");
+    let image = io::read(&shot).unwrap_or_else(|e| panic!("no screenshot after hiding and resizing: {e} {log}"));
+    assert_eq!(
+        (image.width, image.height),
+        (200, 150),
+        "the frame did not follow the window"
+    );
+    let out = dir.join("render-200x150.png");
+    let args = [
+        "render", "whitted", "--width", "200", "--height", "150", "--device", "gpu",
+    ];
+    succeeded(
+        &raypipe(&[&args[..], &["-o", out.to_str().unwrap()]].concat()),
+        "raypipe render",
+    );
+    matches(&shot, &out).unwrap_or_else(|e| panic!("the resized window's frame is not render's: {e}"));
+}
+
 /// The scripted viewer's last frame of whitted after `file` was dropped on it, and its output.
 fn after_dropping(dir: &Path, file: &Path, shot: &str) -> (PathBuf, Output) {
     let shot = dir.join(shot);
@@ -242,6 +323,7 @@ pub fn tests() -> Vec<Test> {
         gpu_window orbit_and_motion_change_the_frames,
         gpu_window a_mode_that_cannot_serve_the_scene_is_one_line,
         gpu_window synthetic_input_switches_and_orbits,
+        gpu_window the_window_survives_hiding_resizing_and_closes_cleanly,
         gpu_window dropped_files_load_or_leave_the_scene,
         gpu_window a_moving_scene_in_texture_memory_is_the_storage_one,
     ]

@@ -70,8 +70,7 @@ pub fn load(path: &Path) -> Result<Mesh, InputError> {
         ))
         .in_origin(&shown)
     })?;
-    let bytes =
-        std::fs::read(path).map_err(|e| InputError::new(format!("cannot read model file: {e}")).in_origin(&shown))?;
+    let bytes = crate::input::read_regular(path, "model file", crate::input::MAX_MODEL_BYTES)?;
     let mut notices = Vec::new();
     let mesh = parse(&bytes, format, &mut notices).map_err(|e| e.in_origin(&shown))?;
     for notice in notices {

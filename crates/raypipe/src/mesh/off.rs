@@ -17,9 +17,12 @@ fn records(text: &str) -> impl Iterator<Item = (usize, Vec<&str>)> {
 }
 
 fn number<T: std::str::FromStr>(line: usize, token: &str, what: &str) -> Result<T, MeshError> {
-    token
-        .parse()
-        .map_err(|_| MeshError::at(line, format!("{what}: cannot read '{token}' as a number")))
+    token.parse().map_err(|_| {
+        MeshError::at(
+            line,
+            format!("{what}: cannot read '{}' as a number", crate::error::quoted(token)),
+        )
+    })
 }
 
 pub fn parse(bytes: &[u8]) -> Result<Mesh, MeshError> {
@@ -35,7 +38,10 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, MeshError> {
         _ => {
             return Err(MeshError::at(
                 line,
-                format!("expected the keyword OFF, COFF, NOFF or CNOFF (got '{keyword}')"),
+                format!(
+                    "expected the keyword OFF, COFF, NOFF or CNOFF (got '{}')",
+                    crate::error::quoted(keyword)
+                ),
             ));
         }
     };

@@ -105,7 +105,16 @@ impl PropertyAccess for Ignored {
 
 /// The parser's error as ours: its line where the text has lines (the header, ASCII payloads).
 fn parse_error(error: ply_rs_bw::parser::ParseError, has_lines: bool) -> MeshError {
-    let text = error.to_string();
+    // The parser quotes the whole offending line after "String:"; the message keeps its words.
+    let raw = crate::error::one_line(&error.to_string());
+    let text: Vec<String> = raw
+        .split(" Error: ")
+        .map(|part| match part.find(" String: ") {
+            Some(at) => part[..at].trim_end_matches('.').to_string(),
+            None => part.to_string(),
+        })
+        .collect();
+    let text = text.join(": ");
     let message = match error.line() {
         Some(line) => text
             .strip_prefix(&format!("Line {line}: "))

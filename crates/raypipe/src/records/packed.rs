@@ -72,6 +72,10 @@ pub struct PackedScene {
     pub bvh: Option<PackedBvh>,
 }
 
+/// The most records of one kind a render takes: indices up to 2^24 - 1 stay exact in the f32
+/// texels of texture memory.
+pub const MAX_RECORDS: usize = MAX_TEXEL_INTEGER as usize - 1;
+
 impl PackedScene {
     /// Packs a validated scene with its render settings.
     pub fn new(scene: &Scene) -> Result<Self, InputError> {
@@ -82,10 +86,10 @@ impl PackedScene {
             ("lights", scene.lights.len()),
             ("materials", scene.materials.len()),
         ] {
-            if count >= MAX_TEXEL_INTEGER as usize {
+            if count > MAX_RECORDS {
                 return Err(InputError::of(
                     Element::Scene,
-                    format!("{count} {what} is more than the {MAX_TEXEL_INTEGER} a record index can hold"),
+                    format!("{count} {what}: a render takes at most {MAX_RECORDS} (what a record index can hold)"),
                 ));
             }
         }

@@ -17,8 +17,9 @@ pub const NAMES: &[&str] = &[
     "bounce:N[:SEED]",
 ];
 
-/// Largest primitive count a procedural family accepts (the texture route's limit is far below).
-const MAX_COUNT: usize = 1 << 26;
+/// Largest primitive count a procedural family accepts: `raypipe bvh` builds trees this large;
+/// renders take at most [`crate::records::packed::MAX_RECORDS`] primitives.
+pub const MAX_COUNT: usize = 1 << 26;
 
 /// Returns `Ok(None)` when `name` is not a built-in (it may be a file), `Err` when it is one with bad
 /// parameters.
@@ -33,7 +34,10 @@ pub fn by_name(name: &str) -> Result<Option<Scene>, InputError> {
             .ok_or_else(|| fail(format!("{family} needs a count, as in {family}:1000")))?;
         match text.parse::<usize>() {
             Ok(n) if (1..=MAX_COUNT).contains(&n) => Ok(n),
-            _ => Err(fail(format!("count must be an integer in 1..={MAX_COUNT}"))),
+            _ => Err(fail(format!(
+                "count must be an integer in 1..={MAX_COUNT} (renders take up to {})",
+                crate::records::packed::MAX_RECORDS
+            ))),
         }
     };
     let expect_params = |n: std::ops::RangeInclusive<usize>| -> Result<(), InputError> {

@@ -118,8 +118,9 @@ const DEFAULT_MATERIAL: &str = "default";
 /// Reads and parses a scene file; every error is one line that starts with the path.
 pub fn load(path: &Path) -> Result<Scene, InputError> {
     let shown = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::new(format!("cannot read scene file: {e}")).in_origin(&shown))?;
+    let bytes = crate::input::read_regular(path, "scene file", crate::input::MAX_SCENE_BYTES)?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| InputError::new("cannot read scene file: it is not UTF-8 text").in_origin(&shown))?;
     let base = path.parent().unwrap_or(Path::new("."));
     parse_in(&text, base).map_err(|e| e.in_origin(shown))
 }
@@ -311,7 +312,7 @@ fn placement(
         Some(_) if as_ == MeshAs::Triangles => {
             return Err(fail("spheres applies to as = \"spheres\"".into()));
         }
-        Some(SpheresDef::Count(n)) if *n >= 1 => SphereCount::Sampled(*n as usize),
+        Some(SpheresDef::Count(n)) if *n >= 1 => SphereCount::Sampled(usize::try_from(*n).unwrap_or(usize::MAX)),
         Some(SpheresDef::Count(n)) => return Err(fail(format!("spheres must be at least 1 (got {n})"))),
         Some(SpheresDef::Word(word)) if word == "vertices" => SphereCount::Vertices,
         Some(SpheresDef::Word(word)) => {

@@ -119,8 +119,15 @@ impl Placement {
         if !self.rotate.is_finite() {
             return fail("rotate must be finite".into());
         }
-        if self.spheres == SphereCount::Sampled(0) {
-            return fail("spheres must be at least 1".into());
+        match self.spheres {
+            SphereCount::Sampled(0) => return fail("spheres must be at least 1".into()),
+            SphereCount::Sampled(n) if n > crate::records::packed::MAX_RECORDS => {
+                return fail(format!(
+                    "spheres must be at most {} (got {n})",
+                    crate::records::packed::MAX_RECORDS
+                ));
+            }
+            _ => {}
         }
         if let Some(radius) = self.radius
             && !(radius > 0.0 && radius.is_finite())

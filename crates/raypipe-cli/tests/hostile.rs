@@ -1,0 +1,284 @@
+//! Hostile input and failing outputs: counts that would overflow, files that are not files, outputs
+//! that cannot be written or are written by several renders at once, a closed or full standard
+//! output. Each ends in exit 0 with a whole file, or exit 2 with one short line; never a panic.
+
+mod common;
+#[path = "../src/io.rs"]
+#[allow(dead_code)]
+mod io;
+use common::models::test_dir;
+use common::{assert_clean_error, raypipe};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_raypipe")
+}
+
+fn path_str(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// A tiny OFF model (one triangle), for the model flags.
+fn triangle_model(dir: &Path) -> PathBuf {
+    let path = dir.join("triangle.off");
+    std::fs::write(&path, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
+    path
+}
+
+#[test]
+fn counts_beyond_what_a_render_takes_are_one_line() {
+    let dir = test_dir("hostile-counts");
+    let model = triangle_model(&dir);
+    for spheres in ["1000000000000", "18446744073709551615", "99999999999999999999999"] {
+        let output = raypipe(&["render", path_str(&model), "--spheres", spheres, "--device", "cpu"]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    let scene = dir.join("many.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[[mesh]]\nfile = \"{}\"\nas = \"spheres\"\nspheres = 9223372036854775807\n",
+            path_str(&model)
+        ),
+    )
+    .unwrap();
+    assert_clean_error(
+        &raypipe(&["render", path_str(&scene), "--device", "cpu"]),
+        &["many.toml:1: mesh 0: spheres must be at most 16777215"],
+    );
+    assert_clean_error(
+        &raypipe(&[
+            "render",
+            "random:16777216",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--device",
+            "cpu",
+        ]),
+        &["16777216 primitives: a render takes at most 16777215"],
+    );
+    assert_clean_error(
+        &raypipe(&["render", "random:99999999999999"]),
+        &["count must be an integer in 1..=67108864 (renders take up to 16777215)"],
+    );
+    let depth = raypipe(&["render", "whitted", "--depth=-1"]);
+    assert!(String::from_utf8_lossy(&depth.stderr).contains("0..=32"));
+}
+
+#[test]
+fn special_files_are_not_read_as_scenes_or_models() {
+    let dir = test_dir("hostile-special");
+    let link = dir.join("zero.off");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+    assert_clean_error(
+        &raypipe(&["render", path_str(&link), "--device", "cpu"]),
+        &["zero.off: cannot read model file: not a regular file"],
+    );
+    assert_clean_error(
+        &raypipe(&["render", "/dev/zero", "--device", "cpu"]),
+        &["/dev/zero: cannot read scene file: not a regular file"],
+    );
+    let fifo = dir.join("scene.toml");
+    let _ = std::fs::remove_file(&fifo);
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    // Opened for reading, a FIFO without a writer would block forever.
+    assert_clean_error(
+        &raypipe(&["render", path_str(&fifo), "--device", "cpu"]),
+        &["scene.toml: cannot read scene file: not a regular file"],
+    );
+}
+
+/// A zero-filled model gives a line that names the file and quotes a little of it, not all of it.
+#[test]
+fn errors_never_echo_the_input() {
+    let dir = test_dir("hostile-echo");
+    let zeros = dir.join("zeros.off");
+    std::fs::write(&zeros, vec![0u8; 100_000]).unwrap();
+    let output = raypipe(&["render", path_str(&zeros), "--device", "cpu"]);
+    assert_clean_error(&output, &["zeros.off:1: expected the keyword OFF"]);
+    assert!(output.stderr.len() < 400, "{} bytes of error", output.stderr.len());
+    let ply = dir.join("bad.ply");
+    std::fs::write(
+        &ply,
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n3 0 0 zz\n",
+    )
+    .unwrap();
+    let output = raypipe(&["render", path_str(&ply), "--device", "cpu"]);
+    assert_clean_error(&output, &["bad.ply:11:"]);
+    assert!(!String::from_utf8_lossy(&output.stderr).contains("String:"));
+}
+
+#[test]
+fn outputs_that_cannot_be_written_fail_before_the_render() {
+    let dir = test_dir("hostile-outputs");
+    let missing = dir.join("no-such-folder").join("out.png");
+    assert_clean_error(
+        &raypipe(&["render", "whitted", "--device", "cpu", "-o", path_str(&missing)]),
+        &["out.png: cannot write: no folder"],
+    );
+    assert_clean_error(
+        &raypipe(&["render", "whitted", "--device", "cpu", "-o", "/dev/full"]),
+        &["/dev/full: cannot write: No space left on device"],
+    );
+    assert_clean_error(
+        &raypipe(&[
+            "render",
+            "bounce:50",
+            "--frames",
+            "2",
+            "--device",
+            "cpu",
+            "-o",
+            "f_%65536d.png",
+        ]),
+        &["a frame number 65536 digits wide; at most 10"],
+    );
+    // A device is written in place, not replaced.
+    let output = raypipe(&[
+        "render",
+        "whitted",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--device",
+        "cpu",
+        "-o",
+        "/dev/null",
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(!std::fs::metadata("/dev/null").unwrap().is_file());
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("partial"))
+        .collect();
+    assert!(leftovers.is_empty(), "partial files left behind: {leftovers:?}");
+}
+
+/// Four renders of different sizes writing one path at once leave one whole file, of one of them;
+/// and an EXR is the same bytes every time.
+#[test]
+fn concurrent_writers_leave_one_whole_file_and_exr_bytes_repeat() {
+    let dir = test_dir("hostile-concurrent");
+    for name in ["same.png", "same.exr"] {
+        let target = dir.join(name);
+        let sizes = [(40, 30), (48, 36), (56, 42), (64, 48)];
+        let children: Vec<_> = sizes
+            .iter()
+            .map(|(w, h)| {
+                Command::new(bin())
+                    .args([
+                        "render",
+                        "whitted",
+                        "--device",
+                        "cpu",
+                        "--width",
+                        &w.to_string(),
+                        "--height",
+                    ])
+                    .args([&h.to_string(), "-o", path_str(&target)])
+                    .stderr(Stdio::piped())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for child in children {
+            assert!(child.wait_with_output().unwrap().status.success());
+        }
+        let image = io::read(&target).unwrap_or_else(|e| panic!("{name} is not a whole image: {e}"));
+        assert!(
+            sizes.contains(&(image.width, image.height)),
+            "{name}: {}x{}",
+            image.width,
+            image.height
+        );
+    }
+    let [a, b] = ["a.exr", "b.exr"].map(|name| {
+        let path = dir.join(name);
+        let output = raypipe(&[
+            "render",
+            "whitted",
+            "--device",
+            "cpu",
+            "--width",
+            "96",
+            "--height",
+            "72",
+            "-o",
+            path_str(&path),
+        ]);
+        assert!(output.status.success());
+        std::fs::read(path).unwrap()
+    });
+    assert!(a == b, "two EXR files of one render differ");
+}
+
+/// A reader that leaves (`| true`) ends the command quietly; a full standard output is one line.
+#[test]
+fn a_closed_or_full_standard_output_is_no_panic() {
+    let script = format!("'{}' bvh random:200000 | true", bin());
+    let output = Command::new("sh").args(["-c", &script]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let dir = test_dir("hostile-stdout");
+    let image = dir.join("a.png");
+    assert!(
+        raypipe(&[
+            "render",
+            "whitted",
+            "--device",
+            "cpu",
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "-o",
+            path_str(&image)
+        ])
+        .status
+        .success()
+    );
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let output = Command::new(bin())
+        .args(["diff", path_str(&image), path_str(&image)])
+        .stdout(full)
+        .output()
+        .unwrap();
+    assert_clean_error(&output, &["standard output: No space left on device"]);
+}
+
+#[test]
+fn thresholds_that_are_not_numbers_or_below_zero_are_refused() {
+    let dir = test_dir("hostile-threshold");
+    let image = dir.join("a.png");
+    assert!(
+        raypipe(&[
+            "render",
+            "whitted",
+            "--device",
+            "cpu",
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "-o",
+            path_str(&image)
+        ])
+        .status
+        .success()
+    );
+    for threshold in ["nan", "inf", "-1", "-0.5", "many"] {
+        let flag = format!("--threshold={threshold}");
+        let output = raypipe(&["diff", path_str(&image), path_str(&image), &flag]);
+        assert_eq!(output.status.code(), Some(2), "--threshold {threshold} was taken");
+        assert!(String::from_utf8_lossy(&output.stderr).contains("--threshold"));
+    }
+}

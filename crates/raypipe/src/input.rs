@@ -1,0 +1,37 @@
+//! Reading the files users name: regular files only (a FIFO, `/dev/zero` or a link to a device would
+//! block or never end), and never more bytes than a cap, checked before and while reading.
+
+use crate::error::InputError;
+use std::io::Read;
+use std::path::Path;
+
+/// The largest scene file read: far past any hand-written scene.
+pub const MAX_SCENE_BYTES: u64 = 16 << 20;
+/// The largest model file read: a mesh far past what a render takes.
+pub const MAX_MODEL_BYTES: u64 = 4 << 30;
+
+/// The bytes of the regular file at `path` (links followed), at most `cap` of them; `what` names
+/// the file in messages ("scene file", "model file").
+pub fn read_regular(path: &Path, what: &str, cap: u64) -> Result<Vec<u8>, InputError> {
+    let fail = |message: String| InputError::new(message).in_origin(path.display().to_string());
+    let metadata = std::fs::metadata(path).map_err(|e| fail(format!("cannot read {what}: {e}")))?;
+    if !metadata.is_file() {
+        return Err(fail(format!("cannot read {what}: not a regular file")));
+    }
+    if metadata.len() > cap {
+        return Err(fail(format!(
+            "cannot read {what}: {} bytes, more than the {cap} read",
+            metadata.len()
+        )));
+    }
+    let file = std::fs::File::open(path).map_err(|e| fail(format!("cannot read {what}: {e}")))?;
+    let mut bytes = Vec::with_capacity(metadata.len() as usize);
+    // The file may grow while it is read: the cap holds for what is read, not only for its size.
+    file.take(cap + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| fail(format!("cannot read {what}: {e}")))?;
+    if bytes.len() as u64 > cap {
+        return Err(fail(format!("cannot read {what}: more than the {cap} bytes read")));
+    }
+    Ok(bytes)
+}
