@@ -81,10 +81,18 @@ fn flip(a: (&FloatImage, &Path), b: (&FloatImage, &Path)) -> Option<Flip> {
 }
 
 pub fn run(args: DiffArgs) -> anyhow::Result<ExitCode> {
+    if let Some(out) = &args.out
+        && !out
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png") || e.eq_ignore_ascii_case("exr"))
+    {
+        bail!("{}: --out writes a .png or .exr file", out.display());
+    }
     let a = io::read(&args.a)?;
     let b = io::read(&args.b)?;
     // Sizes and channels are checked here, before FLIP (which requires equal sizes) runs.
-    let errors = diff::pixel_errors(&a, &b)?;
+    let errors = diff::pixel_errors(&a, &b)
+        .map_err(|e| anyhow::anyhow!("{} and {}: {e}", args.a.display(), args.b.display()))?;
     let stats = diff::stats(&errors);
     let flip = flip((&a, &args.a), (&b, &args.b));
     let flip_figures = match &flip {

@@ -86,6 +86,18 @@ impl SceneArgs {
             crease: self.crease,
         };
         let mut scene = load_scene(&self.spec, &model)?;
+        // Legal but probably not meant: said once, here, rather than per packed frame.
+        if scene.spheres.is_empty() && scene.triangles.is_empty() && scene.planes.is_empty() {
+            log::warn!(
+                "{}: the scene holds nothing to hit: the image is its background",
+                self.spec
+            );
+        } else if scene.lights.is_empty() {
+            log::warn!(
+                "{}: the scene has no lights: only its ambient term shades it",
+                self.spec
+            );
+        }
         let settings = &mut scene.settings;
         settings.width = self.width.unwrap_or(settings.width);
         settings.height = self.height.unwrap_or(settings.height);
@@ -110,6 +122,9 @@ pub struct RenderArgs {
     /// Print render time and rays per second (all samples' rays).
     #[arg(long)]
     stats: bool,
+    /// Say nothing on success (by default one line on standard error says what was written).
+    #[arg(short, long)]
+    quiet: bool,
     /// Render this many frames of a moving scene (bounce:N), rebuilding the BVH every frame (on the
     /// GPU with --memory storage). Writes the last frame, or every frame when the output name holds
     /// a printf-style number such as frame_%04d.png.
@@ -249,6 +264,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let outcome = render(&packed, &options)?;
     let frame = &outcome.frame;
     io::write_as(&aov_image(args.scene.aov, is_exr, frame), &output, is_exr)?;
+    if !args.quiet {
+        eprintln!(
+            "wrote {} ({}x{}, {} samples per pixel, {})",
+            output.display(),
+            frame.width,
+            frame.height,
+            args.spp,
+            outcome.device
+        );
+    }
 
     if args.stats {
         let pixels = frame.width as u64 * frame.height as u64;
@@ -325,6 +350,14 @@ fn render_sequence(
         Ok(())
     })
     .map_err(|e| e.context(args.scene.spec.clone()))?;
+    if !args.quiet {
+        let written = if pattern {
+            name.clone()
+        } else {
+            output.display().to_string()
+        };
+        eprintln!("wrote {written} ({frames} frames, {})", outcome.device);
+    }
     if args.stats {
         let s = &scene.settings;
         crate::say!(

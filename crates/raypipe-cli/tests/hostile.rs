@@ -282,3 +282,103 @@ fn thresholds_that_are_not_numbers_or_below_zero_are_refused() {
         assert!(String::from_utf8_lossy(&output.stderr).contains("--threshold"));
     }
 }
+
+#[test]
+fn messages_name_the_files_and_the_backend() {
+    let dir = test_dir("hostile-messages");
+    let [small, large] = [(8, 6), (16, 12)].map(|(w, h)| {
+        let path = dir.join(format!("{w}x{h}.png"));
+        let (w, h) = (w.to_string(), h.to_string());
+        let args = [
+            "render",
+            "whitted",
+            "--device",
+            "cpu",
+            "--width",
+            &w,
+            "--height",
+            &h,
+            "-o",
+            path_str(&path),
+        ];
+        assert!(raypipe(&args).status.success());
+        path
+    });
+    assert_clean_error(
+        &raypipe(&["diff", path_str(&small), path_str(&large)]),
+        &["8x6.png and ", "16x12.png: images differ in size"],
+    );
+    assert_clean_error(
+        &raypipe(&["diff", path_str(&small), path_str(&small), "--out", "x.jpg"]),
+        &["x.jpg: --out writes a .png or .exr file"],
+    );
+    let output = Command::new(bin())
+        .args([
+            "render",
+            "whitted",
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "-o",
+            path_str(&dir.join("b.png")),
+        ])
+        .env("WGPU_BACKEND", "vulkn")
+        .output()
+        .unwrap();
+    assert_clean_error(&output, &["WGPU_BACKEND=\"vulkn\" names no backend"]);
+}
+
+/// Legal but probably unmeant scenes render, with one warning line; a render says where it wrote
+/// unless -q.
+#[test]
+fn empty_scenes_warn_and_renders_say_where_they_wrote() {
+    let dir = test_dir("hostile-empty");
+    let out = dir.join("out.png");
+    for (name, text, warning) in [
+        ("empty.toml", "", "holds nothing to hit"),
+        (
+            "dark.toml",
+            "[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\n",
+            "has no lights",
+        ),
+    ] {
+        let scene = dir.join(name);
+        std::fs::write(&scene, text).unwrap();
+        let output = raypipe(&[
+            "render",
+            path_str(&scene),
+            "--device",
+            "cpu",
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "-o",
+            path_str(&out),
+        ]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{stderr}");
+        let warnings: Vec<_> = stderr.lines().filter(|l| l.starts_with("warning:")).collect();
+        assert!(warnings.len() == 1 && warnings[0].contains(warning), "{stderr}");
+        assert!(stderr.contains(&format!("wrote {}", out.display())), "{stderr}");
+    }
+    let quiet = raypipe(&[
+        "render",
+        "whitted",
+        "--device",
+        "cpu",
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "-q",
+        "-o",
+        path_str(&out),
+    ]);
+    assert!(
+        quiet.status.success() && quiet.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&quiet.stderr)
+    );
+}

@@ -49,6 +49,26 @@ pub fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     wgpu::Instance::new(desc.with_env())
 }
 
+/// A `WGPU_BACKEND` that names no backend wgpu knows is an error, not a silent fall back to no
+/// adapter (and so to the CPU): wgpu itself only logs it.
+fn check_backend_env() -> Result<(), GpuError> {
+    // The names `wgpu::Backends::from_comma_list` reads.
+    const KNOWN: [&str; 11] = [
+        "vulkan", "vk", "dx12", "d3d12", "metal", "mtl", "opengl", "gles", "gl", "webgpu", "noop",
+    ];
+    match std::env::var("WGPU_BACKEND") {
+        Ok(value)
+            if !value.trim().is_empty()
+                && !value
+                    .split(',')
+                    .all(|name| KNOWN.contains(&name.trim().to_lowercase().as_str())) =>
+        {
+            Err(GpuError::UnknownBackendEnv(value))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The backends to try, in order: the chosen one; else `WGPU_BACKEND`'s; else the primary ones
 /// (Vulkan, Metal, DX12) and, only where they offer no adapter, GL, whose probing is slow and noisy.
 fn backend_order(backend: Option<Backend>) -> Vec<wgpu::Backends> {
@@ -74,6 +94,7 @@ pub struct GpuContext {
 impl GpuContext {
     /// The first adapter wgpu offers on the chosen backends, or `None` when there is none.
     pub async fn new(backend: Option<Backend>) -> Result<Option<Self>, GpuError> {
+        check_backend_env()?;
         for backends in backend_order(backend) {
             let instance = instance(backends);
             if let Ok(adapter) = instance.request_adapter(&wgpu::RequestAdapterOptions::default()).await {
@@ -90,6 +111,7 @@ impl GpuContext {
 
     /// An adapter of `instance` that can present to `surface` (a window's, or a canvas's).
     pub async fn for_surface(instance: &wgpu::Instance, surface: &wgpu::Surface<'_>) -> Result<Self, GpuError> {
+        check_backend_env()?;
         let adapter = instance
             .request_adapter(&wgpu::RequestAdapterOptions {
                 compatible_surface: Some(surface),

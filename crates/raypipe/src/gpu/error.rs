@@ -37,4 +37,6 @@ pub enum GpuError {
     Unsupported { adapter: String, what: &'static str },
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
+    #[error("WGPU_BACKEND={0:?} names no backend wgpu knows (vulkan, gl, metal, dx12, webgpu)")]
+    UnknownBackendEnv(String),
 }

@@ -159,6 +159,9 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
         mesh.normalize();
     }
     mesh.transform(placement.scale, placement.translate);
+    if placement.as_ == MeshAs::Triangles && mesh.triangles.iter().all(|&t| mesh.triangle_area(t) == 0.0) {
+        log::warn!("every triangle of the mesh has zero area: rays pass through it");
+    }
     let material = placement.material;
     match placement.as_ {
         MeshAs::Triangles => {
