@@ -19,6 +19,26 @@ fn path_str(path: &Path) -> &str {
     path.to_str().unwrap()
 }
 
+/// whitted at `width` x `height` on the CPU, written to `path`.
+fn tiny_render(path: &Path, width: u32, height: u32) {
+    let (w, h) = (width.to_string(), height.to_string());
+    let args = [
+        "render",
+        "whitted",
+        "--device",
+        "cpu",
+        "--width",
+        &w,
+        "--height",
+        &h,
+        "-q",
+        "-o",
+        path_str(path),
+    ];
+    let output = raypipe(&args);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
 /// A tiny OFF model (one triangle), for the model flags.
 fn triangle_model(dir: &Path) -> PathBuf {
     let path = dir.join("triangle.off");
@@ -230,22 +250,7 @@ fn a_closed_or_full_standard_output_is_no_panic() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     let dir = test_dir("hostile-stdout");
     let image = dir.join("a.png");
-    assert!(
-        raypipe(&[
-            "render",
-            "whitted",
-            "--device",
-            "cpu",
-            "--width",
-            "8",
-            "--height",
-            "6",
-            "-o",
-            path_str(&image)
-        ])
-        .status
-        .success()
-    );
+    tiny_render(&image, 8, 6);
     let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
     let output = Command::new(bin())
         .args(["diff", path_str(&image), path_str(&image)])
@@ -259,22 +264,7 @@ fn a_closed_or_full_standard_output_is_no_panic() {
 fn thresholds_that_are_not_numbers_or_below_zero_are_refused() {
     let dir = test_dir("hostile-threshold");
     let image = dir.join("a.png");
-    assert!(
-        raypipe(&[
-            "render",
-            "whitted",
-            "--device",
-            "cpu",
-            "--width",
-            "8",
-            "--height",
-            "6",
-            "-o",
-            path_str(&image)
-        ])
-        .status
-        .success()
-    );
+    tiny_render(&image, 8, 6);
     for threshold in ["nan", "inf", "-1", "-0.5", "many"] {
         let flag = format!("--threshold={threshold}");
         let output = raypipe(&["diff", path_str(&image), path_str(&image), &flag]);
@@ -288,20 +278,7 @@ fn messages_name_the_files_and_the_backend() {
     let dir = test_dir("hostile-messages");
     let [small, large] = [(8, 6), (16, 12)].map(|(w, h)| {
         let path = dir.join(format!("{w}x{h}.png"));
-        let (w, h) = (w.to_string(), h.to_string());
-        let args = [
-            "render",
-            "whitted",
-            "--device",
-            "cpu",
-            "--width",
-            &w,
-            "--height",
-            &h,
-            "-o",
-            path_str(&path),
-        ];
-        assert!(raypipe(&args).status.success());
+        tiny_render(&path, w, h);
         path
     });
     assert_clean_error(

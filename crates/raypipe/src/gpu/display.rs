@@ -3,7 +3,7 @@
 //! at the target's top-left corner, one fragment per pixel; the rest of the target is cleared.
 
 use super::GpuContext;
-use super::renderer::FrameTargets;
+use super::renderer::{FrameTargets, target_entry};
 use crate::impl_choice;
 use crate::records::StructLayout;
 use crate::struct_layout;
@@ -77,16 +77,6 @@ impl Display {
             label: Some("display"),
             source: wgpu::ShaderSource::Wgsl(DISPLAY.into()),
         });
-        let texture = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Uint,
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("display"),
             entries: &[
@@ -100,8 +90,8 @@ impl Display {
                     },
                     count: None,
                 },
-                texture(1),
-                texture(2),
+                target_entry(1),
+                target_entry(2),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

@@ -496,9 +496,9 @@ fn readbacks(device: &wgpu::Device, width: u32, height: u32) -> [TextureReadback
     [0, 1].map(|_| TextureReadback::new(device, width, height, TARGET_BYTES_PER_PIXEL))
 }
 
-/// Group 1: the previous sample's colour and surface targets.
-fn previous_sample_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let texture = |binding| wgpu::BindGroupLayoutEntry {
+/// A frame target read by a fragment shader (`texture_2d<u32>`) at `binding`.
+pub(super) fn target_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::FRAGMENT,
         ty: wgpu::BindingType::Texture {
@@ -507,10 +507,14 @@ fn previous_sample_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             multisampled: false,
         },
         count: None,
-    };
+    }
+}
+
+/// Group 1: the previous sample's colour and surface targets.
+fn previous_sample_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("previous sample"),
-        entries: &[texture(0), texture(1)],
+        entries: &[target_entry(0), target_entry(1)],
     })
 }
 
