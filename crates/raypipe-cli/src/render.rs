@@ -289,13 +289,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             packed.lights.len(),
             packed.max_depth
         );
-        crate::say!(
-            "device: {}, memory {:?}, accel {:?}, {} samples per pixel",
-            outcome.device,
-            args.scene.memory,
-            args.scene.accel,
-            args.spp
-        );
+        say_device(&args, &outcome.device)?;
         if args.scene.aov == Aov::Cost {
             let counts = frame.counts();
             let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
@@ -317,6 +311,17 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `--stats`'s line on what traced.
+fn say_device(args: &RenderArgs, device: &str) -> anyhow::Result<()> {
+    crate::say!(
+        "device: {device}, memory {:?}, accel {:?}, {} samples per pixel",
+        args.scene.memory,
+        args.scene.accel,
+        args.spp
+    );
+    Ok(())
 }
 
 pub fn aov_image(aov: Aov, is_exr: bool, frame: &Frame) -> FloatImage {
@@ -367,13 +372,7 @@ fn render_sequence(
             s.height,
             scene.spheres.len()
         );
-        crate::say!(
-            "device: {}, memory {:?}, accel {:?}, {} samples per pixel",
-            outcome.device,
-            args.scene.memory,
-            args.scene.accel,
-            args.spp
-        );
+        say_device(args, &outcome.device)?;
         // The first frame pays for pipeline compilation on some drivers: medians skip it.
         let steady = if frames > 1 { 1 } else { 0 };
         if !outcome.builds.is_empty() {

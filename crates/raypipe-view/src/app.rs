@@ -334,15 +334,9 @@ impl Viewer {
         };
         let tracer = &mut gpu.tracer;
         if tracer.renderer.samples() == 0 {
-            let ctx = gpu.ctx.clone();
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            if let Some(rebuild) = &tracer.rebuild
-                && self.modes.accel.uses_bvh()
-            {
-                rebuild.encode(&mut encoder);
-            }
-            tracer.renderer.encode(&mut encoder);
-            ctx.queue.submit([encoder.finish()]);
+            let mut encoder = gpu.ctx.device.create_command_encoder(&Default::default());
+            tracer.encode(&mut encoder, self.modes.accel);
+            gpu.ctx.queue.submit([encoder.finish()]);
         }
         match block_on(tracer.renderer.read_back()) {
             Ok(frame) => match self.host.save(&frame, self.modes.view, path) {
@@ -412,13 +406,7 @@ impl Viewer {
         let ctx = gpu.ctx.clone();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         if trace {
-            if let Some(rebuild) = &gpu.tracer.rebuild
-                && self.modes.accel.uses_bvh()
-                && gpu.tracer.renderer.samples() == 0
-            {
-                rebuild.encode(&mut encoder);
-            }
-            gpu.tracer.renderer.encode(&mut encoder);
+            gpu.tracer.encode(&mut encoder, self.modes.accel);
         }
         let c = self.camera.camera;
         let depth_far = DEPTH_FAR * (c.eye - c.target).length();

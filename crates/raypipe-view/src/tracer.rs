@@ -99,6 +99,18 @@ impl Tracer {
         })
     }
 
+    /// Records the next sample per pixel; the first after a restart rebuilds the BVH on the GPU
+    /// first, where the scene moves and the walk uses one.
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, accel: Accel) {
+        if let Some(rebuild) = &self.rebuild
+            && accel.uses_bvh()
+            && self.renderer.samples() == 0
+        {
+            rebuild.encode(encoder);
+        }
+        self.renderer.encode(encoder);
+    }
+
     /// Moves the scene to `frame` of its motion: the spheres written to the GPU rebuild's buffers,
     /// or the BVH rebuilt on the CPU and the records rewritten. Returns the CPU build's time.
     /// The samples start again.

@@ -165,20 +165,19 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
     let material = placement.material;
     match placement.as_ {
         MeshAs::Triangles => {
-            let smooth = match (placement.normals, &mesh.normals) {
-                (Normals::Flat, _) | (Normals::Auto, Some(_)) => None,
+            // Each triangle's corner normals, or none to shade flat.
+            let corner_normals: Option<Vec<[Vec3; 3]>> = match (placement.normals, &mesh.normals) {
+                (Normals::Flat, _) => None,
+                (Normals::Auto, Some(file)) => {
+                    Some(mesh.triangles.iter().map(|t| t.map(|i| file[i as usize])).collect())
+                }
                 (Normals::Smooth, _) | (Normals::Auto, None) => Some(mesh.smooth_normals(placement.crease_degrees)),
             };
             scene.triangles.reserve(mesh.triangles.len());
             for (f, &t) in mesh.triangles.iter().enumerate() {
-                let normals = match (&smooth, placement.normals) {
-                    (Some(smooth), _) => Some(smooth[f]),
-                    (None, Normals::Flat) => None,
-                    (None, _) => mesh.normals.as_ref().map(|n| t.map(|i| n[i as usize])),
-                };
                 scene.triangles.push(Triangle {
                     vertices: mesh.corners(t),
-                    normals,
+                    normals: corner_normals.as_ref().map(|n| n[f]),
                     material,
                 });
             }
