@@ -359,3 +359,82 @@ fn empty_scenes_warn_and_renders_say_where_they_wrote() {
         String::from_utf8_lossy(&quiet.stderr)
     );
 }
+
+/// A scene of one triangle model, lit, with every length times `scale`.
+fn scaled_mesh_scene(model: &Path, scale: f32) -> String {
+    let s = |v: f32| format!("{:e}", v * scale);
+    format!(
+        "[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, 0]\n\
+         [[light]]\nposition = [{}, {}, {}]\n\
+         [[mesh]]\nfile = \"{}\"\nnormalize = false\nscale = {scale:e}\n",
+        s(0.3),
+        s(0.3),
+        s(-3.0),
+        s(0.3),
+        s(0.3),
+        s(1.0),
+        s(2.0),
+        s(-4.0),
+        model.display()
+    )
+}
+
+/// Near the numeric limits, scenes either render as they do at unit size or are refused with the
+/// limit that applies (not a false reason).
+#[test]
+fn numbers_near_the_limits_render_right_or_say_which_limit() {
+    let dir = test_dir("hostile-range");
+    let model = triangle_model(&dir);
+    let render = |name: &str, text: &str| {
+        let scene = dir.join(name);
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.join(format!("{name}.png"));
+        let args = ["render", path_str(&scene), "--device", "cpu", "--width", "24", "--height", "16", "-q", "-o"];
+        (raypipe(&[&args[..], &[path_str(&out)]].concat()), out)
+    };
+    // A mesh at 1e10 renders as it does at 1: lit, not shadowed, not lost.
+    let (unit, unit_png) = render("unit.toml", &scaled_mesh_scene(&model, 1.0));
+    assert!(unit.status.success(), "{}", String::from_utf8_lossy(&unit.stderr));
+    let (big, big_png) = render("big.toml", &scaled_mesh_scene(&model, 1e10));
+    assert!(big.status.success(), "{}", String::from_utf8_lossy(&big.stderr));
+    let pixels = image::open(&unit_png).unwrap().to_rgb8();
+    let lit = pixels.pixels().filter(|p| p.0.iter().any(|&c| c > 100)).count();
+    assert!(lit > 20, "the lit triangle covers {lit} pixels at unit size");
+    let same = raypipe(&["diff", path_str(&unit_png), path_str(&big_png)]);
+    assert!(same.status.success(), "{}", String::from_utf8_lossy(&same.stdout));
+    // Past the limit, the message names it.
+    assert_clean_error(
+        &render("huge.toml", &scaled_mesh_scene(&model, 1e19)).0,
+        &["must lie within 1e17 of the origin"],
+    );
+    let light = "[[light]]\nposition = [0, 5, -5]\n";
+    let sphere = "[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\n";
+    for (name, text, needle) in [
+        (
+            "far-eye.toml",
+            format!("[camera]\neye = [1e20, 0, 0]\ntarget = [0, 0, 0]\n{light}{sphere}"),
+            "camera: eye must lie within 1e17",
+        ),
+        (
+            "far-light.toml",
+            format!("[[light]]\nposition = [1e20, 0, 0]\n{sphere}"),
+            "light 0: position must lie within 1e17",
+        ),
+        (
+            "big-sphere.toml",
+            format!("{light}[[sphere]]\ncenter = [2e20, 0, 0]\nradius = 1e20\n"),
+            "sphere 0: the sphere must lie within 1e17",
+        ),
+        (
+            "tiny-sphere.toml",
+            format!("{light}[[sphere]]\ncenter = [0, 0, 0]\nradius = 1e-13\n"),
+            "radius must be finite and at least 1e-12",
+        ),
+    ] {
+        assert_clean_error(&render(name, &text).0, &[needle]);
+    }
+    // A plane normal whose length overflows f32 is still a direction: normalized, accepted.
+    let plane = format!("{light}[[plane]]\npoint = [0, -1, 0]\nnormal = [0, 3e38, 3e38]\n");
+    let (output, _) = render("plane.toml", &plane);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}

@@ -65,7 +65,7 @@ fn split(nodes: &mut Vec<GpuNode>, prims: &mut [u32], boxes: &[Aabb], centroids:
     }
     let centroid_bounds = prims.iter().fold(Aabb::EMPTY, |b, &p| b.grow(centroids[p as usize]));
     let extent = centroid_bounds.max - centroid_bounds.min;
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bins left of the split)
+    let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins left of the split)
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
             continue;
@@ -81,13 +81,13 @@ fn split(nodes: &mut Vec<GpuNode>, prims: &mut [u32], boxes: &[Aabb], centroids:
             bin_boxes[b] = bin_boxes[b].union(boxes[p as usize]);
             counts[b] += 1;
         }
-        let mut right_area = [0f32; BINS];
+        let mut right_area = [0f64; BINS];
         let mut right_count = [0usize; BINS];
         let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
         for b in (1..BINS).rev() {
             acc = acc.union(bin_boxes[b]);
             cnt += counts[b];
-            right_area[b] = acc.surface_area();
+            right_area[b] = acc.surface_area() as f64;
             right_count[b] = cnt;
         }
         let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
@@ -97,7 +97,8 @@ fn split(nodes: &mut Vec<GpuNode>, prims: &mut [u32], boxes: &[Aabb], centroids:
             if cnt == 0 || right_count[b] == 0 {
                 continue;
             }
-            let cost = acc.surface_area() * cnt as f32 + right_area[b] * right_count[b] as f32;
+            // In f64: areas times counts overflow f32 for wide scenes of many primitives.
+            let cost = acc.surface_area() as f64 * cnt as f64 + right_area[b] * right_count[b] as f64;
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b));
             }

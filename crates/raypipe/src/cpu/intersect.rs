@@ -166,8 +166,11 @@ pub fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
     if det == 0.0 {
         return Vec3::splat(NO_HIT);
     }
+    // Weights before depths: an edge function is a product of two coordinates, times a third it
+    // would overflow at the far end of the accepted range.
     let inv_det = 1.0 / det;
-    Vec3::new(v * inv_det, w * inv_det, (u * a.z + v * b.z + w * c.z) * inv_det)
+    let weights = Vec3::new(u, v, w) * inv_det;
+    Vec3::new(weights.y, weights.z, weights.x * a.z + weights.y * b.z + weights.z * c.z)
 }
 
 /// The t in (0, t_max] where the ray meets the triangle, or [`NO_HIT`]; t_max counts, as for spheres.

@@ -16,6 +16,18 @@ pub struct Surface {
     /// geometric normal otherwise. Lighting, reflection and refraction use it.
     pub shading: Vec3,
     pub material: u32,
+    /// The largest coordinate of the ray's origin and of the hit: the position's rounding error is
+    /// a few float steps of it.
+    pub reach: f32,
+}
+
+pub fn max_abs(v: Vec3) -> f32 {
+    v.abs().max_element()
+}
+
+/// `v.normalize()` for any nonzero v: the squares of a big or small v would overflow or underflow.
+pub fn normalize_scaled(v: Vec3) -> Vec3 {
+    (v / max_abs(v)).normalize()
 }
 
 /// WGSL's `reflect(e1, e2)`: e1 - 2 dot(e2, e1) e2.
@@ -26,6 +38,7 @@ pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
 /// The surface a ray hit: where, its normals, its material.
 pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
     let position = ray.origin + hit.t * ray.dir;
+    let reach = max_abs(ray.origin).max(max_abs(position));
     if hit.kind == HitKind::Primitive {
         if let Some(sphere) = scene.spheres.get(hit.index as usize) {
             let normal = (position - v3(sphere.center)).normalize();
@@ -34,16 +47,18 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
                 normal,
                 shading: normal,
                 material: sphere.material,
+                reach,
             };
         }
         let triangle = &scene.triangles[hit.index as usize - scene.spheres.len()];
         let [v0, v1, v2] = triangle.corners();
-        let normal = (v1 - v0).cross(v2 - v0).normalize();
+        let normal = normalize_scaled((v1 - v0).cross(v2 - v0));
         return Surface {
             position,
             normal,
             shading: triangle_shading(scene, triangle, ray, normal),
             material: triangle.material,
+            reach,
         };
     }
     let plane = &scene.planes[hit.index as usize];
@@ -59,6 +74,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
         normal: v3(plane.normal),
         shading: v3(plane.normal),
         material,
+        reach,
     }
 }
 
@@ -93,7 +109,7 @@ pub fn direct_light(
     let globals = &scene.globals.scene;
     let albedo = v3(material.color);
     let mut color = globals.ambient * albedo;
-    let origin = offset_origin(surface.position, normal);
+    let origin = offset_origin(surface, normal);
     for light in &scene.lights {
         let to_light = v3(light.position) - surface.position;
         let distance = to_light.length();
@@ -117,9 +133,8 @@ pub fn direct_light(
 
 /// `side` points to where the new ray goes: the facing normal for reflection and shadows, its
 /// opposite for refraction.
-pub fn offset_origin(position: Vec3, side: Vec3) -> Vec3 {
-    let magnitude = position.abs().max_element().max(1.0);
-    position + side * (RAY_BIAS * magnitude)
+pub fn offset_origin(surface: &Surface, side: Vec3) -> Vec3 {
+    surface.position + side * (RAY_BIAS * surface.reach)
 }
 
 /// Schlick's approximation of the Fresnel reflectance; cos_theta is taken on the less dense side.

@@ -186,7 +186,7 @@ impl<'a> Tracer<'a> {
             let transmit_weight = task.weight * transmit_share;
             if worth_tracing(transmit_weight) && stack.len() < stack_size {
                 stack.push(RayTask {
-                    origin: offset_origin(surface.position, -normal),
+                    origin: offset_origin(&surface, -normal),
                     dir: refracted,
                     weight: transmit_weight,
                     depth: task.depth + 1,
@@ -195,7 +195,7 @@ impl<'a> Tracer<'a> {
             let reflect_weight = task.weight * reflect_share;
             if worth_tracing(reflect_weight) && stack.len() < stack_size {
                 stack.push(RayTask {
-                    origin: offset_origin(surface.position, normal),
+                    origin: offset_origin(&surface, normal),
                     dir: reflect(ray.dir, shading),
                     weight: reflect_weight,
                     depth: task.depth + 1,

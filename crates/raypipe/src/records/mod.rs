@@ -48,7 +48,9 @@ impl GpuCamera {
     /// `camera` looking at a `width` x `height` image.
     pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
         let forward = (camera.target - camera.eye).normalize();
-        let right = forward.cross(camera.up).normalize();
+        // Up only gives a direction: scaled to at most 1 first, so that no length of it overflows.
+        let up_hint = camera.up / camera.up.abs().max_element();
+        let right = forward.cross(up_hint).normalize();
         let up = right.cross(forward);
         Self {
             eye: camera.eye.to_array(),

@@ -4,7 +4,7 @@
 //! its line: `scene.toml:12: sphere 3: radius must be positive and finite (got -1)`.
 
 use super::model::{DEFAULT_CREASE_DEGREES, MeshAs, Normals, Placement, SphereCount, add_mesh};
-use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere};
+use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, unit_vector};
 use crate::choice::Choice;
 use crate::error::{Element, InputError};
 use glam::Vec3;
@@ -246,13 +246,13 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
             }
         };
         let normal = vec3(r.normal);
-        if normal.length_squared() == 0.0 || !normal.is_finite() {
+        let Some(normal) = unit_vector(normal).filter(|_| normal.is_finite()) else {
             return Err(at_element(at, element, "normal must be finite and not zero"));
-        }
+        };
         plane_lines.push(at);
         scene.planes.push(Plane {
             point: vec3(r.point),
-            normal: normal.normalize(),
+            normal,
             material,
             checker,
         });

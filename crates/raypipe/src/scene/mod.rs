@@ -174,12 +174,26 @@ fn finite_vec(v: Vec3) -> bool {
     v.is_finite()
 }
 
-/// The farthest a primitive may reach from the origin: beyond it, box extents (and the threaded
-/// BVH's quantization frame) could overflow f32.
-pub const MAX_COORDINATE: f32 = 1e30;
+/// The farthest anything may lie from the origin. Within it the tracers' arithmetic cannot overflow:
+/// a ray-triangle edge function, the largest product, stays below about 1e36, and squared distances
+/// below 1e35. Scenes render alike at any scale from [`MIN_RADIUS`] to here (tests/scale.rs).
+pub const MAX_COORDINATE: f32 = 1e17;
+/// The smallest sphere radius: below it the radius's square nears f32's smallest normal number,
+/// which GPUs flush to zero.
+pub const MIN_RADIUS: f32 = 1e-12;
 
 fn within_reach(v: Vec3) -> bool {
     v.abs().max_element() <= MAX_COORDINATE
+}
+
+fn out_of_reach(what: &str) -> String {
+    format!("{what} must lie within {MAX_COORDINATE:e} of the origin")
+}
+
+/// `v` at unit length, or `None` for a zero vector; no square of a huge or tiny `v` is formed.
+pub fn unit_vector(v: Vec3) -> Option<Vec3> {
+    let largest = v.abs().max_element();
+    (largest > 0.0 && largest.is_finite()).then(|| (v / largest).normalize())
 }
 
 impl Scene {
@@ -231,11 +245,18 @@ impl Scene {
         if !(finite_vec(c.eye) && finite_vec(c.target) && finite_vec(c.up)) {
             return Err(InputError::of(Element::Camera, "eye, target and up must be finite"));
         }
-        let forward = c.target - c.eye;
-        if forward.length_squared() == 0.0 {
-            return Err(InputError::of(Element::Camera, "eye and target must differ"));
+        for (name, point) in [("eye", c.eye), ("target", c.target)] {
+            if !within_reach(point) {
+                return Err(InputError::of(Element::Camera, out_of_reach(name)));
+            }
         }
-        if forward.normalize().cross(c.up).length_squared() < 1e-12 {
+        let Some(forward) = unit_vector(c.target - c.eye) else {
+            return Err(InputError::of(Element::Camera, "eye and target must differ"));
+        };
+        let Some(up) = unit_vector(c.up) else {
+            return Err(InputError::of(Element::Camera, "up must not be zero"));
+        };
+        if forward.cross(up).length_squared() < 1e-12 {
             return Err(InputError::of(
                 Element::Camera,
                 "up must not be parallel to the view direction",
@@ -251,6 +272,9 @@ impl Scene {
         for (i, light) in self.lights.iter().enumerate() {
             if !(finite_vec(light.position) && finite_vec(light.color)) {
                 return Err(InputError::of(Element::Light(i), "position and color must be finite"));
+            }
+            if !within_reach(light.position) {
+                return Err(InputError::of(Element::Light(i), out_of_reach("position")));
             }
         }
         for (i, m) in self.materials.iter().enumerate() {
@@ -272,17 +296,14 @@ impl Scene {
             if !finite_vec(s.center) {
                 return Err(InputError::of(element(), "center must be finite"));
             }
-            if !(s.radius > 0.0 && s.radius.is_finite()) {
+            if !(s.radius >= MIN_RADIUS && s.radius.is_finite()) {
                 return Err(InputError::of(
                     element(),
-                    format!("radius must be positive and finite (got {})", s.radius),
+                    format!("radius must be finite and at least {MIN_RADIUS:e} (got {})", s.radius),
                 ));
             }
             if !within_reach(s.center.abs() + s.radius) {
-                return Err(InputError::of(
-                    element(),
-                    format!("must lie within {MAX_COORDINATE:e} of the origin"),
-                ));
+                return Err(InputError::of(element(), out_of_reach("the sphere")));
             }
             check_material(&element, s.material)?;
         }
@@ -292,10 +313,7 @@ impl Scene {
                 return Err(InputError::of(element(), "vertices must be finite"));
             }
             if !t.vertices.iter().all(|&v| within_reach(v)) {
-                return Err(InputError::of(
-                    element(),
-                    format!("must lie within {MAX_COORDINATE:e} of the origin"),
-                ));
+                return Err(InputError::of(element(), out_of_reach("vertices")));
             }
             if let Some(normals) = t.normals
                 && !normals.iter().all(|n| n.is_finite())
@@ -308,6 +326,9 @@ impl Scene {
             let element = || Element::Plane(i);
             if !(finite_vec(p.point) && finite_vec(p.normal)) {
                 return Err(InputError::of(element(), "point and normal must be finite"));
+            }
+            if !within_reach(p.point) {
+                return Err(InputError::of(element(), out_of_reach("point")));
             }
             if (p.normal.length() - 1.0).abs() > 1e-4 {
                 return Err(InputError::of(element(), "normal must have unit length"));

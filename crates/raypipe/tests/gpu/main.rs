@@ -1,6 +1,7 @@
 //! The tests that need a GPU, on one shared device (see `common::harness`): the fragment shader
 //! against the CPU reference, memory modes against each other, closed-form answers, the GPU LBVH
-//! build against the CPU's, per-frame rebuilds, the display pass, and watertight triangles; and the tests of the shared
+//! build against the CPU's, per-frame rebuilds, the display pass, watertight triangles, and scenes
+//! at the ends of the accepted numeric range; and the tests of the shared
 //! models.
 
 #[path = "../common/mod.rs"]
@@ -12,6 +13,7 @@ mod frames;
 mod gpu_build;
 mod gpu_vs_cpu;
 mod memory_modes;
+mod scale;
 mod scans;
 mod watertight;
 
@@ -23,6 +25,7 @@ fn main() -> std::process::ExitCode {
         gpu_build::tests(),
         gpu_vs_cpu::tests(),
         memory_modes::tests(),
+        scale::tests(),
         scans::tests(),
         watertight::tests(),
     ];

@@ -115,8 +115,11 @@ fn triangle_uvt(triangle: Triangle, ray: Ray) -> vec3<f32> {
     if (det == 0.0) {
         return vec3<f32>(NO_HIT);
     }
+    // Weights before depths: an edge function is a product of two coordinates, times a third it
+    // would overflow at the far end of the accepted range.
     let inv_det = 1.0 / det;
-    return vec3<f32>(v * inv_det, w * inv_det, (u * a.z + v * b.z + w * c.z) * inv_det);
+    let weights = vec3<f32>(u, v, w) * inv_det;
+    return vec3<f32>(weights.y, weights.z, weights.x * a.z + weights.y * b.z + weights.z * c.z);
 }
 
 // The t in (0, t_max] where the ray meets the triangle, or NO_HIT; t_max counts, as for spheres.

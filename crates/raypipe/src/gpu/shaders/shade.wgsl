@@ -1,8 +1,8 @@
 // Surfaces and Whitted shading: Phong direct light with hard shadows, Schlick's Fresnel term.
 // Mirrored by src/cpu/shade.rs.
 
-// Secondary rays start RAY_BIAS (from the preamble, scaled by the point's magnitude) off the
-// surface, to escape it.
+// Secondary rays start RAY_BIAS (from the preamble) times the hit's reach off the surface, to escape
+// it; the offset scales with the scene, so a scene renders alike at any size in the accepted range.
 
 struct Surface {
     position: vec3<f32>,
@@ -13,6 +13,18 @@ struct Surface {
     // geometric normal otherwise. Lighting, reflection and refraction use it.
     shading: vec3<f32>,
     material: u32,
+    // The largest coordinate of the ray's origin and of the hit: the position's rounding error is a
+    // few float steps of it.
+    reach: f32,
+}
+
+fn max_abs(v: vec3<f32>) -> f32 {
+    return max(abs(v.x), max(abs(v.y), abs(v.z)));
+}
+
+// normalize(v) for any nonzero v: the squares of a big or small v would overflow or underflow.
+fn normalize_scaled(v: vec3<f32>) -> vec3<f32> {
+    return normalize(v / max_abs(v));
 }
 
 // A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's side;
@@ -33,15 +45,16 @@ fn triangle_shading(triangle: Triangle, ray: Ray, normal: vec3<f32>) -> vec3<f32
 
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let position = ray.origin + hit.t * ray.dir;
+    let reach = max(max_abs(ray.origin), max_abs(position));
     if (hit.kind == HIT_PRIMITIVE) {
         if (hit.index < globals.scene.sphere_count) {
             let sphere = load_sphere(hit.index);
             let normal = normalize(position - sphere.center);
-            return Surface(position, normal, normal, sphere.material);
+            return Surface(position, normal, normal, sphere.material, reach);
         }
         let triangle = load_triangle(hit.index - globals.scene.sphere_count);
-        let normal = normalize(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
-        return Surface(position, normal, triangle_shading(triangle, ray, normal), triangle.material);
+        let normal = normalize_scaled(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
+        return Surface(position, normal, triangle_shading(triangle, ray, normal), triangle.material, reach);
     }
     let plane = load_plane(hit.index);
     let local = position - plane.point;
@@ -51,14 +64,13 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     if (cell - 2.0 * floor(cell * 0.5) != 0.0) {
         material = plane.checker_material;
     }
-    return Surface(position, plane.normal, plane.normal, material);
+    return Surface(position, plane.normal, plane.normal, material, reach);
 }
 
 // `side` points to where the new ray goes: the facing normal for reflection and shadows, its
 // opposite for refraction.
-fn offset_origin(position: vec3<f32>, side: vec3<f32>) -> vec3<f32> {
-    let magnitude = max(1.0, max(abs(position.x), max(abs(position.y), abs(position.z))));
-    return position + side * (RAY_BIAS * magnitude);
+fn offset_origin(surface: Surface, side: vec3<f32>) -> vec3<f32> {
+    return surface.position + side * (RAY_BIAS * surface.reach);
 }
 
 // Schlick's approximation of the Fresnel reflectance; cos_theta is taken on the less dense side.
@@ -74,7 +86,7 @@ fn fresnel_schlick(cos_theta: f32, ior: f32) -> f32 {
 // `normal` (geometric) and `shading` face the viewer; `view` points from the surface to the viewer.
 fn direct_light(surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material) -> vec3<f32> {
     var color = globals.scene.ambient * material.color;
-    let origin = offset_origin(surface.position, normal);
+    let origin = offset_origin(surface, normal);
     for (var i = 0u; i < globals.scene.light_count; i++) {
         let light = load_light(i);
         let to_light = light.position - surface.position;

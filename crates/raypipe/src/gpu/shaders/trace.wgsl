@@ -125,12 +125,12 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
         }
         let transmit_weight = task.weight * transmit_share;
         if (worth_tracing(transmit_weight) && top < RAY_STACK_SIZE) {
-            stack[top] = RayTask(offset_origin(surface.position, -normal), refracted, transmit_weight, task.depth + 1u);
+            stack[top] = RayTask(offset_origin(surface, -normal), refracted, transmit_weight, task.depth + 1u);
             top += 1u;
         }
         let reflect_weight = task.weight * reflect_share;
         if (worth_tracing(reflect_weight) && top < RAY_STACK_SIZE) {
-            stack[top] = RayTask(offset_origin(surface.position, normal), reflect(ray.dir, shading), reflect_weight, task.depth + 1u);
+            stack[top] = RayTask(offset_origin(surface, normal), reflect(ray.dir, shading), reflect_weight, task.depth + 1u);
             top += 1u;
         }
     }
