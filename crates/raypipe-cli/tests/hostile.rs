@@ -389,7 +389,18 @@ fn numbers_near_the_limits_render_right_or_say_which_limit() {
         let scene = dir.join(name);
         std::fs::write(&scene, text).unwrap();
         let out = dir.join(format!("{name}.png"));
-        let args = ["render", path_str(&scene), "--device", "cpu", "--width", "24", "--height", "16", "-q", "-o"];
+        let args = [
+            "render",
+            path_str(&scene),
+            "--device",
+            "cpu",
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "-q",
+            "-o",
+        ];
         (raypipe(&[&args[..], &[path_str(&out)]].concat()), out)
     };
     // A mesh at 1e10 renders as it does at 1: lit, not shadowed, not lost.

@@ -170,7 +170,11 @@ pub fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
     // would overflow at the far end of the accepted range.
     let inv_det = 1.0 / det;
     let weights = Vec3::new(u, v, w) * inv_det;
-    Vec3::new(weights.y, weights.z, weights.x * a.z + weights.y * b.z + weights.z * c.z)
+    Vec3::new(
+        weights.y,
+        weights.z,
+        weights.x * a.z + weights.y * b.z + weights.z * c.z,
+    )
 }
 
 /// The t in (0, t_max] where the ray meets the triangle, or [`NO_HIT`]; t_max counts, as for spheres.

@@ -7,11 +7,11 @@
 use crate::common::harness::Test;
 use crate::common::*;
 use glam::Vec3;
+use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::GpuContext;
 use raypipe::image::Frame;
 use raypipe::image::diff::Tolerance;
-use raypipe::Choice;
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{MAX_COORDINATE, MIN_RADIUS, Scene, Triangle};
@@ -77,7 +77,10 @@ fn factors(scene: &Scene) -> ([f32; 2], [f32; 2]) {
     let at_limits = [MIN_RADIUS / small * (1.0 + 1e-6), MAX_COORDINATE / far * (1.0 - 1e-6)];
     for k in exact.into_iter().chain(at_limits) {
         let (far_k, small_k) = extremes(&scaled(scene, k));
-        assert!(far_k <= MAX_COORDINATE && small_k >= MIN_RADIUS, "factor {k:e} leaves the range");
+        assert!(
+            far_k <= MAX_COORDINATE && small_k >= MIN_RADIUS,
+            "factor {k:e} leaves the range"
+        );
     }
     (exact, at_limits)
 }
@@ -96,12 +99,23 @@ fn check(render: impl Fn(&PackedScene, Accel) -> Frame, accels: &[Accel], device
     for &accel in accels {
         let reference = render(&pack(&scene, accel), accel);
         let lit = reference.color.iter().filter(|c| c[0] + c[1] + c[2] > 0.3).count();
-        assert!(lit > reference.color.len() / 2, "{device} {accel:?}: the scene renders dark");
+        assert!(
+            lit > reference.color.len() / 2,
+            "{device} {accel:?}: the scene renders dark"
+        );
         for k in exact {
             let frame = render(&pack(&scaled(&scene, k), accel), accel);
             let name = format!("{device} {accel:?} scaled by {k:e}");
-            assert!(frame.color == reference.color, "{name}: the colours differ from scale 1");
-            let depth_scaled = frame.depth().data.iter().zip(&reference.depth().data).all(|(a, b)| *a == b * k);
+            assert!(
+                frame.color == reference.color,
+                "{name}: the colours differ from scale 1"
+            );
+            let depth_scaled = frame
+                .depth()
+                .data
+                .iter()
+                .zip(&reference.depth().data)
+                .all(|(a, b)| *a == b * k);
             assert!(depth_scaled, "{name}: depth is not the scale-1 depth times the factor");
         }
         for k in at_limits {
@@ -123,7 +137,11 @@ fn cpu_renders_alike_at_every_accepted_scale() {
 fn gpu_renders_alike_at_every_accepted_scale(ctx: &GpuContext) {
     for memory in [MemoryMode::Storage, MemoryMode::Texture] {
         let render = |scene: &PackedScene, accel| render_gpu(ctx, scene, memory, accel);
-        check(render, &[Accel::Brute, Accel::Threaded], &format!("{} {memory:?}", ctx.describe()));
+        check(
+            render,
+            &[Accel::Brute, Accel::Threaded],
+            &format!("{} {memory:?}", ctx.describe()),
+        );
     }
 }
 
