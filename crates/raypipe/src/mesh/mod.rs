@@ -99,9 +99,14 @@ fn push_fan(triangles: &mut Vec<[u32; 3]>, face: &[u32]) {
 }
 
 /// Checks a polygon's indices, for the parsers: at least three, each below `vertex_count`.
+/// The one rule of every format for a face that cannot be a polygon.
+fn too_few_corners(corners: usize) -> String {
+    format!("a face needs at least 3 vertices (got {corners})")
+}
+
 fn check_face(face: &[i64], vertex_count: usize) -> Result<Vec<u32>, String> {
     if face.len() < 3 {
-        return Err(format!("a face needs at least 3 vertices (got {})", face.len()));
+        return Err(too_few_corners(face.len()));
     }
     face.iter()
         .map(|&index| {

@@ -9,7 +9,7 @@ use std::io::Cursor;
 
 pub fn parse(bytes: &[u8], notices: &mut Vec<String>) -> Result<Mesh, MeshError> {
     let text = std::str::from_utf8(bytes).map_err(|e| MeshError::new(format!("not a text file: {e}")))?;
-    check_vertices(text)?;
+    check_statements(text)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         // One index for position and normal, so normals come out one per vertex.
@@ -54,22 +54,35 @@ pub fn parse(bytes: &[u8], notices: &mut Vec<String>) -> Result<Mesh, MeshError>
     Ok(mesh)
 }
 
-/// Non-finite coordinates, found here because tobj takes `nan` and `inf` as numbers and renumbers the
-/// vertices, so that a later check could not name the line.
-fn check_vertices(text: &str) -> Result<(), MeshError> {
-    let mut vertex = 0;
+/// What tobj lets through and a later check could not place, because tobj renumbers vertices and
+/// drops faces: non-finite coordinates (tobj takes `nan` and `inf` as numbers), and faces of fewer
+/// than three corners (which OFF and PLY refuse too).
+fn check_statements(text: &str) -> Result<(), MeshError> {
+    let (mut vertex, mut face) = (0, 0);
     for (i, line) in text.lines().enumerate() {
         let mut tokens = line.split_whitespace();
-        if tokens.next() != Some("v") {
-            continue;
+        match tokens.next() {
+            Some("v") => {
+                if tokens.take(3).any(|t| t.parse::<f32>().is_ok_and(|v| !v.is_finite())) {
+                    return Err(MeshError::at(
+                        i + 1,
+                        format!("vertex {vertex}: coordinates must be finite"),
+                    ));
+                }
+                vertex += 1;
+            }
+            Some("f") => {
+                let corners = tokens.count();
+                if corners < 3 {
+                    return Err(MeshError::at(
+                        i + 1,
+                        format!("face {face}: {}", super::too_few_corners(corners)),
+                    ));
+                }
+                face += 1;
+            }
+            _ => {}
         }
-        if tokens.take(3).any(|t| t.parse::<f32>().is_ok_and(|v| !v.is_finite())) {
-            return Err(MeshError::at(
-                i + 1,
-                format!("vertex {vertex}: coordinates must be finite"),
-            ));
-        }
-        vertex += 1;
     }
     Ok(())
 }
@@ -167,5 +180,12 @@ mod tests {
             err("v 0 0 0\n\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n"),
             "3: vertex 1: coordinates must be finite"
         );
+    }
+
+    /// The rule OFF and PLY apply: tobj alone would drop the face without a word.
+    #[test]
+    fn a_face_of_two_corners_is_refused() {
+        let err = parse(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n", &mut Vec::new()).unwrap_err();
+        assert_eq!(err.to_string(), "5: face 1: a face needs at least 3 vertices (got 2)");
     }
 }
