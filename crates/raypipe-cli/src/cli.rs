@@ -63,10 +63,10 @@ fn gpu_message(error: &GpuError) -> String {
             needed,
             allowed,
         } => {
-            let hint = if *memory == MemoryMode::Storage {
-                ""
-            } else {
-                "; use --memory storage"
+            let hint = match memory {
+                MemoryMode::Uniform => "; use --memory storage",
+                MemoryMode::Storage => "; use --memory texture, or --device cpu",
+                MemoryMode::Texture => "; use --device cpu",
             };
             format!(
                 "scene too big for --memory {memory}: {records} {array} records need {needed}, the adapter allows {allowed}{hint}"
@@ -76,6 +76,20 @@ fn gpu_message(error: &GpuError) -> String {
             "the BVH rebuilt on the GPU is read from storage memory: use --memory storage".into()
         }
         GpuError::MissingBvh(missing) => format!("--accel {} needs the scene's BVH", missing.accel),
+        GpuError::ImageTooLarge { width, height, max } => format!(
+            "image {width}x{height} is larger than the adapter's maximum texture size {max}; render at most {max}x{max} on the GPU, or use --device cpu"
+        ),
+        GpuError::FrameTooLarge {
+            width,
+            height,
+            bytes,
+            max,
+            max_pixels,
+        } => format!(
+            "image {width}x{height} needs {} MiB per frame target, the adapter allocates at most {} MiB; render at most {max_pixels} pixels on the GPU, or use --device cpu",
+            bytes >> 20,
+            max >> 20
+        ),
         other => other.to_string(),
     }
 }

@@ -25,6 +25,7 @@ pub fn run() -> anyhow::Result<ExitCode> {
             "  max storage binding:        {} bytes",
             limits.max_storage_buffer_binding_size
         );
+        crate::say!("  max buffer size:            {} bytes", limits.max_buffer_size);
         crate::say!(
             "  storage buffers per stage:  {}",
             limits.max_storage_buffers_per_shader_stage

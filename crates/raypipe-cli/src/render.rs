@@ -261,7 +261,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     if args.scene.accel.uses_bvh() {
         packed.build_bvh(MortonBits::default());
     }
-    let outcome = render(&packed, &options)?;
+    let outcome = render(&packed, &options).map_err(|e| e.context(args.scene.spec.clone()))?;
     let frame = &outcome.frame;
     io::write_as(&aov_image(args.scene.aov, is_exr, frame), &output, is_exr)?;
     if !args.quiet {

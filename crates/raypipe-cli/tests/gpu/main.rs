@@ -11,10 +11,17 @@ mod io;
 
 mod bench;
 mod bvh;
+mod limits;
 mod models;
 mod view;
 
 fn main() -> std::process::ExitCode {
-    let tests = [bench::tests(), bvh::tests(), models::tests(), view::tests()];
+    let tests = [
+        bench::tests(),
+        bvh::tests(),
+        limits::tests(),
+        models::tests(),
+        view::tests(),
+    ];
     common::harness::run(tests.into_iter().flatten().collect())
 }

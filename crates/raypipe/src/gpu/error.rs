@@ -33,6 +33,17 @@ pub enum GpuError {
     MissingBvh(#[from] MissingBvh),
     #[error("image {width}x{height} is larger than the adapter's maximum texture size {max}")]
     ImageTooLarge { width: u32, height: u32, max: u32 },
+    /// A frame target of this size is more memory than the adapter allocates at once.
+    #[error(
+        "image {width}x{height} needs {bytes} bytes per frame target, more than the adapter's largest allocation ({max} bytes, about {max_pixels} pixels)"
+    )]
+    FrameTooLarge {
+        width: u32,
+        height: u32,
+        bytes: u64,
+        max: u64,
+        max_pixels: u64,
+    },
     #[error("adapter {adapter} cannot {what}")]
     Unsupported { adapter: String, what: &'static str },
     #[error("reading back from the GPU failed: {0}")]

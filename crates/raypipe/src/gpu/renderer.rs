@@ -484,10 +484,25 @@ impl Renderer {
     }
 }
 
+/// Found before anything is allocated: past the adapter's limits wgpu would fail later, with its own
+/// words, after the other targets took their memory.
 fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), GpuError> {
-    let max = ctx.limits().max_texture_dimension_2d;
+    let limits = ctx.limits();
+    let max = limits.max_texture_dimension_2d;
     if width == 0 || height == 0 || width > max || height > max {
         return Err(GpuError::ImageTooLarge { width, height, max });
+    }
+    // Each target texture, and its read-back buffer (rows padded), is one allocation; wgpu's largest
+    // buffer stands for the adapter's largest allocation.
+    let bytes = crate::gpu::readback::padded_bytes_per_row(width * TARGET_BYTES_PER_PIXEL) as u64 * height as u64;
+    if bytes > limits.max_buffer_size {
+        return Err(GpuError::FrameTooLarge {
+            width,
+            height,
+            bytes,
+            max: limits.max_buffer_size,
+            max_pixels: limits.max_buffer_size / TARGET_BYTES_PER_PIXEL as u64,
+        });
     }
     Ok(())
 }

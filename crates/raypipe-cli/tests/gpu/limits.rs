@@ -1,0 +1,50 @@
+//! Past the adapter's limits a render is one line that names the scene and says what would work,
+//! found before anything big is allocated.
+
+use crate::common::harness::Test;
+use crate::common::{assert_clean_error, raypipe};
+use raypipe::gpu::GpuContext;
+use std::time::{Duration, Instant};
+
+fn render(args: &[&str]) -> std::process::Output {
+    let out = crate::common::models::test_dir("limits").join("out.png");
+    let out = out.to_str().unwrap().to_string();
+    raypipe(&[&["render"], args, &["--device", "gpu", "-q", "-o", &out]].concat())
+}
+
+fn limits_are_one_line_that_names_the_scene_and_a_way_out(ctx: &GpuContext) {
+    let limits = ctx.limits();
+    let side = limits.max_texture_dimension_2d;
+    let target_bytes = side as u64 * side as u64 * 16;
+    let started = Instant::now();
+    let (w, h) = (side.to_string(), side.to_string());
+    if target_bytes > limits.max_buffer_size {
+        assert_clean_error(
+            &render(&["whitted", "--width", &w, "--height", &h]),
+            &["whitted: image ", "per frame target", "--device cpu"],
+        );
+    } else {
+        eprintln!(
+            "{}: a {side}x{side} target fits one allocation; not refused",
+            ctx.describe()
+        );
+    }
+    let too_wide = (side + 1).to_string();
+    assert_clean_error(
+        &render(&["whitted", "--width", &too_wide, "--height", "8"]),
+        &["whitted: "],
+    );
+    assert_clean_error(
+        &render(&["random:100000", "--memory", "uniform", "--width", "8", "--height", "8"]),
+        &[
+            "random:100000: scene too big for --memory uniform",
+            "use --memory storage",
+        ],
+    );
+    // Refused up front: nothing of 4 GiB was allocated and drawn into first.
+    assert!(started.elapsed() < Duration::from_secs(60), "{:?}", started.elapsed());
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![gpu limits_are_one_line_that_names_the_scene_and_a_way_out]
+}
