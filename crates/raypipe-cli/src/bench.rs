@@ -6,7 +6,6 @@ use crate::cli::median;
 use crate::plot::{Series, write_fps_plot};
 use anyhow::{Context, bail};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use pollster::block_on;
 use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
@@ -164,8 +163,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     );
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
     let points = args.counts.len() * args.accel.len() * args.memory.len();
-    let bar = ProgressBar::new(points as u64);
-    bar.set_style(ProgressStyle::with_template("{spinner} bench {bar:40} {pos}/{len} {msg}").expect("valid template"));
+    let bar = crate::device::progress_bar(
+        true,
+        points as u64,
+        "{spinner} bench {bar:40} {pos}/{len} {msg}, {elapsed}",
+    );
     let mut rows = Vec::new();
     let mut refused = Vec::new();
     for &count in &args.counts {
@@ -189,7 +191,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         for &accel in &args.accel {
             for &memory in &args.memory {
                 let point = format!("{count} {} {}", name(&accel), name(&memory));
-                bar.set_message(point.clone());
+                bar.set_message(format!("{point}: compiling, checking the image"));
                 if accel != Accel::Brute {
                     if reference.is_none() {
                         reference = Some(Reference::new(&ctx, &args.scene, count)?);
@@ -217,7 +219,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 let mut times = Vec::new();
                 let mut builds = Vec::new();
                 let mut rays = 0;
-                for frame in 0..args.warmup + args.frames {
+                let total = args.warmup + args.frames;
+                for frame in 0..total {
+                    bar.set_message(format!("{point}: frame {} of {total}", frame + 1));
                     let start = std::time::Instant::now();
                     let timed = block_on(renderer.render_samples(args.spp, |encoder| {
                         if let Some(rebuild) = &rebuild {

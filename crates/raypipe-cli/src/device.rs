@@ -14,7 +14,7 @@ use raypipe::image::Frame;
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
 pub enum DeviceChoice {
@@ -31,7 +31,8 @@ pub struct RenderOptions {
     pub backend: Option<Backend>,
     pub memory: MemoryMode,
     pub accel: Accel,
-    /// Show a progress bar for CPU renders (only drawn on a terminal).
+    /// Show progress: rows of a CPU render, samples of a GPU render, frames of a sequence, and the
+    /// pipeline's build (drawn only on a terminal).
     pub progress: bool,
     /// What a frame's fourth colour channel counts.
     pub count: Count,
@@ -82,18 +83,43 @@ fn open_device(options: &RenderOptions) -> anyhow::Result<Option<GpuContext>> {
     })
 }
 
+/// A progress bar on standard error where `show` (indicatif draws it only on a terminal). It ticks
+/// on its own, so that a long GPU draw or shader compile, which blocks this thread, still shows time
+/// passing.
+pub fn progress_bar(show: bool, len: u64, template: &str) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len);
+    bar.set_style(ProgressStyle::with_template(template).expect("the template is valid"));
+    bar.enable_steady_tick(Duration::from_millis(100));
+    bar
+}
+
+/// The GPU renderer for `scene`, with a spinner while the driver compiles the tracer (seconds on
+/// llvmpipe).
+fn build_renderer(
+    ctx: &GpuContext,
+    scene: &PackedScene,
+    rebuild: Option<&SceneRebuild>,
+    options: &RenderOptions,
+) -> anyhow::Result<Renderer> {
+    let spinner = progress_bar(options.progress, 0, "{spinner} compiling the tracer, {elapsed}");
+    let renderer = match rebuild {
+        Some(rebuild) => block_on(Renderer::with_rebuild(ctx, scene, rebuild, options.renderer())),
+        None => block_on(Renderer::new(ctx, scene, options.renderer())),
+    };
+    spinner.finish_and_clear();
+    Ok(renderer?)
+}
+
 /// The CPU reference's frame, with a progress bar on a terminal.
 fn render_cpu(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Frame> {
-    let bar = if options.progress {
-        let bar = ProgressBar::new(scene.height() as u64);
-        bar.set_style(
-            ProgressStyle::with_template("{spinner} CPU render {bar:40} {pos}/{len} rows, {eta} left")
-                .expect("the template is valid"),
-        );
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
+    let bar = progress_bar(
+        options.progress,
+        scene.height() as u64,
+        "{spinner} CPU render {bar:40} {pos}/{len} rows, {eta} left",
+    );
     let frame = cpu::render_with(scene, options.accel, options.count, options.samples, &|| bar.inc(1))?;
     bar.finish_and_clear();
     Ok(frame)
@@ -102,12 +128,20 @@ fn render_cpu(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Fr
 pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<RenderOutcome> {
     match open_device(options)? {
         Some(ctx) => {
-            let mut renderer = block_on(Renderer::new(&ctx, scene, options.renderer()))?;
+            let mut renderer = build_renderer(&ctx, scene, None, options)?;
             if options.warm_up {
                 block_on(renderer.read_frame())?;
             }
+            let bar = progress_bar(
+                options.progress,
+                options.samples.max(1) as u64,
+                "{spinner} GPU render {bar:40} {pos}/{len} samples, {elapsed}",
+            );
             let start = Instant::now();
-            let timed = block_on(renderer.render_samples(options.samples, |_| {}))?;
+            let timed =
+                block_on(renderer.render_samples_with(options.samples, |_| {}, |done| bar.set_position(done as u64)));
+            bar.finish_and_clear();
+            let timed = timed?;
             Ok(RenderOutcome {
                 frame: timed.frame,
                 device: ctx.describe(),
@@ -161,6 +195,16 @@ pub fn render_frames(
         rays: Vec::new(),
     };
     let spheres_at = |frame: u32| -> anyhow::Result<PackedScene> { Ok(PackedScene::new(&scene.at_frame(frame))?) };
+    // One bar for the sequence; none inside a frame.
+    let bar = progress_bar(
+        options.progress,
+        frames as u64,
+        "{spinner} frames {bar:40} {pos}/{len}, {eta} left",
+    );
+    let options = &RenderOptions {
+        progress: false,
+        ..*options
+    };
     match open_device(options)? {
         Some(ctx) => {
             ensure!(
@@ -169,7 +213,7 @@ pub fn render_frames(
             );
             outcome.device = ctx.describe();
             let rebuild = block_on(SceneRebuild::new(&ctx, &first, options.accel, MortonBits::Bits30))?;
-            let mut renderer = block_on(Renderer::with_rebuild(&ctx, &first, &rebuild, options.renderer()))?;
+            let mut renderer = build_renderer(&ctx, &first, Some(&rebuild), options)?;
             for frame in 0..frames {
                 if frame > 0 {
                     rebuild.write_spheres(&spheres_at(frame)?.spheres);
@@ -187,6 +231,7 @@ pub fn render_frames(
                 outcome.render_ms.push(timed.gpu_ms.unwrap_or(wall));
                 outcome.rays.push(timed.frame.rays());
                 emit(frame, &timed.frame)?;
+                bar.inc(1);
             }
         }
         None => {
@@ -209,8 +254,10 @@ pub fn render_frames(
                 outcome.render_ms.push(start.elapsed().as_secs_f64() * 1e3);
                 outcome.rays.push(frame_image.rays());
                 emit(frame, &frame_image)?;
+                bar.inc(1);
             }
         }
     }
+    bar.finish_and_clear();
     Ok(outcome)
 }

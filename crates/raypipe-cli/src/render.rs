@@ -249,9 +249,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         samples: args.spp,
     };
     if let Some(frames) = args.frames {
-        // No progress bars between frames; sequences time steady frames instead of a warm-up.
+        // Sequences time steady frames instead of a warm-up.
         let options = RenderOptions {
-            progress: false,
             warm_up: false,
             ..options
         };

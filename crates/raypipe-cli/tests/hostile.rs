@@ -7,7 +7,7 @@ mod common;
 #[allow(dead_code)]
 mod io;
 use common::models::test_dir;
-use common::{assert_clean_error, raypipe};
+use common::{assert_clean_error, raypipe, raypipe_on_a_terminal};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
@@ -448,4 +448,30 @@ fn numbers_near_the_limits_render_right_or_say_which_limit() {
     let plane = format!("{light}[[plane]]\npoint = [0, -1, 0]\nnormal = [0, 3e38, 3e38]\n");
     let (output, _) = render("plane.toml", &plane);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+/// A sequence of frames shows its progress on a terminal, and says where it wrote.
+#[test]
+fn frame_sequences_show_progress_on_a_terminal() {
+    let out = test_dir("hostile-progress").join("last.png");
+    let args = [
+        "render",
+        "bounce:50",
+        "--frames",
+        "12",
+        "--device",
+        "cpu",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "-o",
+    ];
+    let (ok, shown) = raypipe_on_a_terminal(&[&args[..], &[path_str(&out)]].concat());
+    assert!(ok, "{shown}");
+    assert!(
+        shown.contains("frames") && shown.contains("/12"),
+        "no frame count shown: {shown}"
+    );
+    assert!(shown.contains("wrote "), "{shown}");
 }

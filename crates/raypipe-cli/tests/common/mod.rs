@@ -13,6 +13,22 @@ pub fn raypipe(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_raypipe")).args(args).output().unwrap()
 }
 
+/// raypipe run on a terminal, as a user runs it (util-linux's `script` gives it a pseudo-terminal):
+/// what the terminal showed, carriage returns as line breaks, and whether it succeeded.
+pub fn raypipe_on_a_terminal(args: &[&str]) -> (bool, String) {
+    let quoted: Vec<String> = std::iter::once(env!("CARGO_BIN_EXE_raypipe"))
+        .chain(args.iter().copied())
+        .map(|a| format!("'{}'", a.replace('\'', "'\\''")))
+        .collect();
+    let output = Command::new("script")
+        .args(["-qec", &quoted.join(" "), "/dev/null"])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("util-linux's script runs");
+    let shown = String::from_utf8_lossy(&output.stdout).replace('\r', "\n");
+    (output.status.success(), shown)
+}
+
 /// Exit code 2, exactly one line on stderr that starts with `error:` and contains every `needle`.
 pub fn assert_clean_error(output: &Output, needles: &[&str]) {
     let stderr = String::from_utf8_lossy(&output.stderr);

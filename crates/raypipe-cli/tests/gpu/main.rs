@@ -13,6 +13,7 @@ mod bench;
 mod bvh;
 mod limits;
 mod models;
+mod progress;
 mod view;
 
 fn main() -> std::process::ExitCode {
@@ -21,6 +22,7 @@ fn main() -> std::process::ExitCode {
         bvh::tests(),
         limits::tests(),
         models::tests(),
+        progress::tests(),
         view::tests(),
     ];
     common::harness::run(tests.into_iter().flatten().collect())

@@ -432,11 +432,22 @@ impl Renderer {
         samples: u32,
         prepare: impl FnOnce(&mut wgpu::CommandEncoder),
     ) -> Result<TimedFrame, GpuError> {
+        self.render_samples_with(samples, prepare, |_| {}).await
+    }
+
+    /// [`Renderer::render_samples`], calling `sample_done` with the count of samples finished after
+    /// each: for progress bars.
+    pub async fn render_samples_with(
+        &mut self,
+        samples: u32,
+        prepare: impl FnOnce(&mut wgpu::CommandEncoder),
+        mut sample_done: impl FnMut(u32),
+    ) -> Result<TimedFrame, GpuError> {
         self.restart();
         let mut prepare = Some(prepare);
         let mut gpu_ms = self.timer.as_ref().map(|_| 0.0);
         let ctx = self.ctx.clone();
-        for _ in 0..samples.max(1) {
+        for sample in 0..samples.max(1) {
             ctx.checked("rendering", || {
                 let mut encoder = ctx.device.create_command_encoder(&Default::default());
                 if let Some(prepare) = prepare.take() {
@@ -450,6 +461,7 @@ impl Renderer {
             if let (Some(total), Some(ms)) = (gpu_ms.as_mut(), self.read_gpu_ms().await?) {
                 *total += ms;
             }
+            sample_done(sample + 1);
         }
         Ok(TimedFrame {
             frame: self.read_back().await?,
