@@ -13,7 +13,7 @@ use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild}
 use raypipe::image::Frame;
 use raypipe::image::diff::{Tolerance, compare};
 use raypipe::mesh::is_model_path;
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use raypipe::scene::model::{MeshAs, ModelOptions};
@@ -34,6 +34,10 @@ pub struct BenchArgs {
     accel: Vec<Accel>,
     #[arg(long, value_parser = choice::<MemoryMode>(), value_delimiter = ',', default_values_t = [MemoryMode::Storage])]
     memory: Vec<MemoryMode>,
+    /// The stages that trace, each timed at every point: the fragment shader of a full-screen
+    /// triangle (the paper's) and a compute kernel.
+    #[arg(long, value_parser = choice::<Pipeline>(), value_delimiter = ',', default_values_t = Pipeline::ALL.to_vec())]
+    pipeline: Vec<Pipeline>,
     #[arg(long, default_value_t = 256)]
     width: u32,
     #[arg(long, default_value_t = 256)]
@@ -62,6 +66,7 @@ pub struct BenchArgs {
 #[derive(Serialize, Clone)]
 struct Row {
     count: usize,
+    pipeline: String,
     accel: String,
     memory: String,
     width: u32,
@@ -86,8 +91,9 @@ fn name<T: Choice>(value: &T) -> String {
     value.name().to_string()
 }
 
-fn options(memory: MemoryMode, accel: Accel) -> RendererOptions {
+fn options(pipeline: Pipeline, memory: MemoryMode, accel: Accel) -> RendererOptions {
     RendererOptions {
+        pipeline,
         memory,
         accel,
         ..Default::default()
@@ -128,15 +134,19 @@ struct Reference {
 impl Reference {
     fn new(ctx: &GpuContext, family: &str, count: usize) -> anyhow::Result<Self> {
         let scene = scene(family, count, 64, 48)?;
-        let mut renderer = block_on(Renderer::new(ctx, &scene, options(MemoryMode::Storage, Accel::Brute)))?;
+        let mut renderer = block_on(Renderer::new(
+            ctx,
+            &scene,
+            options(Pipeline::Fragment, MemoryMode::Storage, Accel::Brute),
+        ))?;
         let brute = block_on(renderer.read_frame())?.frame;
         Ok(Self { scene, brute })
     }
 
-    /// Renders `accel` in `memory` and requires brute force's image; a mode that cannot run (a scene
-    /// too big for uniform memory, say) reports why.
-    fn check(&self, ctx: &GpuContext, accel: Accel, memory: MemoryMode) -> anyhow::Result<()> {
-        let mut renderer = block_on(Renderer::new(ctx, &self.scene, options(memory, accel)))?;
+    /// Renders `accel` in `memory` through `pipeline` and requires brute force's image (the fragment
+    /// pipeline's); a mode that cannot run (a scene too big for uniform memory, say) reports why.
+    fn check(&self, ctx: &GpuContext, pipeline: Pipeline, accel: Accel, memory: MemoryMode) -> anyhow::Result<()> {
+        let mut renderer = block_on(Renderer::new(ctx, &self.scene, options(pipeline, memory, accel)))?;
         let frame = block_on(renderer.read_frame())?.frame;
         let color = compare(&frame.display(), &self.brute.display())?;
         let depth = compare(&frame.depth(), &self.brute.depth())?;
@@ -162,7 +172,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         "--rebuild builds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
     );
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
-    let points = args.counts.len() * args.accel.len() * args.memory.len();
+    let points = args.counts.len() * args.pipeline.len() * args.accel.len() * args.memory.len();
     let bar = crate::device::progress_bar(
         true,
         points as u64,
@@ -188,15 +198,22 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         };
         // Made on first need: a run of brute force alone does not render it.
         let mut reference: Option<Reference> = None;
-        for &accel in &args.accel {
+        for (&pipeline, &accel) in args
+            .pipeline
+            .iter()
+            .flat_map(|p| args.accel.iter().map(move |a| (p, a)))
+        {
             for &memory in &args.memory {
-                let point = format!("{count} {} {}", name(&accel), name(&memory));
+                let point = format!("{count} {} {} {}", name(&pipeline), name(&accel), name(&memory));
                 bar.set_message(format!("{point}: compiling, checking the image"));
-                if accel != Accel::Brute {
+                if (pipeline, accel) != (Pipeline::Fragment, Accel::Brute) {
                     if reference.is_none() {
                         reference = Some(Reference::new(&ctx, &args.scene, count)?);
                     }
-                    let checked = reference.as_ref().expect("made above").check(&ctx, accel, memory);
+                    let checked = reference
+                        .as_ref()
+                        .expect("made above")
+                        .check(&ctx, pipeline, accel, memory);
                     if let Err(e) = checked {
                         refused.push(format!("{point}: {}", crate::cli::message(&e)));
                         bar.inc(1);
@@ -205,8 +222,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 }
                 let rebuild = rebuild_for(accel)?;
                 let renderer = match &rebuild {
-                    Some(rebuild) => block_on(Renderer::with_rebuild(&ctx, &packed, rebuild, options(memory, accel))),
-                    None => block_on(Renderer::new(&ctx, &packed, options(memory, accel))),
+                    Some(rebuild) => block_on(Renderer::with_rebuild(
+                        &ctx,
+                        &packed,
+                        rebuild,
+                        options(pipeline, memory, accel),
+                    )),
+                    None => block_on(Renderer::new(&ctx, &packed, options(pipeline, memory, accel))),
                 };
                 let mut renderer = match renderer {
                     Ok(r) => r,
@@ -242,6 +264,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 let ms = median(times.iter().copied());
                 rows.push(Row {
                     count,
+                    pipeline: name(&pipeline),
                     accel: name(&accel),
                     memory: name(&memory),
                     width: args.width,
@@ -276,8 +299,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     } else {
         crate::say!("adapter: {} ({clock}), {}x{}", ctx.describe(), args.width, args.height);
         crate::say!(
-            "{:>8} {:>10} {:>8} {:>10} {:>10} {:>10}",
+            "{:>8} {:>9} {:>10} {:>8} {:>10} {:>10} {:>10}",
             "count",
+            "pipeline",
             "accel",
             "memory",
             "ms",
@@ -286,8 +310,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         );
         for r in &rows {
             crate::say!(
-                "{:>8} {:>10} {:>8} {:>10.3} {:>10.2} {:>10.2}",
+                "{:>8} {:>9} {:>10} {:>8} {:>10.3} {:>10.2} {:>10.2}",
                 r.count,
+                r.pipeline,
                 r.accel,
                 r.memory,
                 r.ms_median,
@@ -307,13 +332,14 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
     let mut file = std::fs::File::create(path).with_context(|| format!("{}: cannot write", path.display()))?;
     writeln!(
         file,
-        "count,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,clock,adapter,backend"
+        "count,pipeline,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,clock,adapter,backend"
     )?;
     for r in rows {
         writeln!(
             file,
-            "{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},\"{}\",{}",
+            "{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},\"{}\",{}",
             r.count,
+            r.pipeline,
             r.accel,
             r.memory,
             r.width,
@@ -334,15 +360,17 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// fps against count, one line per (accel, memory), titled with the adapter and resolution.
+/// fps against count, one line per (pipeline, accel, memory), titled with the adapter and resolution.
 fn write_plot(args: &BenchArgs, ctx: &GpuContext, rows: &[Row]) -> anyhow::Result<()> {
     let mut series: Vec<Series> = Vec::new();
     for r in rows {
-        let label = if args.memory.len() > 1 {
-            format!("{} ({})", r.accel, r.memory)
-        } else {
-            r.accel.clone()
-        };
+        let mut label = r.accel.clone();
+        if args.pipeline.len() > 1 {
+            label = format!("{label}, {}", r.pipeline);
+        }
+        if args.memory.len() > 1 {
+            label = format!("{label} ({})", r.memory);
+        }
         match series.iter_mut().find(|s| s.name == label) {
             Some(s) => s.points.push((r.count as f64, r.fps)),
             None => series.push(Series {

@@ -11,7 +11,7 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::{self, Count};
 use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use std::time::{Duration, Instant};
@@ -29,6 +29,7 @@ pub enum DeviceChoice {
 pub struct RenderOptions {
     pub device: DeviceChoice,
     pub backend: Option<Backend>,
+    pub pipeline: Pipeline,
     pub memory: MemoryMode,
     pub accel: Accel,
     /// Show progress: rows of a CPU render, samples of a GPU render, frames of a sequence, and the
@@ -46,6 +47,7 @@ pub struct RenderOptions {
 impl RenderOptions {
     fn renderer(&self) -> RendererOptions {
         RendererOptions {
+            pipeline: self.pipeline,
             memory: self.memory,
             accel: self.accel,
             count: self.count,

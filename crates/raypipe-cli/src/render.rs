@@ -9,7 +9,7 @@ use raypipe::cpu::Count;
 use raypipe::gpu::Backend;
 use raypipe::image::{FloatImage, Frame, heatmap};
 use raypipe::mesh::is_model_path;
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use raypipe::scene::model::{MeshAs, ModelOptions, Normals};
@@ -67,6 +67,10 @@ pub struct SceneArgs {
     pub depth: Option<u32>,
     #[arg(long, value_parser = choice::<Backend>())]
     pub backend: Option<Backend>,
+    /// The stage that traces on the GPU: the fragment shader of a full-screen triangle (the paper's
+    /// route), or a compute kernel. The images are the same.
+    #[arg(long, value_parser = choice::<Pipeline>(), default_value_t)]
+    pub pipeline: Pipeline,
     #[arg(long, value_parser = choice::<MemoryMode>(), default_value_t)]
     pub memory: MemoryMode,
     #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
@@ -237,6 +241,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let options = RenderOptions {
         device: args.device,
         backend: args.scene.backend,
+        pipeline: args.scene.pipeline,
         memory: args.scene.memory,
         accel: args.scene.accel,
         progress: std::io::stderr().is_terminal(),
@@ -315,7 +320,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
 /// `--stats`'s line on what traced.
 fn say_device(args: &RenderArgs, device: &str) -> anyhow::Result<()> {
     crate::say!(
-        "device: {device}, memory {:?}, accel {:?}, {} samples per pixel",
+        "device: {device}, pipeline {:?}, memory {:?}, accel {:?}, {} samples per pixel",
+        args.scene.pipeline,
         args.scene.memory,
         args.scene.accel,
         args.spp

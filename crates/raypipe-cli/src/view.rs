@@ -102,6 +102,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
     let options = ViewerOptions {
         name: args.scene.spec.clone(),
         modes: Modes {
+            pipeline: args.scene.pipeline,
             accel: args.scene.accel,
             memory: args.scene.memory,
             depth: scene.settings.max_depth,

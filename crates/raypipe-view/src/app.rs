@@ -219,7 +219,13 @@ impl Viewer {
         } != self.modes;
         // The cost view needs the shader's cost variant; the other views share one.
         let same_tracer = !retrace
-            || (asked.accel, asked.memory, asked.depth) == (self.modes.accel, self.modes.memory, self.modes.depth)
+            || (asked.pipeline, asked.accel, asked.memory, asked.depth)
+                == (
+                    self.modes.pipeline,
+                    self.modes.accel,
+                    self.modes.memory,
+                    self.modes.depth,
+                )
                 && (asked.view == DisplayView::Cost) == (self.modes.view == DisplayView::Cost);
         if !same_tracer {
             if !gpu.ctx.memory_modes().contains(&asked.memory) {
@@ -246,7 +252,8 @@ impl Viewer {
         }
         if asked != self.modes {
             log::info!(
-                "acceleration {}, memory {}, depth {}, view {}{}",
+                "pipeline {}, acceleration {}, memory {}, depth {}, view {}{}",
+                asked.pipeline,
                 asked.accel,
                 asked.memory,
                 asked.depth,
@@ -305,6 +312,7 @@ impl Viewer {
         match code {
             KeyCode::KeyR => self.camera.reset(),
             KeyCode::KeyB => asked.accel = next(asked.accel),
+            KeyCode::KeyG => asked.pipeline = next(asked.pipeline),
             KeyCode::KeyM => asked.memory = next(asked.memory),
             KeyCode::KeyV => asked.view = next(asked.view),
             KeyCode::BracketLeft => asked.depth = asked.depth.saturating_sub(1),

@@ -16,13 +16,15 @@ pub use camera::CameraControl;
 
 use raypipe::gpu::{Backend, DisplayView, GpuError};
 use raypipe::image::Frame;
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// What the viewer traces with; every field can change while it runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Modes {
+    /// The stage that traces: the fragment shader of a full-screen triangle, or a compute kernel.
+    pub pipeline: Pipeline,
     pub accel: Accel,
     pub memory: MemoryMode,
     /// Bounces after the primary ray.

@@ -3,7 +3,7 @@
 use crate::Modes;
 use raypipe::Choice;
 use raypipe::gpu::DisplayView;
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
 
 /// What the panel shows.
 pub struct Readout<'a> {
@@ -23,7 +23,7 @@ pub struct Readout<'a> {
 }
 
 pub const KEYS: &str = "drag: orbit · right or middle drag: pan · wheel: dolly · WASD/QE: fly · R: reset\n\
-    B: acceleration · M: memory · [ ]: depth · V: view · Space: pause · Y: vsync · P: screenshot · H: panel";
+    G: pipeline · B: acceleration · M: memory · [ ]: depth · V: view · Space: pause · Y: vsync · P: screenshot · H: panel";
 
 fn choose<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T) {
     egui::ComboBox::from_label(label)
@@ -62,6 +62,7 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout) -> Modes {
                 None => ui.label("BVH build: none (brute force)"),
             };
             ui.separator();
+            choose::<Pipeline>(ui, "pipeline", &mut asked.pipeline);
             choose::<Accel>(ui, "acceleration", &mut asked.accel);
             choose::<MemoryMode>(ui, "memory", &mut asked.memory);
             choose::<DisplayView>(ui, "view", &mut asked.view);

@@ -42,6 +42,7 @@ impl Tracer {
         let mut packed = PackedScene::new(&scene).map_err(|e| e.to_string())?;
         packed.set_camera(camera, size.0, size.1);
         let options = RendererOptions {
+            pipeline: modes.pipeline,
             memory: modes.memory,
             accel: modes.accel,
             count: if modes.view == raypipe::gpu::DisplayView::Cost {

@@ -25,4 +25,4 @@ pub mod scene;
 
 pub use choice::Choice;
 pub use error::{Element, InputError};
-pub use modes::{Accel, MemoryMode};
+pub use modes::{Accel, MemoryMode, Pipeline};

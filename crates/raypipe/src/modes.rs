@@ -79,6 +79,33 @@ impl_choice!(
     ]
 );
 
+/// Which shader stage runs the tracer. Both call the same tracer functions and write the same
+/// targets, bit for bit alike on one adapter; WebGL2 has the fragment stage only.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Pipeline {
+    /// The paper's route: a full-screen triangle, the tracer in the fragment stage.
+    #[default]
+    Fragment,
+    /// A compute dispatch of 8x8 workgroups over the image, writing storage textures.
+    Compute,
+}
+
+impl_choice!(
+    Pipeline,
+    [
+        (
+            Fragment,
+            "fragment",
+            "the graphics pipeline: a full-screen triangle, the tracer in the fragment stage"
+        ),
+        (
+            Compute,
+            "compute",
+            "a compute dispatch of 8x8 workgroups over the image, writing storage textures"
+        ),
+    ]
+);
+
 /// What a pixel's fourth colour channel holds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Count {

@@ -5,7 +5,7 @@ use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::shader::{ShaderConfig, compose};
 use raypipe::gpu::upload::{TEXELS_PER_ROW, record_arrays};
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::{LAYOUTS, PackedScene, StructLayout};
 use raypipe::scene::{Scene, builtin};
 
@@ -70,10 +70,14 @@ fn every_shader_variant_validates() {
     empty.lights.clear();
     let empty = PackedScene::new(&empty).unwrap();
     for scene in [&scene, &empty] {
-        for &memory in MemoryMode::ALL {
+        for (&pipeline, &memory) in Pipeline::ALL
+            .iter()
+            .flat_map(|p| MemoryMode::ALL.iter().map(move |m| (p, m)))
+        {
             for &accel in Accel::ALL {
                 for max_depth in [0, 5] {
                     let source = compose(&ShaderConfig {
+                        pipeline,
                         memory,
                         accel,
                         max_depth,
@@ -88,7 +92,7 @@ fn every_shader_variant_validates() {
                         .validate(&module)
                         .unwrap_or_else(|e| {
                             panic!(
-                                "{memory:?}, {accel:?}, depth {max_depth}: {}",
+                                "{pipeline:?}, {memory:?}, {accel:?}, depth {max_depth}: {}",
                                 e.emit_to_string(&source)
                             )
                         });
@@ -140,6 +144,7 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
     let scene = PackedScene::new(&builtin::whitted()).unwrap();
     for &accel in Accel::ALL {
         let source = compose(&ShaderConfig {
+            pipeline: Pipeline::Fragment,
             memory: MemoryMode::Storage,
             accel,
             max_depth: 5,

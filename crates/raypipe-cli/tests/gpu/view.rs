@@ -62,9 +62,14 @@ fn matches(a: &Path, b: &Path) -> Result<(), String> {
 
 fn scripted_frames_are_the_render(_: &GpuContext) {
     let dir = test_dir("view-scripted");
-    for (scene, extra) in [("whitted", &[][..]), ("random:2000", &["--accel", "stack"][..])] {
-        let shot = viewed(&dir, scene, extra, 3);
-        let render = rendered(&dir, scene, extra);
+    // The viewer through the compute pipeline shows render's frame from the fragment pipeline.
+    for (scene, viewer_flags, render_flags) in [
+        ("whitted", &[][..], &[][..]),
+        ("random:2000", &["--accel", "stack"][..], &["--accel", "stack"][..]),
+        ("whitted", &["--pipeline", "compute"][..], &[][..]),
+    ] {
+        let shot = viewed(&dir, scene, viewer_flags, 3);
+        let render = rendered(&dir, scene, render_flags);
         matches(&shot, &render).unwrap_or_else(|e| panic!("{scene}: the viewer's frame is not render's: {e}"));
     }
 }

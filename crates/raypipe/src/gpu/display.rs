@@ -90,8 +90,8 @@ impl Display {
                     },
                     count: None,
                 },
-                target_entry(1),
-                target_entry(2),
+                target_entry(1, wgpu::ShaderStages::FRAGMENT),
+                target_entry(2, wgpu::ShaderStages::FRAGMENT),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

@@ -1,6 +1,7 @@
 //! The renderer: one full-screen triangle, a passthrough vertex stage, and the tracer in the
 //! fragment stage writing the frame targets (colour and ray count, normal and depth, as f32 bits in
-//! rgba32uint). It owns its handles and its targets, records its work into a caller's encoder, and
+//! rgba32uint); or, with [`Pipeline::Compute`], the same tracer in a compute kernel writing the same
+//! targets as storage textures. It owns its handles and its targets, records its work into a caller's encoder, and
 //! never reads back unless asked: a window shows the targets through [`super::display::Display`],
 //! files and tests read them with [`Renderer::read_frame`].
 //!
@@ -18,7 +19,7 @@ use super::{GpuContext, GpuError};
 use crate::error::MissingBvh;
 use crate::image::Frame;
 use crate::modes::Count;
-use crate::modes::{Accel, MemoryMode};
+use crate::modes::{Accel, MemoryMode, Pipeline};
 use crate::records::{GpuCamera, GpuGlobals, PackedScene};
 use crate::scene::Camera;
 use wgpu::util::DeviceExt;
@@ -29,10 +30,21 @@ const TARGET_BYTES_PER_PIXEL: u32 = 16;
 
 /// A triangle whose clip-space corners cover the whole viewport.
 const FULLSCREEN_TRIANGLE: [[f32; 2]; 3] = [[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]];
+/// The compute kernel's workgroup side (`@workgroup_size(8, 8)` in compute.wgsl).
+const COMPUTE_TILE: u32 = 8;
+
+/// The shader stage that runs the tracer: what its bindings are visible to.
+pub(super) fn tracer_stage(pipeline: Pipeline) -> wgpu::ShaderStages {
+    match pipeline {
+        Pipeline::Fragment => wgpu::ShaderStages::FRAGMENT,
+        Pipeline::Compute => wgpu::ShaderStages::COMPUTE,
+    }
+}
 
 /// How a renderer traces.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RendererOptions {
+    pub pipeline: Pipeline,
     pub memory: MemoryMode,
     pub accel: Accel,
     /// What the colour target's fourth channel counts.
@@ -52,7 +64,11 @@ pub struct FrameTargets {
 }
 
 impl FrameTargets {
-    fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+    fn new(device: &wgpu::Device, width: u32, height: u32, pipeline: Pipeline) -> Self {
+        let written_as = match pipeline {
+            Pipeline::Fragment => wgpu::TextureUsages::RENDER_ATTACHMENT,
+            Pipeline::Compute => wgpu::TextureUsages::STORAGE_BINDING,
+        };
         let [color, surface] = ["color target", "surface target"].map(|label| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -65,9 +81,7 @@ impl FrameTargets {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format: TARGET_FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::COPY_SRC
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                usage: written_as | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
         });
@@ -93,7 +107,8 @@ impl FrameTargets {
 /// Two pairs of targets that take turns: a draw reads the sums in one and writes the other.
 struct Accumulation {
     targets: [FrameTargets; 2],
-    /// `reads[k]` binds `targets[k]` as the previous sample's, for a draw into `targets[1 - k]`.
+    /// `reads[k]` binds `targets[k]` as the previous sample's, for a draw into `targets[1 - k]`
+    /// (which a compute kernel finds bound beside them).
     reads: [wgpu::BindGroup; 2],
     /// The pair holding the latest sums.
     current: usize,
@@ -102,22 +117,22 @@ struct Accumulation {
 }
 
 impl Accumulation {
-    fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, width: u32, height: u32) -> Self {
-        let targets = [0, 1].map(|_| FrameTargets::new(device, width, height));
+    fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, width: u32, height: u32, pipeline: Pipeline) -> Self {
+        let targets = [0, 1].map(|_| FrameTargets::new(device, width, height, pipeline));
         let reads = [0, 1].map(|k| {
+            let view = |binding, view| wgpu::BindGroupEntry {
+                binding,
+                resource: wgpu::BindingResource::TextureView(view),
+            };
+            let (read, written) = (&targets[k], &targets[1 - k]);
+            let mut entries = vec![view(0, &read.color_view), view(1, &read.surface_view)];
+            if pipeline == Pipeline::Compute {
+                entries.extend([view(2, &written.color_view), view(3, &written.surface_view)]);
+            }
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("previous sample"),
                 layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&targets[k].color_view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&targets[k].surface_view),
-                    },
-                ],
+                entries: &entries,
             })
         });
         Self {
@@ -136,16 +151,24 @@ pub struct TimedFrame {
 }
 
 /// A scene uploaded and a pipeline built for it, ready to trace frames into its targets.
+/// The tracer's pipeline: the full-screen triangle's, or the compute kernel's.
+enum TracePipeline {
+    Fragment {
+        pipeline: wgpu::RenderPipeline,
+        vertices: wgpu::Buffer,
+    },
+    Compute(wgpu::ComputePipeline),
+}
+
 pub struct Renderer {
     ctx: GpuContext,
     options: RendererOptions,
-    pipeline: wgpu::RenderPipeline,
+    pipeline: TracePipeline,
     bind_group: wgpu::BindGroup,
     /// The layout of the previous sample's targets (group 1).
     previous_layout: wgpu::BindGroupLayout,
     globals: GpuGlobals,
     globals_buffer: wgpu::Buffer,
-    vertices: wgpu::Buffer,
     accumulation: Accumulation,
     /// Where [`Renderer::read_frame`] copies the targets; sized with them.
     readbacks: [TextureReadback; 2],
@@ -220,16 +243,15 @@ impl Renderer {
     ) -> Result<Self, GpuError> {
         let (width, height) = (scene.width(), scene.height());
         check_size(ctx, width, height)?;
-        let features = ctx.adapter.get_texture_format_features(TARGET_FORMAT);
-        if !features.allowed_usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT) {
-            return Err(GpuError::Unsupported {
-                adapter: ctx.describe(),
-                what: "render to rgba32uint targets",
-            });
-        }
-        let RendererOptions { memory, accel, count } = options;
+        let RendererOptions {
+            pipeline,
+            memory,
+            accel,
+            count,
+        } = options;
+        check_pipeline(ctx, pipeline)?;
         ctx.checked("uploading the scene and building the pipeline", || {
-            let resources = upload(ctx, scene, memory, accel, shared)?;
+            let resources = upload(ctx, scene, memory, accel, shared, tracer_stage(pipeline))?;
             let globals = scene.globals;
             let globals_buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("globals"),
@@ -237,6 +259,7 @@ impl Renderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             });
             let source = compose(&ShaderConfig {
+                pipeline,
                 memory,
                 accel,
                 max_depth: scene.max_depth,
@@ -245,23 +268,18 @@ impl Renderer {
                 texels_per_row: resources.texels_per_row,
                 write_cost: count == Count::Cost,
             });
-            let previous_layout = previous_sample_layout(&ctx.device);
-            let (pipeline, bind_group) = build_pipeline(ctx, &source, &resources, &globals_buffer, &previous_layout);
-            let vertices = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("fullscreen triangle"),
-                contents: bytemuck::cast_slice(&FULLSCREEN_TRIANGLE),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
+            let previous_layout = previous_sample_layout(&ctx.device, pipeline);
+            let (trace_pipeline, bind_group) =
+                build_pipeline(ctx, pipeline, &source, &resources, &globals_buffer, &previous_layout);
             Ok(Self {
                 ctx: ctx.clone(),
                 options,
-                pipeline,
+                pipeline: trace_pipeline,
                 bind_group,
-                accumulation: Accumulation::new(&ctx.device, &previous_layout, width, height),
+                accumulation: Accumulation::new(&ctx.device, &previous_layout, width, height, pipeline),
                 previous_layout,
                 globals,
                 globals_buffer,
-                vertices,
                 readbacks: readbacks(&ctx.device, width, height),
                 bvh_frame: shared.and_then(|s| s.bvh_frame.clone()),
                 resources,
@@ -331,7 +349,13 @@ impl Renderer {
             return Ok(());
         }
         check_size(&self.ctx, width, height)?;
-        self.accumulation = Accumulation::new(&self.ctx.device, &self.previous_layout, width, height);
+        self.accumulation = Accumulation::new(
+            &self.ctx.device,
+            &self.previous_layout,
+            width,
+            height,
+            self.options.pipeline,
+        );
         self.readbacks = readbacks(&self.ctx.device, width, height);
         self.write_camera(GpuCamera {
             aspect: width as f32 / height as f32,
@@ -367,31 +391,46 @@ impl Renderer {
             .write_buffer(&self.globals_buffer, offset, bytemuck::bytes_of(&sample));
         let read = self.accumulation.current;
         let written = &self.accumulation.targets[1 - read];
-        let attachments = [&written.color_view, &written.surface_view].map(|view| {
-            Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })
-        });
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("trace"),
-            color_attachments: &attachments,
-            depth_stencil_attachment: None,
-            timestamp_writes: self.timer.as_ref().map(|t| t.render_writes(0)),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.set_bind_group(1, &self.accumulation.reads[read], &[]);
-        pass.set_vertex_buffer(0, self.vertices.slice(..));
-        pass.draw(0..3, 0..1);
-        drop(pass);
+        let previous = &self.accumulation.reads[read];
+        match &self.pipeline {
+            TracePipeline::Fragment { pipeline, vertices } => {
+                let attachments = [&written.color_view, &written.surface_view].map(|view| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                });
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("trace"),
+                    color_attachments: &attachments,
+                    depth_stencil_attachment: None,
+                    timestamp_writes: self.timer.as_ref().map(|t| t.render_writes(0)),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &self.bind_group, &[]);
+                pass.set_bind_group(1, previous, &[]);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.draw(0..3, 0..1);
+            }
+            TracePipeline::Compute(pipeline) => {
+                let (width, height) = written.size();
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("trace"),
+                    timestamp_writes: self.timer.as_ref().map(|t| t.compute_writes(0)),
+                });
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &self.bind_group, &[]);
+                pass.set_bind_group(1, previous, &[]);
+                pass.dispatch_workgroups(width.div_ceil(COMPUTE_TILE), height.div_ceil(COMPUTE_TILE), 1);
+            }
+        }
         if let Some(timer) = &self.timer {
             timer.resolve(encoder);
         }
@@ -523,11 +562,40 @@ fn readbacks(device: &wgpu::Device, width: u32, height: u32) -> [TextureReadback
     [0, 1].map(|_| TextureReadback::new(device, width, height, TARGET_BYTES_PER_PIXEL))
 }
 
-/// A frame target read by a fragment shader (`texture_2d<u32>`) at `binding`.
-pub(super) fn target_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+/// What the pipeline needs of the adapter beyond the fragment stage's rgba32uint targets.
+fn check_pipeline(ctx: &GpuContext, pipeline: Pipeline) -> Result<(), GpuError> {
+    let usages = ctx.adapter.get_texture_format_features(TARGET_FORMAT).allowed_usages;
+    let unsupported = |what| {
+        Err(GpuError::Unsupported {
+            adapter: ctx.describe(),
+            what,
+        })
+    };
+    match pipeline {
+        Pipeline::Fragment if !usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT) => {
+            unsupported("render to rgba32uint targets")
+        }
+        Pipeline::Compute
+            if !ctx
+                .adapter
+                .get_downlevel_capabilities()
+                .flags
+                .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS) =>
+        {
+            unsupported("run compute shaders (--pipeline compute)")
+        }
+        Pipeline::Compute if !usages.contains(wgpu::TextureUsages::STORAGE_BINDING) => {
+            unsupported("write rgba32uint storage textures (--pipeline compute)")
+        }
+        _ => Ok(()),
+    }
+}
+
+/// A frame target read by a shader stage (`texture_2d<u32>`) at `binding`.
+pub(super) fn target_entry(binding: u32, stage: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
+        visibility: stage,
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Uint,
             view_dimension: wgpu::TextureViewDimension::D2,
@@ -537,21 +605,37 @@ pub(super) fn target_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// Group 1: the previous sample's colour and surface targets.
-fn previous_sample_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+/// Group 1: the previous sample's colour and surface targets; for the compute kernel, the targets
+/// it writes too, as storage textures.
+fn previous_sample_layout(device: &wgpu::Device, pipeline: Pipeline) -> wgpu::BindGroupLayout {
+    let stage = tracer_stage(pipeline);
+    let mut entries = vec![target_entry(0, stage), target_entry(1, stage)];
+    if pipeline == Pipeline::Compute {
+        entries.extend([2, 3].map(|binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: stage,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: TARGET_FORMAT,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
+            count: None,
+        }));
+    }
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("previous sample"),
-        entries: &[target_entry(0), target_entry(1)],
+        entries: &entries,
     })
 }
 
 fn build_pipeline(
     ctx: &GpuContext,
+    kind: Pipeline,
     source: &str,
     resources: &SceneResources,
     globals: &wgpu::Buffer,
     previous_layout: &wgpu::BindGroupLayout,
-) -> (wgpu::RenderPipeline, wgpu::BindGroup) {
+) -> (TracePipeline, wgpu::BindGroup) {
     let device = &ctx.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("trace"),
@@ -559,7 +643,7 @@ fn build_pipeline(
     });
     let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
         binding: 0,
-        visibility: wgpu::ShaderStages::FRAGMENT,
+        visibility: tracer_stage(kind),
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
             has_dynamic_offset: false,
@@ -587,6 +671,17 @@ fn build_pipeline(
         bind_group_layouts: &[Some(&bind_group_layout), Some(previous_layout)],
         immediate_size: 0,
     });
+    if kind == Pipeline::Compute {
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("trace"),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some("cs_main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        return (TracePipeline::Compute(pipeline), bind_group);
+    }
     let target = Some(wgpu::ColorTargetState {
         format: TARGET_FORMAT,
         blend: None,
@@ -617,5 +712,10 @@ fn build_pipeline(
         multiview_mask: None,
         cache: None,
     });
-    (pipeline, bind_group)
+    let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("fullscreen triangle"),
+        contents: bytemuck::cast_slice(&FULLSCREEN_TRIANGLE),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    (TracePipeline::Fragment { pipeline, vertices }, bind_group)
 }

@@ -1,10 +1,11 @@
-//! Assembles the fragment shader from its files and a small generated preamble.
+//! Assembles the tracer's shader from its files and a small generated preamble.
 //!
 //! The preamble holds what must be known at compile time (the ray stack size for `--depth`, uniform
 //! array lengths, the texture row width) and the memory mode's `load_*` accessors, so one tracer
-//! source serves every memory mode and acceleration structure.
+//! source serves every memory mode and acceleration structure; the pipeline adds its entry points
+//! (a full-screen triangle's vertex and fragment stages, or a compute kernel) around it.
 
-use crate::modes::{Accel, MemoryMode};
+use crate::modes::{Accel, MemoryMode, Pipeline};
 use crate::records::constants;
 use std::fmt::Write;
 
@@ -18,6 +19,7 @@ pub fn records_source() -> String {
 }
 const TEXELS: &str = include_str!("shaders/texels.wgsl");
 const FULLSCREEN: &str = include_str!("shaders/fullscreen.wgsl");
+const COMPUTE: &str = include_str!("shaders/compute.wgsl");
 const INTERSECT: &str = include_str!("shaders/intersect.wgsl");
 const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
 const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
@@ -38,6 +40,7 @@ pub struct RecordArray {
 }
 
 pub struct ShaderConfig<'a> {
+    pub pipeline: Pipeline,
     pub memory: MemoryMode,
     pub accel: Accel,
     pub max_depth: u32,
@@ -55,8 +58,8 @@ pub fn compose(config: &ShaderConfig) -> String {
     let w = &mut source;
     writeln!(
         w,
-        "// Generated preamble: memory {:?}, accel {:?}.",
-        config.memory, config.accel
+        "// Generated preamble: {:?} pipeline, memory {:?}, accel {:?}.",
+        config.pipeline, config.memory, config.accel
     )
     .unwrap();
     writeln!(w, "const MAX_DEPTH: u32 = {}u;", config.max_depth).unwrap();
@@ -109,7 +112,11 @@ pub fn compose(config: &ShaderConfig) -> String {
     };
     source.push('\n');
     source.push_str(&records_source());
-    for part in [TEXELS, FULLSCREEN, INTERSECT, accel, SHADE, TRACE] {
+    let entry_points = match config.pipeline {
+        Pipeline::Fragment => FULLSCREEN,
+        Pipeline::Compute => COMPUTE,
+    };
+    for part in [TEXELS, INTERSECT, accel, SHADE, TRACE, entry_points] {
         source.push('\n');
         source.push_str(part);
     }

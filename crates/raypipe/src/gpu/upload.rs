@@ -104,6 +104,7 @@ pub fn upload(
     memory: MemoryMode,
     accel: Accel,
     shared: Option<&SharedBuffers>,
+    stage: wgpu::ShaderStages,
 ) -> Result<SceneResources, GpuError> {
     if shared.is_some() && memory != MemoryMode::Storage {
         return Err(GpuError::RebuildNeedsStorage { memory });
@@ -212,7 +213,7 @@ pub fn upload(
         };
         out.layout_entries.push(wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
+            visibility: stage,
             ty,
             count: None,
         });

@@ -14,6 +14,23 @@ use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use std::path::{Path, PathBuf};
 
+/// Whitted's scene (mirror, glass, checker floor, two lights) with a quad of two triangles behind,
+/// at `width` x `height`: every primitive kind in one image.
+pub fn whitted_with_quad(width: u32, height: u32) -> Scene {
+    let mut scene = raypipe::scene::builtin::whitted();
+    scene.settings.width = width;
+    scene.settings.height = height;
+    let q = [(1.2, -1.0), (2.8, -1.0), (2.8, 1.0), (1.2, 1.0)].map(|(x, y)| glam::Vec3::new(x, y, 2.0));
+    for [a, b, c] in [[0, 2, 1], [0, 3, 2]] {
+        scene.triangles.push(raypipe::scene::Triangle {
+            vertices: [q[a], q[b], q[c]],
+            normals: None,
+            material: 1,
+        });
+    }
+    scene
+}
+
 /// A scene at a test size and depth, packed.
 pub fn packed(spec: &str, width: u32, height: u32, max_depth: u32) -> PackedScene {
     let mut scene = Scene::load(spec).unwrap();

@@ -53,6 +53,7 @@ fn sixteen_samples_agree(ctx: &GpuContext) {
             memory,
             accel: Accel::Threaded,
             count,
+            ..Default::default()
         };
         let mut gpu = renderer(ctx, &scene, options);
         let frame = pollster::block_on(gpu.render_samples(16, |_| {})).unwrap().frame;
@@ -137,6 +138,7 @@ fn cost_aov_counts_the_same_tests_on_both_devices(ctx: &GpuContext) {
             memory: MemoryMode::Storage,
             accel,
             count: Count::Cost,
+            ..Default::default()
         };
         let gpu = pollster::block_on(renderer(ctx, &scene, options).read_frame())
             .unwrap()

@@ -13,6 +13,7 @@ mod frames;
 mod gpu_build;
 mod gpu_vs_cpu;
 mod memory_modes;
+mod pipelines;
 mod scale;
 mod scans;
 mod watertight;
@@ -25,6 +26,7 @@ fn main() -> std::process::ExitCode {
         gpu_build::tests(),
         gpu_vs_cpu::tests(),
         memory_modes::tests(),
+        pipelines::tests(),
         scale::tests(),
         scans::tests(),
         watertight::tests(),

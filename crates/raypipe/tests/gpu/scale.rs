@@ -6,7 +6,6 @@
 
 use crate::common::harness::Test;
 use crate::common::*;
-use glam::Vec3;
 use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::GpuContext;
@@ -14,23 +13,10 @@ use raypipe::image::Frame;
 use raypipe::image::diff::Tolerance;
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
-use raypipe::scene::{MAX_COORDINATE, MIN_RADIUS, Scene, Triangle};
+use raypipe::scene::{MAX_COORDINATE, MIN_RADIUS, Scene};
 
-/// Whitted's scene (mirror, glass, checker floor, two lights) with a quad of two triangles behind,
-/// at 96 x 72.
 fn base() -> Scene {
-    let mut scene = raypipe::scene::builtin::whitted();
-    scene.settings.width = 96;
-    scene.settings.height = 72;
-    let q = [(1.2, -1.0), (2.8, -1.0), (2.8, 1.0), (1.2, 1.0)].map(|(x, y)| Vec3::new(x, y, 2.0));
-    for [a, b, c] in [[0, 2, 1], [0, 3, 2]] {
-        scene.triangles.push(Triangle {
-            vertices: [q[a], q[b], q[c]],
-            normals: None,
-            material: 1,
-        });
-    }
-    scene
+    whitted_with_quad(96, 72)
 }
 
 /// Every length of the scene times `k`.

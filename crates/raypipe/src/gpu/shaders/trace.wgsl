@@ -139,23 +139,23 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
 
 // Both targets are rgba32uint holding f32 bits: integer targets are colour-renderable everywhere
 // (float targets are not on GLES/WebGL2 without an extension), and bits read back exactly. They hold
-// sums over the samples so far: each draw reads the previous pair and writes the other one.
-struct FragmentOutput {
+// sums over the samples so far: each sample reads the previous pair and writes the other one.
+struct PixelSums {
     // rgb: linear radiance; a: rays traced for this pixel (its cost, with WRITE_COST); summed.
-    @location(0) color: vec4<u32>,
+    color: vec4<u32>,
     // xyz: first-hit normal; w: first-hit distance or DEPTH_MISS; the centre sample's.
-    @location(1) surface: vec4<u32>,
+    surface: vec4<u32>,
 }
 
 // The targets the previous sample wrote; unread by sample 0.
 @group(1) @binding(0) var previous_color: texture_2d<u32>;
 @group(1) @binding(1) var previous_surface: texture_2d<u32>;
 
-@fragment
-fn fs_main(@builtin(position) position: vec4<f32>) -> FragmentOutput {
+// The pixel's next sample, added to the sums of those before it: what either entry point writes
+// (fs_main in fullscreen.wgsl, cs_main in compute.wgsl).
+fn sample_pixel(pixel: vec2<u32>) -> PixelSums {
     ray_count = 0u;
     box_tests = 0u;
-    let pixel = vec2<u32>(position.xy);
     let sample = globals.camera.sample;
     let traced = trace_pixel(camera_ray(vec2<f32>(pixel) + sample_offset(pixel, sample)));
     let count = select(ray_count, primary_cost, WRITE_COST);
@@ -166,5 +166,5 @@ fn fs_main(@builtin(position) position: vec4<f32>) -> FragmentOutput {
         color = bitcast<vec4<f32>>(textureLoad(previous_color, texel, 0)) + color;
         surface = bitcast<vec4<f32>>(textureLoad(previous_surface, texel, 0));
     }
-    return FragmentOutput(bitcast<vec4<u32>>(color), bitcast<vec4<u32>>(surface));
+    return PixelSums(bitcast<vec4<u32>>(color), bitcast<vec4<u32>>(surface));
 }
