@@ -23,9 +23,10 @@ fn bench_reports_every_point_with_the_documented_keys(_: &GpuContext) {
         .unwrap();
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let rows: Vec<serde_json::Value> = serde_json::from_slice(&output.stdout).unwrap();
-    assert_eq!(rows.len(), 8, "two counts times four modes");
+    assert_eq!(rows.len(), 16, "two counts times two pipelines times four modes");
     let keys = [
         "count",
+        "pipeline",
         "accel",
         "memory",
         "width",
@@ -52,14 +53,19 @@ fn bench_reports_every_point_with_the_documented_keys(_: &GpuContext) {
         assert!(row["mrays_per_s"].as_f64().unwrap() > 0.0);
     }
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 9, "a header and eight rows");
+    assert_eq!(csv.lines().count(), 17, "a header and sixteen rows");
+    assert!(csv.starts_with("count,pipeline,accel,"), "{csv}");
+    for pipeline in ["fragment", "compute"] {
+        let rows_of = rows.iter().filter(|r| r["pipeline"] == pipeline).count();
+        assert_eq!(rows_of, 8, "{pipeline}: a row per count and mode");
+    }
     assert!(out.join("results.json").exists());
     let plot = image::open(out.join("fps.png")).unwrap();
     assert!(plot.width() > 100 && plot.height() > 100);
     let svg = std::fs::read_to_string(out.join("fps.svg")).unwrap();
     assert!(
-        svg.contains("<svg") && svg.contains("stackless"),
-        "the SVG names its lines"
+        svg.contains("<svg") && svg.contains("stackless, compute") && svg.contains("stackless, fragment"),
+        "the SVG names its lines, one per pipeline"
     );
 }
 
