@@ -8,6 +8,7 @@ use anyhow::{Context, bail};
 use clap::Args;
 use pollster::block_on;
 use raypipe::Choice;
+use raypipe::bvh::BuildTimings;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
@@ -30,6 +31,10 @@ pub struct BenchArgs {
     scene: String,
     #[arg(long, value_delimiter = ',', default_values_t = [1000, 2000, 5000, 10000, 20000])]
     counts: Vec<usize>,
+    /// With a model file: time spheres on its surface, one point per count (the default), or its
+    /// triangles, one point (--counts unused).
+    #[arg(long = "as", value_parser = choice::<MeshAs>())]
+    as_: Option<MeshAs>,
     #[arg(long, value_parser = choice::<Accel>(), value_delimiter = ',', default_values_t = Accel::ALL.to_vec())]
     accel: Vec<Accel>,
     #[arg(long, value_parser = choice::<MemoryMode>(), value_delimiter = ',', default_values_t = [MemoryMode::Storage])]
@@ -81,10 +86,45 @@ struct Row {
     mrays_per_s: f64,
     /// GPU time of the per-frame LBVH build (median), with --rebuild.
     build_ms_median: Option<f64>,
+    /// The same build's phases, each the median over the frames.
+    build_phases_ms: Option<BuildPhases>,
     /// "gpu timestamps" or "wall clock".
     clock: String,
     adapter: String,
     backend: String,
+}
+
+/// Per-phase medians of a rebuild's timings (`BuildTimings`' phases).
+#[derive(Serialize, Clone, Copy)]
+struct BuildPhases {
+    morton: f64,
+    sort: f64,
+    hierarchy: f64,
+    bounds: f64,
+    links: f64,
+}
+
+impl BuildPhases {
+    fn median_of(builds: &[BuildTimings]) -> Option<Self> {
+        let phase = |f: fn(&BuildTimings) -> f64| median(builds.iter().map(f));
+        (!builds.is_empty()).then(|| Self {
+            morton: phase(|b| b.morton),
+            sort: phase(|b| b.sort),
+            hierarchy: phase(|b| b.hierarchy),
+            bounds: phase(|b| b.bounds),
+            links: phase(|b| b.links),
+        })
+    }
+
+    fn csv(phases: Option<Self>) -> String {
+        match phases {
+            Some(p) => format!(
+                "{:.4},{:.4},{:.4},{:.4},{:.4}",
+                p.morton, p.sort, p.hierarchy, p.bounds, p.links
+            ),
+            None => ",,,,".into(),
+        }
+    }
 }
 
 fn name<T: Choice>(value: &T) -> String {
@@ -101,12 +141,12 @@ fn options(pipeline: Pipeline, memory: MemoryMode, accel: Accel) -> RendererOpti
 }
 
 /// The scene of one bench point, at the given size, packed with a CPU-built BVH: a built-in family
-/// at `count` spheres, or a model with `count` spheres on its surface.
-fn scene(family: &str, count: usize, width: u32, height: u32) -> anyhow::Result<PackedScene> {
+/// at `count` spheres, or a model with `count` spheres on its surface or as its triangles.
+fn scene(family: &str, as_: MeshAs, count: usize, width: u32, height: u32) -> anyhow::Result<PackedScene> {
     let mut scene = if is_model_path(Path::new(family)) {
         let options = ModelOptions {
-            as_: Some(MeshAs::Spheres),
-            spheres: Some(count),
+            as_: Some(as_),
+            spheres: (as_ == MeshAs::Spheres).then_some(count),
             ..Default::default()
         };
         Scene::load_with(family, &options)?
@@ -132,8 +172,9 @@ struct Reference {
 }
 
 impl Reference {
-    fn new(ctx: &GpuContext, family: &str, count: usize) -> anyhow::Result<Self> {
-        let scene = scene(family, count, 64, 48)?;
+    /// At 64x48, or the bench's size where that is smaller.
+    fn new(ctx: &GpuContext, family: &str, as_: MeshAs, count: usize, size: (u32, u32)) -> anyhow::Result<Self> {
+        let scene = scene(family, as_, count, size.0.min(64), size.1.min(48))?;
         let mut renderer = block_on(Renderer::new(
             ctx,
             &scene,
@@ -171,8 +212,19 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         !args.rebuild || args.memory.iter().all(|&m| m == MemoryMode::Storage),
         "--rebuild builds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
     );
+    let as_ = args.as_.unwrap_or(MeshAs::Spheres);
+    anyhow::ensure!(
+        as_ == MeshAs::Spheres || is_model_path(Path::new(&args.scene)),
+        "--as triangles times a model file's triangles: name a .ply, .obj or .off"
+    );
+    // A model's triangles are one point, whatever the counts.
+    let counts = if as_ == MeshAs::Triangles {
+        vec![0]
+    } else {
+        args.counts.clone()
+    };
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
-    let points = args.counts.len() * args.pipeline.len() * args.accel.len() * args.memory.len();
+    let points = counts.len() * args.pipeline.len() * args.accel.len() * args.memory.len();
     let bar = crate::device::progress_bar(
         true,
         points as u64,
@@ -180,10 +232,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     );
     let mut rows = Vec::new();
     let mut refused = Vec::new();
-    for &count in &args.counts {
-        let packed = scene(&args.scene, count, args.width, args.height)?;
-        // One rebuild per walk, which writes the count's primitives into its own buffers: the stack
-        // and threaded walks also lay out its tree.
+    for &count in &counts {
+        let packed = scene(&args.scene, as_, count, args.width, args.height)?;
+        let count = packed.primitive_count();
+        // One rebuild per walk, which writes the count's primitives into its own buffers (the stack
+        // and threaded walks also lay out its tree), shared by the walk's pipelines and memories.
         let rebuild_for = |accel: Accel| -> anyhow::Result<Option<SceneRebuild>> {
             if args.rebuild && accel.uses_bvh() {
                 Ok(Some(block_on(SceneRebuild::new(
@@ -198,17 +251,19 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         };
         // Made on first need: a run of brute force alone does not render it.
         let mut reference: Option<Reference> = None;
-        for (&pipeline, &accel) in args
-            .pipeline
-            .iter()
-            .flat_map(|p| args.accel.iter().map(move |a| (p, a)))
-        {
-            for &memory in &args.memory {
+        for &accel in &args.accel {
+            let rebuild = rebuild_for(accel)?;
+            for (&pipeline, &memory) in args
+                .pipeline
+                .iter()
+                .flat_map(|p| args.memory.iter().map(move |m| (p, m)))
+            {
                 let point = format!("{count} {} {} {}", name(&pipeline), name(&accel), name(&memory));
                 bar.set_message(format!("{point}: compiling, checking the image"));
                 if (pipeline, accel) != (Pipeline::Fragment, Accel::Brute) {
                     if reference.is_none() {
-                        reference = Some(Reference::new(&ctx, &args.scene, count)?);
+                        let size = (args.width, args.height);
+                        reference = Some(Reference::new(&ctx, &args.scene, as_, count, size)?);
                     }
                     let checked = reference
                         .as_ref()
@@ -220,7 +275,6 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                         continue;
                     }
                 }
-                let rebuild = rebuild_for(accel)?;
                 let renderer = match &rebuild {
                     Some(rebuild) => block_on(Renderer::with_rebuild(
                         &ctx,
@@ -256,7 +310,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                         rays = timed.frame.rays();
                         if let Some(rebuild) = &rebuild {
                             // The 16-byte layout of the tree, for the walks that read it, is part of the rebuild.
-                            builds.push(block_on(rebuild.read_timings())?.total());
+                            builds.push(block_on(rebuild.read_timings())?);
                         }
                     }
                 }
@@ -276,20 +330,20 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     ms_max: times[times.len() - 1],
                     fps: 1e3 / ms,
                     mrays_per_s: rays as f64 / (ms * 1e3),
-                    build_ms_median: (!builds.is_empty()).then(|| median(builds.iter().copied())),
+                    build_ms_median: (!builds.is_empty()).then(|| median(builds.iter().map(BuildTimings::total))),
+                    build_phases_ms: BuildPhases::median_of(&builds),
                     clock: clock.into(),
                     adapter: ctx.info.name.clone(),
                     backend: format!("{:?}", ctx.info.backend),
                 });
+                // After every point: a run cut short keeps what it measured.
+                write_results(&args.out, &rows)?;
                 bar.inc(1);
             }
         }
     }
     bar.finish_and_clear();
-    write_csv(&args.out.join("results.csv"), &rows)?;
-    let json = serde_json::to_string_pretty(&rows)?;
-    std::fs::write(args.out.join("results.json"), &json)
-        .with_context(|| format!("{}: cannot write", args.out.display()))?;
+    let json = write_results(&args.out, &rows)?;
     write_plot(&args, &ctx, &rows)?;
     for line in &refused {
         eprintln!("refused: {line}");
@@ -328,16 +382,24 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// results.csv and results.json in `out`; returns the JSON.
+fn write_results(out: &Path, rows: &[Row]) -> anyhow::Result<String> {
+    write_csv(&out.join("results.csv"), rows)?;
+    let json = serde_json::to_string_pretty(rows)?;
+    std::fs::write(out.join("results.json"), &json).with_context(|| format!("{}: cannot write", out.display()))?;
+    Ok(json)
+}
+
 fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
     let mut file = std::fs::File::create(path).with_context(|| format!("{}: cannot write", path.display()))?;
     writeln!(
         file,
-        "count,pipeline,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,clock,adapter,backend"
+        "count,pipeline,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,build_morton_ms,build_sort_ms,build_hierarchy_ms,build_bounds_ms,build_links_ms,clock,adapter,backend"
     )?;
     for r in rows {
         writeln!(
             file,
-            "{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},\"{}\",{}",
+            "{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},{},\"{}\",{}",
             r.count,
             r.pipeline,
             r.accel,
@@ -352,6 +414,7 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
             r.fps,
             r.mrays_per_s,
             r.build_ms_median.map(|b| format!("{b:.4}")).unwrap_or_default(),
+            BuildPhases::csv(r.build_phases_ms),
             r.clock,
             r.adapter.replace('"', "'"),
             r.backend
@@ -384,7 +447,12 @@ fn write_plot(args: &BenchArgs, ctx: &GpuContext, rows: &[Row]) -> anyhow::Resul
         .file_name()
         .map_or(args.scene.clone(), |name| name.to_string_lossy().into_owned());
     let title = format!(
-        "{scene} spheres, {}x{}, {} ({:?}){}",
+        "{scene} {}, {}x{}, {} ({:?}){}",
+        if args.as_ == Some(MeshAs::Triangles) {
+            "triangles"
+        } else {
+            "spheres"
+        },
         args.width,
         args.height,
         ctx.info.name,

@@ -96,7 +96,11 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let boxes = packed.primitive_boxes();
     let runs = args.runs.max(1);
     let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
-    let hierarchy = args.hierarchy.unwrap_or_default();
+    // The GPU finds the hierarchy by Karras's searches only.
+    let hierarchy = match args.device {
+        BuildDevice::Gpu => Hierarchy::Searches,
+        BuildDevice::Cpu => args.hierarchy.unwrap_or_default(),
+    };
     match (args.hierarchy, args.builder, args.device) {
         (Some(_), Builder::Sah, _) => anyhow::bail!("--hierarchy is an option of the LBVH builder"),
         (Some(Hierarchy::Merges), _, BuildDevice::Gpu) => {

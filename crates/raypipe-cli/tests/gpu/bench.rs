@@ -69,6 +69,58 @@ fn bench_reports_every_point_with_the_documented_keys(_: &GpuContext) {
     );
 }
 
+/// A model's triangles are one point whose count is the mesh's; with --rebuild every row has the
+/// build's phases; the results are written as each point finishes.
+fn bench_times_a_models_triangles_with_build_phases(_: &GpuContext) {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-triangles");
+    std::fs::create_dir_all(&dir).unwrap();
+    // An octahedron: eight triangles.
+    let model = dir.join("octahedron.off");
+    std::fs::write(
+        &model,
+        "OFF\n6 8 0\n1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n\
+         3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n",
+    )
+    .unwrap();
+    let out = dir.join("results");
+    let output = Command::new(env!("CARGO_BIN_EXE_raypipe"))
+        .arg("bench")
+        .arg(&model)
+        .args([
+            "--as",
+            "triangles",
+            "--accel",
+            "brute,threaded",
+            "--rebuild",
+            "--width",
+            "32",
+        ])
+        .args(["--height", "24", "--frames", "2", "--warmup", "1", "--json", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let rows: Vec<serde_json::Value> = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(rows.len(), 4, "one point: two pipelines times two modes");
+    for row in &rows {
+        assert_eq!(row["count"], 8, "{row}");
+        let phases = &row["build_phases_ms"];
+        if row["accel"] == "brute" {
+            assert!(phases.is_null(), "brute force builds nothing: {row}");
+        } else {
+            for phase in ["morton", "sort", "hierarchy", "bounds", "links"] {
+                assert!(phases[phase].as_f64().is_some_and(|ms| ms >= 0.0), "{phase} in {row}");
+            }
+        }
+    }
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().contains("build_sort_ms"), "{csv}");
+    assert_eq!(csv.lines().count(), 5, "{csv}");
+}
+
 pub fn tests() -> Vec<Test> {
-    crate::tests![gpu bench_reports_every_point_with_the_documented_keys]
+    crate::tests![
+        gpu bench_reports_every_point_with_the_documented_keys,
+        gpu bench_times_a_models_triangles_with_build_phases,
+    ]
 }

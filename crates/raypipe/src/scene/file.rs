@@ -1,7 +1,7 @@
 //! Scene files in TOML (format: `docs/scene-format.md`).
 //!
 //! Every table denies unknown keys, and every error names the file and, where the element has one,
-//! its line: `scene.toml:12: sphere 3: radius must be positive and finite (got -1)`.
+//! its line: `scene.toml:12: sphere 3: radius must be finite and at least 1e-12 (got -1)`.
 
 use super::model::{DEFAULT_CREASE_DEGREES, MeshAs, Normals, Placement, SphereCount, add_mesh};
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, unit_vector};
@@ -381,6 +381,9 @@ mod tests {
     #[test]
     fn nan_radius_is_rejected() {
         let err = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = nan\n").unwrap_err();
-        assert!(err.message.contains("radius must be positive and finite"), "{err}");
+        assert!(
+            err.message.contains("radius must be finite and at least 1e-12"),
+            "{err}"
+        );
     }
 }
