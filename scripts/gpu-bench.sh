@@ -71,7 +71,7 @@ if [[ $quick -eq 1 ]]; then
   build_runs=2
   # Seconds for: Figure 4's BVH modes and its brute force (each size), the Bunny's spheres and its
   # triangles, one build, and one build of the largest count.
-  limits=(120 120 120 120 60 60)
+  limits=(300 300 300 300 120 120)
 else
   sizes=(1920x1080 256x256)
   brute_counts=1000,2000,5000,10000,20000

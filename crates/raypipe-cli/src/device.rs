@@ -201,7 +201,7 @@ pub fn render_frames(
     let bar = progress_bar(
         options.progress,
         frames as u64,
-        "{spinner} frames {bar:40} {pos}/{len}, {eta} left",
+        "{spinner} frames {bar:40} {pos}/{len}, {eta} left {msg}",
     );
     let options = &RenderOptions {
         progress: false,
@@ -214,8 +214,10 @@ pub fn render_frames(
                 "--frames rebuilds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
             );
             outcome.device = ctx.describe();
+            bar.set_message("(compiling the BVH build and the tracer)");
             let rebuild = block_on(SceneRebuild::new(&ctx, &first, options.accel, MortonBits::Bits30))?;
             let mut renderer = build_renderer(&ctx, &first, Some(&rebuild), options)?;
+            bar.set_message("");
             for frame in 0..frames {
                 if frame > 0 {
                     rebuild.write_spheres(&spheres_at(frame)?.spheres);

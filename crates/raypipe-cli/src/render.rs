@@ -320,7 +320,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
 /// `--stats`'s line on what traced.
 fn say_device(args: &RenderArgs, device: &str) -> anyhow::Result<()> {
     crate::say!(
-        "device: {device}, pipeline {:?}, memory {:?}, accel {:?}, {} samples per pixel",
+        "device: {device}, pipeline {}, memory {}, accel {}, {} samples per pixel",
         args.scene.pipeline,
         args.scene.memory,
         args.scene.accel,
