@@ -166,8 +166,8 @@ pub fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
     if det == 0.0 {
         return Vec3::splat(NO_HIT);
     }
-    // Weights before depths: an edge function is a product of two coordinates, times a third it
-    // would overflow at the far end of the accepted range.
+    // Weights first, then depths: an edge function is already a product of two coordinates, and
+    // times a depth it would overflow near the accepted range's end (MAX_COORDINATE).
     let inv_det = 1.0 / det;
     let weights = Vec3::new(u, v, w) * inv_det;
     Vec3::new(

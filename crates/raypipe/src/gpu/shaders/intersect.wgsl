@@ -115,8 +115,8 @@ fn triangle_uvt(triangle: Triangle, ray: Ray) -> vec3<f32> {
     if (det == 0.0) {
         return vec3<f32>(NO_HIT);
     }
-    // Weights before depths: an edge function is a product of two coordinates, times a third it
-    // would overflow at the far end of the accepted range.
+    // Weights first, then depths: an edge function is already a product of two coordinates, and
+    // times a depth it would overflow near the accepted range's end (MAX_COORDINATE).
     let inv_det = 1.0 / det;
     let weights = vec3<f32>(u, v, w) * inv_det;
     return vec3<f32>(weights.y, weights.z, weights.x * a.z + weights.y * b.z + weights.z * c.z);
