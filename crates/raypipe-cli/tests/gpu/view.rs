@@ -11,13 +11,32 @@ use raypipe::gpu::GpuContext;
 use raypipe::image::diff::{Tolerance, compare};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 const XVFB_SCREEN: &str = "-screen 0 1024x768x24";
 
+/// `xvfb-run` on a display number of this test process's own. `xvfb-run -a` takes the first number
+/// without a lock file, so two window tests starting at once could take the same one, and the
+/// second's program then fails to connect.
+fn xvfb_run() -> Command {
+    static NEXT: AtomicU32 = AtomicU32::new(0);
+    // A block of numbers per process; numbers another server holds are skipped.
+    let base = 200 + (std::process::id() % 500) * 64;
+    let display = loop {
+        let n = base + NEXT.fetch_add(1, Ordering::Relaxed) % 64;
+        if !Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+            break n;
+        }
+    };
+    let mut command = Command::new("xvfb-run");
+    command.args(["-n", &display.to_string(), "-s", XVFB_SCREEN]);
+    command
+}
+
 /// `raypipe ARGS` in a fresh virtual display.
 fn in_xvfb(args: &[&str]) -> Output {
-    Command::new("xvfb-run")
-        .args(["-a", "-s", XVFB_SCREEN, env!("CARGO_BIN_EXE_raypipe")])
+    xvfb_run()
+        .arg(env!("CARGO_BIN_EXE_raypipe"))
         .args(args)
         .output()
         .unwrap()
@@ -108,10 +127,7 @@ fn the_window_shows_the_frame(_: &GpuContext) {
         crop = crop.display(),
         expected = expected.display(),
     );
-    let output = Command::new("xvfb-run")
-        .args(["-a", "-s", XVFB_SCREEN, "sh", "-c", &script])
-        .output()
-        .unwrap();
+    let output = xvfb_run().args(["sh", "-c", &script]).output().unwrap();
     assert!(crop.exists(), "no capture: {}", String::from_utf8_lossy(&output.stderr));
     matches(&crop, &expected).unwrap_or_else(|e| panic!("the window does not show the frame: {e}"));
 }
@@ -174,10 +190,7 @@ fn synthetic_input_switches_and_orbits(_: &GpuContext) {
         dir = dir.display(),
         raypipe = env!("CARGO_BIN_EXE_raypipe"),
     );
-    let output = Command::new("xvfb-run")
-        .args(["-a", "-s", XVFB_SCREEN, "sh", "-c", &script])
-        .output()
-        .unwrap();
+    let output = xvfb_run().args(["sh", "-c", &script]).output().unwrap();
     let log = std::fs::read_to_string(dir.join("view.log")).unwrap_or_default();
     let shot = |n: u32| dir.join(format!("raypipe-{n:03}.png"));
     assert!(
@@ -250,10 +263,7 @@ fn the_window_survives_hiding_resizing_and_closes_cleanly(_: &GpuContext) {
         raypipe = env!("CARGO_BIN_EXE_raypipe"),
         close = close.display(),
     );
-    let output = Command::new("xvfb-run")
-        .args(["-a", "-s", XVFB_SCREEN, "sh", "-c", &script])
-        .output()
-        .unwrap();
+    let output = xvfb_run().args(["sh", "-c", &script]).output().unwrap();
     let stdout = String::from_utf8_lossy(&output.stdout);
     let log = std::fs::read_to_string(dir.join("view.log")).unwrap_or_default();
     assert!(stdout.contains("exit=0"), "closing did not exit 0: {stdout} {log}");
