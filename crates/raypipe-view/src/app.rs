@@ -7,7 +7,7 @@ use crate::tracer::Tracer;
 use crate::{Host, Modes, Script, Summary, ViewError, ViewerOptions};
 use pollster::block_on;
 use raypipe::Choice;
-use raypipe::gpu::{Display, DisplayView, GpuContext};
+use raypipe::gpu::{Display, GpuContext};
 use raypipe::scene::Scene;
 use std::collections::HashSet;
 use std::sync::Arc;
@@ -172,13 +172,13 @@ impl Viewer {
         if !ctx.memory_modes().contains(&self.modes.memory) {
             self.modes.memory = ctx.default_memory();
         }
-        let tracer = Tracer::new(
+        let tracer = block_on(Tracer::new(
             &ctx,
             &self.options.scene,
             &self.modes,
             (config.width, config.height),
             &self.camera.camera,
-        )
+        ))
         .map_err(ViewError::Scene)?;
         self.build_ms = tracer.cpu_build_ms;
         let egui = egui::Context::default();
@@ -212,32 +212,19 @@ impl Viewer {
             gpu.config.present_mode = present_mode(&caps, asked.vsync);
             gpu.surface.configure(&gpu.ctx.device, &gpu.config);
         }
-        let retrace = Modes {
-            paused: self.modes.paused,
-            vsync: self.modes.vsync,
-            ..asked
-        } != self.modes;
-        // The cost view needs the shader's cost variant; the other views share one.
-        let same_tracer = !retrace
-            || (asked.pipeline, asked.accel, asked.memory, asked.depth)
-                == (
-                    self.modes.pipeline,
-                    self.modes.accel,
-                    self.modes.memory,
-                    self.modes.depth,
-                )
-                && (asked.view == DisplayView::Cost) == (self.modes.view == DisplayView::Cost);
-        if !same_tracer {
-            if !gpu.ctx.memory_modes().contains(&asked.memory) {
-                self.message = Some(format!(
-                    "{} has no {} memory for fragment shaders",
-                    gpu.ctx.describe(),
-                    asked.memory
-                ));
+        if asked.needs_new_tracer(&self.modes) {
+            if let Err(why) = asked.check(&gpu.ctx) {
+                self.message = Some(why);
                 return;
             }
             let size = (gpu.config.width, gpu.config.height);
-            match Tracer::new(&gpu.ctx, &self.options.scene, &asked, size, &self.camera.camera) {
+            match block_on(Tracer::new(
+                &gpu.ctx,
+                &self.options.scene,
+                &asked,
+                size,
+                &self.camera.camera,
+            )) {
                 Ok(tracer) => {
                     self.build_ms = tracer.cpu_build_ms;
                     gpu.tracer = tracer;
@@ -269,7 +256,7 @@ impl Viewer {
         let Some(gpu) = &mut self.gpu else { return };
         let camera = CameraControl::new(scene.camera);
         let size = (gpu.config.width, gpu.config.height);
-        match Tracer::new(&gpu.ctx, &scene, &self.modes, size, &camera.camera) {
+        match block_on(Tracer::new(&gpu.ctx, &scene, &self.modes, size, &camera.camera)) {
             Ok(tracer) => {
                 self.build_ms = tracer.cpu_build_ms;
                 gpu.tracer = tracer;

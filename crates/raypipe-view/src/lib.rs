@@ -5,16 +5,20 @@
 //! pixel, up to a cap, and the display shows their mean.
 //!
 //! The viewer reads no files and writes none: its host (the `raypipe view` command) loads dropped
-//! files and saves screenshots, so the same viewer can serve a web page.
+//! files and saves screenshots. The tracer, the camera and the modes build for wasm32 too, where
+//! the web page (crates/raypipe-web) uses them with controls of its own; the window is native only.
 
+#[cfg(not(target_arch = "wasm32"))]
 mod app;
 mod camera;
+#[cfg(not(target_arch = "wasm32"))]
 mod panel;
-mod tracer;
+pub mod tracer;
 
 pub use camera::CameraControl;
+pub use tracer::Tracer;
 
-use raypipe::gpu::{Backend, DisplayView, GpuError};
+use raypipe::gpu::{Backend, DisplayView, GpuContext, GpuError};
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
@@ -34,6 +38,28 @@ pub struct Modes {
     pub paused: bool,
     /// Whether presentation waits for the display's refresh.
     pub vsync: bool,
+}
+
+impl Modes {
+    /// Whether going from `current` to these modes needs a new tracer (another shader or scene
+    /// records); the other views share one, but the cost view needs the shader's cost variant.
+    pub fn needs_new_tracer(&self, current: &Modes) -> bool {
+        (self.pipeline, self.accel, self.memory, self.depth)
+            != (current.pipeline, current.accel, current.memory, current.depth)
+            || (self.view == DisplayView::Cost) != (current.view == DisplayView::Cost)
+    }
+
+    /// Whether the device can trace with these modes at all; the error is one line.
+    pub fn check(&self, ctx: &GpuContext) -> Result<(), String> {
+        if !ctx.memory_modes().contains(&self.memory) {
+            return Err(format!(
+                "{} has no {} memory for fragment shaders",
+                ctx.describe(),
+                self.memory
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// A run that draws a fixed number of frames and exits: for tests and demos.
@@ -95,6 +121,7 @@ pub struct Summary {
 }
 
 /// Opens the window and runs until it is closed, or until the script's frames are drawn.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<Summary, ViewError> {
     let wayland = std::env::var_os("WAYLAND_DISPLAY").is_some();
     if std::env::var_os("DISPLAY").is_none() && !wayland {

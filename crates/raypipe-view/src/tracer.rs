@@ -1,9 +1,8 @@
 //! What the viewer traces with: the scene packed for its modes, a renderer, and for a moving scene
 //! the per-frame rebuild: on the GPU in storage memory, on the CPU otherwise. Rebuilt whole when a
-//! mode changes.
+//! mode changes. Building one is async: a window blocks on it, a web page awaits it.
 
 use crate::Modes;
-use pollster::block_on;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::build::depth_bound;
@@ -29,7 +28,7 @@ pub struct Tracer {
 }
 
 impl Tracer {
-    pub fn new(
+    pub async fn new(
         ctx: &GpuContext,
         scene: &Scene,
         modes: &Modes,
@@ -60,8 +59,9 @@ impl Tracer {
                 packed.set_bvh(builder.to_bvh());
             }
             let bound = depth_bound(primitives, MortonBits::Bits30);
-            let renderer =
-                block_on(Renderer::with_depth_bound(ctx, &packed, options, bound)).map_err(|e| e.to_string())?;
+            let renderer = Renderer::with_depth_bound(ctx, &packed, options, bound)
+                .await
+                .map_err(|e| e.to_string())?;
             return Ok(Self {
                 renderer,
                 rebuild: None,
@@ -72,10 +72,12 @@ impl Tracer {
             });
         }
         if scene.motion.is_some() {
-            let rebuild = block_on(SceneRebuild::new(ctx, &packed, modes.accel, MortonBits::Bits30))
+            let rebuild = SceneRebuild::new(ctx, &packed, modes.accel, MortonBits::Bits30)
+                .await
                 .map_err(|e| e.to_string())?;
-            let renderer =
-                block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options)).map_err(|e| e.to_string())?;
+            let renderer = Renderer::with_rebuild(ctx, &packed, &rebuild, options)
+                .await
+                .map_err(|e| e.to_string())?;
             return Ok(Self {
                 renderer,
                 rebuild: Some(rebuild),
@@ -89,7 +91,7 @@ impl Tracer {
             .accel
             .uses_bvh()
             .then(|| packed.build_bvh(MortonBits::Bits30).total());
-        let renderer = block_on(Renderer::new(ctx, &packed, options)).map_err(|e| e.to_string())?;
+        let renderer = Renderer::new(ctx, &packed, options).await.map_err(|e| e.to_string())?;
         Ok(Self {
             renderer,
             rebuild: None,

@@ -53,6 +53,42 @@ fn every_format_gives_the_same_triangles() {
     }
 }
 
+/// A file's bytes (what a web page is given) make the scene its path makes, in every format; a
+/// TOML scene too; errors name the file and its line.
+#[test]
+fn a_file_given_as_bytes_makes_the_scene_its_path_makes() {
+    let model = models::torus(12, 6);
+    let dir = test_dir("meshes-bytes");
+    for (name, bytes) in every_format(&model) {
+        let path = write(&dir, name, &bytes);
+        let from_path = raypipe::scene::Scene::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let from_bytes = raypipe::scene::Scene::from_bytes(name, &bytes).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(from_bytes, from_path, "{name}");
+    }
+    let toml = std::fs::read("../../scenes/whitted.toml").unwrap();
+    assert_eq!(
+        raypipe::scene::Scene::from_bytes("whitted.toml", &toml).unwrap(),
+        raypipe::scene::Scene::load("../../scenes/whitted.toml").unwrap()
+    );
+    let broken = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n";
+    let error = raypipe::scene::Scene::from_bytes("broken.obj", broken)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(error, "broken.obj:4: face vertex index out of bounds");
+    let error = raypipe::scene::Scene::from_bytes("notes.txt", b"hello")
+        .unwrap_err()
+        .to_string();
+    assert!(error.starts_with("notes.txt: unknown file type"), "{error}");
+    let error = raypipe::scene::Scene::from_bytes("bad.toml", b"[camera]\neye = 3\n")
+        .unwrap_err()
+        .to_string();
+    assert!(error.starts_with("bad.toml:2:"), "{error}");
+    let error = raypipe::scene::Scene::from_bytes("latin.toml", b"\xff\xfe")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(error, "latin.toml: cannot read scene file: it is not UTF-8 text");
+}
+
 /// A scene file places its meshes relative to itself: normalize, scale, translate.
 #[test]
 fn scene_meshes_are_placed_as_the_file_says() {

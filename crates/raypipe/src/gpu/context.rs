@@ -232,10 +232,18 @@ pub fn describe(info: &wgpu::AdapterInfo) -> String {
         .copied()
         .collect::<Vec<_>>()
         .join(" ");
-    format!(
-        "{} ({:?}, {:?}, driver: {})",
-        info.name, info.backend, info.device_type, driver
-    )
+    // A browser's WebGPU may keep the adapter's name and driver to itself.
+    let name = if info.name.is_empty() {
+        "unnamed adapter"
+    } else {
+        &info.name
+    };
+    let driver = if driver.is_empty() {
+        "not named".to_string()
+    } else {
+        driver
+    };
+    format!("{name} ({:?}, {:?}, driver: {driver})", info.backend, info.device_type)
 }
 
 /// A buffer mapping as a future: resolved by wgpu's callback, which a native device fires during

@@ -238,6 +238,41 @@ impl Scene {
         )))
     }
 
+    /// A scene from a file's contents rather than its path, for hosts without a file system (a web
+    /// page given a file): a TOML scene, or a model (`.ply`, `.obj`, `.off`) framed as
+    /// [`Scene::load`] frames it. `name` is the file's name: its extension picks the format, and
+    /// every error starts with it. A TOML scene's `[[mesh]]` files are read relative to the
+    /// working directory, where there is one.
+    pub fn from_bytes(name: &str, bytes: &[u8]) -> Result<Scene, InputError> {
+        let path = Path::new(name);
+        if let Some(format) = crate::mesh::MeshFormat::from_path(path) {
+            let mut notices = Vec::new();
+            let mesh = crate::mesh::parse(bytes, format, &mut notices).map_err(|e| e.in_origin(name))?;
+            for notice in notices {
+                log::info!("{name}: {notice}");
+            }
+            return model::scene_around(mesh, name, &model::ModelOptions::default());
+        }
+        if !path.extension().is_some_and(|ext| ext.eq_ignore_ascii_case("toml")) {
+            return Err(InputError::new(format!(
+                "unknown file type (expected a .toml scene, or a model ending in {})",
+                crate::mesh::MeshFormat::extension_list()
+            ))
+            .in_origin(name));
+        }
+        if bytes.len() as u64 > crate::input::MAX_SCENE_BYTES {
+            return Err(InputError::new(format!(
+                "cannot read scene file: {} bytes, more than the {} read",
+                bytes.len(),
+                crate::input::MAX_SCENE_BYTES
+            ))
+            .in_origin(name));
+        }
+        let text = std::str::from_utf8(bytes)
+            .map_err(|_| InputError::new("cannot read scene file: it is not UTF-8 text").in_origin(name))?;
+        file::parse(text).map_err(|e| e.in_origin(name))
+    }
+
     /// Checks every invariant the tracers rely on: finite numbers, positive radii, unit-length normals
     /// that exist, material indices in range, a camera that can see.
     pub fn validate(&self) -> Result<(), InputError> {

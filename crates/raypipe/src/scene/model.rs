@@ -247,8 +247,14 @@ impl ModelOptions {
 /// checkered floor that touches it, two lights, and a camera that frames its bounding sphere.
 pub fn model_scene(path: &Path, options: &ModelOptions) -> Result<Scene, InputError> {
     let shown = path.display().to_string();
-    let placement = options.placement().map_err(|e| e.in_origin(&shown))?;
-    let mesh = mesh::load(path)?;
+    options.placement().map_err(|e| e.in_origin(&shown))?;
+    scene_around(mesh::load(path)?, &shown, options)
+}
+
+/// [`model_scene`] for a mesh already parsed (a file a web page was given); `shown` names it in
+/// messages.
+pub fn scene_around(mesh: Mesh, shown: &str, options: &ModelOptions) -> Result<Scene, InputError> {
+    let placement = options.placement().map_err(|e| e.in_origin(shown))?;
     let mut scene = Scene {
         settings: RenderSettings::default(),
         materials: vec![
@@ -269,7 +275,7 @@ pub fn model_scene(path: &Path, options: &ModelOptions) -> Result<Scene, InputEr
         ],
         ..Scene::default()
     };
-    add_mesh(&mut scene, mesh, &placement).map_err(|e| e.in_origin(&shown))?;
+    add_mesh(&mut scene, mesh, &placement).map_err(|e| e.in_origin(shown))?;
     let bounds = scene_bounds(&scene);
     let center = bounds.centroid();
     let radius = ((bounds.max - bounds.min) * 0.5).length();

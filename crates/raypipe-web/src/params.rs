@@ -1,0 +1,247 @@
+//! The page's settings by name: what the URL's query sets at the start (`?scene=whitted&accel=stack`)
+//! and what the page's controls change later, through the same parser. Plain Rust, so that it is
+//! tested natively.
+
+use raypipe::Choice;
+use raypipe::gpu::DisplayView;
+use raypipe::impl_choice;
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::scene::MAX_DEPTH_LIMIT;
+
+/// The browser API the page traces through.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WebBackend {
+    WebGpu,
+    WebGl2,
+}
+
+impl_choice!(
+    WebBackend,
+    [
+        (
+            WebGpu,
+            "webgpu",
+            "WebGPU: storage memory, compute, the BVH rebuilt in compute passes"
+        ),
+        (
+            WebGl2,
+            "webgl2",
+            "WebGL2: texture or uniform memory, the BVH rebuilt on the CPU in wasm"
+        ),
+    ]
+);
+
+/// The largest canvas side the page asks for; the adapter's texture limit may allow less.
+pub const MAX_SIDE: u32 = 8192;
+/// The most samples per pixel a still frame gathers.
+pub const MAX_SPP: u32 = 4096;
+
+/// A change the page's controls or its URL ask for. `None` in a mode means "the backend's default"
+/// until one is asked for.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Setting {
+    Scene(String),
+    Accel(Accel),
+    Memory(MemoryMode),
+    Pipeline(Pipeline),
+    Depth(u32),
+    View(DisplayView),
+    Paused(bool),
+    Spp(u32),
+    Width(u32),
+    Height(u32),
+    Backend(WebBackend),
+}
+
+/// The keys, for messages.
+pub const KEYS: &[&str] = &[
+    "scene", "accel", "memory", "pipeline", "depth", "aov", "paused", "spp", "width", "height", "backend",
+];
+
+impl Setting {
+    /// Parses `key=value`; the error is one line naming both.
+    pub fn parse(key: &str, value: &str) -> Result<Setting, String> {
+        fn choice<T: Choice>(key: &str, value: &str) -> Result<T, String> {
+            T::from_name(value).ok_or_else(|| format!("{key}={value}: expected one of {}", T::names()))
+        }
+        let number = |range: std::ops::RangeInclusive<u32>| -> Result<u32, String> {
+            match value.parse::<u32>() {
+                Ok(n) if range.contains(&n) => Ok(n),
+                _ => Err(format!(
+                    "{key}={value}: expected a whole number in {}..={}",
+                    range.start(),
+                    range.end()
+                )),
+            }
+        };
+        Ok(match key {
+            "scene" if value.is_empty() => return Err("scene=: name a scene".into()),
+            "scene" => Setting::Scene(value.to_string()),
+            "accel" => Setting::Accel(choice(key, value)?),
+            "memory" => Setting::Memory(choice(key, value)?),
+            "pipeline" => Setting::Pipeline(choice(key, value)?),
+            "depth" => Setting::Depth(number(0..=MAX_DEPTH_LIMIT)?),
+            "aov" => Setting::View(choice(key, value)?),
+            "paused" => Setting::Paused(match value {
+                "true" | "1" => true,
+                "false" | "0" => false,
+                _ => return Err(format!("{key}={value}: expected true or false")),
+            }),
+            "spp" => Setting::Spp(number(1..=MAX_SPP)?),
+            "width" => Setting::Width(number(1..=MAX_SIDE)?),
+            "height" => Setting::Height(number(1..=MAX_SIDE)?),
+            "backend" => Setting::Backend(choice(key, value)?),
+            _ => return Err(format!("unknown setting '{key}' (known: {})", KEYS.join(", "))),
+        })
+    }
+}
+
+/// What the page starts with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StartParams {
+    pub scene: String,
+    pub accel: Accel,
+    /// `None`: the backend's default (storage on WebGPU, texture on WebGL2).
+    pub memory: Option<MemoryMode>,
+    pub pipeline: Pipeline,
+    /// `None`: the scene's own.
+    pub depth: Option<u32>,
+    pub view: DisplayView,
+    pub paused: bool,
+    pub spp: u32,
+    pub width: u32,
+    pub height: u32,
+    /// `None`: WebGPU where the browser has it, else WebGL2.
+    pub backend: Option<WebBackend>,
+}
+
+impl Default for StartParams {
+    fn default() -> Self {
+        Self {
+            scene: "whitted".into(),
+            accel: Accel::Threaded,
+            memory: None,
+            pipeline: Pipeline::Fragment,
+            depth: None,
+            view: DisplayView::Color,
+            paused: false,
+            spp: 64,
+            width: 960,
+            height: 540,
+            backend: None,
+        }
+    }
+}
+
+impl StartParams {
+    /// The settings of a URL query's pairs (already percent-decoded). A bad pair is skipped and its
+    /// error returned beside the rest, so that the page starts and shows what it ignored.
+    pub fn from_pairs<'a>(pairs: impl IntoIterator<Item = (&'a str, &'a str)>) -> (Self, Vec<String>) {
+        let mut params = Self::default();
+        let mut errors = Vec::new();
+        for (key, value) in pairs {
+            match Setting::parse(key, value) {
+                Ok(setting) => params.apply(setting),
+                Err(why) => errors.push(why),
+            }
+        }
+        (params, errors)
+    }
+
+    fn apply(&mut self, setting: Setting) {
+        match setting {
+            Setting::Scene(name) => self.scene = name,
+            Setting::Accel(accel) => self.accel = accel,
+            Setting::Memory(memory) => self.memory = Some(memory),
+            Setting::Pipeline(pipeline) => self.pipeline = pipeline,
+            Setting::Depth(depth) => self.depth = Some(depth),
+            Setting::View(view) => self.view = view,
+            Setting::Paused(paused) => self.paused = paused,
+            Setting::Spp(spp) => self.spp = spp,
+            Setting::Width(width) => self.width = width,
+            Setting::Height(height) => self.height = height,
+            Setting::Backend(backend) => self.backend = Some(backend),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_issue_example_sets_every_named_field() {
+        let query = [
+            ("scene", "random:2000"),
+            ("accel", "threaded"),
+            ("memory", "texture"),
+            ("width", "320"),
+            ("height", "240"),
+            ("backend", "webgl2"),
+            ("depth", "3"),
+            ("aov", "normal"),
+            ("spp", "1"),
+        ];
+        let (params, errors) = StartParams::from_pairs(query);
+        assert!(errors.is_empty(), "{errors:?}");
+        assert_eq!(
+            params,
+            StartParams {
+                scene: "random:2000".into(),
+                accel: Accel::Threaded,
+                memory: Some(MemoryMode::Texture),
+                pipeline: Pipeline::Fragment,
+                depth: Some(3),
+                view: DisplayView::Normal,
+                paused: false,
+                spp: 1,
+                width: 320,
+                height: 240,
+                backend: Some(WebBackend::WebGl2),
+            }
+        );
+    }
+
+    #[test]
+    fn bad_pairs_are_reported_one_line_each_and_the_rest_applies() {
+        let query = [
+            ("accel", "bvh"),
+            ("width", "0"),
+            ("depth", "33"),
+            ("colour", "red"),
+            ("height", "200"),
+        ];
+        let (params, errors) = StartParams::from_pairs(query);
+        assert_eq!(params.height, 200);
+        assert_eq!(params.width, StartParams::default().width);
+        assert_eq!(params.accel, Accel::Threaded);
+        assert_eq!(
+            errors,
+            [
+                "accel=bvh: expected one of brute, stack, stackless, threaded",
+                "width=0: expected a whole number in 1..=8192",
+                "depth=33: expected a whole number in 0..=32",
+                "unknown setting 'colour' (known: scene, accel, memory, pipeline, depth, aov, paused, spp, width, height, backend)",
+            ]
+        );
+    }
+
+    #[test]
+    fn every_mode_name_parses_back() {
+        for &accel in Accel::ALL {
+            assert_eq!(Setting::parse("accel", accel.name()), Ok(Setting::Accel(accel)));
+        }
+        for &memory in MemoryMode::ALL {
+            assert_eq!(Setting::parse("memory", memory.name()), Ok(Setting::Memory(memory)));
+        }
+        for &view in DisplayView::ALL {
+            assert_eq!(Setting::parse("aov", view.name()), Ok(Setting::View(view)));
+        }
+        for &backend in WebBackend::ALL {
+            assert_eq!(Setting::parse("backend", backend.name()), Ok(Setting::Backend(backend)));
+        }
+        assert_eq!(Setting::parse("paused", "true"), Ok(Setting::Paused(true)));
+        assert!(Setting::parse("paused", "yes").is_err());
+        assert!(Setting::parse("scene", "").is_err());
+    }
+}

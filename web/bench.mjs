@@ -1,0 +1,85 @@
+// Measures the page in headless Chromium: time to the first frame and frames per second on each
+// backend, for docs/BENCHMARKS.md. Build the page first (scripts/build-web.sh target/web).
+//
+//   node web/bench.mjs [--scene S] [--width W] [--height H] [--seconds N] [--screenshot F.png]
+//
+// Each backend loads the page with spp=4096, so that every frame traces a new sample (a still frame
+// with its samples gathered is only shown again); the frames per second are those presented over
+// N seconds after the first two (which pay for compiling the tracer). Prints one JSON line per backend.
+import { chromium } from "playwright-core";
+import fs from "node:fs";
+import http from "node:http";
+import path from "node:path";
+import { fileURLToPath } from "node:url";
+import { parseArgs } from "node:util";
+
+const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..");
+const { values: options } = parseArgs({
+  options: {
+    scene: { type: "string", default: "random:20000" },
+    width: { type: "string", default: "320" },
+    height: { type: "string", default: "240" },
+    seconds: { type: "string", default: "10" },
+    accel: { type: "string", default: "threaded" },
+    screenshot: { type: "string" },
+    site: { type: "string", default: path.join(root, "target/web") },
+  },
+});
+
+const FLAGS = [
+  "--no-sandbox", "--disable-quic", "--no-first-run", "--disable-background-networking",
+  "--disable-component-update", "--disable-sync", "--enable-unsafe-webgpu", "--enable-unsafe-swiftshader",
+  "--use-angle=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
+];
+const TYPES = { ".html": "text/html", ".js": "text/javascript", ".css": "text/css", ".wasm": "application/wasm" };
+
+const server = http.createServer((request, response) => {
+  const name = new URL(request.url, "http://x").pathname;
+  const file = path.join(options.site, name === "/" ? "index.html" : name);
+  if (!file.startsWith(options.site) || !fs.existsSync(file)) return response.writeHead(404).end();
+  response.writeHead(200, { "content-type": TYPES[path.extname(file)] ?? "application/octet-stream" });
+  fs.createReadStream(file).pipe(response);
+});
+await new Promise((resolve) => server.listen(0, "127.0.0.1", resolve));
+const origin = `http://127.0.0.1:${server.address().port}`;
+const browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium", args: FLAGS });
+const wasmBytes = fs.statSync(path.join(options.site, "raypipe_web_bg.wasm")).size;
+
+for (const backend of ["webgpu", "webgl2"]) {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1 });
+  const query = `scene=${options.scene}&accel=${options.accel}&width=${options.width}&height=${options.height}` +
+    `&backend=${backend}&spp=4096`;
+  const loaded = Date.now();
+  await page.goto(`${origin}/index.html?${query}`);
+  await page.waitForFunction(() => window.raypipeStatus?.frames >= 2 || window.raypipeStatus?.error, null, {
+    timeout: 600_000,
+    polling: 50,
+  });
+  const firstFrames = Date.now() - loaded;
+  const start = await page.evaluate(() => ({ ...window.raypipeStatus, now: performance.now() }));
+  if (start.error) throw new Error(`${backend}: ${start.error}`);
+  await page.waitForTimeout(Number(options.seconds) * 1000);
+  const end = await page.evaluate(() => ({ ...window.raypipeStatus, now: performance.now() }));
+  const fps = ((end.frames - start.frames) * 1000) / (end.now - start.now);
+  console.log(JSON.stringify({
+    backend,
+    adapter: end.adapter,
+    scene: options.scene,
+    accel: end.accel,
+    memory: end.memory,
+    size: `${end.width}x${end.height}`,
+    wasm_bytes: wasmBytes,
+    load_to_second_frame_ms: firstFrames,
+    fps: Number(fps.toFixed(2)),
+    ms_per_frame: Number((1000 / fps).toFixed(2)),
+  }));
+  if (options.screenshot && backend === "webgpu") {
+    await page.evaluate(() => window.raypipeViewer.set("spp", "16"));
+    await page.waitForFunction(() => window.raypipeStatus.samples >= 16, null, { timeout: 600_000 });
+    await page.waitForTimeout(500);
+    await page.screenshot({ path: options.screenshot });
+  }
+  await page.close();
+}
+await browser.close();
+server.close();

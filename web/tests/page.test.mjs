@@ -1,0 +1,275 @@
+// The page in headless Chromium, on WebGPU (SwiftShader's Vulkan) and on WebGL2 (ANGLE on
+// SwiftShader): its canvas against the native CPU reference (`raypipe render --device cpu`) of the
+// same scene and size, compared by `raypipe diff` with the GPU-against-CPU colour tolerance
+// (Tolerance::COLOR: mean per-pixel error at most 1e-3 and its 99th percentile at most 0.02);
+// switches, motion, broken files and a browser without either API. On a failure the screenshot and
+// the difference image stay in target/web-test/.
+//
+// Needs the page built (scripts/build-web.sh target/web, or RAYPIPE_WEB_DIR), the native binary
+// (target/release/raypipe, or RAYPIPE_BIN) and Chromium (/usr/bin/chromium, or CHROMIUM).
+import { test, before, after, describe } from "node:test";
+import assert from "node:assert/strict";
+import { execFileSync, spawnSync } from "node:child_process";
+import fs from "node:fs";
+import http from "node:http";
+import path from "node:path";
+import { fileURLToPath } from "node:url";
+import { chromium } from "playwright-core";
+
+const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "../..");
+const site = process.env.RAYPIPE_WEB_DIR ?? path.join(root, "target/web");
+const raypipe = process.env.RAYPIPE_BIN ?? path.join(root, "target/release/raypipe");
+const output = path.join(root, "target/web-test");
+const references = path.join(output, "references");
+
+// Tolerance::COLOR, as every GPU-against-CPU test states it.
+const MEAN = 1e-3;
+const P99 = 0.02;
+// SwiftShader compiles the tracer on two cores: minutes, not seconds, for a new pipeline.
+const COMPILE_MS = 240_000;
+
+const FLAGS = [
+  "--no-sandbox", "--disable-quic", "--no-first-run", "--disable-background-networking",
+  "--disable-component-update", "--disable-sync", "--enable-unsafe-webgpu", "--enable-unsafe-swiftshader",
+  "--use-angle=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
+];
+
+const TYPES = { ".html": "text/html", ".js": "text/javascript", ".css": "text/css", ".wasm": "application/wasm" };
+
+let server;
+let origin;
+let browser;
+
+before(async () => {
+  for (const needed of [path.join(site, "index.html"), raypipe]) {
+    assert.ok(fs.existsSync(needed), `${needed} is missing: run scripts/build-web.sh target/web and cargo build --release`);
+  }
+  fs.mkdirSync(references, { recursive: true });
+  server = http.createServer((request, response) => {
+    const name = decodeURIComponent(new URL(request.url, "http://x").pathname);
+    const file = path.join(site, name === "/" ? "index.html" : name);
+    if (!file.startsWith(site) || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
+      response.writeHead(404).end();
+      return;
+    }
+    response.writeHead(200, { "content-type": TYPES[path.extname(file)] ?? "application/octet-stream" });
+    fs.createReadStream(file).pipe(response);
+  });
+  await new Promise((resolve) => server.listen(0, "127.0.0.1", resolve));
+  origin = `http://127.0.0.1:${server.address().port}`;
+  browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium", args: FLAGS });
+});
+
+after(async () => {
+  await browser?.close();
+  server?.close();
+});
+
+/// A page at `query`, with what reaches its console as errors collected in `page.errors`.
+async function open(query, { init } = {}) {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1 });
+  page.errors = [];
+  page.on("pageerror", (error) => page.errors.push(`uncaught: ${error.message}`));
+  page.on("console", (message) => {
+    if (message.type() === "error") page.errors.push(`console: ${message.text()}`);
+  });
+  if (init) await page.addInitScript(init);
+  await page.goto(`${origin}/index.html?${query}`);
+  return page;
+}
+
+/// Waits until `window.raypipeStatus` satisfies `condition` (a function of it and `arg`), failing at once
+/// where the page shows an error the condition does not wait for; says what the status was.
+async function until(page, condition, what, { arg = null, timeout = COMPILE_MS } = {}) {
+  const source = condition.toString();
+  const expectsError = source.includes("error");
+  let status;
+  try {
+    await page.waitForFunction(
+      ([source, expectsError, arg]) => {
+        const status = window.raypipeStatus;
+        if (status == null) return false;
+        return (status.error != null && !expectsError) || new Function("s", "arg", `return (${source})(s, arg)`)(status, arg);
+      },
+      [source, expectsError, arg],
+      { timeout, polling: 100 },
+    );
+    status = await page.evaluate(() => ({ ...window.raypipeStatus }));
+  } catch (error) {
+    const now = await page.evaluate(() => JSON.stringify(window.raypipeStatus));
+    throw new Error(`waiting for ${what}: ${error.message.split("\n")[0]}; status ${now}; errors ${page.errors}`);
+  }
+  if (status.error != null && !expectsError) {
+    throw new Error(`waiting for ${what}, the page says: ${status.error}; errors ${page.errors}`);
+  }
+  return status;
+}
+
+/// A frame traced with every sample asked for, no tracer pending, and a frame presented after.
+const SETTLED = (s) => s.frames >= 2 && !s.busy && s.samples >= s.spp;
+
+/// Waits until the page's message line shows `text`: the page's script copies it from the status.
+async function shows(page, text) {
+  await page.waitForFunction((text) => document.getElementById("message").textContent === text, text, { timeout: 10_000 });
+  assert.ok(await page.locator("#message").isVisible());
+}
+
+async function screenshot(page, name) {
+  const file = path.join(output, `${name}-actual.png`);
+  await page.locator("#frame").screenshot({ path: file });
+  return file;
+}
+
+/// `raypipe render SPEC --device cpu`, once per scene and size.
+function reference(spec, width, height) {
+  const file = path.join(references, `${spec.replaceAll(":", "_")}-${width}x${height}.png`);
+  if (!fs.existsSync(file)) {
+    execFileSync(raypipe, ["render", spec, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "-q", "-o", file]);
+  }
+  return file;
+}
+
+/// `raypipe diff` of `actual` against `expected`: both the mean and the p99 within bounds, or the
+/// difference image is written beside the screenshot and the test fails. Passing screenshots are
+/// removed.
+function assertSimilar(actual, expected, { mean = MEAN, p99 = P99 } = {}) {
+  const difference = actual.replace(/-actual\.png$/, "-difference.png");
+  const runs = [["mean", mean], ["p99", p99]].map(([metric, threshold]) =>
+    spawnSync(raypipe, ["diff", actual, expected, "--metric", metric, "--threshold", `${threshold}`, "--out", difference], {
+      encoding: "utf8",
+    }),
+  );
+  const failed = runs.find((run) => run.status !== 0);
+  if (failed) {
+    assert.fail(`${path.basename(actual)} against ${path.basename(expected)}: ${failed.stdout}${failed.stderr}` +
+      ` (kept ${actual} and ${difference})`);
+  }
+  fs.rmSync(difference, { force: true });
+  fs.rmSync(actual, { force: true });
+}
+
+/// Whether two screenshots differ anywhere.
+function differ(a, b) {
+  const run = spawnSync(raypipe, ["diff", a, b, "--metric", "mean", "--threshold", "0"], { encoding: "utf8" });
+  assert.ok(run.status === 0 || run.status === 1, `raypipe diff ${a} ${b}: ${run.stderr}`);
+  return run.status === 1;
+}
+
+const BROKEN_PLY = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n" +
+  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 oops\n0 1 0\n3 0 1 2\n";
+const TETRAHEDRON_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+for (const backend of ["webgpu", "webgl2"]) {
+  const memories = backend === "webgpu" ? ["storage", "texture"] : ["texture"];
+  const size = { width: 160, height: 120 };
+
+  describe(`the page on ${backend}`, () => {
+    for (const memory of memories) {
+      test(`whitted and random:2000 (threaded, ${memory} memory) equal the CPU reference`, async () => {
+        for (const scene of ["whitted", "random:2000"]) {
+          const page = await open(
+            `scene=${scene}&accel=threaded&memory=${memory}&width=${size.width}&height=${size.height}&backend=${backend}&spp=1`,
+          );
+          const status = await until(page, SETTLED, `${scene} on ${backend}`);
+          assert.equal(status.backend, backend);
+          assert.equal(status.memory, memory);
+          assert.equal(status.error, null);
+          assert.deepEqual(await page.locator("#frame").evaluate((c) => [c.width, c.height, c.clientWidth, c.clientHeight]),
+            [size.width, size.height, size.width, size.height]);
+          const shot = await screenshot(page, `${backend}-${memory}-${scene.replace(":", "_")}`);
+          assertSimilar(shot, reference(scene, size.width, size.height));
+          assert.deepEqual(page.errors, []);
+          await page.close();
+        }
+      });
+    }
+
+    test("switching the acceleration keeps the image; a broken file shows its error and the image stays", async () => {
+      const page = await open(`scene=whitted&width=${size.width}&height=${size.height}&backend=${backend}&spp=1`);
+      await until(page, SETTLED, "whitted");
+      await page.selectOption("select[data-key=accel]", "brute");
+      const brute = await until(page, (s) => s.accel === "brute" && !s.busy && s.samples >= 1, "the brute-force tracer");
+      assert.equal(brute.error, null);
+      const before = await screenshot(page, `${backend}-brute-whitted`);
+      assertSimilar(before, reference("whitted", size.width, size.height));
+
+      const shown = await screenshot(page, `${backend}-before-broken`);
+      await page.setInputFiles("#file", { name: "broken.ply", mimeType: "application/octet-stream", buffer: Buffer.from(BROKEN_PLY) });
+      const broken = await until(page, (s) => s.error != null, "the broken file's error", { timeout: 30_000 });
+      assert.match(broken.error, /^broken\.ply:11: /);
+      assert.ok(!broken.error.includes("\n"), broken.error);
+      assert.equal(broken.scene, "whitted");
+      await shows(page, broken.error);
+      await until(page, (s, frames) => s.error != null && s.frames >= frames, "frames after the error", { arg: broken.frames + 2 });
+      const after = await screenshot(page, `${backend}-after-broken`);
+      assert.ok(!differ(after, shown), "the image changed after a broken file");
+      fs.rmSync(shown);
+      fs.rmSync(after);
+
+      // A scene beyond the mode's limits: refused with its reason, and the current one stays.
+      await page.selectOption("select[data-key=memory]", "uniform");
+      await until(page, (s) => s.memory === "uniform" && !s.busy && s.samples >= 1, "uniform memory");
+      await page.selectOption("#scene", "sphere-8k");
+      const refused = await until(page, (s) => s.error != null && !s.busy, "the refusal");
+      assert.match(refused.error, /^sphere-8k: .*uniform/);
+      assert.equal(refused.scene, "whitted");
+      await shows(page, refused.error);
+
+      await page.setInputFiles("#file", { name: "tetrahedron.obj", mimeType: "text/plain", buffer: Buffer.from(TETRAHEDRON_OBJ) });
+      const opened = await until(page, (s) => s.scene === "tetrahedron.obj" && s.error == null && !s.busy && s.samples >= 1, "the opened model");
+      assert.equal(opened.error, null);
+      assert.equal(opened.primitives, 4);
+      assert.deepEqual(page.errors, []);
+      await page.close();
+    });
+
+    test("bounce:N stands still when paused, equal to the CPU's first frame, and moves between frames", async () => {
+      const spec = "bounce:300";
+      const small = { width: 96, height: 72 };
+      const page = await open(`scene=${spec}&paused=true&width=${small.width}&height=${small.height}&backend=${backend}&spp=1`);
+      const still = await until(page, SETTLED, spec);
+      assert.equal(still.motionFrame, 0);
+      assert.equal(still.memory, backend === "webgpu" ? "storage" : "texture");
+      const first = await screenshot(page, `${backend}-bounce-0`);
+      assertSimilar(first, reference(spec, small.width, small.height));
+      const firstAgain = await screenshot(page, `${backend}-bounce-first`);
+      await page.locator("input[data-key=paused]").uncheck();
+      const moved = await until(page, (s) => !s.paused && s.motionFrame >= 3 && s.samples >= 1, "motion");
+      assert.ok(moved.buildMs != null || backend === "webgpu", "a CPU rebuild reports its time");
+      const later = await screenshot(page, `${backend}-bounce-later`);
+      assert.ok(differ(later, firstAgain), "the spheres did not move");
+      fs.rmSync(later);
+      fs.rmSync(firstAgain);
+      assert.deepEqual(page.errors, []);
+      await page.close();
+    });
+  });
+}
+
+test("a browser with neither WebGPU nor WebGL2 gets one line on the page", async () => {
+  const page = await open("scene=whitted&width=64&height=48", {
+    init: () => {
+      Object.defineProperty(navigator, "gpu", { value: undefined });
+      const getContext = HTMLCanvasElement.prototype.getContext;
+      HTMLCanvasElement.prototype.getContext = function (kind, ...rest) {
+        return kind === "webgl2" ? null : getContext.call(this, kind, ...rest);
+      };
+    },
+  });
+  const status = await until(page, (s) => s.error != null, "the error", { timeout: 60_000 });
+  assert.match(status.error, /^raypipe cannot trace here: this browser has no WebGPU; this browser has no WebGL2/);
+  assert.ok(!status.error.includes("\n"), status.error);
+  assert.equal(status.frames, 0);
+  await shows(page, status.error);
+  await page.close();
+});
+
+test("a bad URL setting is reported and the rest applies", async () => {
+  const page = await open("scene=whitted&accel=bvh&width=64&height=48&backend=webgl2&spp=1");
+  const status = await until(page, (s) => s.frames >= 1 && s.error != null, "a frame");
+  assert.equal(status.error, "accel=bvh: expected one of brute, stack, stackless, threaded");
+  assert.equal(status.width, 64);
+  assert.equal(status.accel, "threaded");
+  await shows(page, status.error);
+  await page.close();
+});
