@@ -1,11 +1,12 @@
 // Measures the page in headless Chromium: time to the first frame and frames per second on each
 // backend, for docs/BENCHMARKS.md. Build the page first (scripts/build-web.sh target/web).
 //
-//   node web/bench.mjs [--scene S] [--width W] [--height H] [--seconds N] [--screenshot F.png]
+//   node web/bench.mjs [--scene S] [--width W] [--height H] [--frames N] [--screenshot F.png]
 //
 // Each backend loads the page with spp=4096, so that every frame traces a new sample (a still frame
-// with its samples gathered is only shown again); the frames per second are those presented over
-// N seconds after the first two (which pay for compiling the tracer). Prints one JSON line per backend.
+// with its samples gathered is only shown again); the frames per second are those of N frames
+// presented after the first two (which pay for compiling the tracer), by the page's clock. Prints
+// one JSON line per backend. The screenshot is the WebGPU page's, whole, with 16 samples gathered.
 import { chromium } from "playwright-core";
 import fs from "node:fs";
 import http from "node:http";
@@ -19,7 +20,7 @@ const { values: options } = parseArgs({
     scene: { type: "string", default: "random:20000" },
     width: { type: "string", default: "320" },
     height: { type: "string", default: "240" },
-    seconds: { type: "string", default: "10" },
+    frames: { type: "string", default: "10" },
     accel: { type: "string", default: "threaded" },
     screenshot: { type: "string" },
     site: { type: "string", default: path.join(root, "target/web") },
@@ -58,7 +59,10 @@ for (const backend of ["webgpu", "webgl2"]) {
   const firstFrames = Date.now() - loaded;
   const start = await page.evaluate(() => ({ ...window.raypipeStatus, now: performance.now() }));
   if (start.error) throw new Error(`${backend}: ${start.error}`);
-  await page.waitForTimeout(Number(options.seconds) * 1000);
+  await page.waitForFunction((frames) => window.raypipeStatus.frames >= frames, start.frames + Number(options.frames), {
+    timeout: 600_000,
+    polling: 20,
+  });
   const end = await page.evaluate(() => ({ ...window.raypipeStatus, now: performance.now() }));
   const fps = ((end.frames - start.frames) * 1000) / (end.now - start.now);
   console.log(JSON.stringify({
@@ -76,8 +80,7 @@ for (const backend of ["webgpu", "webgl2"]) {
   if (options.screenshot && backend === "webgpu") {
     await page.evaluate(() => window.raypipeViewer.set("spp", "16"));
     await page.waitForFunction(() => window.raypipeStatus.samples >= 16, null, { timeout: 600_000 });
-    await page.waitForTimeout(500);
-    await page.screenshot({ path: options.screenshot });
+    await page.locator("main").screenshot({ path: options.screenshot, timeout: 120_000 });
   }
   await page.close();
 }

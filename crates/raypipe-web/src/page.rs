@@ -59,6 +59,7 @@ struct Page {
     started: Instant,
     first_frame_ms: Option<f64>,
     last_frame: Instant,
+    last_presented: Instant,
     fps: f64,
     /// Wall-clock milliseconds between animation frames (smoothed): the browser paces them by the
     /// GPU's progress. Timestamp queries are not read here, since their read would hold the
@@ -233,6 +234,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         started: now,
         first_frame_ms: None,
         last_frame: now,
+        last_presented: now,
         fps: 0.0,
         frame_ms: 0.0,
     })
@@ -314,11 +316,14 @@ impl Page {
         if this.first_frame_ms.is_none() {
             this.first_frame_ms = Some((now - this.started).as_secs_f64() * 1e3);
         }
+        // Between presented frames: a callback that found no texture to draw into presented none.
+        let presented = (now - this.last_presented).as_secs_f64().max(1e-6);
+        this.last_presented = now;
         if this.frames > 1 {
             this.fps = if this.fps == 0.0 {
-                1.0 / seconds.max(1e-6)
+                1.0 / presented
             } else {
-                0.9 * this.fps + 0.1 / seconds.max(1e-6)
+                0.9 * this.fps + 0.1 / presented
             };
             this.frame_ms = 1e3 / this.fps;
         }
