@@ -184,6 +184,33 @@ for (const backend of ["webgpu", "webgl2"]) {
       });
     }
 
+    if (backend === "webgpu") {
+      test("the compute pipeline gives the CPU reference's image", async () => {
+        const page = await open(`scene=whitted&pipeline=compute&width=${size.width}&height=${size.height}&backend=webgpu&spp=1`);
+        const status = await until(page, SETTLED, "whitted through compute");
+        assert.equal(status.pipeline, "compute");
+        const shot = await screenshot(page, "webgpu-compute-whitted");
+        assertSimilar(shot, reference("whitted", size.width, size.height));
+        assert.deepEqual(page.errors, []);
+        await page.close();
+      });
+    } else {
+      test("the compute pipeline is refused with its reason and the fragment pipeline stays", async () => {
+        const page = await open(`scene=whitted&width=64&height=48&backend=webgl2&spp=1`);
+        await until(page, SETTLED, "whitted");
+        // The page's script disables what the backend lacks, from the status, at its next frame.
+        await page.waitForFunction(() =>
+          [...document.querySelectorAll("select[data-key=pipeline] option")].some((o) => o.value === "compute" && o.disabled),
+          null, { timeout: 10_000 });
+        await page.evaluate(() => window.raypipeViewer.set("pipeline", "compute"));
+        const refused = await until(page, (s) => s.error != null && !s.busy, "the refusal");
+        assert.match(refused.error, /compute/);
+        assert.equal(refused.pipeline, "fragment");
+        await shows(page, refused.error);
+        await page.close();
+      });
+    }
+
     test("switching the acceleration keeps the image; a broken file shows its error and the image stays", async () => {
       const page = await open(`scene=whitted&width=${size.width}&height=${size.height}&backend=${backend}&spp=1`);
       await until(page, SETTLED, "whitted");

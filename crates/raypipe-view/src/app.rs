@@ -4,9 +4,8 @@
 use crate::camera::CameraControl;
 use crate::panel::{self, Readout};
 use crate::tracer::Tracer;
-use crate::{Host, Modes, Script, Summary, ViewError, ViewerOptions};
+use crate::{Host, ModeKey, Modes, Script, Summary, ViewError, ViewerOptions, next_texture, present_format};
 use pollster::block_on;
-use raypipe::Choice;
 use raypipe::gpu::{Display, GpuContext};
 use raypipe::scene::Scene;
 use std::collections::HashSet;
@@ -20,10 +19,6 @@ use winit::window::{Window, WindowId};
 
 /// Fly speed: the distance to the target per second.
 const FLY_PER_SECOND: f32 = 0.8;
-/// The depth view's far end, in multiples of the distance to the target.
-const DEPTH_FAR: f32 = 3.0;
-/// The cost view's top, in nodes tested.
-const COST_MAX: f32 = 200.0;
 /// How often an idle viewer (nothing to trace, nothing moving) redraws its panel.
 const IDLE_REDRAW: std::time::Duration = std::time::Duration::from_millis(100);
 
@@ -148,13 +143,7 @@ impl Viewer {
             .map_err(|e| ViewError::Window(e.to_string()))?;
         let ctx = block_on(GpuContext::for_surface(&instance, &surface))?;
         let caps = surface.get_capabilities(&ctx.adapter);
-        // A linear format: the display pass encodes sRGB itself, as PNG files hold it.
-        let format = caps
-            .formats
-            .iter()
-            .copied()
-            .find(|f| !f.is_srgb())
-            .or(caps.formats.first().copied())
+        let format = present_format(&caps)
             .ok_or_else(|| ViewError::Window(format!("{} cannot present to this window", ctx.describe())))?;
         let size = window.inner_size();
         let config = wgpu::SurfaceConfiguration {
@@ -295,16 +284,13 @@ impl Viewer {
             self.input.held.remove(&code);
             return;
         }
+        // winit's key names are the browser's `KeyboardEvent.code` names, which ModeKey reads.
+        if let Some(key) = ModeKey::from_code(&format!("{code:?}")) {
+            return self.set_modes(self.modes.after(key));
+        }
         let mut asked = self.modes;
         match code {
             KeyCode::KeyR => self.camera.reset(),
-            KeyCode::KeyB => asked.accel = next(asked.accel),
-            KeyCode::KeyG => asked.pipeline = next(asked.pipeline),
-            KeyCode::KeyM => asked.memory = next(asked.memory),
-            KeyCode::KeyV => asked.view = next(asked.view),
-            KeyCode::BracketLeft => asked.depth = asked.depth.saturating_sub(1),
-            KeyCode::BracketRight => asked.depth = (asked.depth + 1).min(raypipe::scene::MAX_DEPTH_LIMIT),
-            KeyCode::Space => asked.paused = !asked.paused,
             KeyCode::KeyY => asked.vsync = !asked.vsync,
             KeyCode::KeyH => self.show_panel = !self.show_panel,
             KeyCode::KeyP => {
@@ -388,14 +374,8 @@ impl Viewer {
         // A still frame that has its samples is shown again, not traced again.
         let trace = gpu.tracer.renderer.samples() < self.options.samples.max(1);
         self.idle = !trace && !moving && self.input.held.is_empty();
-        let surface_texture = match gpu.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(texture) | wgpu::CurrentSurfaceTexture::Suboptimal(texture) => texture,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                gpu.surface.configure(&gpu.ctx.device, &gpu.config);
-                return;
-            }
-            // Minimized, or the compositor is busy: try again next time.
-            _ => return,
+        let Some(surface_texture) = next_texture(&gpu.surface, &gpu.ctx.device, &gpu.config) else {
+            return;
         };
         let view = surface_texture.texture.create_view(&Default::default());
         let ctx = gpu.ctx.clone();
@@ -403,16 +383,8 @@ impl Viewer {
         if trace {
             gpu.tracer.encode(&mut encoder, self.modes.accel);
         }
-        let c = self.camera.camera;
-        let depth_far = DEPTH_FAR * (c.eye - c.target).length();
-        gpu.display.encode(
-            &mut encoder,
-            gpu.tracer.renderer.targets(),
-            &view,
-            self.modes.view,
-            depth_far,
-            COST_MAX,
-        );
+        gpu.tracer
+            .show(&gpu.display, &mut encoder, &view, self.modes.view, &self.camera.camera);
         let mut asked = None;
         if self.show_panel {
             let raw = gpu.egui_state.take_egui_input(&gpu.window);
@@ -527,12 +499,6 @@ impl Viewer {
         }
         event_loop.exit();
     }
-}
-
-fn next<T: Choice>(value: T) -> T {
-    let all = T::ALL;
-    let i = all.iter().position(|&v| v == value).unwrap_or(0);
-    all[(i + 1) % all.len()]
 }
 
 fn present_mode(caps: &wgpu::SurfaceCapabilities, vsync: bool) -> wgpu::PresentMode {

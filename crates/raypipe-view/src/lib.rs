@@ -16,7 +16,7 @@ mod panel;
 pub mod tracer;
 
 pub use camera::CameraControl;
-pub use tracer::Tracer;
+pub use tracer::{Tracer, next_texture, present_format};
 
 use raypipe::gpu::{Backend, DisplayView, GpuContext, GpuError};
 use raypipe::image::Frame;
@@ -40,7 +40,64 @@ pub struct Modes {
     pub vsync: bool,
 }
 
+/// A key that changes a mode, as the window and the page both bind them: B, G, M, V, [ and ], Space.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModeKey {
+    /// B: the next acceleration mode.
+    Accel,
+    /// G: the next pipeline.
+    Pipeline,
+    /// M: the next memory mode.
+    Memory,
+    /// V: the next view.
+    View,
+    /// [: one bounce less.
+    FewerBounces,
+    /// ]: one bounce more.
+    MoreBounces,
+    /// Space: pause or resume the motion.
+    Pause,
+}
+
+impl ModeKey {
+    /// The key by its name, which is the same in winit's `KeyCode` and a browser's
+    /// `KeyboardEvent.code`.
+    pub fn from_code(code: &str) -> Option<Self> {
+        Some(match code {
+            "KeyB" => Self::Accel,
+            "KeyG" => Self::Pipeline,
+            "KeyM" => Self::Memory,
+            "KeyV" => Self::View,
+            "BracketLeft" => Self::FewerBounces,
+            "BracketRight" => Self::MoreBounces,
+            "Space" => Self::Pause,
+            _ => return None,
+        })
+    }
+}
+
+/// The variant after `value` in `T::ALL`, round to the first.
+pub fn next<T: raypipe::Choice>(value: T) -> T {
+    let all = T::ALL;
+    let i = all.iter().position(|&v| v == value).unwrap_or(0);
+    all[(i + 1) % all.len()]
+}
+
 impl Modes {
+    /// The modes `key` asks for.
+    pub fn after(mut self, key: ModeKey) -> Modes {
+        match key {
+            ModeKey::Accel => self.accel = next(self.accel),
+            ModeKey::Pipeline => self.pipeline = next(self.pipeline),
+            ModeKey::Memory => self.memory = next(self.memory),
+            ModeKey::View => self.view = next(self.view),
+            ModeKey::FewerBounces => self.depth = self.depth.saturating_sub(1),
+            ModeKey::MoreBounces => self.depth = (self.depth + 1).min(raypipe::scene::MAX_DEPTH_LIMIT),
+            ModeKey::Pause => self.paused = !self.paused,
+        }
+        self
+    }
+
     /// Whether going from `current` to these modes needs a new tracer (another shader or scene
     /// records); the other views share one, but the cost view needs the shader's cost variant.
     pub fn needs_new_tracer(&self, current: &Modes) -> bool {

@@ -6,10 +6,15 @@ use crate::Modes;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::build::depth_bound;
-use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{Display, DisplayView, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::modes::{Accel, Count, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
+
+/// The depth view's far end, in multiples of the distance to the target.
+const DEPTH_FAR: f32 = 3.0;
+/// The cost view's top, in nodes tested.
+const COST_MAX: f32 = 200.0;
 
 pub struct Tracer {
     pub renderer: Renderer,
@@ -136,4 +141,49 @@ impl Tracer {
         self.renderer.write_scene(&moved).map_err(|e| e.to_string())?;
         Ok(ms)
     }
+}
+
+impl Tracer {
+    /// Records the display pass: the mean of the samples gathered, shown as `view` into `target`;
+    /// the depth view fades out at three times the camera's distance to its target.
+    pub fn show(
+        &self,
+        display: &Display,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        view: DisplayView,
+        camera: &Camera,
+    ) {
+        let depth_far = DEPTH_FAR * (camera.eye - camera.target).length();
+        display.encode(encoder, self.renderer.targets(), target, view, depth_far, COST_MAX);
+    }
+}
+
+/// The surface's next texture to draw into, or `None` this time: an outdated or lost surface is
+/// configured again; a minimized window or a busy compositor is tried again at the next frame.
+pub fn next_texture(
+    surface: &wgpu::Surface<'_>,
+    device: &wgpu::Device,
+    config: &wgpu::SurfaceConfiguration,
+) -> Option<wgpu::SurfaceTexture> {
+    match surface.get_current_texture() {
+        wgpu::CurrentSurfaceTexture::Success(texture) | wgpu::CurrentSurfaceTexture::Suboptimal(texture) => {
+            Some(texture)
+        }
+        wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+            surface.configure(device, config);
+            None
+        }
+        _ => None,
+    }
+}
+
+/// The format to present in: a linear one where the surface offers it, since the display pass
+/// encodes sRGB itself, as PNG files hold it; `None` where the surface offers none.
+pub fn present_format(caps: &wgpu::SurfaceCapabilities) -> Option<wgpu::TextureFormat> {
+    caps.formats
+        .iter()
+        .copied()
+        .find(|f| !f.is_srgb())
+        .or(caps.formats.first().copied())
 }

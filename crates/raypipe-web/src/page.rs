@@ -12,7 +12,7 @@ use crate::params::{Setting, StartParams, WebBackend};
 use raypipe::Choice;
 use raypipe::gpu::{Display, GpuContext};
 use raypipe::scene::Scene;
-use raypipe_view::{CameraControl, Modes, Tracer};
+use raypipe_view::{CameraControl, ModeKey, Modes, Tracer, next_texture, present_format};
 use std::cell::RefCell;
 use std::collections::HashSet;
 use std::rc::Rc;
@@ -22,10 +22,6 @@ use web_time::Instant;
 
 /// Fly speed: the distance to the target per second.
 const FLY_PER_SECOND: f32 = 0.8;
-/// The depth view's far end, in multiples of the distance to the target.
-const DEPTH_FAR: f32 = 3.0;
-/// The cost view's top, in nodes tested.
-const COST_MAX: f32 = 200.0;
 
 /// The page's handle on the viewer: the controls' calls land here.
 #[wasm_bindgen]
@@ -176,14 +172,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         ));
     }
     let caps = surface.get_capabilities(&ctx.adapter);
-    // A linear format: the display pass encodes sRGB itself, as PNG files hold it.
-    let format = caps
-        .formats
-        .iter()
-        .copied()
-        .find(|f| !f.is_srgb())
-        .or(caps.formats.first().copied())
-        .ok_or_else(|| format!("{} cannot present to the canvas", ctx.describe()))?;
+    let format = present_format(&caps).ok_or_else(|| format!("{} cannot present to the canvas", ctx.describe()))?;
     let config = wgpu::SurfaceConfiguration {
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
         format,
@@ -286,13 +275,8 @@ impl Page {
             }
         }
         let trace = this.tracer.renderer.samples() < this.spp;
-        let texture = match this.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(texture) | wgpu::CurrentSurfaceTexture::Suboptimal(texture) => texture,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                this.surface.configure(&this.ctx.device, &this.config);
-                return;
-            }
-            _ => return,
+        let Some(texture) = next_texture(&this.surface, &this.ctx.device, &this.config) else {
+            return;
         };
         let view = texture.texture.create_view(&Default::default());
         let ctx = this.ctx.clone();
@@ -301,15 +285,8 @@ impl Page {
             let accel = this.modes.accel;
             this.tracer.encode(&mut encoder, accel);
         }
-        let depth_far = DEPTH_FAR * (camera.eye - camera.target).length();
-        this.display.encode(
-            &mut encoder,
-            this.tracer.renderer.targets(),
-            &view,
-            this.modes.view,
-            depth_far,
-            COST_MAX,
-        );
+        this.tracer
+            .show(&this.display, &mut encoder, &view, this.modes.view, &camera);
         ctx.queue.submit([encoder.finish()]);
         ctx.queue.present(texture);
         this.frames += 1;
@@ -568,28 +545,15 @@ impl Viewer {
         if !pressed {
             return false;
         }
-        let mut asked = self.page.borrow().modes;
-        match code {
-            "KeyR" => {
-                self.page.borrow_mut().camera.reset();
-                return true;
-            }
-            "KeyB" => asked.accel = next(asked.accel),
-            "KeyG" => asked.pipeline = next(asked.pipeline),
-            "KeyM" => asked.memory = next(asked.memory),
-            "KeyV" => asked.view = next(asked.view),
-            "BracketLeft" => asked.depth = asked.depth.saturating_sub(1),
-            "BracketRight" => asked.depth = (asked.depth + 1).min(raypipe::scene::MAX_DEPTH_LIMIT),
-            "Space" => asked.paused = !asked.paused,
-            _ => return false,
+        if code == "KeyR" {
+            self.page.borrow_mut().camera.reset();
+            return true;
         }
+        let Some(key) = ModeKey::from_code(code) else {
+            return false;
+        };
+        let asked = self.page.borrow().modes.after(key);
         self.set_modes(asked);
         true
     }
-}
-
-fn next<T: Choice>(value: T) -> T {
-    let all = T::ALL;
-    let i = all.iter().position(|&v| v == value).unwrap_or(0);
-    all[(i + 1) % all.len()]
 }
