@@ -9,10 +9,10 @@ out=${1:?usage: scripts/build-web.sh OUT_DIR}
 cd "$(dirname "$0")/.."
 scripts/build-wasm.sh raypipe-web
 # The glue must come from the wasm-bindgen version the module was built with: tools/wasm-bindgen
-# pins the one in Cargo.lock.
-cargo build --quiet --release -p raypipe-wasm-bindgen
+# pins the one in Cargo.lock. Its profile builds it in a minute or so; it runs in seconds.
+cargo build --quiet --profile tool -p raypipe-wasm-bindgen
 mkdir -p "$out"
-target/release/raypipe-wasm-bindgen target/wasm32-unknown-unknown/release/raypipe_web.wasm "$out"
+target/tool/raypipe-wasm-bindgen target/wasm32-unknown-unknown/release/raypipe_web.wasm "$out"
 wasm="$out/raypipe_web_bg.wasm"
 if [ -x web/node_modules/.bin/wasm-opt ]; then
   before=$(stat -c %s "$wasm")
