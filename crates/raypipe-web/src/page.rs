@@ -267,8 +267,8 @@ impl Page {
         let camera = this.camera.camera;
         this.tracer.renderer.set_camera(&camera);
         if this.scene.motion.is_some() && this.tracer.motion_frame != Some(this.motion_frame) {
-            let (scene, frame, accel) = (this.scene.clone(), this.motion_frame, this.modes.accel);
-            match this.tracer.advance(&scene, frame, accel) {
+            let this = &mut *this;
+            match this.tracer.advance(&this.scene, this.motion_frame, this.modes.accel) {
                 Ok(Some(ms)) => this.build_ms = Some(ms),
                 Ok(None) => {}
                 Err(why) => this.error = Some(why),
@@ -357,8 +357,8 @@ impl Page {
 
     /// Builds a tracer for `modes` (and `scene`, where one is given) and swaps it in when it is
     /// ready; on failure the current one stays and the message shows.
-    fn retrace(page: &Rc<RefCell<Page>>, modes: Modes, scene: Option<(String, Scene)>) {
-        let (ctx, scene_now, size, camera, request) = {
+    fn retrace(page: &Rc<RefCell<Page>>, modes: Modes, new_scene: Option<(String, Scene)>) {
+        let (ctx, name, traced, size, camera, request) = {
             let mut this = page.borrow_mut();
             if let Err(why) = modes.check(&this.ctx) {
                 this.error = Some(why);
@@ -369,20 +369,22 @@ impl Page {
             // The last request's message no longer applies.
             this.error = None;
             this.publish();
-            let camera = match &scene {
-                Some((_, scene)) => scene.camera,
-                None => this.camera.camera,
+            // The tracer is built after this borrow ends: it gets a scene of its own.
+            let (name, traced) = match new_scene {
+                Some((name, scene)) => (Some(name), scene),
+                None => (None, this.scene.clone()),
+            };
+            let camera = if name.is_some() {
+                traced.camera
+            } else {
+                this.camera.camera
             };
             let size = (this.config.width, this.config.height);
-            (this.ctx.clone(), this.scene.clone(), size, camera, this.requested)
+            (this.ctx.clone(), name, traced, size, camera, this.requested)
         };
         let page = page.clone();
         wasm_bindgen_futures::spawn_local(async move {
-            let traced = match &scene {
-                Some((_, scene)) => scene,
-                None => &scene_now,
-            };
-            let result = Tracer::new(&ctx, traced, &modes, size, &camera).await;
+            let result = Tracer::new(&ctx, &traced, &modes, size, &camera).await;
             let mut this = page.borrow_mut();
             if this.requested != request {
                 return;
@@ -394,15 +396,15 @@ impl Page {
                     this.tracer = tracer;
                     this.modes = modes;
                     this.error = None;
-                    if let Some((name, scene)) = scene {
-                        this.camera = CameraControl::new(scene.camera);
-                        this.scene = scene;
+                    if let Some(name) = name {
+                        this.camera = CameraControl::new(traced.camera);
+                        this.scene = traced;
                         this.name = name;
                         this.motion_frame = 0;
                     }
                 }
                 Err(why) => {
-                    let name = scene.as_ref().map_or(this.name.clone(), |(name, _)| name.clone());
+                    let name = name.unwrap_or_else(|| this.name.clone());
                     log::warn!("{name}: {why}");
                     this.error = Some(format!("{name}: {why}"));
                 }
