@@ -38,6 +38,16 @@ pub fn run() -> anyhow::Result<ExitCode> {
             "  timestamp queries:          {}",
             adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
         );
+        let info = adapter.get_info();
+        if adapter.features().contains(wgpu::Features::SUBGROUP) {
+            crate::say!(
+                "  subgroups:                  {} to {} invocations",
+                info.subgroup_min_size,
+                info.subgroup_max_size
+            );
+        } else {
+            crate::say!("  subgroups:                  none");
+        }
         crate::say!(
             "  rgba32uint render target:   {}",
             renders_to(wgpu::TextureFormat::Rgba32Uint)

@@ -3,11 +3,15 @@
 
 use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
+use raypipe::gpu::build::SortRanking;
 use raypipe::gpu::shader::{ShaderConfig, compose};
 use raypipe::gpu::upload::{TEXELS_PER_ROW, record_arrays};
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::{LAYOUTS, PackedScene, StructLayout};
 use raypipe::scene::{Scene, builtin};
+
+/// The sort's two rankings, with subgroups of 8 to 32 invocations.
+const RANKINGS: [SortRanking; 2] = [SortRanking::Subgroups { group: 256 }, SortRanking::Shared];
 
 fn parse(source: &str) -> naga::Module {
     naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
@@ -104,21 +108,30 @@ fn every_shader_variant_validates() {
 
 #[test]
 fn the_build_layout_and_display_shaders_validate() {
-    let sources = [
+    let mut sources = vec![
+        ("threaded layout".to_string(), raypipe::gpu::threaded::shader_source()),
         (
-            "LBVH build, 30-bit",
-            raypipe::gpu::build::shader_source(MortonBits::Bits30),
+            "display".to_string(),
+            raypipe::gpu::display::shader_source().to_string(),
         ),
-        (
-            "LBVH build, 63-bit",
-            raypipe::gpu::build::shader_source(MortonBits::Bits63),
-        ),
-        ("threaded layout", raypipe::gpu::threaded::shader_source()),
-        ("display", raypipe::gpu::display::shader_source().to_string()),
     ];
+    for bits in [MortonBits::Bits30, MortonBits::Bits63] {
+        for ranking in RANKINGS {
+            sources.push((
+                format!("LBVH build, {}-bit codes, {ranking:?}", bits.total_bits()),
+                raypipe::gpu::build::shader_source(bits, ranking),
+            ));
+        }
+    }
     for (what, source) in sources {
         let module = parse(&source);
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        // Subgroup operations only where the source uses them.
+        let capabilities = if what.contains("Subgroups") {
+            naga::valid::Capabilities::SUBGROUP
+        } else {
+            naga::valid::Capabilities::empty()
+        };
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{what}: {}", e.emit_to_string(&source)));
     }
@@ -136,8 +149,10 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
             .count()
     };
     for bits in [MortonBits::Bits30, MortonBits::Bits63] {
-        let count = storage_buffers(&raypipe::gpu::build::shader_source(bits));
-        assert!(count <= 8, "the LBVH build binds {count} storage buffers");
+        for ranking in RANKINGS {
+            let count = storage_buffers(&raypipe::gpu::build::shader_source(bits, ranking));
+            assert!(count <= 8, "the LBVH build binds {count} storage buffers");
+        }
     }
     let count = storage_buffers(&raypipe::gpu::threaded::shader_source());
     assert!(count <= 8, "the threaded layout binds {count} storage buffers");

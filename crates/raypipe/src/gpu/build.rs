@@ -20,18 +20,27 @@ use crate::struct_layout;
 use std::num::NonZeroU64;
 
 const LBVH: &str = include_str!("shaders/lbvh.wgsl");
+const RADIX_SORT: &str = include_str!("shaders/radix_sort.wgsl");
 
 /// Invocations per workgroup.
 const GROUP: u32 = 256;
-/// Items per block of the reduction and sort kernels: `BLOCK / GROUP` consecutive items per invocation.
+/// Items per block of the reduction kernels: `BLOCK / GROUP` consecutive items per invocation.
 const BLOCK: u32 = 1024;
-/// The radix sort's digit.
-const DIGIT_BITS: u32 = 4;
-const RADIX: u32 = 1 << DIGIT_BITS;
-/// Where `scratch` holds the centroid bounds (6 words), and where the sort's digit counts start.
+/// Where `scratch` holds the centroid bounds (6 words), and where the per-block words start.
 const SCRATCH_BOUNDS: u32 = 0;
-const SCRATCH_HIST: u32 = 8;
-const _: () = assert!(SCRATCH_BOUNDS + 6 <= SCRATCH_HIST);
+const SCRATCH_BLOCKS: u32 = 8;
+const _: () = assert!(SCRATCH_BOUNDS + 6 <= SCRATCH_BLOCKS);
+
+/// The radix sort's digit (radix_sort.wgsl's DIGIT_BITS).
+const DIGIT_BITS: u32 = 8;
+const DIGITS: u64 = 1 << DIGIT_BITS;
+/// Pairs per invocation of the kernel that counts every pass's digits.
+const HISTOGRAM_ITEMS: u32 = 16;
+/// Lane groups per sort workgroup, at most: their digit counts fill 8 KiB of workgroup memory.
+const LANE_GROUPS: u32 = 8;
+/// The lane group of the path without subgroups.
+const SHARED_LANE_WIDTH: u32 = 16;
+
 /// Passes of the radix sort over codes of each width: even numbers, so that the sorted pairs end
 /// where they started, in pairs A.
 const fn sort_passes(bits: MortonBits) -> u32 {
@@ -39,6 +48,167 @@ const fn sort_passes(bits: MortonBits) -> u32 {
 }
 const _: () = assert!(sort_passes(MortonBits::Bits30).is_multiple_of(2));
 const _: () = assert!(sort_passes(MortonBits::Bits63).is_multiple_of(2));
+
+/// How a sort workgroup ranks its tile's pairs by digit (radix_sort.wgsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SortRanking {
+    /// Lane groups are subgroups, which find the lanes of a digit by ballots.
+    Subgroups {
+        /// Invocations per workgroup: whole subgroups of any size the adapter may pick.
+        group: u32,
+    },
+    /// Lane groups of 16 invocations, which compare their digits through workgroup memory.
+    Shared,
+    /// Every invocation counts the digits of its own run of pairs, as a CPU sort does: for CPU
+    /// adapters, whose workgroups are a few SIMD lanes and whose ballots and barriers are loops.
+    Runs {
+        /// Invocations per workgroup, each with its own digit counts.
+        group: u32,
+    },
+}
+
+impl SortRanking {
+    /// Runs on a CPU adapter; subgroups where the device has them and a workgroup of whole
+    /// subgroups fits the lane groups' memory; the shared path otherwise.
+    pub fn best(ctx: &GpuContext) -> Self {
+        if ctx.info.device_type == wgpu::DeviceType::Cpu {
+            Self::runs(ctx)
+        } else {
+            Self::subgroups(ctx).unwrap_or(SortRanking::Shared)
+        }
+    }
+
+    /// Every ranking the device can run, the best first.
+    pub fn all(ctx: &GpuContext) -> Vec<Self> {
+        let mut all = vec![Self::best(ctx)];
+        for ranking in [Some(Self::runs(ctx)), Some(SortRanking::Shared), Self::subgroups(ctx)] {
+            match ranking {
+                Some(ranking) if !all.contains(&ranking) => all.push(ranking),
+                _ => {}
+            }
+        }
+        all
+    }
+
+    /// Runs of one SIMD vector's width: a subgroup where the device says, else 8 (AVX2's 32-bit lanes).
+    fn runs(ctx: &GpuContext) -> Self {
+        let group = ctx.subgroups.map_or(8, |(_, max)| max.clamp(1, 64));
+        SortRanking::Runs { group }
+    }
+
+    fn subgroups(ctx: &GpuContext) -> Option<Self> {
+        let (min, max) = ctx.subgroups?;
+        let group = (LANE_GROUPS * min).min(256);
+        (min >= 4 && max <= 128 && group >= max && group.is_multiple_of(max) && LANE_TILE.is_multiple_of(group))
+            .then_some(SortRanking::Subgroups { group })
+    }
+
+    /// Invocations per sort workgroup.
+    fn group(self) -> u32 {
+        match self {
+            SortRanking::Subgroups { group } | SortRanking::Runs { group } => group,
+            SortRanking::Shared => 128,
+        }
+    }
+
+    /// Pairs a sort workgroup ranks and scatters at once. Runs keep no ranks, so their tiles may be
+    /// larger, which makes fewer tiles to look back over.
+    pub fn tile(self) -> u32 {
+        match self {
+            SortRanking::Subgroups { .. } | SortRanking::Shared => LANE_TILE,
+            SortRanking::Runs { .. } => RUNS_TILE,
+        }
+    }
+
+    fn entry_point(self) -> &'static str {
+        match self {
+            SortRanking::Subgroups { .. } | SortRanking::Shared => "sort_pass",
+            SortRanking::Runs { .. } => "sort_pass_runs",
+        }
+    }
+
+    /// The WGSL that radix_sort.wgsl asks the preamble for.
+    fn source(self) -> String {
+        let (group, tile) = (self.group(), self.tile());
+        let (lane_groups, ranked_pairs) = match self {
+            SortRanking::Runs { group } => (group, 1),
+            _ => (LANE_GROUPS, tile),
+        };
+        let common = format!(
+            "const SORT_GROUP: u32 = {group}u;
+const SORT_ITEMS: u32 = {}u;
+const TILE: u32 = {tile}u;
+const LANE_GROUPS: u32 = {lane_groups}u;
+const RANKED_PAIRS: u32 = {ranked_pairs}u;
+const HISTOGRAM_ITEMS: u32 = {HISTOGRAM_ITEMS}u;
+",
+            tile / group
+        );
+        let ranking = match self {
+            SortRanking::Subgroups { .. } => {
+                "// Lane groups are subgroups: a digit's lanes found by one ballot per digit bit.
+struct SortInvocation {
+    @builtin(local_invocation_index) index: u32,
+    @builtin(subgroup_invocation_id) lane: u32,
+    @builtin(subgroup_size) width: u32,
+    @builtin(subgroup_id) group: u32,
+}
+fn lane_index(v: SortInvocation) -> u32 { return v.lane; }
+fn lane_width(v: SortInvocation) -> u32 { return v.width; }
+fn lane_group(v: SortInvocation) -> u32 { return v.group; }
+fn same_digit(v: SortInvocation, digit: u32, valid: bool) -> vec4<u32> {
+    var peers = subgroupBallot(valid);
+    for (var b = 0u; b < DIGIT_BITS; b++) {
+        let bit_set = ((digit >> b) & 1u) != 0u;
+        let votes = subgroupBallot(bit_set);
+        peers &= select(~votes, votes, bit_set);
+    }
+    return peers;
+}
+"
+                .to_string()
+            }
+            SortRanking::Shared | SortRanking::Runs { .. } => {
+                let width = if matches!(self, SortRanking::Shared) {
+                    SHARED_LANE_WIDTH
+                } else {
+                    1
+                };
+                format!(
+                    "// Lane groups of {width} invocations: each lane compares its digit with its group's
+// through workgroup memory. (Runs use sort_pass_runs, not these.)
+const LANE_WIDTH: u32 = {width}u;
+struct SortInvocation {{
+    @builtin(local_invocation_index) index: u32,
+}}
+fn lane_index(v: SortInvocation) -> u32 {{ return v.index % LANE_WIDTH; }}
+fn lane_width(v: SortInvocation) -> u32 {{ return LANE_WIDTH; }}
+fn lane_group(v: SortInvocation) -> u32 {{ return v.index / LANE_WIDTH; }}
+var<workgroup> lane_digits: array<u32, SORT_GROUP>;
+fn same_digit(v: SortInvocation, digit: u32, valid: bool) -> vec4<u32> {{
+    lane_digits[v.index] = select(DIGITS, digit, valid);
+    workgroupBarrier();
+    let first = v.index - lane_index(v);
+    var peers = 0u;
+    for (var l = 0u; l < LANE_WIDTH; l++) {{
+        peers |= select(0u, 1u << l, lane_digits[first + l] == digit);
+    }}
+    workgroupBarrier();
+    return vec4<u32>(select(0u, peers, valid), 0u, 0u, 0u);
+}}
+"
+                )
+            }
+        };
+        common + &ranking
+    }
+}
+const _: () = assert!(SHARED_LANE_WIDTH * LANE_GROUPS >= 128);
+/// The tile of lane groups, whose ranks fill 4 KiB of workgroup memory.
+const LANE_TILE: u32 = 1024;
+/// The tile of [`SortRanking::Runs`]: on lavapipe, the sort of 1M pairs took 86 to 92 ms with tiles
+/// of 1,024, 50 to 58 with 4,096 and 49 to 52 with 8,192.
+const RUNS_TILE: u32 = 8192;
 
 /// What lbvh.wgsl needs to know of the code width: the grid, and the (code, primitive) pair.
 fn key_preamble(bits: MortonBits) -> String {
@@ -63,21 +233,27 @@ fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, p.y, high); }"
 const GROUP: u32 = {GROUP}u;
 const BLOCK: u32 = {BLOCK}u;
 const ITEMS: u32 = {}u;
-const RADIX: u32 = {RADIX}u;
 const SCRATCH_BOUNDS: u32 = {SCRATCH_BOUNDS}u;
-const SCRATCH_HIST: u32 = {SCRATCH_HIST}u;
+const SCRATCH_BLOCKS: u32 = {SCRATCH_BLOCKS}u;
 const CELLS: u32 = {}u;
+const SORT_PASSES: u32 = {}u;
 {pair}
 ",
         bits.total_bits(),
         BLOCK / GROUP,
-        1u32 << bits.bits_per_axis()
+        1u32 << bits.bits_per_axis(),
+        sort_passes(bits),
     )
 }
 
-/// The build kernels' WGSL for codes of `bits`.
-pub fn shader_source(bits: MortonBits) -> String {
-    format!("{}\n{}\n{LBVH}", key_preamble(bits), records_source())
+/// The build kernels' WGSL for codes of `bits`, the sort ranking by `ranking`.
+pub fn shader_source(bits: MortonBits, ranking: SortRanking) -> String {
+    format!(
+        "{}\n{}\n{}\n{LBVH}\n{RADIX_SORT}",
+        key_preamble(bits),
+        ranking.source(),
+        records_source(),
+    )
 }
 
 /// Bytes of one (code, primitive) pair.
@@ -88,8 +264,15 @@ fn pair_bytes(bits: MortonBits) -> u64 {
     }
 }
 
-/// Words of `scratch` per block: its digit counts and 6 words of centroid bounds.
-const SCRATCH_WORDS_PER_BLOCK: u64 = RADIX as u64 + 6;
+/// Words of `scratch` per block: its centroid bounds.
+const SCRATCH_WORDS_PER_BLOCK: u64 = 6;
+
+/// Words of `climb` the sort uses (radix_sort.wgsl): every pass's digit starts and tile ticket, and
+/// two passes' look-back words.
+fn sort_words(bits: MortonBits, ranking: SortRanking, count: u64) -> u64 {
+    let passes = sort_passes(bits) as u64;
+    passes * (DIGITS + 1) + 2 * count.div_ceil(ranking.tile() as u64) * DIGITS
+}
 /// Uniform offsets must be multiples of 256 bytes.
 const PARAMS_STRIDE: u64 = 256;
 const PHASES: usize = 5;
@@ -112,9 +295,9 @@ struct Kernels {
     bounds_partial: wgpu::ComputePipeline,
     bounds_final: wgpu::ComputePipeline,
     morton: wgpu::ComputePipeline,
-    sort_count: wgpu::ComputePipeline,
-    sort_scan: wgpu::ComputePipeline,
-    sort_scatter: wgpu::ComputePipeline,
+    sort_histogram: wgpu::ComputePipeline,
+    sort_digit_starts: wgpu::ComputePipeline,
+    sort_pass: wgpu::ComputePipeline,
     hierarchy: wgpu::ComputePipeline,
     leaves_and_bounds: wgpu::ComputePipeline,
     links: wgpu::ComputePipeline,
@@ -125,6 +308,7 @@ struct Kernels {
 pub struct GpuLbvhBuilder {
     ctx: GpuContext,
     bits: MortonBits,
+    ranking: SortRanking,
     kernels: Kernels,
     layout: wgpu::BindGroupLayout,
     buffers: Buffers,
@@ -151,6 +335,17 @@ impl GpuLbvhBuilder {
     /// Compiles the kernels for Morton codes of `bits` and sizes the buffers for `spheres` spheres and
     /// `triangles` triangles.
     pub async fn new(ctx: &GpuContext, bits: MortonBits, spheres: usize, triangles: usize) -> Result<Self, GpuError> {
+        Self::with_ranking(ctx, bits, spheres, triangles, SortRanking::best(ctx)).await
+    }
+
+    /// Like [`GpuLbvhBuilder::new`], with the sort's ranking chosen.
+    pub async fn with_ranking(
+        ctx: &GpuContext,
+        bits: MortonBits,
+        spheres: usize,
+        triangles: usize,
+        ranking: SortRanking,
+    ) -> Result<Self, GpuError> {
         ctx.checked("compiling the GPU LBVH build", || {
             let device = &ctx.device;
             let rw = wgpu::BufferBindingType::Storage { read_only: false };
@@ -165,22 +360,23 @@ impl GpuLbvhBuilder {
                 label: Some("lbvh build"),
                 entries: &entries,
             });
-            let kernel = kernels(device, "lbvh", shader_source(bits), &layout);
+            let kernel = kernels(device, "lbvh", shader_source(bits, ranking), &layout);
             let kernels = Kernels {
                 bounds_partial: kernel("bounds_partial"),
                 bounds_final: kernel("bounds_final"),
                 morton: kernel("morton"),
-                sort_count: kernel("sort_count"),
-                sort_scan: kernel("sort_scan"),
-                sort_scatter: kernel("sort_scatter"),
+                sort_histogram: kernel("sort_histogram"),
+                sort_digit_starts: kernel("sort_digit_starts"),
+                sort_pass: kernel(ranking.entry_point()),
                 hierarchy: kernel("hierarchy"),
                 leaves_and_bounds: kernel("leaves_and_bounds"),
                 links: kernel("links"),
             };
-            let buffers = Buffers::new(ctx, &layout, bits, spheres, triangles)?;
+            let buffers = Buffers::new(ctx, &layout, bits, ranking, spheres, triangles)?;
             Ok(Self {
                 ctx: ctx.clone(),
                 bits,
+                ranking,
                 kernels,
                 layout,
                 buffers,
@@ -199,7 +395,7 @@ impl GpuLbvhBuilder {
             let ctx = &self.ctx;
             self.buffers = ctx
                 .checked("sizing the GPU LBVH build", || {
-                    Buffers::new(ctx, &self.layout, self.bits, spheres, triangles)
+                    Buffers::new(ctx, &self.layout, self.bits, self.ranking, spheres, triangles)
                 })
                 .await?;
         }
@@ -246,6 +442,11 @@ impl GpuLbvhBuilder {
         self.bits
     }
 
+    /// How the sort ranks pairs by digit.
+    pub fn ranking(&self) -> SortRanking {
+        self.ranking
+    }
+
     /// Replaces the Morton phase with given codes (of the builder's width), for comparisons with
     /// the CPU build.
     pub fn write_codes(&self, codes: &[u64]) {
@@ -271,9 +472,8 @@ impl GpuLbvhBuilder {
         if n == 0 {
             return;
         }
-        if n > 1 {
-            encoder.clear_buffer(&b.climb, 0, Some((n as u64 - 1) * 4));
-        }
+        let sort_bytes = sort_words(self.bits, self.ranking, n as u64) * 4;
+        encoder.clear_buffer(&b.climb, 0, Some(sort_bytes));
         let blocks = n.div_ceil(BLOCK);
         let items = n.div_ceil(GROUP);
         let k = &self.kernels;
@@ -306,17 +506,23 @@ impl GpuLbvhBuilder {
                 ],
             );
         }
-        let sort: Vec<_> = (0..sort_passes(self.bits))
-            .flat_map(|pass| {
-                let bind_group = &b.bind_groups[pass as usize % 2];
-                [
-                    (&k.sort_count, bind_group, pass, blocks),
-                    (&k.sort_scan, bind_group, pass, 1),
-                    (&k.sort_scatter, bind_group, pass, blocks),
-                ]
-            })
-            .collect();
+        let mut sort = vec![
+            (&k.sort_histogram, a, 0, n.div_ceil(GROUP * HISTOGRAM_ITEMS)),
+            (&k.sort_digit_starts, a, 0, 1),
+        ];
+        for pass in 0..sort_passes(self.bits) {
+            sort.push((
+                &k.sort_pass,
+                &b.bind_groups[pass as usize % 2],
+                pass,
+                n.div_ceil(self.ranking.tile()),
+            ));
+        }
         phase(encoder, 1, &sort);
+        // The sort's words in `climb` give way to the visit counters.
+        if n > 1 {
+            encoder.clear_buffer(&b.climb, 0, Some((n as u64 - 1) * 4));
+        }
         let internal = (n - 1).div_ceil(GROUP);
         let hierarchy = [(&k.hierarchy, a, 0, internal)];
         phase(encoder, 2, if n > 1 { &hierarchy[..] } else { &[] });
@@ -395,6 +601,7 @@ impl Buffers {
         ctx: &GpuContext,
         layout: &wgpu::BindGroupLayout,
         bits: MortonBits,
+        ranking: SortRanking,
         sphere_count: usize,
         triangle_count: usize,
     ) -> Result<Self, GpuError> {
@@ -433,11 +640,11 @@ impl Buffers {
         let scratch = storage_buffer(
             device,
             "build scratch",
-            (SCRATCH_HIST as u64 + SCRATCH_WORDS_PER_BLOCK * blocks + (2 * n).saturating_sub(1)) * 4,
+            (SCRATCH_BLOCKS as u64 + SCRATCH_WORDS_PER_BLOCK * blocks + (2 * n).saturating_sub(1)) * 4,
             wgpu::BufferUsages::empty(),
         );
         let ranges = storage_buffer(device, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
-        let climb_words = n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1);
+        let climb_words = (n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1)).max(sort_words(bits, ranking, n));
         let climb = storage_buffer(device, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
         let nodes = storage_buffer(device, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
         let params = device.create_buffer(&wgpu::BufferDescriptor {

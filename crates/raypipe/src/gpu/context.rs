@@ -89,6 +89,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Whether passes can be timed with timestamp queries.
     pub timestamps: bool,
+    /// The smallest and largest subgroup, where shaders may use subgroup operations.
+    pub subgroups: Option<(u32, u32)>,
 }
 
 impl GpuContext {
@@ -129,7 +131,14 @@ impl GpuContext {
         if let Some(warning) = driver_warning(&info) {
             log::warn!("{warning}");
         }
-        let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        // Subgroup operations speed up the build's sort. Not in a browser: naga would pass the
+        // shader on without the `enable subgroups;` that the browser's compiler asks for.
+        let wanted = if cfg!(target_arch = "wasm32") {
+            wgpu::Features::TIMESTAMP_QUERY
+        } else {
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP
+        };
+        let required_features = adapter.features() & wanted;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("raypipe"),
@@ -148,6 +157,9 @@ impl GpuContext {
         }));
         Ok(Self {
             timestamps: required_features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            subgroups: required_features
+                .contains(wgpu::Features::SUBGROUP)
+                .then_some((info.subgroup_min_size, info.subgroup_max_size)),
             adapter,
             device,
             queue,

@@ -9,7 +9,7 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::threaded::threaded_nodes;
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::gpu::GpuContext;
-use raypipe::gpu::build::GpuLbvhBuilder;
+use raypipe::gpu::build::{GpuLbvhBuilder, SortRanking};
 use raypipe::gpu::threaded::GpuThreadedLayout;
 use raypipe::records::{GpuSphere, PackedScene};
 use raypipe::rng::SplitMix64;
@@ -91,7 +91,7 @@ fn check_threaded_layout(builder: &GpuLbvhBuilder, nodes: &[GpuNode], what: &str
 fn same_codes_give_identical_nodes(ctx: &GpuContext) {
     for bits in WIDTHS {
         let mut builder = block_on(GpuLbvhBuilder::new(ctx, bits, 0, 0)).unwrap();
-        for n in [0, 1, 2, 3, 100, 1023, 1024, 1025, 5000] {
+        for n in [0, 1, 2, 3, 100, 1023, 1024, 1025, 5000, 8192, 8193] {
             check_same_codes(
                 &mut builder,
                 &random_spheres(n, n as u64, n),
@@ -103,6 +103,27 @@ fn same_codes_give_identical_nodes(ctx: &GpuContext) {
             &random_spheres(30_000, 7, 30_000),
             "30,000 random spheres",
         );
+    }
+}
+
+/// Every way the sort can rank pairs (runs, lane groups in workgroup memory, subgroups where the
+/// device has them) sorts alike, over many tiles and a partial last one, with many equal digits.
+fn every_sort_ranking_gives_identical_nodes(ctx: &GpuContext) {
+    for ranking in SortRanking::all(ctx) {
+        for bits in WIDTHS {
+            let mut builder = block_on(GpuLbvhBuilder::with_ranking(ctx, bits, 0, 0, ranking)).unwrap();
+            let what = format!("{ranking:?}");
+            check_same_codes(
+                &mut builder,
+                &random_spheres(40_000, 9, 40_000),
+                &format!("{what}, 40,000 spheres"),
+            );
+            check_same_codes(
+                &mut builder,
+                &random_spheres(3000, 2, 3),
+                &format!("{what}, 3,000 spheres on 3 centres"),
+            );
+        }
     }
 }
 
@@ -193,6 +214,7 @@ fn spheres_and_triangles_build_alike(ctx: &GpuContext) {
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu same_codes_give_identical_nodes,
+        gpu every_sort_ranking_gives_identical_nodes,
         gpu same_codes_give_identical_nodes_with_duplicate_centroids,
         plain wide_codes_split_what_narrow_codes_tie,
         gpu own_codes_give_a_valid_tree,

@@ -6,16 +6,14 @@
 // `code_word` (the code's low or high 32 bits; 30-bit codes have no high word, it reads 0).
 
 // From the preamble (src/gpu/build.rs): GROUP invocations per workgroup; BLOCK items per block in
-// the reduction and sort kernels, ITEMS consecutive ones per invocation; the sort orders keys by
-// digits of RADIX values, lowest digit first.
+// the reduction kernels, ITEMS consecutive ones per invocation. The sort is in radix_sort.wgsl.
 
 // BuildParams is in types.wgsl, beside the other records with a host twin.
 
-// Layout of `scratch`: centroid bounds; from SCRATCH_HIST, the current sort pass's digit counts per
-// block, digit-major (RADIX * blocks words, scanned in place into where each block's items of each
-// digit go); then per-block partial centroid bounds (6 words each); then every node's parent. (One
-// buffer for all of them keeps the build within 8 storage buffers, WebGPU's default limit.)
-// SCRATCH_BOUNDS and SCRATCH_HIST come from the preamble.
+// Layout of `scratch`: centroid bounds; from SCRATCH_BLOCKS, per-block partial centroid bounds (6
+// words each); then every node's parent. (One buffer for all of them keeps the build within 8
+// storage buffers, WebGPU's default limit.) SCRATCH_BOUNDS and SCRATCH_BLOCKS come from the
+// preamble.
 
 @group(0) @binding(0) var<uniform> params: BuildParams;
 @group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
@@ -26,18 +24,13 @@
 // Internal node i: (left child, right child, first, last).
 @group(0) @binding(5) var<storage, read_write> ranges: array<vec4<u32>>;
 // [0, n - 1): visit counters of internal nodes; then 6 words per node: its box's min and max bits.
+// (The sort keeps its counts here before: radix_sort.wgsl.)
 @group(0) @binding(6) var<storage, read_write> climb: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> nodes: array<BvhNode>;
 // Primitive sphere_count + i is triangle i.
 @group(0) @binding(8) var<storage, read> triangles: array<Triangle>;
 
 var<workgroup> shared_u32: array<u32, GROUP>;
-// An invocation's digit counts, two 16-bit counts per word, eight words in two vectors: digits 0 and
-// 1 in shared_counts_lo.x, ..., digits 14 and 15 in shared_counts_hi.w. Vectors updated by masks,
-// never indexed by a variable: GL drivers compile dynamically indexed locals very slowly.
-var<workgroup> shared_counts_lo: array<vec4<u32>, GROUP>;
-var<workgroup> shared_counts_hi: array<vec4<u32>, GROUP>;
-var<workgroup> digit_totals: array<atomic<u32>, RADIX>;
 var<workgroup> shared_lo: array<vec3<f32>, GROUP>;
 var<workgroup> shared_hi: array<vec3<f32>, GROUP>;
 
@@ -51,12 +44,12 @@ fn block_count() -> u32 {
 
 // Where block `block`'s centroid bounds wait for bounds_final.
 fn partial_bounds(block: u32) -> u32 {
-    return SCRATCH_HIST + RADIX * block_count() + block * 6u;
+    return SCRATCH_BLOCKS + block * 6u;
 }
 
 // Where node `node`'s parent is kept.
 fn parent_slot(node: u32) -> u32 {
-    return SCRATCH_HIST + (RADIX + 6u) * block_count() + node;
+    return SCRATCH_BLOCKS + 6u * block_count() + node;
 }
 
 struct Box {
@@ -180,13 +173,8 @@ fn morton(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups
     pairs_in[i] = pair(code, i);
 }
 
-// A digit never straddles the two words of a 64-bit code: 32 is a multiple of the digit's 4 bits.
-fn digit(i: u32) -> u32 {
-    return (code_word(pairs_in[i], params.shift >= 32u) >> (params.shift & 31u)) & (RADIX - 1u);
-}
-
-// Exclusive scan of shared_u32 over the workgroup (Hillis-Steele); returns the total.
-fn scan_shared(lid: u32) -> u32 {
+// Inclusive scan of shared_u32 over the workgroup (Hillis-Steele), in place.
+fn scan_shared_inclusive(lid: u32) {
     workgroupBarrier();
     for (var offset = 1u; offset < GROUP; offset *= 2u) {
         var add = 0u;
@@ -196,119 +184,6 @@ fn scan_shared(lid: u32) -> u32 {
         workgroupBarrier();
         shared_u32[lid] += add;
         workgroupBarrier();
-    }
-    let total = shared_u32[GROUP - 1u];
-    workgroupBarrier();
-    return total;
-}
-
-// Inclusive scan of shared_counts_lo and _hi over the workgroup (Hillis-Steele): all sixteen digits
-// at once.
-fn scan_counts(lid: u32) {
-    workgroupBarrier();
-    for (var offset = 1u; offset < GROUP; offset *= 2u) {
-        var add_lo = vec4<u32>(0u);
-        var add_hi = vec4<u32>(0u);
-        if (lid >= offset) {
-            add_lo = shared_counts_lo[lid - offset];
-            add_hi = shared_counts_hi[lid - offset];
-        }
-        workgroupBarrier();
-        shared_counts_lo[lid] += add_lo;
-        shared_counts_hi[lid] += add_hi;
-        workgroupBarrier();
-    }
-}
-
-// One item of digit d, as packed counts: the half of the eight words from `first_word`.
-fn one_digit(d: u32, first_word: u32) -> vec4<u32> {
-    let words = vec4<u32>(first_word) + vec4<u32>(0u, 1u, 2u, 3u);
-    return select(vec4<u32>(0u), vec4<u32>(1u << (16u * (d & 1u))), words == vec4<u32>(d >> 1u));
-}
-
-// Digit d's count in packed counts.
-fn packed_count(lo: vec4<u32>, hi: vec4<u32>, d: u32) -> u32 {
-    let picked = select(vec4<u32>(0u), lo, vec4<u32>(0u, 1u, 2u, 3u) == vec4<u32>(d >> 1u))
-        + select(vec4<u32>(0u), hi, vec4<u32>(4u, 5u, 6u, 7u) == vec4<u32>(d >> 1u));
-    let word = picked.x + picked.y + picked.z + picked.w;
-    return (word >> (16u * (d & 1u))) & 0xffffu;
-}
-
-// One pass of a stable LSD radix sort of (code, primitive) pairs by the digit at params.shift:
-// count each block's digits, scan the counts, scatter.
-@compute @workgroup_size(256)
-fn sort_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-              @builtin(local_invocation_index) lid: u32) {
-    let block = flat_group(wid, groups);
-    if (lid < RADIX) {
-        atomicStore(&digit_totals[lid], 0u);
-    }
-    workgroupBarrier();
-    for (var k = 0u; k < ITEMS; k++) {
-        let i = block * BLOCK + lid * ITEMS + k;
-        if (i < params.count) {
-            atomicAdd(&digit_totals[digit(i)], 1u);
-        }
-    }
-    workgroupBarrier();
-    if (lid < RADIX && block < block_count()) {
-        scratch[SCRATCH_HIST + lid * block_count() + block] = atomicLoad(&digit_totals[lid]);
-    }
-}
-
-@compute @workgroup_size(256)
-fn sort_scan(@builtin(local_invocation_index) lid: u32) {
-    // Digit-major counts: one exclusive scan gives every (digit, block) its first output position.
-    // Each invocation sums a run of consecutive entries; a scan over the runs gives their offsets.
-    let entries = RADIX * block_count();
-    let per = (entries + GROUP - 1u) / GROUP;
-    var sum = 0u;
-    for (var e = lid * per; e < min(entries, (lid + 1u) * per); e++) {
-        sum += scratch[SCRATCH_HIST + e];
-    }
-    shared_u32[lid] = sum;
-    scan_shared(lid);
-    var running = shared_u32[lid] - sum;
-    for (var e = lid * per; e < min(entries, (lid + 1u) * per); e++) {
-        let count = scratch[SCRATCH_HIST + e];
-        scratch[SCRATCH_HIST + e] = running;
-        running += count;
-    }
-}
-
-@compute @workgroup_size(256)
-fn sort_scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-                @builtin(local_invocation_index) lid: u32) {
-    let block = flat_group(wid, groups);
-    // How many items of each digit this invocation holds; a scan gives those of the invocations before.
-    var own_lo = vec4<u32>(0u);
-    var own_hi = vec4<u32>(0u);
-    for (var k = 0u; k < ITEMS; k++) {
-        let i = block * BLOCK + lid * ITEMS + k;
-        if (i < params.count) {
-            let d = digit(i);
-            own_lo += one_digit(d, 0u);
-            own_hi += one_digit(d, 4u);
-        }
-    }
-    shared_counts_lo[lid] = own_lo;
-    shared_counts_hi[lid] = own_hi;
-    scan_counts(lid);
-    if (block >= block_count()) {
-        return;
-    }
-    // Items of each digit ahead of the next item in the block.
-    var ahead_lo = shared_counts_lo[lid] - own_lo;
-    var ahead_hi = shared_counts_hi[lid] - own_hi;
-    for (var k = 0u; k < ITEMS; k++) {
-        let i = block * BLOCK + lid * ITEMS + k;
-        if (i >= params.count) {
-            break;
-        }
-        let d = digit(i);
-        pairs_out[scratch[SCRATCH_HIST + d * block_count() + block] + packed_count(ahead_lo, ahead_hi, d)] = pairs_in[i];
-        ahead_lo += one_digit(d, 0u);
-        ahead_hi += one_digit(d, 4u);
     }
 }
 
