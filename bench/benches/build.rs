@@ -69,7 +69,7 @@ fn cpu_builders(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("raypipe_lbvh", n), &boxes, |b, boxes| {
             b.iter(|| builder.build(boxes, MortonBits::Bits30))
         });
-        // The same tree with Karras's searches for the hierarchy, as the GPU finds it.
+        // The same tree with Karras's searches for the hierarchy.
         let mut builder = LbvhBuilder::<u64>::with_hierarchy(Hierarchy::Searches);
         group.bench_with_input(BenchmarkId::new("raypipe_lbvh_searches", n), &boxes, |b, boxes| {
             b.iter(|| builder.build(boxes, MortonBits::Bits30))
@@ -124,7 +124,7 @@ fn gpu_builder(c: &mut Criterion) {
         }
         builder.write_spheres(&packed.spheres);
         group.throughput(Throughput::Elements(n as u64));
-        // GPU time of the five compute passes, from timestamp queries.
+        // GPU time of the build's compute passes, from timestamp queries.
         group.bench_function(BenchmarkId::new("raypipe_lbvh_gpu", n), |b| {
             b.iter_custom(|iterations| {
                 (0..iterations)

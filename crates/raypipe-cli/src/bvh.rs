@@ -45,7 +45,7 @@ pub struct BvhArgs {
     #[arg(long, value_parser = choice::<MortonBits>(), default_value_t)]
     morton_bits: MortonBits,
     /// How the CPU LBVH finds its hierarchy: bottom-up merges that also write the bounds and links
-    /// (the default), or Karras's searches for every node, as the GPU finds it, then bounds and links
+    /// (the default, and the GPU's way), or Karras's searches for every node, then bounds and links
     /// in a pass of their own. Both give the same tree.
     #[arg(long, value_parser = choice::<Hierarchy>())]
     hierarchy: Option<Hierarchy>,
@@ -96,20 +96,20 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let boxes = packed.primitive_boxes();
     let runs = args.runs.max(1);
     let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
-    // The GPU finds the hierarchy by Karras's searches only.
+    // The GPU finds the hierarchy by merges only.
     let hierarchy = match args.device {
-        BuildDevice::Gpu => Hierarchy::Searches,
+        BuildDevice::Gpu => Hierarchy::Merges,
         BuildDevice::Cpu => args.hierarchy.unwrap_or_default(),
     };
     match (args.hierarchy, args.builder, args.device) {
         (Some(_), Builder::Sah, _) => anyhow::bail!("--hierarchy is an option of the LBVH builder"),
-        (Some(Hierarchy::Merges), _, BuildDevice::Gpu) => {
-            anyhow::bail!("the GPU builder finds the hierarchy by searches only (--hierarchy searches)")
+        (Some(Hierarchy::Searches), _, BuildDevice::Gpu) => {
+            anyhow::bail!("the GPU builder finds the hierarchy by merges only (--hierarchy merges)")
         }
         _ => {}
     }
     // Where the merges find the hierarchy, its time holds the bounds and links too.
-    let fused = args.builder == Builder::Lbvh && args.device == BuildDevice::Cpu && hierarchy == Hierarchy::Merges;
+    let fused = args.builder == Builder::Lbvh && hierarchy == Hierarchy::Merges;
     let (bvh, mut runs) = match (args.builder, args.morton_bits) {
         (Builder::Lbvh, bits) if args.device == BuildDevice::Gpu => {
             let ctx = block_on(GpuContext::require(args.backend))?;

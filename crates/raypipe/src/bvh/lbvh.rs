@@ -1,7 +1,7 @@
 //! Karras (2012): the binary radix tree over sorted Morton codes, then bounds bottom-up and the
 //! traversal links. The CPU finds the tree one of two ways ([`Hierarchy`]): every internal node by
-//! Karras's own searches, as the GPU does, then bounds and links in a climb; or by bottom-up merges
-//! ([`super::merge`]) that write bounds and links in the same pass. Each phase runs in parallel, and
+//! Karras's own searches, then bounds and links in a climb; or by bottom-up merges
+//! ([`super::merge`]) that write bounds and links in the same pass, as the GPU does. Each phase runs in parallel, and
 //! the last writes each node of the final array once, whole; `LbvhBuilder` keeps its buffers from
 //! one build to the next, as a per-frame rebuild wants.
 
@@ -136,8 +136,8 @@ pub enum Hierarchy {
     /// leaves.
     #[default]
     Merges,
-    /// Karras's searches: every internal node found on its own, as the GPU builder finds them, then
-    /// the boxes and links in a climb of their own.
+    /// Karras's searches: every internal node found on its own, then the boxes and links in a climb
+    /// of their own.
     Searches,
 }
 
@@ -152,7 +152,7 @@ crate::impl_choice!(
         (
             Searches,
             "searches",
-            "Karras's searches: every internal node found on its own, as the GPU builder finds them, then the boxes and links in a climb of their own"
+            "Karras's searches: every internal node found on its own, then the boxes and links in a climb of their own"
         ),
     ]
 );

@@ -30,8 +30,8 @@ pub struct Bvh {
 pub struct BuildTimings {
     pub morton: f64,
     pub sort: f64,
-    /// With the CPU's bottom-up merges ([`lbvh::Hierarchy::Merges`]), this holds the bounds and
-    /// links too, which are written in the same pass; `bounds` and `links` are then zero.
+    /// With bottom-up merges ([`lbvh::Hierarchy::Merges`], and always on the GPU), this holds the
+    /// bounds and links too, which are written in the same pass; `bounds` and `links` are then zero.
     pub hierarchy: f64,
     pub bounds: f64,
     /// Zero where the links are written with the bounds, as the CPU's climb after Karras's searches

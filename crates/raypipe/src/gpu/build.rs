@@ -1,6 +1,7 @@
-//! The LBVH build on the GPU: `shaders/lbvh.wgsl`'s kernels in five compute passes (morton, sort,
-//! hierarchy, bounds, links), each timed with timestamp queries where the adapter has them. The node
-//! array stays on the GPU, ready for the fragment shader; `read_nodes` fetches it for tests and stats.
+//! The LBVH build on the GPU: `shaders/lbvh.wgsl`'s and `shaders/radix_sort.wgsl`'s kernels in
+//! three compute passes (morton, sort, hierarchy: bottom-up merges that write the bounds and links
+//! too, as on the CPU), each timed with timestamp queries where the adapter has them. The node array
+//! stays on the GPU, ready for the fragment shader; `read_nodes` fetches it for tests and stats.
 //!
 //! Morton codes are 30-bit or 63-bit, as on the CPU; the width picks the key type the kernels are
 //! compiled with.
@@ -61,6 +62,7 @@ pub enum SortRanking {
     Shared,
     /// Every invocation counts the digits of its own run of pairs, as a CPU sort does: for CPU
     /// adapters, whose workgroups are a few SIMD lanes and whose ballots and barriers are loops.
+    /// The merges then also give each invocation a run of leaves.
     Runs {
         /// Invocations per workgroup, each with its own digit counts.
         group: u32,
@@ -120,6 +122,14 @@ impl SortRanking {
         }
     }
 
+    /// Leaves an invocation of the merges takes in turn: runs of them on CPU adapters too.
+    fn merge_run(self) -> u32 {
+        match self {
+            SortRanking::Runs { .. } => MERGE_RUN,
+            SortRanking::Subgroups { .. } | SortRanking::Shared => 1,
+        }
+    }
+
     fn entry_point(self) -> &'static str {
         match self {
             SortRanking::Subgroups { .. } | SortRanking::Shared => "sort_pass",
@@ -141,8 +151,10 @@ const TILE: u32 = {tile}u;
 const LANE_GROUPS: u32 = {lane_groups}u;
 const RANKED_PAIRS: u32 = {ranked_pairs}u;
 const HISTOGRAM_ITEMS: u32 = {HISTOGRAM_ITEMS}u;
+const MERGE_RUN: u32 = {}u;
 ",
-            tile / group
+            tile / group,
+            self.merge_run()
         );
         let ranking = match self {
             SortRanking::Subgroups { .. } => {
@@ -204,6 +216,8 @@ fn same_digit(v: SortInvocation, digit: u32, valid: bool) -> vec4<u32> {{
     }
 }
 const _: () = assert!(SHARED_LANE_WIDTH * LANE_GROUPS >= 128);
+/// Leaves per invocation of the merges on CPU adapters.
+const MERGE_RUN: u32 = 32;
 /// The tile of lane groups, whose ranks fill 4 KiB of workgroup memory.
 const LANE_TILE: u32 = 1024;
 /// The tile of [`SortRanking::Runs`]: on lavapipe, the sort of 1M pairs took 86 to 92 ms with tiles
@@ -275,7 +289,7 @@ fn sort_words(bits: MortonBits, ranking: SortRanking, count: u64) -> u64 {
 }
 /// Uniform offsets must be multiples of 256 bytes.
 const PARAMS_STRIDE: u64 = 256;
-const PHASES: usize = 5;
+const PHASES: usize = 3;
 
 /// The kernels' parameters (`BuildParams` in types.wgsl), one per sort pass at `PARAMS_STRIDE`.
 #[repr(C)]
@@ -298,9 +312,8 @@ struct Kernels {
     sort_histogram: wgpu::ComputePipeline,
     sort_digit_starts: wgpu::ComputePipeline,
     sort_pass: wgpu::ComputePipeline,
-    hierarchy: wgpu::ComputePipeline,
-    leaves_and_bounds: wgpu::ComputePipeline,
-    links: wgpu::ComputePipeline,
+    split_prefixes: wgpu::ComputePipeline,
+    merge: wgpu::ComputePipeline,
 }
 
 /// A GPU LBVH builder: kernels compiled once, buffers kept from build to build while the
@@ -368,9 +381,8 @@ impl GpuLbvhBuilder {
                 sort_histogram: kernel("sort_histogram"),
                 sort_digit_starts: kernel("sort_digit_starts"),
                 sort_pass: kernel(ranking.entry_point()),
-                hierarchy: kernel("hierarchy"),
-                leaves_and_bounds: kernel("leaves_and_bounds"),
-                links: kernel("links"),
+                split_prefixes: kernel("split_prefixes"),
+                merge: kernel("merge"),
             };
             let buffers = Buffers::new(ctx, &layout, bits, ranking, spheres, triangles)?;
             Ok(Self {
@@ -519,15 +531,19 @@ impl GpuLbvhBuilder {
             ));
         }
         phase(encoder, 1, &sort);
-        // The sort's words in `climb` give way to the visit counters.
+        // The sort's words in `climb` give way to the merges' exchange words.
         if n > 1 {
             encoder.clear_buffer(&b.climb, 0, Some((n as u64 - 1) * 4));
         }
-        let internal = (n - 1).div_ceil(GROUP);
-        let hierarchy = [(&k.hierarchy, a, 0, internal)];
-        phase(encoder, 2, if n > 1 { &hierarchy[..] } else { &[] });
-        phase(encoder, 3, &[(&k.leaves_and_bounds, a, 0, items)]);
-        phase(encoder, 4, &[(&k.links, a, 0, (2 * n - 1).div_ceil(GROUP))]);
+        let invocations = n.div_ceil(self.ranking.merge_run());
+        phase(
+            encoder,
+            2,
+            &[
+                (&k.split_prefixes, a, 0, n.div_ceil(GROUP)),
+                (&k.merge, a, 0, invocations.div_ceil(GROUP)),
+            ],
+        );
         if let Some(timer) = &self.timer {
             timer.resolve(encoder);
         }
@@ -562,8 +578,8 @@ impl GpuLbvhBuilder {
                     morton: ms[0],
                     sort: ms[1],
                     hierarchy: ms[2],
-                    bounds: ms[3],
-                    links: ms[4],
+                    bounds: 0.0,
+                    links: 0.0,
                 })
             }
             _ => Ok(BuildTimings::default()),
@@ -636,15 +652,20 @@ impl Buffers {
         );
         let pairs = storage_buffer(device, "pairs A", n * pair_bytes(bits), wgpu::BufferUsages::COPY_DST);
         let pairs_b = storage_buffer(device, "pairs B", n * pair_bytes(bits), wgpu::BufferUsages::empty());
-        // The parents follow the per-block words (`parent_slot` in lbvh.wgsl).
         let scratch = storage_buffer(
             device,
             "build scratch",
-            (SCRATCH_BLOCKS as u64 + SCRATCH_WORDS_PER_BLOCK * blocks + (2 * n).saturating_sub(1)) * 4,
+            (SCRATCH_BLOCKS as u64 + SCRATCH_WORDS_PER_BLOCK * blocks) * 4,
             wgpu::BufferUsages::empty(),
         );
-        let ranges = storage_buffer(device, "ranges", n.saturating_sub(1) * 16, wgpu::BufferUsages::empty());
-        let climb_words = (n.saturating_sub(1) + 6 * (2 * n).saturating_sub(1)).max(sort_words(bits, ranking, n));
+        let splits = storage_buffer(
+            device,
+            "split prefixes",
+            n.saturating_sub(1) * 4,
+            wgpu::BufferUsages::empty(),
+        );
+        // Per split: the exchange word, and the two children's boxes.
+        let climb_words = (13 * n.saturating_sub(1)).max(sort_words(bits, ranking, n));
         let climb = storage_buffer(device, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
         let nodes = storage_buffer(device, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
@@ -664,7 +685,7 @@ impl Buffers {
         }
         let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
             let resources = [
-                &spheres, pairs_in, pairs_out, &scratch, &ranges, &climb, &nodes, &triangles,
+                &spheres, pairs_in, pairs_out, &scratch, &splits, &climb, &nodes, &triangles,
             ];
             let mut entries = vec![wgpu::BindGroupEntry {
                 binding: 0,
@@ -705,4 +726,4 @@ pub fn depth_bound(count: usize, bits: MortonBits) -> u32 {
     bits.total_bits() + (count.max(1) as u64).next_power_of_two().trailing_zeros()
 }
 
-const PHASE_NAMES: [&str; PHASES] = ["morton", "sort", "hierarchy", "bounds", "links"];
+const PHASE_NAMES: [&str; PHASES] = ["morton", "sort", "hierarchy"];

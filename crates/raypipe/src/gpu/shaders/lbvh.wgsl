@@ -11,9 +11,7 @@
 // BuildParams is in types.wgsl, beside the other records with a host twin.
 
 // Layout of `scratch`: centroid bounds; from SCRATCH_BLOCKS, per-block partial centroid bounds (6
-// words each); then every node's parent. (One buffer for all of them keeps the build within 8
-// storage buffers, WebGPU's default limit.) SCRATCH_BOUNDS and SCRATCH_BLOCKS come from the
-// preamble.
+// words each). SCRATCH_BOUNDS and SCRATCH_BLOCKS come from the preamble.
 
 @group(0) @binding(0) var<uniform> params: BuildParams;
 @group(0) @binding(1) var<storage, read> spheres: array<Sphere>;
@@ -21,10 +19,11 @@
 @group(0) @binding(2) var<storage, read_write> pairs_in: array<Pair>;
 @group(0) @binding(3) var<storage, read_write> pairs_out: array<Pair>;
 @group(0) @binding(4) var<storage, read_write> scratch: array<u32>;
-// Internal node i: (left child, right child, first, last).
-@group(0) @binding(5) var<storage, read_write> ranges: array<vec4<u32>>;
-// [0, n - 1): visit counters of internal nodes; then 6 words per node: its box's min and max bits.
-// (The sort keeps its counts here before: radix_sort.wgsl.)
+// The prefix length of sorted positions i and i + 1 (split_prefixes).
+@group(0) @binding(5) var<storage, read_write> splits: array<i32>;
+// What the merges exchange at each split: the far end of the first child to arrive, then 12 words
+// per split, the boxes of its two children. (The sort keeps its words here before:
+// radix_sort.wgsl.)
 @group(0) @binding(6) var<storage, read_write> climb: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> nodes: array<BvhNode>;
 // Primitive sphere_count + i is triangle i.
@@ -45,11 +44,6 @@ fn block_count() -> u32 {
 // Where block `block`'s centroid bounds wait for bounds_final.
 fn partial_bounds(block: u32) -> u32 {
     return SCRATCH_BLOCKS + block * 6u;
-}
-
-// Where node `node`'s parent is kept.
-fn parent_slot(node: u32) -> u32 {
-    return SCRATCH_BLOCKS + 6u * block_count() + node;
 }
 
 struct Box {
@@ -208,152 +202,134 @@ fn delta(i: u32, j: i32) -> i32 {
     return 64 + i32(countLeadingZeros(i ^ u32(j)));
 }
 
-// Find every internal node's children and range, and every node's parent (Karras 2012).
+// The prefix length of sorted positions i and i + 1, for every i below n - 1: where each node
+// of the tree splits (Karras 2012), and so which side each subtree's sibling lies on.
 @compute @workgroup_size(256)
-fn hierarchy(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-             @builtin(local_invocation_index) lid: u32) {
+fn split_prefixes(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                  @builtin(local_invocation_index) lid: u32) {
     let i = flat_group(wid, groups) * GROUP + lid;
-    let n = params.count;
-    if (i + 1u >= n) {
-        return;
-    }
-    let ii = i32(i);
-    let leaf_base = n - 1u;
-    var d = -1;
-    if (delta(i, ii + 1) > delta(i, ii - 1)) {
-        d = 1;
-    }
-    let delta_min = delta(i, ii - d);
-    var l_max = 2;
-    while (delta(i, ii + l_max * d) > delta_min) {
-        l_max *= 2;
-    }
-    var l = 0;
-    for (var t = l_max / 2; t >= 1; t /= 2) {
-        if (delta(i, ii + (l + t) * d) > delta_min) {
-            l += t;
-        }
-    }
-    let j = ii + l * d;
-    let delta_node = delta(i, j);
-    var s = 0;
-    var shift = 1u;
-    loop {
-        let t = (l + (1 << shift) - 1) >> shift;
-        if (delta(i, ii + (s + t) * d) > delta_node) {
-            s += t;
-        }
-        if (t == 1) {
-            break;
-        }
-        shift += 1u;
-    }
-    let split = u32(ii + s * d + min(d, 0));
-    let first = u32(min(ii, j));
-    let last = u32(max(ii, j));
-    var left = split;
-    if (first == split) {
-        left = leaf_base + split;
-    }
-    var right = split + 1u;
-    if (last == split + 1u) {
-        right = leaf_base + split + 1u;
-    }
-    ranges[i] = vec4<u32>(left, right, first, last);
-    scratch[parent_slot(left)] = i;
-    scratch[parent_slot(right)] = i;
-    if (i == 0u) {
-        scratch[parent_slot(0)] = NONE;
+    if (i + 1u < params.count) {
+        splits[i] = delta(i, i32(i) + 1);
     }
 }
 
-fn box_base(node: u32) -> u32 {
-    return params.count - 1u + node * 6u;
+// splits[i], and -1 beyond either end of the keys.
+fn split_prefix(i: i32) -> i32 {
+    if (i < 0 || i + 1 >= i32(params.count)) {
+        return -1;
+    }
+    return splits[i];
 }
 
-fn store_box(node: u32, lo: vec3<f32>, hi: vec3<f32>) {
-    let base = box_base(node);
+// Where the box of the child on one side of split s waits for its sibling: 6 atomic words, after
+// the n - 1 words the children exchange their far ends through.
+fn box_slot(split: u32, right: bool) -> u32 {
+    return params.count - 1u + split * 12u + select(0u, 6u, right);
+}
+
+fn store_box(slot: u32, lo: vec3<f32>, hi: vec3<f32>) {
     for (var a = 0u; a < 3u; a++) {
-        atomicStore(&climb[base + a], bitcast<u32>(lo[a]));
-        atomicStore(&climb[base + 3u + a], bitcast<u32>(hi[a]));
+        atomicStore(&climb[slot + a], bitcast<u32>(lo[a]));
+        atomicStore(&climb[slot + 3u + a], bitcast<u32>(hi[a]));
     }
 }
 
-fn load_box_lo(node: u32) -> vec3<f32> {
-    let base = box_base(node);
-    return vec3<f32>(bitcast<f32>(atomicLoad(&climb[base])), bitcast<f32>(atomicLoad(&climb[base + 1u])),
-                     bitcast<f32>(atomicLoad(&climb[base + 2u])));
+fn load_box(slot: u32) -> Box {
+    var b: Box;
+    for (var a = 0u; a < 3u; a++) {
+        b.lo[a] = bitcast<f32>(atomicLoad(&climb[slot + a]));
+        b.hi[a] = bitcast<f32>(atomicLoad(&climb[slot + 3u + a]));
+    }
+    return b;
 }
 
-fn load_box_hi(node: u32) -> vec3<f32> {
-    let base = box_base(node) + 3u;
-    return vec3<f32>(bitcast<f32>(atomicLoad(&climb[base])), bitcast<f32>(atomicLoad(&climb[base + 1u])),
-                     bitcast<f32>(atomicLoad(&climb[base + 2u])));
-}
-
-// Bound leaves by their primitives, then internal nodes bottom-up: each leaf climbs; at each
-// internal node an atomic visit counter stops the first child to arrive, and the second, which
-// then knows both children's boxes, writes the union and climbs on. Boxes are atomic words so the
-// second arrival reads what the first stored.
-@compute @workgroup_size(256)
-fn leaves_and_bounds(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-                     @builtin(local_invocation_index) lid: u32) {
-    let k = flat_group(wid, groups) * GROUP + lid;
-    let n = params.count;
-    if (k >= n) {
-        return;
-    }
-    let leaf = n - 1u + k;
-    let b = primitive_box(pair_primitive(pairs_in[k]));
-    store_box(leaf, b.lo, b.hi);
-    if (n == 1u) {
-        return;
-    }
-    var node = scratch[parent_slot(leaf)];
-    while (node != NONE) {
-        if (atomicAdd(&climb[node], 1u) == 0u) {
-            return;
-        }
-        let children = ranges[node];
-        store_box(node, min(load_box_lo(children.x), load_box_lo(children.y)),
-                  max(load_box_hi(children.x), load_box_hi(children.y)));
-        node = scratch[parent_slot(node)];
-    }
-}
-
-// Link every node to the node after its subtree in depth-first order, and write the node array.
-@compute @workgroup_size(256)
-fn links(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-         @builtin(local_invocation_index) lid: u32) {
-    let node = flat_group(wid, groups) * GROUP + lid;
-    let n = params.count;
-    if (node >= 2u * n - 1u) {
-        return;
-    }
-    let leaf_base = n - 1u;
-    var left: u32;
-    var right: u32;
-    var last: u32;
-    if (node < leaf_base) {
-        let range = ranges[node];
-        left = range.x;
-        right = range.y;
-        last = range.w;
-    } else {
-        left = pair_primitive(pairs_in[node - leaf_base]);
-        right = LEAF;
-        last = node - leaf_base;
-    }
+// The node after every subtree that ends at sorted position `last`, in depth-first order: the right
+// child of the split after it (bvh::merge's escape).
+fn escape_after(last: u32) -> u32 {
     let next = last + 1u;
-    var escape = leaf_base + next;
-    if (next == n) {
-        escape = NONE;
-    } else if (next < leaf_base && ranges[next].z == next) {
-        escape = next;
+    if (next == params.count) {
+        return NONE;
     }
-    var parent = NONE;
-    if (n > 1u) {
-        parent = scratch[parent_slot(node)];
+    if (split_prefix(i32(last)) > split_prefix(i32(next))) {
+        return params.count - 1u + next;
     }
-    nodes[node] = BvhNode(load_box_lo(node), left, load_box_hi(node), right, parent, escape);
+    return next;
+}
+
+// The tree's nodes, bottom-up by merges (Apetrei 2014), as bvh::merge makes them on the CPU: every
+// finished subtree writes its node but for the parent, learns from the split prefixes on either
+// side which side its sibling is on, leaves its box and far end at the split between them, and
+// stops if it is there first. The second to arrive makes the parent: its range, number (Karras's),
+// box and children, whose parent links it writes, and climbs on with it. Boxes and ends pass through
+// atomic words, so the second arrival reads what the first stored.
+//
+// Each invocation takes MERGE_RUN consecutive leaves and starts the next as soon as its climb stops,
+// so invocations that run in lockstep stay busy.
+@compute @workgroup_size(256)
+fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+         @builtin(local_invocation_index) lid: u32) {
+    let n = params.count;
+    let leaf_base = n - 1u;
+    let run_start = (flat_group(wid, groups) * GROUP + lid) * MERGE_RUN;
+    let run_end = min(run_start + MERGE_RUN, n);
+    var next_leaf = run_start;
+    var climbing = false;
+    // The finished subtree: sorted positions first..last, node number, box, the node's two links down.
+    var first = 0u;
+    var last = 0u;
+    var node = 0u;
+    var bounds: Box;
+    var left = 0u;
+    var right = 0u;
+    loop {
+        if (!climbing) {
+            if (next_leaf >= run_end) {
+                break;
+            }
+            let primitive = pair_primitive(pairs_in[next_leaf]);
+            bounds = primitive_box(primitive);
+            first = next_leaf;
+            last = next_leaf;
+            node = leaf_base + next_leaf;
+            left = primitive;
+            right = LEAF;
+            next_leaf += 1u;
+            climbing = true;
+        }
+        nodes[node].min = bounds.lo;
+        nodes[node].left = left;
+        nodes[node].max = bounds.hi;
+        nodes[node].right = right;
+        nodes[node].escape = escape_after(last);
+        if (first == 0u && last == leaf_base) {
+            nodes[node].parent = NONE;
+            climbing = false;
+            continue;
+        }
+        // A left child when the keys after it share the longer prefix with its own.
+        let is_left = split_prefix(i32(last)) > split_prefix(i32(first) - 1);
+        let split = select(first - 1u, last, is_left);
+        store_box(box_slot(split, !is_left), bounds.lo, bounds.hi);
+        let sibling_end = atomicExchange(&climb[split], select(last, first, is_left) + 1u);
+        if (sibling_end == 0u) {
+            climbing = false;
+            continue;
+        }
+        let sibling = load_box(box_slot(split, is_left));
+        if (is_left) {
+            last = sibling_end - 1u;
+            bounds = Box(min(bounds.lo, sibling.lo), max(bounds.hi, sibling.hi));
+        } else {
+            first = sibling_end - 1u;
+            bounds = Box(min(sibling.lo, bounds.lo), max(sibling.hi, bounds.hi));
+        }
+        left = select(split, leaf_base + split, first == split);
+        right = select(split + 1u, leaf_base + split + 1u, last == split + 1u);
+        node = 0u;
+        if (first != 0u || last != leaf_base) {
+            node = select(first, last, split_prefix(i32(last)) > split_prefix(i32(first) - 1));
+        }
+        nodes[left].parent = node;
+        nodes[right].parent = node;
+    }
 }
