@@ -6,7 +6,7 @@
 // `code_word` (the code's low or high 32 bits; 30-bit codes have no high word, it reads 0).
 
 // From the preamble (src/gpu/build.rs): GROUP invocations per workgroup; BLOCK items per block in
-// the reduction kernels, ITEMS consecutive ones per invocation. The sort is in radix_sort.wgsl.
+// the reduction kernels, ITEMS per invocation, GROUP apart. The sort is in radix_sort.wgsl.
 
 // BuildParams is in types.wgsl, beside the other records with a host twin.
 
@@ -88,7 +88,7 @@ fn bounds_partial(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
     var lo = vec3<f32>(BIG);
     var hi = vec3<f32>(-BIG);
     for (var k = 0u; k < ITEMS; k++) {
-        let i = block * BLOCK + lid * ITEMS + k;
+        let i = block * BLOCK + k * GROUP + lid;
         if (i < params.count) {
             let c = centroid(i);
             lo = min(lo, c);
@@ -244,13 +244,13 @@ fn load_box(slot: u32) -> Box {
 }
 
 // The node after every subtree that ends at sorted position `last`, in depth-first order: the right
-// child of the split after it (bvh::merge's escape).
-fn escape_after(last: u32) -> u32 {
+// child of the split after it (bvh::merge's escape). `after` is split_prefix(last).
+fn escape_after(last: u32, after: i32) -> u32 {
     let next = last + 1u;
     if (next == params.count) {
         return NONE;
     }
-    if (split_prefix(i32(last)) > split_prefix(i32(next))) {
+    if (after > split_prefix(i32(next))) {
         return params.count - 1u + next;
     }
     return next;
@@ -274,9 +274,12 @@ fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
     let run_end = min(run_start + MERGE_RUN, n);
     var next_leaf = run_start;
     var climbing = false;
-    // The finished subtree: sorted positions first..last, node number, box, the node's two links down.
+    // The finished subtree: sorted positions first..last, the split prefixes before and after it,
+    // node number, box, the node's two links down.
     var first = 0u;
     var last = 0u;
+    var before = -1;
+    var after = -1;
     var node = 0u;
     var bounds: Box;
     var left = 0u;
@@ -290,6 +293,8 @@ fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
             bounds = primitive_box(primitive);
             first = next_leaf;
             last = next_leaf;
+            before = split_prefix(i32(first) - 1);
+            after = split_prefix(i32(last));
             node = leaf_base + next_leaf;
             left = primitive;
             right = LEAF;
@@ -300,14 +305,14 @@ fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
         nodes[node].left = left;
         nodes[node].max = bounds.hi;
         nodes[node].right = right;
-        nodes[node].escape = escape_after(last);
+        nodes[node].escape = escape_after(last, after);
         if (first == 0u && last == leaf_base) {
             nodes[node].parent = NONE;
             climbing = false;
             continue;
         }
         // A left child when the keys after it share the longer prefix with its own.
-        let is_left = split_prefix(i32(last)) > split_prefix(i32(first) - 1);
+        let is_left = after > before;
         let split = select(first - 1u, last, is_left);
         store_box(box_slot(split, !is_left), bounds.lo, bounds.hi);
         let sibling_end = atomicExchange(&climb[split], select(last, first, is_left) + 1u);
@@ -318,16 +323,18 @@ fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
         let sibling = load_box(box_slot(split, is_left));
         if (is_left) {
             last = sibling_end - 1u;
+            after = split_prefix(i32(last));
             bounds = Box(min(bounds.lo, sibling.lo), max(bounds.hi, sibling.hi));
         } else {
             first = sibling_end - 1u;
+            before = split_prefix(i32(first) - 1);
             bounds = Box(min(sibling.lo, bounds.lo), max(sibling.hi, bounds.hi));
         }
         left = select(split, leaf_base + split, first == split);
         right = select(split + 1u, leaf_base + split + 1u, last == split + 1u);
         node = 0u;
         if (first != 0u || last != leaf_base) {
-            node = select(first, last, split_prefix(i32(last)) > split_prefix(i32(first) - 1));
+            node = select(first, last, after > before);
         }
         nodes[left].parent = node;
         nodes[right].parent = node;
