@@ -94,9 +94,12 @@ impl SortRanking {
         all
     }
 
-    /// Runs of one SIMD vector's width: a subgroup where the device says, else 8 (AVX2's 32-bit lanes).
+    /// Runs of one SIMD vector's width: a subgroup where the device says, else 8 (AVX2's 32-bit lanes),
+    /// as many as the workgroup memory holds digit counts for (1 KiB each, beside 4 KiB of the
+    /// tile's own).
     fn runs(ctx: &GpuContext) -> Self {
-        let group = ctx.subgroups.map_or(8, |(_, max)| max.clamp(1, 64));
+        let room = (ctx.limits().max_compute_workgroup_storage_size.saturating_sub(4096) / 1024).max(1);
+        let group = ctx.subgroups.map_or(8, |(_, max)| max).clamp(1, room);
         SortRanking::Runs { group }
     }
 
