@@ -459,11 +459,6 @@ impl GpuLbvhBuilder {
         self.bits
     }
 
-    /// How the sort ranks pairs by digit.
-    pub fn ranking(&self) -> SortRanking {
-        self.ranking
-    }
-
     /// Replaces the Morton phase with given codes (of the builder's width), for comparisons with
     /// the CPU build.
     pub fn write_codes(&self, codes: &[u64]) {

@@ -182,34 +182,27 @@ fn scan_shared_inclusive(lid: u32) {
 }
 
 // Length of the common prefix of the keys (code as 64 bits, then sorted position as 32) at sorted
-// positions i and j; -1 outside the array. The CPU's keys hold the same bits under another number
-// of leading zeros: its lengths differ from these by a constant, and every comparison of two lengths
-// comes out the same on both devices.
-fn delta(i: u32, j: i32) -> i32 {
-    if (j < 0 || j >= i32(params.count)) {
-        return -1;
-    }
-    let a = pairs_in[i];
-    let b = pairs_in[u32(j)];
-    let high = code_word(a, true) ^ code_word(b, true);
-    if (high != 0u) {
-        return i32(countLeadingZeros(high));
-    }
-    let low = code_word(a, false) ^ code_word(b, false);
-    if (low != 0u) {
-        return 32 + i32(countLeadingZeros(low));
-    }
-    return 64 + i32(countLeadingZeros(i ^ u32(j)));
-}
-
-// The prefix length of sorted positions i and i + 1, for every i below n - 1: where each node
-// of the tree splits (Karras 2012), and so which side each subtree's sibling lies on.
+// positions i and i + 1: where each node of the tree splits (Karras 2012), and so which side each
+// subtree's sibling lies on. The CPU's keys hold the same bits under another number of leading
+// zeros: its lengths differ from these by a constant, and every comparison of two lengths comes out
+// the same on both devices.
 @compute @workgroup_size(256)
 fn split_prefixes(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                   @builtin(local_invocation_index) lid: u32) {
     let i = flat_group(wid, groups) * GROUP + lid;
-    if (i + 1u < params.count) {
-        splits[i] = delta(i, i32(i) + 1);
+    if (i + 1u >= params.count) {
+        return;
+    }
+    let a = pairs_in[i];
+    let b = pairs_in[i + 1u];
+    let high = code_word(a, true) ^ code_word(b, true);
+    let low = code_word(a, false) ^ code_word(b, false);
+    if (high != 0u) {
+        splits[i] = i32(countLeadingZeros(high));
+    } else if (low != 0u) {
+        splits[i] = 32 + i32(countLeadingZeros(low));
+    } else {
+        splits[i] = 64 + i32(countLeadingZeros(i ^ (i + 1u)));
     }
 }
 

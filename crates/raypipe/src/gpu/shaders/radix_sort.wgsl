@@ -1,12 +1,13 @@
 // The build's sort: a stable least-significant-digit radix sort of (Morton code, primitive) pairs
-// by 8-bit digits, one pass per digit, after Onepass (Adinets and Merrill 2022). One kernel counts
+// by 8-bit digits, one pass per digit, after Onesweep (Adinets and Merrill 2022). One kernel counts
 // every pass's digits at once; then each pass is one kernel over tiles of TILE pairs, in which a
 // workgroup ranks its tile's pairs by digit, learns how many pairs of each digit the tiles before
 // it hold by decoupled look-back, and scatters.
 //
-// The preamble (src/gpu/build.rs) chooses how a tile is ranked: with subgroup ballots where the
-// adapter has them, or with "lane groups" of 16 invocations that compare digits through workgroup
-// memory. Either way it defines SORT_GROUP (invocations per workgroup), SORT_ITEMS (pairs per
+// The preamble (src/gpu/build.rs) chooses how a tile is ranked (`SortRanking`): in sort_pass, with
+// subgroup ballots where the adapter has them, or with "lane groups" of 16 invocations that compare
+// digits through workgroup memory; or in sort_pass_runs, where each invocation counts its own run
+// (CPU adapters). Either way it defines SORT_GROUP (invocations per workgroup), SORT_ITEMS (pairs per
 // invocation, TILE = SORT_GROUP * SORT_ITEMS), LANE_GROUPS (lane groups per workgroup, at most),
 // the entry point's `SortInvocation`, its accessors `lane_index`, `lane_width`, `lane_group`, and
 // `same_digit`, the lanes of the caller's lane group that hold a pair of the caller's digit.
