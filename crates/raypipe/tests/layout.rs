@@ -3,15 +3,25 @@
 
 use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
-use raypipe::gpu::build::SortRanking;
+use raypipe::gpu::build::{BuildVariant, SiblingBoxes, SortRanking};
 use raypipe::gpu::shader::{ShaderConfig, compose};
 use raypipe::gpu::upload::{TEXELS_PER_ROW, record_arrays};
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::{LAYOUTS, PackedScene, StructLayout};
 use raypipe::scene::{Scene, builtin};
 
-/// The sort's two rankings, with subgroups of 8 to 32 invocations.
-const RANKINGS: [SortRanking; 2] = [SortRanking::Subgroups { group: 256 }, SortRanking::Shared];
+/// Every variant of the build's kernels: the sort's three rankings (subgroups of 8 to 32
+/// invocations, runs as lavapipe's), each with both ways of passing sibling boxes.
+fn build_variants() -> impl Iterator<Item = BuildVariant> {
+    let rankings = [
+        SortRanking::Subgroups { group: 256 },
+        SortRanking::Shared,
+        SortRanking::Runs { group: 8 },
+    ];
+    rankings.into_iter().flat_map(|ranking| {
+        [SiblingBoxes::Atomics, SiblingBoxes::Nodes].map(|sibling_boxes| BuildVariant { ranking, sibling_boxes })
+    })
+}
 
 fn parse(source: &str) -> naga::Module {
     naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
@@ -116,10 +126,10 @@ fn the_build_layout_and_display_shaders_validate() {
         ),
     ];
     for bits in [MortonBits::Bits30, MortonBits::Bits63] {
-        for ranking in RANKINGS {
+        for variant in build_variants() {
             sources.push((
-                format!("LBVH build, {}-bit codes, {ranking:?}", bits.total_bits()),
-                raypipe::gpu::build::shader_source(bits, ranking),
+                format!("LBVH build, {}-bit codes, {variant:?}", bits.total_bits()),
+                raypipe::gpu::build::shader_source(bits, variant),
             ));
         }
     }
@@ -149,8 +159,8 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
             .count()
     };
     for bits in [MortonBits::Bits30, MortonBits::Bits63] {
-        for ranking in RANKINGS {
-            let count = storage_buffers(&raypipe::gpu::build::shader_source(bits, ranking));
+        for variant in build_variants() {
+            let count = storage_buffers(&raypipe::gpu::build::shader_source(bits, variant));
             assert!(count <= 8, "the LBVH build binds {count} storage buffers");
         }
     }

@@ -221,6 +221,72 @@ fn same_digit(v: SortInvocation, digit: u32, valid: bool) -> vec4<u32> {{
     }
 }
 const _: () = assert!(SHARED_LANE_WIDTH * LANE_GROUPS >= 128);
+
+/// How the merges pass a finished subtree's box to its sibling (lbvh.wgsl's `merge`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SiblingBoxes {
+    /// Both children store their box in atomic words at the split before they meet there, and the
+    /// second to arrive reads its sibling's. Atomic accesses are all WGSL orders between
+    /// invocations of different workgroups.
+    Atomics,
+    /// The second to arrive reads its sibling's box from the sibling's node. Only where every atomic
+    /// orders the plain accesses around it: Mesa's llvmpipe makes each a sequentially consistent
+    /// host atomic, so the node's stores come before the first arrival's exchange and the second
+    /// arrival's loads after its own. Atomics are per-lane loops there: this spares 12 a merge.
+    Nodes,
+}
+
+impl SiblingBoxes {
+    /// Nodes on llvmpipe (lavapipe and its GL twin), atomics elsewhere.
+    pub fn best(ctx: &GpuContext) -> Self {
+        if ctx.info.device_type == wgpu::DeviceType::Cpu && ctx.info.name.starts_with("llvmpipe") {
+            SiblingBoxes::Nodes
+        } else {
+            SiblingBoxes::Atomics
+        }
+    }
+
+    /// Words of `climb` per split: the far end of the first child to arrive, and with atomics the
+    /// two children's boxes.
+    fn words_per_split(self) -> u64 {
+        match self {
+            SiblingBoxes::Atomics => 13,
+            SiblingBoxes::Nodes => 1,
+        }
+    }
+}
+
+/// What the build's kernels do where adapters differ: how the sort ranks and how the merges meet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BuildVariant {
+    pub ranking: SortRanking,
+    pub sibling_boxes: SiblingBoxes,
+}
+
+impl BuildVariant {
+    /// The fastest kernels the adapter runs correctly.
+    pub fn best(ctx: &GpuContext) -> Self {
+        BuildVariant {
+            ranking: SortRanking::best(ctx),
+            sibling_boxes: SiblingBoxes::best(ctx),
+        }
+    }
+
+    /// The best kernels, then each other choice the adapter runs, one at a time with the best of the
+    /// rest: atomic sibling boxes run everywhere.
+    pub fn variants(ctx: &GpuContext) -> Vec<Self> {
+        let best = Self::best(ctx);
+        let rankings = SortRanking::all(ctx)
+            .into_iter()
+            .skip(1)
+            .map(|ranking| BuildVariant { ranking, ..best });
+        let boxes = (best.sibling_boxes != SiblingBoxes::Atomics).then_some(BuildVariant {
+            sibling_boxes: SiblingBoxes::Atomics,
+            ..best
+        });
+        std::iter::once(best).chain(rankings).chain(boxes).collect()
+    }
+}
 /// Leaves per invocation of the merges on CPU adapters.
 const MERGE_RUN: u32 = 32;
 /// The tile of lane groups, whose ranks fill 4 KiB of workgroup memory.
@@ -265,12 +331,13 @@ const SORT_PASSES: u32 = {}u;
     )
 }
 
-/// The build kernels' WGSL for codes of `bits`, the sort ranking by `ranking`.
-pub fn shader_source(bits: MortonBits, ranking: SortRanking) -> String {
+/// The build kernels' WGSL for codes of `bits`, in `variant`.
+pub fn shader_source(bits: MortonBits, variant: BuildVariant) -> String {
     format!(
-        "{}\n{}\n{}\n{LBVH}\n{RADIX_SORT}",
+        "{}\n{}\nconst SIBLING_BOXES_IN_NODES: bool = {};\n{}\n{LBVH}\n{RADIX_SORT}",
         key_preamble(bits),
-        ranking.source(),
+        variant.ranking.source(),
+        variant.sibling_boxes == SiblingBoxes::Nodes,
         records_source(),
     )
 }
@@ -326,7 +393,7 @@ struct Kernels {
 pub struct GpuLbvhBuilder {
     ctx: GpuContext,
     bits: MortonBits,
-    ranking: SortRanking,
+    variant: BuildVariant,
     kernels: Kernels,
     layout: wgpu::BindGroupLayout,
     buffers: Buffers,
@@ -353,16 +420,16 @@ impl GpuLbvhBuilder {
     /// Compiles the kernels for Morton codes of `bits` and sizes the buffers for `spheres` spheres and
     /// `triangles` triangles.
     pub async fn new(ctx: &GpuContext, bits: MortonBits, spheres: usize, triangles: usize) -> Result<Self, GpuError> {
-        Self::with_ranking(ctx, bits, spheres, triangles, SortRanking::best(ctx)).await
+        Self::with_variant(ctx, bits, spheres, triangles, BuildVariant::best(ctx)).await
     }
 
-    /// Like [`GpuLbvhBuilder::new`], with the sort's ranking chosen.
-    pub async fn with_ranking(
+    /// Like [`GpuLbvhBuilder::new`], with the kernels' variant chosen.
+    pub async fn with_variant(
         ctx: &GpuContext,
         bits: MortonBits,
         spheres: usize,
         triangles: usize,
-        ranking: SortRanking,
+        variant: BuildVariant,
     ) -> Result<Self, GpuError> {
         ctx.checked("compiling the GPU LBVH build", || {
             let device = &ctx.device;
@@ -378,22 +445,22 @@ impl GpuLbvhBuilder {
                 label: Some("lbvh build"),
                 entries: &entries,
             });
-            let kernel = kernels(device, "lbvh", shader_source(bits, ranking), &layout);
+            let kernel = kernels(device, "lbvh", shader_source(bits, variant), &layout);
             let kernels = Kernels {
                 bounds_partial: kernel("bounds_partial"),
                 bounds_final: kernel("bounds_final"),
                 morton: kernel("morton"),
                 sort_histogram: kernel("sort_histogram"),
                 sort_digit_starts: kernel("sort_digit_starts"),
-                sort_pass: kernel(ranking.entry_point()),
+                sort_pass: kernel(variant.ranking.entry_point()),
                 split_prefixes: kernel("split_prefixes"),
                 merge: kernel("merge"),
             };
-            let buffers = Buffers::new(ctx, &layout, bits, ranking, spheres, triangles)?;
+            let buffers = Buffers::new(ctx, &layout, bits, variant, spheres, triangles)?;
             Ok(Self {
                 ctx: ctx.clone(),
                 bits,
-                ranking,
+                variant,
                 kernels,
                 layout,
                 buffers,
@@ -412,7 +479,7 @@ impl GpuLbvhBuilder {
             let ctx = &self.ctx;
             self.buffers = ctx
                 .checked("sizing the GPU LBVH build", || {
-                    Buffers::new(ctx, &self.layout, self.bits, self.ranking, spheres, triangles)
+                    Buffers::new(ctx, &self.layout, self.bits, self.variant, spheres, triangles)
                 })
                 .await?;
         }
@@ -484,7 +551,7 @@ impl GpuLbvhBuilder {
         if n == 0 {
             return;
         }
-        let sort_bytes = sort_words(self.bits, self.ranking, n as u64) * 4;
+        let sort_bytes = sort_words(self.bits, self.variant.ranking, n as u64) * 4;
         encoder.clear_buffer(&b.climb, 0, Some(sort_bytes));
         let blocks = n.div_ceil(BLOCK);
         let items = n.div_ceil(GROUP);
@@ -527,7 +594,7 @@ impl GpuLbvhBuilder {
                 &k.sort_pass,
                 &b.bind_groups[pass as usize % 2],
                 pass,
-                n.div_ceil(self.ranking.tile()),
+                n.div_ceil(self.variant.ranking.tile()),
             ));
         }
         phase(encoder, 1, &sort);
@@ -535,7 +602,7 @@ impl GpuLbvhBuilder {
         if n > 1 {
             encoder.clear_buffer(&b.climb, 0, Some((n as u64 - 1) * 4));
         }
-        let invocations = n.div_ceil(self.ranking.merge_run());
+        let invocations = n.div_ceil(self.variant.ranking.merge_run());
         phase(
             encoder,
             2,
@@ -617,7 +684,7 @@ impl Buffers {
         ctx: &GpuContext,
         layout: &wgpu::BindGroupLayout,
         bits: MortonBits,
-        ranking: SortRanking,
+        variant: BuildVariant,
         sphere_count: usize,
         triangle_count: usize,
     ) -> Result<Self, GpuError> {
@@ -665,7 +732,8 @@ impl Buffers {
             wgpu::BufferUsages::empty(),
         );
         // Per split: the exchange word, and the two children's boxes.
-        let climb_words = (13 * n.saturating_sub(1)).max(sort_words(bits, ranking, n));
+        let climb_words =
+            (variant.sibling_boxes.words_per_split() * n.saturating_sub(1)).max(sort_words(bits, variant.ranking, n));
         let climb = storage_buffer(device, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
         let nodes = storage_buffer(device, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
         let params = device.create_buffer(&wgpu::BufferDescriptor {

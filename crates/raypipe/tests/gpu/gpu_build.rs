@@ -9,7 +9,7 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::threaded::threaded_nodes;
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::gpu::GpuContext;
-use raypipe::gpu::build::{GpuLbvhBuilder, SortRanking};
+use raypipe::gpu::build::{BuildVariant, GpuLbvhBuilder, SiblingBoxes};
 use raypipe::gpu::threaded::GpuThreadedLayout;
 use raypipe::records::{GpuSphere, PackedScene};
 use raypipe::rng::SplitMix64;
@@ -106,17 +106,22 @@ fn same_codes_give_identical_nodes(ctx: &GpuContext) {
     }
 }
 
-/// Every way the sort can rank pairs (runs, lane groups in workgroup memory, subgroups where the
-/// device has them) sorts alike, over many tiles and a partial last one, with many equal digits.
-/// The best ranking, which the tests above use, is checked there with both code widths; the others
+/// Every variant of the kernels the device runs builds alike: each way the sort can rank pairs
+/// (runs, lane groups in workgroup memory, subgroups where the device has them), over many tiles
+/// and a partial last one, with many equal digits; and each way the merges pass sibling boxes. The
+/// best variant, which the tests above use, is checked there with both code widths; the others
 /// share its digit extraction and are checked with 30-bit codes.
-fn every_sort_ranking_gives_identical_nodes(ctx: &GpuContext) {
-    let rankings = SortRanking::all(ctx);
-    // Runs and the shared path run everywhere.
-    assert!(rankings.len() >= 2, "{rankings:?}");
-    for ranking in rankings.into_iter().skip(1) {
-        let mut builder = block_on(GpuLbvhBuilder::with_ranking(ctx, MortonBits::Bits30, 0, 0, ranking)).unwrap();
-        let what = format!("{ranking:?}");
+fn every_build_variant_gives_identical_nodes(ctx: &GpuContext) {
+    let variants = BuildVariant::variants(ctx);
+    // Runs and the shared path run everywhere, and so do atomic sibling boxes.
+    assert!(variants.len() >= 2, "{variants:?}");
+    assert!(
+        variants.iter().any(|v| v.sibling_boxes == SiblingBoxes::Atomics),
+        "{variants:?}"
+    );
+    for variant in variants.into_iter().skip(1) {
+        let mut builder = block_on(GpuLbvhBuilder::with_variant(ctx, MortonBits::Bits30, 0, 0, variant)).unwrap();
+        let what = format!("{variant:?}");
         check_same_codes(
             &mut builder,
             &random_spheres(40_000, 9, 40_000),
@@ -218,7 +223,7 @@ fn spheres_and_triangles_build_alike(ctx: &GpuContext) {
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu same_codes_give_identical_nodes,
-        gpu every_sort_ranking_gives_identical_nodes,
+        gpu every_build_variant_gives_identical_nodes,
         gpu same_codes_give_identical_nodes_with_duplicate_centroids,
         plain wide_codes_split_what_narrow_codes_tie,
         gpu own_codes_give_a_valid_tree,

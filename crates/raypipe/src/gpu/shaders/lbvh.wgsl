@@ -21,9 +21,9 @@
 @group(0) @binding(4) var<storage, read_write> scratch: array<u32>;
 // The prefix length of sorted positions i and i + 1 (split_prefixes).
 @group(0) @binding(5) var<storage, read_write> splits: array<i32>;
-// What the merges exchange at each split: the far end of the first child to arrive, then 12 words
-// per split, the boxes of its two children. (The sort keeps its words here before:
-// radix_sort.wgsl.)
+// What the merges exchange at each split: the far end of the first child to arrive, then, unless
+// SIBLING_BOXES_IN_NODES, 12 words per split, the boxes of its two children. (The sort keeps its
+// words here before: radix_sort.wgsl.)
 @group(0) @binding(6) var<storage, read_write> climb: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> nodes: array<BvhNode>;
 // Primitive sphere_count + i is triangle i.
@@ -236,6 +236,24 @@ fn load_box(slot: u32) -> Box {
     return b;
 }
 
+// The node of the child of split `split` on its right (or left) whose far end is `far_end`: a leaf
+// where it spans one position, else numbered by its end at the split (Karras's numbering).
+fn child_node(split: u32, right: bool, far_end: u32) -> u32 {
+    let near_end = select(split, split + 1u, right);
+    return select(near_end, params.count - 1u + near_end, far_end == near_end);
+}
+
+// The box of the child on the right (or left) of split `split` that arrived there first, whose far
+// end is `far_end`: from the atomic words it stored, or where SIBLING_BOXES_IN_NODES (src/gpu/
+// build.rs says where that is sound), from its node.
+fn sibling_box(split: u32, right: bool, far_end: u32) -> Box {
+    if (SIBLING_BOXES_IN_NODES) {
+        let node = child_node(split, right, far_end);
+        return Box(nodes[node].min, nodes[node].max);
+    }
+    return load_box(box_slot(split, right));
+}
+
 // The node after every subtree that ends at sorted position `last`, in depth-first order: the right
 // child of the split after it (bvh::merge's escape). `after` is split_prefix(last).
 fn escape_after(last: u32, after: i32) -> u32 {
@@ -253,8 +271,9 @@ fn escape_after(last: u32, after: i32) -> u32 {
 // finished subtree writes its node but for the parent, learns from the split prefixes on either
 // side which side its sibling is on, leaves its box and far end at the split between them, and
 // stops if it is there first. The second to arrive makes the parent: its range, number (Karras's),
-// box and children, whose parent links it writes, and climbs on with it. Boxes and ends pass through
-// atomic words, so the second arrival reads what the first stored.
+// box and children, whose parent links it writes, and climbs on with it. Ends pass through atomic
+// words, so the second arrival reads what the first stored; boxes too but on llvmpipe
+// (`sibling_box`).
 //
 // Each invocation takes MERGE_RUN consecutive leaves and starts the next as soon as its climb stops,
 // so invocations that run in lockstep stay busy.
@@ -307,13 +326,15 @@ fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
         // A left child when the keys after it share the longer prefix with its own.
         let is_left = after > before;
         let split = select(first - 1u, last, is_left);
-        store_box(box_slot(split, !is_left), bounds.lo, bounds.hi);
+        if (!SIBLING_BOXES_IN_NODES) {
+            store_box(box_slot(split, !is_left), bounds.lo, bounds.hi);
+        }
         let sibling_end = atomicExchange(&climb[split], select(last, first, is_left) + 1u);
         if (sibling_end == 0u) {
             climbing = false;
             continue;
         }
-        let sibling = load_box(box_slot(split, is_left));
+        let sibling = sibling_box(split, is_left, sibling_end - 1u);
         if (is_left) {
             last = sibling_end - 1u;
             after = split_prefix(i32(last));
@@ -323,8 +344,8 @@ fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
             before = split_prefix(i32(first) - 1);
             bounds = Box(min(sibling.lo, bounds.lo), max(sibling.hi, bounds.hi));
         }
-        left = select(split, leaf_base + split, first == split);
-        right = select(split + 1u, leaf_base + split + 1u, last == split + 1u);
+        left = child_node(split, false, first);
+        right = child_node(split, true, last);
         node = 0u;
         if (first != 0u || last != leaf_base) {
             node = select(first, last, after > before);
