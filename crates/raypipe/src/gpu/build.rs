@@ -226,8 +226,9 @@ const _: () = assert!(SHARED_LANE_WIDTH * LANE_GROUPS >= 128);
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SiblingBoxes {
     /// Both children store their box in atomic words at the split before they meet there, and the
-    /// second to arrive reads its sibling's. Atomic accesses are all WGSL orders between
-    /// invocations of different workgroups.
+    /// second to arrive reads its sibling's, waiting for each word to show: WGSL's atomics are
+    /// relaxed, so the exchange orders nothing else, and only atomic words may be shared between
+    /// workgroups without a race.
     Atomics,
     /// The second to arrive reads its sibling's box from the sibling's node. Only where every atomic
     /// orders the plain accesses around it: Mesa's llvmpipe makes each a sequentially consistent
@@ -598,9 +599,11 @@ impl GpuLbvhBuilder {
             ));
         }
         phase(encoder, 1, &sort);
-        // The sort's words in `climb` give way to the merges' exchange words.
+        // The sort's words in `climb` give way to the merges' exchange words (0: nobody arrived, no
+        // box stored).
         if n > 1 {
-            encoder.clear_buffer(&b.climb, 0, Some((n as u64 - 1) * 4));
+            let words = self.variant.sibling_boxes.words_per_split() * (n as u64 - 1);
+            encoder.clear_buffer(&b.climb, 0, Some(words * 4));
         }
         let invocations = n.div_ceil(self.variant.ranking.merge_run());
         phase(
@@ -731,7 +734,7 @@ impl Buffers {
             n.saturating_sub(1) * 4,
             wgpu::BufferUsages::empty(),
         );
-        // Per split: the exchange word, and the two children's boxes.
+        // Per split: the exchange word, and with atomic boxes the two children's.
         let climb_words =
             (variant.sibling_boxes.words_per_split() * n.saturating_sub(1)).max(sort_words(bits, variant.ranking, n));
         let climb = storage_buffer(device, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);

@@ -220,18 +220,32 @@ fn box_slot(split: u32, right: bool) -> u32 {
     return params.count - 1u + split * 12u + select(0u, 6u, right);
 }
 
+// A box word holds the coordinate's bits inverted, so that 0, as the words are cleared, means not
+// yet stored: no coordinate of a finite box has all bits set (that is a NaN).
 fn store_box(slot: u32, lo: vec3<f32>, hi: vec3<f32>) {
     for (var a = 0u; a < 3u; a++) {
-        atomicStore(&climb[slot + a], bitcast<u32>(lo[a]));
-        atomicStore(&climb[slot + 3u + a], bitcast<u32>(hi[a]));
+        atomicStore(&climb[slot + a], ~bitcast<u32>(lo[a]));
+        atomicStore(&climb[slot + 3u + a], ~bitcast<u32>(hi[a]));
     }
+}
+
+// Reads for each word until its store shows. WGSL's atomics are relaxed: the exchange that told the
+// caller it arrived second says the sibling's stores ran, not that they are visible yet.
+// (BOX_SPINS bounds the wait for a word that is never stored, a NaN's.)
+const BOX_SPINS: u32 = 1048576u;
+fn box_word(index: u32) -> f32 {
+    var word = atomicLoad(&climb[index]);
+    for (var spin = 0u; spin < BOX_SPINS && word == 0u; spin++) {
+        word = atomicLoad(&climb[index]);
+    }
+    return bitcast<f32>(~word);
 }
 
 fn load_box(slot: u32) -> Box {
     var b: Box;
     for (var a = 0u; a < 3u; a++) {
-        b.lo[a] = bitcast<f32>(atomicLoad(&climb[slot + a]));
-        b.hi[a] = bitcast<f32>(atomicLoad(&climb[slot + 3u + a]));
+        b.lo[a] = box_word(slot + a);
+        b.hi[a] = box_word(slot + 3u + a);
     }
     return b;
 }
