@@ -96,6 +96,8 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let boxes = packed.primitive_boxes();
     let runs = args.runs.max(1);
     let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
+    // The GPU build's kernels where adapters differ.
+    let mut gpu_variant = String::new();
     // The GPU finds the hierarchy by merges only.
     let hierarchy = match args.device {
         BuildDevice::Gpu => Hierarchy::Merges,
@@ -124,6 +126,7 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
                 packed.spheres.len(),
                 packed.triangles.len(),
             ))?;
+            gpu_variant = format!("; {}", builder.variant().describe());
             block_on(builder.write_scene(&packed))?;
             block_on(builder.build(false))?;
             let timings = (0..runs)
@@ -166,7 +169,7 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
         scene: args.scene.clone(),
         builder: match args.builder {
             Builder::Lbvh => format!(
-                "lbvh ({}-bit Morton codes, hierarchy by {})",
+                "lbvh ({}-bit Morton codes, hierarchy by {}{gpu_variant})",
                 args.morton_bits.total_bits(),
                 match hierarchy {
                     Hierarchy::Merges => "merges",

@@ -1,9 +1,11 @@
 //! `raypipe bvh --json`: one object with the documented keys, for every device and code width, and
-//! the same tree statistics from the CPU and the GPU build of one scene.
+//! the same tree statistics from the CPU and the GPU build of one scene; the GPU build names the
+//! kernels it ran.
 
 use crate::common::harness::Test;
 use crate::common::raypipe;
 use raypipe::gpu::GpuContext;
+use raypipe::gpu::build::BuildVariant;
 use serde_json::Value;
 
 fn bvh_json(args: &[&str]) -> Value {
@@ -47,10 +49,16 @@ fn bvh_reports_the_documented_keys_on_the_cpu() {
 
 /// The GPU builds from its own Morton codes: it may round the grid's scale differently and so
 /// build another valid tree (the CLI validates every tree it reports), but not a worse one.
-fn bvh_reports_the_documented_keys_on_the_gpu(_: &GpuContext) {
+fn bvh_reports_the_documented_keys_on_the_gpu(ctx: &GpuContext) {
+    let variant = BuildVariant::best(ctx).describe();
     for bits in ["30", "63"] {
         let cpu = bvh_json(&["--morton-bits", bits]);
         let gpu = bvh_json(&["--device", "gpu", "--morton-bits", bits]);
+        let builder = gpu["builder"].as_str().unwrap_or_default();
+        assert!(
+            builder.contains(&variant),
+            "{builder} does not name the kernels ({variant})"
+        );
         let depth = |r: &Value| r["max_depth"].as_i64().unwrap();
         let sah = |r: &Value| r["sah_cost"].as_f64().unwrap();
         assert!(

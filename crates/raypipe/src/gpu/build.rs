@@ -287,6 +287,20 @@ impl BuildVariant {
         });
         std::iter::once(best).chain(rankings).chain(boxes).collect()
     }
+
+    /// In words, for reports: "sort by runs (8 invocations), sibling boxes through the nodes".
+    pub fn describe(self) -> String {
+        let ranking = match self.ranking {
+            SortRanking::Subgroups { group } => format!("subgroup ballots ({group} invocations)"),
+            SortRanking::Shared => "lane groups in workgroup memory".to_string(),
+            SortRanking::Runs { group } => format!("runs ({group} invocations)"),
+        };
+        let boxes = match self.sibling_boxes {
+            SiblingBoxes::Atomics => "in atomic words",
+            SiblingBoxes::Nodes => "through the nodes",
+        };
+        format!("sort by {ranking}, sibling boxes {boxes}")
+    }
 }
 /// Leaves per invocation of the merges on CPU adapters.
 const MERGE_RUN: u32 = 32;
@@ -471,6 +485,11 @@ impl GpuLbvhBuilder {
             })
         })
         .await
+    }
+
+    /// The kernels' variant this builder runs.
+    pub fn variant(&self) -> BuildVariant {
+        self.variant
     }
 
     /// Sizes the buffers for `spheres` spheres and `triangles` triangles (a no-op when the counts are
