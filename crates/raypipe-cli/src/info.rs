@@ -15,7 +15,8 @@ pub fn run() -> anyhow::Result<ExitCode> {
                 .allowed_usages
                 .contains(wgpu::TextureUsages::RENDER_ATTACHMENT)
         };
-        crate::say!("{}", describe(&adapter.get_info()));
+        let info = adapter.get_info();
+        crate::say!("{}", describe(&info));
         crate::say!("  max texture 2D:             {}", limits.max_texture_dimension_2d);
         crate::say!(
             "  max uniform binding:        {} bytes",
@@ -38,7 +39,6 @@ pub fn run() -> anyhow::Result<ExitCode> {
             "  timestamp queries:          {}",
             adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
         );
-        let info = adapter.get_info();
         if adapter.features().contains(wgpu::Features::SUBGROUP) {
             crate::say!(
                 "  subgroups:                  {} to {} invocations",

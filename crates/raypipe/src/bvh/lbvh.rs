@@ -1,9 +1,9 @@
 //! Karras (2012): the binary radix tree over sorted Morton codes, then bounds bottom-up and the
 //! traversal links. The CPU finds the tree one of two ways ([`Hierarchy`]): every internal node by
 //! Karras's own searches, then bounds and links in a climb; or by bottom-up merges
-//! ([`super::merge`]) that write bounds and links in the same pass, as the GPU does. Each phase runs in parallel, and
-//! the last writes each node of the final array once, whole; `LbvhBuilder` keeps its buffers from
-//! one build to the next, as a per-frame rebuild wants.
+//! ([`super::merge`]) that write bounds and links in the same pass, as the GPU does. Each phase runs
+//! in parallel, and the last writes each node of the final array once, whole; `LbvhBuilder` keeps
+//! its buffers from one build to the next, as a per-frame rebuild wants.
 
 use super::aabb::Aabb;
 use super::key::{Key, gather_leaf_boxes};

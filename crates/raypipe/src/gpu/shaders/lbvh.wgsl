@@ -360,10 +360,9 @@ fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
         }
         left = child_node(split, false, first);
         right = child_node(split, true, last);
-        node = 0u;
-        if (first != 0u || last != leaf_base) {
-            node = select(first, last, after > before);
-        }
+        // Karras's number: the end at the parent's split. The root's prefixes are both -1 (beyond
+        // the keys), so it takes its first end, 0.
+        node = select(first, last, after > before);
         nodes[left].parent = node;
         nodes[right].parent = node;
     }
