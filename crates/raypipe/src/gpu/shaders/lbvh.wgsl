@@ -61,6 +61,20 @@ fn primitive_box(i: u32) -> Box {
     return Box(min(min(t.v0, t.v1), t.v2), max(max(t.v0, t.v1), t.v2));
 }
 
+// A box in `scratch`: 6 words from `base`, the low corner first.
+fn scratch_box(base: u32) -> Box {
+    let lo = vec3<u32>(scratch[base], scratch[base + 1u], scratch[base + 2u]);
+    let hi = vec3<u32>(scratch[base + 3u], scratch[base + 4u], scratch[base + 5u]);
+    return Box(bitcast<vec3<f32>>(lo), bitcast<vec3<f32>>(hi));
+}
+
+fn store_scratch_box(base: u32, b: Box) {
+    for (var a = 0u; a < 3u; a++) {
+        scratch[base + a] = bitcast<u32>(b.lo[a]);
+        scratch[base + 3u + a] = bitcast<u32>(b.hi[a]);
+    }
+}
+
 fn centroid(i: u32) -> vec3<f32> {
     let b = primitive_box(i);
     return (b.lo + b.hi) * 0.5;
@@ -99,11 +113,7 @@ fn bounds_partial(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
     shared_hi[lid] = hi;
     reduce_bounds(lid);
     if (lid == 0u && block < block_count()) {
-        let base = partial_bounds(block);
-        for (var a = 0u; a < 3u; a++) {
-            scratch[base + a] = bitcast<u32>(shared_lo[0][a]);
-            scratch[base + 3u + a] = bitcast<u32>(shared_hi[0][a]);
-        }
+        store_scratch_box(partial_bounds(block), Box(shared_lo[0], shared_hi[0]));
     }
 }
 
@@ -112,20 +122,15 @@ fn bounds_final(@builtin(local_invocation_index) lid: u32) {
     var lo = vec3<f32>(BIG);
     var hi = vec3<f32>(-BIG);
     for (var block = lid; block < block_count(); block += GROUP) {
-        let base = partial_bounds(block);
-        let b_lo = vec3<f32>(bitcast<f32>(scratch[base]), bitcast<f32>(scratch[base + 1u]), bitcast<f32>(scratch[base + 2u]));
-        let b_hi = vec3<f32>(bitcast<f32>(scratch[base + 3u]), bitcast<f32>(scratch[base + 4u]), bitcast<f32>(scratch[base + 5u]));
-        lo = min(lo, b_lo);
-        hi = max(hi, b_hi);
+        let b = scratch_box(partial_bounds(block));
+        lo = min(lo, b.lo);
+        hi = max(hi, b.hi);
     }
     shared_lo[lid] = lo;
     shared_hi[lid] = hi;
     reduce_bounds(lid);
     if (lid == 0u) {
-        for (var a = 0u; a < 3u; a++) {
-            scratch[SCRATCH_BOUNDS + a] = bitcast<u32>(shared_lo[0][a]);
-            scratch[SCRATCH_BOUNDS + 3u + a] = bitcast<u32>(shared_hi[0][a]);
-        }
+        store_scratch_box(SCRATCH_BOUNDS, Box(shared_lo[0], shared_hi[0]));
     }
 }
 
@@ -157,9 +162,9 @@ fn morton(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups
     if (i >= params.count) {
         return;
     }
-    let lo = vec3<f32>(bitcast<f32>(scratch[0]), bitcast<f32>(scratch[1]), bitcast<f32>(scratch[2]));
-    let hi = vec3<f32>(bitcast<f32>(scratch[3]), bitcast<f32>(scratch[4]), bitcast<f32>(scratch[5]));
-    let extent = hi - lo;
+    let bounds = scratch_box(SCRATCH_BOUNDS);
+    let lo = bounds.lo;
+    let extent = bounds.hi - lo;
     let scale = select(vec3<f32>(0.0), vec3<f32>(f32(CELLS)) / extent, extent > vec3<f32>(0.0));
     let cell = min(max((centroid(i) - lo) * scale, vec3<f32>(0.0)), vec3<f32>(f32(CELLS - 1u)));
     let q = vec3<u32>(cell);
