@@ -20,6 +20,10 @@ fn compute_equals_fragment(ctx: &GpuContext) {
     // Odd sizes: the last workgroups of the compute grid reach past the image.
     let mut whitted = PackedScene::new(&whitted_with_quad(75, 53)).unwrap();
     whitted.build_bvh(MortonBits::Bits30);
+    // 10 rows of tiles, where the compute kernel's row step must skip 6, which shares a factor
+    // with 10 (compute.wgsl, `tile_row`).
+    let mut tall = PackedScene::new(&whitted_with_quad(12, 80)).unwrap();
+    tall.build_bvh(MortonBits::Bits30);
     let mut cloud = packed("random:1500:3", 75, 53, 5);
     cloud.build_bvh(MortonBits::Bits30);
     let options = |accel, memory, count| RendererOptions {
@@ -38,6 +42,7 @@ fn compute_equals_fragment(ctx: &GpuContext) {
         cases.push((scene, options(Accel::Threaded, MemoryMode::Storage, Count::Cost), 1));
         cases.push((scene, options(Accel::Threaded, MemoryMode::Storage, Count::Rays), 3));
     }
+    cases.push((&tall, options(Accel::Stack, MemoryMode::Storage, Count::Rays), 1));
     for memory in ctx.memory_modes().into_iter().filter(|&m| m != MemoryMode::Storage) {
         cases.push((&whitted, options(Accel::Threaded, memory, Count::Rays), 2));
         if memory != MemoryMode::Uniform {
