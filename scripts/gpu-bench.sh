@@ -8,8 +8,9 @@
 #   scripts/gpu-bench.sh --quick OUT_DIR    # the same steps at small sizes (CI runs it on lavapipe)
 #
 # Writes under OUT_DIR: info.txt (`raypipe info`), a folder per benchmark with results.csv,
-# results.json, fps.png and fps.svg, builds.jsonl and builds.csv, and log.txt with each step's
-# command, time and outcome. Each step has a time limit; a step that fails or runs out of time is
+# results.json, fps.png and fps.svg, builds.jsonl and builds.csv, summary.md (each target of the
+# GPU issue judged where the run measured it, and the pipelines and builds side by side:
+# scripts/gpu-bench-summary.py), and log.txt with each step's command, time and outcome. Each step has a time limit; a step that fails or runs out of time is
 # logged, the others still run (a benchmark keeps the points it finished), and the script exits 1.
 #
 # RAYPIPE names the binary (default target/release/raypipe); RAYPIPE_MODELS the folder holding
@@ -62,8 +63,8 @@ step() {
 
 if [[ $quick -eq 1 ]]; then
   sizes=(32x24 16x12)
-  brute_counts=100,200
-  bvh_counts=1000
+  brute_counts=200,1000
+  bvh_counts=200,1000
   frames=(--frames 2 --warmup 1)
   bunny_size=(--width 32 --height 24)
   bunny_spheres=2000
@@ -139,6 +140,7 @@ with open(sys.argv[2], "w", newline="") as f:
                      + [round(r["mprims_per_s"], 2)])
 print(f"builds.csv: {len(rows)} builds")
 EOF
+python3 "$(dirname "$0")/gpu-bench-summary.py" "$out" || failed=1
 
 echo "results in $out (log.txt lists every step)"
 exit "$failed"

@@ -1,0 +1,256 @@
+#!/usr/bin/env python3
+"""Reads what scripts/gpu-bench.sh wrote under OUT_DIR and writes OUT_DIR/summary.md: each of the
+GPU issue's targets with the figure that decides it, the fragment pipeline against compute per mode,
+the Bunny's frame rates with the rebuild counted, and the GPU builds against the CPU's.
+
+    scripts/gpu-bench-summary.py OUT_DIR
+    scripts/gpu-bench-summary.py --self-test   # checks the arithmetic on made-up results
+
+A target is judged only where the run measured its conditions (20K spheres, 1920x1080, 1M
+primitives); a missing benchmark (a step that failed or ran out of time) is named, not guessed.
+Exits 1 if a results file cannot be read, 2 on bad arguments.
+"""
+
+import json
+import re
+import sys
+import tempfile
+from pathlib import Path
+
+BRUTE_TARGET = 200.0  # best BVH mode over brute force at 20K spheres, same adapter
+BUNNY_FPS_TARGET = 500.0  # Bunny, 20K spheres, 1920x1080, depth 5, rebuilt every frame
+BUILD_MS_TARGET = 1.0  # 1M primitives on the GPU
+PIPELINES = ("fragment", "compute")
+
+
+def load_results(folder):
+    """The rows of a bench's results.json, or None where the step left none."""
+    path = folder / "results.json"
+    if not path.is_file():
+        return None
+    return json.loads(path.read_text())
+
+
+def frame_ms(row):
+    """A frame's time with the BVH rebuild counted, where the bench rebuilt it."""
+    return row["ms_median"] + (row["build_ms_median"] or 0.0)
+
+
+def fmt(value, digits=1):
+    return f"{value:,.{digits}f}"
+
+
+def best_over_brute(bvh_rows, brute_rows):
+    """Per (resolution, pipeline): the largest sphere count both benches ran, the best BVH mode
+    there and its speed-up over brute force (trace time alone, as brute force builds nothing)."""
+    out = []
+    for pipeline in PIPELINES:
+        brute = {r["count"]: r for r in brute_rows if r["pipeline"] == pipeline}
+        bvh = [r for r in bvh_rows if r["pipeline"] == pipeline and r["count"] in brute]
+        if not bvh:
+            continue
+        count = max(r["count"] for r in bvh)
+        best = min((r for r in bvh if r["count"] == count), key=lambda r: r["ms_median"])
+        out.append((pipeline, count, best["accel"], brute[count]["ms_median"] / best["ms_median"]))
+    return out
+
+
+def pipeline_ratios(rows):
+    """(count, accel, fragment ms, compute ms, compute / fragment) where both pipelines ran."""
+    by_key = {(r["count"], r["accel"], r["pipeline"]): r["ms_median"] for r in rows}
+    out = []
+    for count, accel in sorted({(r["count"], r["accel"]) for r in rows}):
+        fragment = by_key.get((count, accel, "fragment"))
+        compute = by_key.get((count, accel, "compute"))
+        if fragment and compute:
+            out.append((count, accel, fragment, compute, compute / fragment))
+    return out
+
+
+def morton_bits(builder):
+    match = re.search(r"(\d+)-bit", builder)
+    return int(match.group(1)) if match else None
+
+
+def build_pairs(builds):
+    """(primitives, bits, GPU build, CPU build or None) for every GPU build."""
+    cpu = {(b["primitives"], morton_bits(b["builder"])): b for b in builds if b["device"].startswith("cpu")}
+    return [
+        (b["primitives"], morton_bits(b["builder"]), b, cpu.get((b["primitives"], morton_bits(b["builder"]))))
+        for b in builds
+        if b["device"].startswith("gpu")
+    ]
+
+
+def verdict(met):
+    return "**met**" if met else "**not met**"
+
+
+def summarise(out):
+    lines = ["# gpu-bench summary", ""]
+    info = out / "info.txt"
+    if info.is_file():
+        lines += ["Adapters (`raypipe info`, first line of each):", ""]
+        lines += [f"- {line}" for line in info.read_text().splitlines() if line and not line.startswith(" ")]
+        lines.append("")
+    missing = []
+    targets = []
+
+    lines += ["## Figure 4: the best BVH mode against brute force", ""]
+    lines += ["Trace time per frame (median), the BVH modes rebuilding their tree every frame.", ""]
+    figure_sizes = sorted(
+        {p.name[len("figure4-") : -len("-bvh")] for p in out.glob("figure4-*-bvh")},
+        key=lambda s: -int(s.split("x")[0]),
+    )
+    for size in figure_sizes:
+        bvh = load_results(out / f"figure4-{size}-bvh")
+        brute = load_results(out / f"figure4-{size}-brute")
+        if bvh is None or brute is None:
+            missing.append(f"figure 4 at {size}")
+            continue
+        for pipeline, count, accel, speedup in best_over_brute(bvh, brute):
+            lines.append(f"- {size}, {pipeline}: at {count:,} spheres {accel} is {fmt(speedup)}x brute force")
+            if count == 20000:
+                targets.append(
+                    f"Best BVH mode at least {BRUTE_TARGET:.0f}x brute force at 20K spheres ({size}, {pipeline}): "
+                    f"{fmt(speedup)}x, {verdict(speedup >= BRUTE_TARGET)}"
+                )
+        lines += ["", f"The fragment pipeline against compute at {size}:", ""]
+        lines += ["| spheres | accel | fragment ms | compute ms | compute / fragment |", "| ---: | --- | ---: | ---: | ---: |"]
+        for count, accel, fragment, compute, ratio in pipeline_ratios(bvh + brute):
+            lines.append(f"| {count:,} | {accel} | {fmt(fragment, 3)} | {fmt(compute, 3)} | {ratio:.2f} |")
+        lines.append("")
+
+    lines += ["## The Bunny, rebuilt every frame", ""]
+    for name, title in (("bunny-spheres", "spheres"), ("bunny-triangles", "triangles")):
+        rows = load_results(out / name)
+        if rows is None:
+            missing.append(f"the Bunny as {title}")
+            continue
+        r0 = rows[0]
+        lines += [f"As {r0['count']:,} {title}, {r0['width']}x{r0['height']}:", ""]
+        lines += [
+            "| pipeline | accel | trace ms | build ms | fps with the build | Mrays/s |",
+            "| --- | --- | ---: | ---: | ---: | ---: |",
+        ]
+        for r in rows:
+            lines.append(
+                f"| {r['pipeline']} | {r['accel']} | {fmt(r['ms_median'], 3)} | {fmt(r['build_ms_median'] or 0.0, 3)} "
+                f"| {fmt(1e3 / frame_ms(r))} | {fmt(r['mrays_per_s'])} |"
+            )
+        lines.append("")
+        best = {p: max((1e3 / frame_ms(r) for r in rows if r["pipeline"] == p), default=None) for p in PIPELINES}
+        if best["fragment"] and best["compute"]:
+            lines += [f"Best fps with the build: fragment {fmt(best['fragment'])}, compute {fmt(best['compute'])} "
+                      f"(compute / fragment {best['compute'] / best['fragment']:.2f}).", ""]
+        faster = max((v for v in best.values() if v), default=None)
+        if title == "spheres" and faster and r0["count"] == 20000 and (r0["width"], r0["height"]) == (1920, 1080):
+            targets.append(
+                f"Bunny, 20K spheres, 1920x1080, rebuilt every frame, above {BUNNY_FPS_TARGET:.0f} fps in the "
+                f"faster pipeline: {fmt(faster)} fps, {verdict(faster > BUNNY_FPS_TARGET)}"
+            )
+
+    lines += ["## LBVH builds, GPU against CPU", ""]
+    builds_path = out / "builds.jsonl"
+    builds = [json.loads(line) for line in builds_path.read_text().splitlines() if line.strip()] if builds_path.is_file() else []
+    if not builds:
+        missing.append("the LBVH builds")
+    else:
+        lines += [
+            "| primitives | codes | GPU ms (morton, sort, hierarchy) | GPU Mprims/s | CPU ms | GPU / CPU |",
+            "| ---: | ---: | ---: | ---: | ---: | ---: |",
+        ]
+        for n, bits, gpu, cpu in build_pairs(builds):
+            ms = gpu["build_ms"]
+            phases = f"{fmt(ms['total'], 3)} ({fmt(ms['morton'], 3)}, {fmt(ms['sort'], 3)}, {fmt(ms['hierarchy'], 3)})"
+            cpu_ms = cpu["build_ms"]["total"] if cpu else None
+            ratio = f"{ms['total'] / cpu_ms:.2f}" if cpu_ms else "-"
+            lines.append(f"| {n:,} | {bits}-bit | {phases} | {fmt(gpu['mprims_per_s'])} | {fmt(cpu_ms, 3) if cpu_ms else '-'} | {ratio} |")
+            if n == 1_000_000:
+                targets.append(
+                    f"1M primitives built on the GPU in at most {BUILD_MS_TARGET:.0f} ms ({bits}-bit codes): "
+                    f"{fmt(ms['total'], 3)} ms, {verdict(ms['total'] <= BUILD_MS_TARGET)}"
+                )
+        gpu_builders = sorted({b["builder"] for b in builds if b["device"].startswith("gpu")})
+        lines += [""] + [f"GPU builder: {builder}" for builder in gpu_builders] + [""]
+
+    head = ["## Targets", ""]
+    head += [f"- {t}" for t in targets] or ["- none at the sizes of this run (`--quick` measures none)"]
+    head += [f"- not measured: {m} (see log.txt)" for m in missing]
+    head.append("")
+    at = lines.index("## Figure 4: the best BVH mode against brute force")
+    lines[at:at] = head
+    (out / "summary.md").write_text("\n".join(lines) + "\n")
+    return targets, missing
+
+
+def self_test():
+    """Made-up results with known answers: the speed-up, the ratio, the fps with the build and the
+    verdicts must come out as computed by hand here."""
+
+    def row(count, pipeline, accel, ms, build=None, size=(1920, 1080)):
+        return {
+            "count": count, "pipeline": pipeline, "accel": accel, "width": size[0], "height": size[1],
+            "ms_median": ms, "build_ms_median": build, "mrays_per_s": 1.0,
+        }
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp)
+        for name, rows in {
+            "figure4-1920x1080-bvh": [row(20000, "fragment", "stack", 2.0, 0.5), row(20000, "fragment", "threaded", 1.0, 0.5),
+                                      row(20000, "compute", "threaded", 0.5, 0.5), row(50000, "compute", "threaded", 0.7, 0.6)],
+            "figure4-1920x1080-brute": [row(20000, "fragment", "brute", 150.0), row(20000, "compute", "brute", 120.0)],
+            "bunny-spheres": [row(20000, "fragment", "threaded", 1.5, 0.5), row(20000, "compute", "threaded", 1.0, 0.25)],
+        }.items():
+            (out / name).mkdir()
+            (out / name / "results.json").write_text(json.dumps(rows))
+        build = lambda device, bits, total: {  # noqa: E731
+            "primitives": 1_000_000, "device": device, "builder": f"lbvh ({bits}-bit Morton codes)",
+            "build_ms": {"morton": 0.1, "sort": 0.2, "hierarchy": 0.3, "total": total}, "mprims_per_s": 1e3 / total,
+        }
+        (out / "builds.jsonl").write_text("\n".join(json.dumps(b) for b in [
+            build("gpu: x", 30, 0.8), build("cpu (16 threads)", 30, 8.0), build("gpu: x", 63, 1.2)]))
+        targets, missing = summarise(out)
+        text = (out / "summary.md").read_text()
+    expected_targets = [
+        "Best BVH mode at least 200x brute force at 20K spheres (1920x1080, fragment): 150.0x, **not met**",
+        "Best BVH mode at least 200x brute force at 20K spheres (1920x1080, compute): 240.0x, **met**",
+        "Bunny, 20K spheres, 1920x1080, rebuilt every frame, above 500 fps in the faster pipeline: 800.0 fps, **met**",
+        "1M primitives built on the GPU in at most 1 ms (30-bit codes): 0.800 ms, **met**",
+        "1M primitives built on the GPU in at most 1 ms (63-bit codes): 1.200 ms, **not met**",
+    ]
+    failures = [t for t in expected_targets if t not in targets]
+    for needle in ("| 20,000 | threaded | 1.000 | 0.500 | 0.50 |", "compute / fragment 1.60",
+                   "| 1,000,000 | 30-bit | 0.800 (0.100, 0.200, 0.300) | 1,250.0 | 8.000 | 0.10 |",
+                   "not measured: the Bunny as triangles"):
+        if needle not in text:
+            failures.append(needle)
+    if missing != ["the Bunny as triangles"]:
+        failures.append(f"missing: {missing}")
+    if failures:
+        print("gpu-bench-summary self-test failed; not found:", *failures, sep="\n  ", file=sys.stderr)
+        print(text, file=sys.stderr)
+        return 1
+    print("gpu-bench-summary self-test: ok")
+    return 0
+
+
+def main(argv):
+    if argv == ["--self-test"]:
+        return self_test()
+    if len(argv) != 1 or not Path(argv[0]).is_dir():
+        print("usage: scripts/gpu-bench-summary.py OUT_DIR | --self-test (OUT_DIR: a gpu-bench.sh output folder)",
+              file=sys.stderr)
+        return 2
+    out = Path(argv[0])
+    try:
+        targets, missing = summarise(out)
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        print(f"gpu-bench-summary: {out}: cannot read the results: {e}", file=sys.stderr)
+        return 1
+    print(f"summary: {out / 'summary.md'} ({len(targets)} targets judged, {len(missing)} benchmarks missing)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
