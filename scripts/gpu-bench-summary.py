@@ -28,7 +28,15 @@ def load_results(folder):
     path = folder / "results.json"
     if not path.is_file():
         return None
-    return json.loads(path.read_text())
+    return read_json(path, path.read_text())
+
+
+def read_json(path, text, line=None):
+    try:
+        return json.loads(text)
+    except ValueError as e:
+        where = f"{path}, line {line}" if line else f"{path}"
+        raise ValueError(f"{where}: {e}") from None
 
 
 def frame_ms(row):
@@ -152,7 +160,11 @@ def summarise(out):
 
     lines += ["## LBVH builds, GPU against CPU", ""]
     builds_path = out / "builds.jsonl"
-    builds = [json.loads(line) for line in builds_path.read_text().splitlines() if line.strip()] if builds_path.is_file() else []
+    builds = []
+    if builds_path.is_file():
+        for number, line in enumerate(builds_path.read_text().splitlines(), 1):
+            if line.strip():
+                builds.append(read_json(builds_path, line, number))
     if not builds:
         missing.append("the LBVH builds")
     else:
@@ -246,7 +258,7 @@ def main(argv):
     try:
         targets, missing = summarise(out)
     except (OSError, ValueError, KeyError, TypeError) as e:
-        print(f"gpu-bench-summary: {out}: cannot read the results: {e}", file=sys.stderr)
+        print(f"gpu-bench-summary: cannot read the results: {e}", file=sys.stderr)
         return 1
     print(f"summary: {out / 'summary.md'} ({len(targets)} targets judged, {len(missing)} benchmarks missing)")
     return 0
