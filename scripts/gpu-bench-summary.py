@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Reads what scripts/gpu-bench.sh wrote under OUT_DIR and writes OUT_DIR/summary.md: each of the
-GPU issue's targets with the figure that decides it, the fragment pipeline against compute per mode,
+performance targets with the figure that decides it, the fragment pipeline against compute per mode,
 the Bunny's frame rates with the rebuild counted, and the GPU builds against the CPU's.
 
     scripts/gpu-bench-summary.py OUT_DIR
@@ -124,7 +124,10 @@ def summarise(out):
                     f"{fmt(speedup)}x, {verdict(speedup >= BRUTE_TARGET)}"
                 )
         lines += ["", f"The fragment pipeline against compute at {size}:", ""]
-        lines += ["| spheres | accel | fragment ms | compute ms | compute / fragment |", "| ---: | --- | ---: | ---: | ---: |"]
+        lines += [
+            "| spheres | accel | fragment ms | compute ms | compute / fragment |",
+            "| ---: | --- | ---: | ---: | ---: |",
+        ]
         for count, accel, fragment, compute, ratio in pipeline_ratios(bvh + brute):
             lines.append(f"| {count:,} | {accel} | {fmt(fragment, 3)} | {fmt(compute, 3)} | {ratio:.2f} |")
         lines.append("")
@@ -147,12 +150,22 @@ def summarise(out):
                 f"| {fmt(1e3 / frame_ms(r))} | {fmt(r['mrays_per_s'])} |"
             )
         lines.append("")
-        best = {p: max((1e3 / frame_ms(r) for r in rows if r["pipeline"] == p), default=None) for p in PIPELINES}
+        best = {
+            p: max((1e3 / frame_ms(r) for r in rows if r["pipeline"] == p), default=None) for p in PIPELINES
+        }
         if best["fragment"] and best["compute"]:
-            lines += [f"Best fps with the build: fragment {fmt(best['fragment'])}, compute {fmt(best['compute'])} "
-                      f"(compute / fragment {best['compute'] / best['fragment']:.2f}).", ""]
+            lines += [
+                f"Best fps with the build: fragment {fmt(best['fragment'])}, compute {fmt(best['compute'])} "
+                f"(compute / fragment {best['compute'] / best['fragment']:.2f}).",
+                "",
+            ]
         faster = max((v for v in best.values() if v), default=None)
-        if title == "spheres" and faster and r0["count"] == 20000 and (r0["width"], r0["height"]) == (1920, 1080):
+        if (
+            title == "spheres"
+            and faster
+            and r0["count"] == 20000
+            and (r0["width"], r0["height"]) == (1920, 1080)
+        ):
             targets.append(
                 f"Bunny, 20K spheres, 1920x1080, rebuilt every frame, above {BUNNY_FPS_TARGET:.0f} fps in the "
                 f"faster pipeline: {fmt(faster)} fps, {verdict(faster > BUNNY_FPS_TARGET)}"
@@ -177,7 +190,9 @@ def summarise(out):
             phases = f"{fmt(ms['total'], 3)} ({fmt(ms['morton'], 3)}, {fmt(ms['sort'], 3)}, {fmt(ms['hierarchy'], 3)})"
             cpu_ms = cpu["build_ms"]["total"] if cpu else None
             ratio = f"{ms['total'] / cpu_ms:.2f}" if cpu_ms else "-"
-            lines.append(f"| {n:,} | {bits}-bit | {phases} | {fmt(gpu['mprims_per_s'])} | {fmt(cpu_ms, 3) if cpu_ms else '-'} | {ratio} |")
+            lines.append(
+                f"| {n:,} | {bits}-bit | {phases} | {fmt(gpu['mprims_per_s'])} | {fmt(cpu_ms, 3) if cpu_ms else '-'} | {ratio} |"
+            )
             if n == 1_000_000:
                 targets.append(
                     f"1M primitives built on the GPU in at most {BUILD_MS_TARGET:.0f} ms ({bits}-bit codes): "
@@ -202,26 +217,53 @@ def self_test():
 
     def row(count, pipeline, accel, ms, build=None, size=(1920, 1080)):
         return {
-            "count": count, "pipeline": pipeline, "accel": accel, "width": size[0], "height": size[1],
-            "ms_median": ms, "build_ms_median": build, "mrays_per_s": 1.0,
+            "count": count,
+            "pipeline": pipeline,
+            "accel": accel,
+            "width": size[0],
+            "height": size[1],
+            "ms_median": ms,
+            "build_ms_median": build,
+            "mrays_per_s": 1.0,
         }
 
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
         for name, rows in {
-            "figure4-1920x1080-bvh": [row(20000, "fragment", "stack", 2.0, 0.5), row(20000, "fragment", "threaded", 1.0, 0.5),
-                                      row(20000, "compute", "threaded", 0.5, 0.5), row(50000, "compute", "threaded", 0.7, 0.6)],
-            "figure4-1920x1080-brute": [row(20000, "fragment", "brute", 150.0), row(20000, "compute", "brute", 120.0)],
-            "bunny-spheres": [row(20000, "fragment", "threaded", 1.5, 0.5), row(20000, "compute", "threaded", 1.0, 0.25)],
+            "figure4-1920x1080-bvh": [
+                row(20000, "fragment", "stack", 2.0, 0.5),
+                row(20000, "fragment", "threaded", 1.0, 0.5),
+                row(20000, "compute", "threaded", 0.5, 0.5),
+                row(50000, "compute", "threaded", 0.7, 0.6),
+            ],
+            "figure4-1920x1080-brute": [
+                row(20000, "fragment", "brute", 150.0),
+                row(20000, "compute", "brute", 120.0),
+            ],
+            "bunny-spheres": [
+                row(20000, "fragment", "threaded", 1.5, 0.5),
+                row(20000, "compute", "threaded", 1.0, 0.25),
+            ],
         }.items():
             (out / name).mkdir()
             (out / name / "results.json").write_text(json.dumps(rows))
         build = lambda device, bits, total: {  # noqa: E731
-            "primitives": 1_000_000, "device": device, "builder": f"lbvh ({bits}-bit Morton codes)",
-            "build_ms": {"morton": 0.1, "sort": 0.2, "hierarchy": 0.3, "total": total}, "mprims_per_s": 1e3 / total,
+            "primitives": 1_000_000,
+            "device": device,
+            "builder": f"lbvh ({bits}-bit Morton codes)",
+            "build_ms": {"morton": 0.1, "sort": 0.2, "hierarchy": 0.3, "total": total},
+            "mprims_per_s": 1e3 / total,
         }
-        (out / "builds.jsonl").write_text("\n".join(json.dumps(b) for b in [
-            build("gpu: x", 30, 0.8), build("cpu (16 threads)", 30, 8.0), build("gpu: x", 63, 1.2)]))
+        (out / "builds.jsonl").write_text(
+            "\n".join(
+                json.dumps(b)
+                for b in [
+                    build("gpu: x", 30, 0.8),
+                    build("cpu (16 threads)", 30, 8.0),
+                    build("gpu: x", 63, 1.2),
+                ]
+            )
+        )
         targets, missing = summarise(out)
         text = (out / "summary.md").read_text()
     expected_targets = [
@@ -232,9 +274,12 @@ def self_test():
         "1M primitives built on the GPU in at most 1 ms (63-bit codes): 1.200 ms, **not met**",
     ]
     failures = [t for t in expected_targets if t not in targets]
-    for needle in ("| 20,000 | threaded | 1.000 | 0.500 | 0.50 |", "compute / fragment 1.60",
-                   "| 1,000,000 | 30-bit | 0.800 (0.100, 0.200, 0.300) | 1,250.0 | 8.000 | 0.10 |",
-                   "not measured: the Bunny as triangles"):
+    for needle in (
+        "| 20,000 | threaded | 1.000 | 0.500 | 0.50 |",
+        "compute / fragment 1.60",
+        "| 1,000,000 | 30-bit | 0.800 (0.100, 0.200, 0.300) | 1,250.0 | 8.000 | 0.10 |",
+        "not measured: the Bunny as triangles",
+    ):
         if needle not in text:
             failures.append(needle)
     if missing != ["the Bunny as triangles"]:
@@ -251,8 +296,10 @@ def main(argv):
     if argv == ["--self-test"]:
         return self_test()
     if len(argv) != 1 or not Path(argv[0]).is_dir():
-        print("usage: scripts/gpu-bench-summary.py OUT_DIR | --self-test (OUT_DIR: a gpu-bench.sh output folder)",
-              file=sys.stderr)
+        print(
+            "usage: scripts/gpu-bench-summary.py OUT_DIR | --self-test (OUT_DIR: a gpu-bench.sh output folder)",
+            file=sys.stderr,
+        )
         return 2
     out = Path(argv[0])
     try:

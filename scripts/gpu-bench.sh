@@ -8,10 +8,11 @@
 #   scripts/gpu-bench.sh --quick OUT_DIR    # the same steps at small sizes (CI runs it on lavapipe)
 #
 # Writes under OUT_DIR: info.txt (`raypipe info`), a folder per benchmark with results.csv,
-# results.json, fps.png and fps.svg, builds.jsonl and builds.csv, summary.md (each target of the
-# GPU issue judged where the run measured it, and the pipelines and builds side by side:
-# scripts/gpu-bench-summary.py), and log.txt with each step's command, time and outcome. Each step has a time limit; a step that fails or runs out of time is
-# logged, the others still run (a benchmark keeps the points it finished), and the script exits 1.
+# results.json, fps.png and fps.svg, builds.jsonl and builds.csv, summary.md (each performance
+# target judged where the run measured it, the pipelines and the builds side by side:
+# scripts/gpu-bench-summary.py), and log.txt with each step's command, time and outcome. Each step
+# has a time limit; a step that fails or runs out of time is logged, the others still run (a
+# benchmark keeps the points it finished), and the script exits 1.
 #
 # RAYPIPE names the binary (default target/release/raypipe); RAYPIPE_MODELS the folder holding
 # bunny.ply (default ../shared/models, else .models). WGPU_BACKEND picks the backend as usual.
