@@ -64,7 +64,7 @@ pub enum SortRanking {
     Shared,
     /// Every invocation counts the digits of its own run of pairs, as a CPU sort does: for CPU
     /// adapters, whose workgroups are a few SIMD lanes and whose ballots and barriers are loops.
-    /// The merges then also give each invocation a run of leaves.
+    /// The merges then also give each invocation a run of leaves (`BuildVariant::merge_run`).
     Runs {
         /// Invocations per workgroup, each with its own digit counts.
         group: u32,
@@ -127,14 +127,6 @@ impl SortRanking {
         }
     }
 
-    /// Leaves an invocation of the merges takes in turn: runs of them on CPU adapters too.
-    fn merge_run(self) -> u32 {
-        match self {
-            SortRanking::Runs { .. } => MERGE_RUN,
-            SortRanking::Subgroups { .. } | SortRanking::Shared => 1,
-        }
-    }
-
     fn entry_point(self) -> &'static str {
         match self {
             SortRanking::Subgroups { .. } | SortRanking::Shared => "sort_pass",
@@ -156,10 +148,8 @@ const TILE: u32 = {tile}u;
 const LANE_GROUPS: u32 = {lane_groups}u;
 const RANKED_PAIRS: u32 = {ranked_pairs}u;
 const HISTOGRAM_ITEMS: u32 = {HISTOGRAM_ITEMS}u;
-const MERGE_RUN: u32 = {}u;
 ",
-            tile / group,
-            self.merge_run()
+            tile / group
         );
         let ranking = match self {
             SortRanking::Subgroups { .. } => {
@@ -301,7 +291,17 @@ impl BuildVariant {
         };
         format!("sort by {ranking}, sibling boxes {boxes}")
     }
+
+    /// Leaves an invocation of the merges takes in turn: runs of them on CPU adapters (those whose
+    /// sort ranks by runs), one elsewhere.
+    fn merge_run(self) -> u32 {
+        match self.ranking {
+            SortRanking::Runs { .. } => MERGE_RUN,
+            SortRanking::Subgroups { .. } | SortRanking::Shared => 1,
+        }
+    }
 }
+
 /// Leaves per invocation of the merges on CPU adapters.
 const MERGE_RUN: u32 = 32;
 /// The tile of lane groups, whose ranks fill 4 KiB of workgroup memory.
@@ -349,9 +349,10 @@ const SORT_PASSES: u32 = {}u;
 /// The build kernels' WGSL for codes of `bits`, in `variant`.
 pub fn shader_source(bits: MortonBits, variant: BuildVariant) -> String {
     format!(
-        "{}\n{}\nconst SIBLING_BOXES_IN_NODES: bool = {};\n{}\n{LBVH}\n{RADIX_SORT}",
+        "{}\n{}\nconst MERGE_RUN: u32 = {}u;\nconst SIBLING_BOXES_IN_NODES: bool = {};\n{}\n{LBVH}\n{RADIX_SORT}",
         key_preamble(bits),
         variant.ranking.source(),
+        variant.merge_run(),
         variant.sibling_boxes == SiblingBoxes::Nodes,
         records_source(),
     )
@@ -624,7 +625,7 @@ impl GpuLbvhBuilder {
             let words = self.variant.sibling_boxes.words_per_split() * (n as u64 - 1);
             encoder.clear_buffer(&b.climb, 0, Some(words * 4));
         }
-        let invocations = n.div_ceil(self.variant.ranking.merge_run());
+        let invocations = n.div_ceil(self.variant.merge_run());
         phase(
             encoder,
             2,
@@ -667,8 +668,8 @@ impl GpuLbvhBuilder {
                     morton: ms[0],
                     sort: ms[1],
                     hierarchy: ms[2],
-                    bounds: 0.0,
-                    links: 0.0,
+                    // The merges write the bounds and links with the hierarchy.
+                    ..BuildTimings::default()
                 })
             }
             _ => Ok(BuildTimings::default()),

@@ -6,7 +6,8 @@
 // `code_word` (the code's low or high 32 bits; 30-bit codes have no high word, it reads 0).
 
 // From the preamble (src/gpu/build.rs): GROUP invocations per workgroup; BLOCK items per block in
-// the reduction kernels, ITEMS per invocation, GROUP apart. The sort is in radix_sort.wgsl.
+// the reduction kernels, ITEMS per invocation, GROUP apart; MERGE_RUN leaves per invocation of the
+// merges and SIBLING_BOXES_IN_NODES (`merge`). The sort is in radix_sort.wgsl.
 
 // BuildParams is in types.wgsl, beside the other records with a host twin.
 
