@@ -12,6 +12,7 @@ Exits 1 if a results file cannot be read, 2 on bad arguments.
 """
 
 import json
+import os
 import re
 import sys
 import tempfile
@@ -39,9 +40,9 @@ def read_json(path, text, line=None):
         raise ValueError(f"{where}: {e}") from None
 
 
-def frame_ms(row):
-    """A frame's time with the BVH rebuild counted, where the bench rebuilt it."""
-    return row["ms_median"] + (row["build_ms_median"] or 0.0)
+def fps_with_build(row):
+    """Frames per second with the BVH rebuild counted, where the bench rebuilt it."""
+    return 1e3 / (row["ms_median"] + (row["build_ms_median"] or 0.0))
 
 
 def fmt(value, digits=1):
@@ -82,12 +83,9 @@ def morton_bits(builder):
 
 def build_pairs(builds):
     """(primitives, bits, GPU build, CPU build or None) for every GPU build."""
-    cpu = {(b["primitives"], morton_bits(b["builder"])): b for b in builds if b["device"].startswith("cpu")}
-    return [
-        (b["primitives"], morton_bits(b["builder"]), b, cpu.get((b["primitives"], morton_bits(b["builder"]))))
-        for b in builds
-        if b["device"].startswith("gpu")
-    ]
+    key = lambda b: (b["primitives"], morton_bits(b["builder"]))  # noqa: E731
+    cpu = {key(b): b for b in builds if b["device"].startswith("cpu")}
+    return [(*key(b), b, cpu.get(key(b))) for b in builds if b["device"].startswith("gpu")]
 
 
 def verdict(met):
@@ -95,16 +93,17 @@ def verdict(met):
 
 
 def summarise(out):
-    lines = ["# gpu-bench summary", ""]
+    head = ["# gpu-bench summary", ""]
     info = out / "info.txt"
     if info.is_file():
-        lines += ["Adapters (`raypipe info`, first line of each):", ""]
-        lines += [f"- {line}" for line in info.read_text().splitlines() if line and not line.startswith(" ")]
-        lines.append("")
+        head += ["Adapters (`raypipe info`, first line of each):", ""]
+        head += [f"- {line}" for line in info.read_text().splitlines() if line and not line.startswith(" ")]
+        head.append("")
     missing = []
     targets = []
 
-    lines += ["## Figure 4: the best BVH mode against brute force", ""]
+    # The tables; the targets they decide go above them.
+    lines = ["## Figure 4: the best BVH mode against brute force", ""]
     lines += ["Trace time per frame (median), the BVH modes rebuilding their tree every frame.", ""]
     figure_sizes = sorted(
         {p.name[len("figure4-") : -len("-bvh")] for p in out.glob("figure4-*-bvh")},
@@ -147,11 +146,11 @@ def summarise(out):
         for r in rows:
             lines.append(
                 f"| {r['pipeline']} | {r['accel']} | {fmt(r['ms_median'], 3)} | {fmt(r['build_ms_median'] or 0.0, 3)} "
-                f"| {fmt(1e3 / frame_ms(r))} | {fmt(r['mrays_per_s'])} |"
+                f"| {fmt(fps_with_build(r))} | {fmt(r['mrays_per_s'])} |"
             )
         lines.append("")
         best = {
-            p: max((1e3 / frame_ms(r) for r in rows if r["pipeline"] == p), default=None) for p in PIPELINES
+            p: max((fps_with_build(r) for r in rows if r["pipeline"] == p), default=None) for p in PIPELINES
         }
         if best["fragment"] and best["compute"]:
             lines += [
@@ -201,13 +200,14 @@ def summarise(out):
         gpu_builders = sorted({b["builder"] for b in builds if b["device"].startswith("gpu")})
         lines += [""] + [f"GPU builder: {builder}" for builder in gpu_builders] + [""]
 
-    head = ["## Targets", ""]
+    head += ["## Targets", ""]
     head += [f"- {t}" for t in targets] or ["- none at the sizes of this run (`--quick` measures none)"]
     head += [f"- not measured: {m} (see log.txt)" for m in missing]
     head.append("")
-    at = lines.index("## Figure 4: the best BVH mode against brute force")
-    lines[at:at] = head
-    (out / "summary.md").write_text("\n".join(lines) + "\n")
+    # Whole or not at all: a full disk leaves no half summary.
+    partial = out / "summary.md.partial"
+    partial.write_text("\n".join(head + lines) + "\n")
+    os.replace(partial, out / "summary.md")
     return targets, missing
 
 
