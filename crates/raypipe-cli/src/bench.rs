@@ -13,10 +13,10 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::image::diff::{Tolerance, compare};
-use raypipe::mesh::is_model_path;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
+use raypipe::scene::model::is_model_file;
 use raypipe::scene::model::{MeshAs, ModelOptions};
 use serde::Serialize;
 use std::io::Write;
@@ -26,7 +26,7 @@ use std::process::ExitCode;
 #[derive(Args)]
 pub struct BenchArgs {
     /// A built-in family whose size takes the count (random, sphere, torus or bounce), or a model file
-    /// (.ply, .obj, .off) with that many spheres on its surface.
+    /// (.ply, .obj, .off, .gltf, .glb) with that many spheres on its surface.
     #[arg(default_value = "random")]
     scene: String,
     #[arg(long, value_delimiter = ',', default_values_t = [1000, 2000, 5000, 10000, 20000])]
@@ -143,7 +143,7 @@ fn options(pipeline: Pipeline, memory: MemoryMode, accel: Accel) -> RendererOpti
 /// The scene of one bench point, at the given size, packed with a CPU-built BVH: a built-in family
 /// at `count` spheres, or a model with `count` spheres on its surface or as its triangles.
 fn scene(family: &str, as_: MeshAs, count: usize, width: u32, height: u32) -> anyhow::Result<PackedScene> {
-    let mut scene = if is_model_path(Path::new(family)) {
+    let mut scene = if is_model_file(Path::new(family)) {
         let options = ModelOptions {
             as_: Some(as_),
             spheres: (as_ == MeshAs::Spheres).then_some(count),
@@ -214,8 +214,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     );
     let as_ = args.as_.unwrap_or(MeshAs::Spheres);
     anyhow::ensure!(
-        as_ == MeshAs::Spheres || is_model_path(Path::new(&args.scene)),
-        "--as triangles times a model file's triangles: name a .ply, .obj or .off"
+        as_ == MeshAs::Spheres || is_model_file(Path::new(&args.scene)),
+        "--as triangles times a model file's triangles: name a .ply, .obj, .off, .gltf or .glb"
     );
     // A model's triangles are one point, whatever the counts.
     let counts = if as_ == MeshAs::Triangles {

@@ -8,10 +8,10 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::Count;
 use raypipe::gpu::Backend;
 use raypipe::image::{FloatImage, Frame, heatmap};
-use raypipe::mesh::is_model_path;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
+use raypipe::scene::model::is_model_file;
 use raypipe::scene::model::{MeshAs, ModelOptions, Normals};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -35,7 +35,8 @@ pub enum Aov {
 #[derive(Args)]
 pub struct SceneArgs {
     /// A built-in scene (whitted, sphere-8k, torus-5k, sphere:N, torus:N, random:N[:SEED],
-    /// bounce:N[:SEED]), a TOML scene file, or a model file (.ply, .obj, .off) to frame and render.
+    /// bounce:N[:SEED]), a TOML scene file, a model file (.ply, .obj, .off) to frame and render, or a glTF
+    /// scene (.gltf, .glb) with its camera and lights.
     #[arg(default_value = "whitted", value_name = "SCENE")]
     pub spec: String,
     /// With a model file: render its triangles, or spheres on its surface.
@@ -141,10 +142,10 @@ pub const MAX_SPP: u32 = 65_536;
 
 /// Loads a scene the way every subcommand names one; the model options are flags of model files.
 pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
-    if !model.is_default() && !is_model_path(std::path::Path::new(spec)) {
+    if !model.is_default() && !is_model_file(std::path::Path::new(spec)) {
         bail!(
             "scene '{spec}': --as, --spheres, --rotate, --normals and --crease apply to model files ({})",
-            raypipe::mesh::MeshFormat::extension_list()
+            raypipe::scene::model::model_extension_list()
         );
     }
     if model.as_ == Some(MeshAs::Triangles) && model.spheres.is_some() {

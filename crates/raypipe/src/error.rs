@@ -22,6 +22,7 @@ pub enum Element {
     NamedMaterial(String),
     /// A `[[mesh]]` table of a scene file.
     Mesh(usize),
+    Texture(usize),
 }
 
 impl fmt::Display for Element {
@@ -37,6 +38,7 @@ impl fmt::Display for Element {
             Element::Material(i) => write!(f, "material {i}"),
             Element::NamedMaterial(name) => write!(f, "material '{name}'"),
             Element::Mesh(i) => write!(f, "mesh {i}"),
+            Element::Texture(i) => write!(f, "texture {i}"),
         }
     }
 }

@@ -3,8 +3,9 @@
 use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
 use crate::bvh::layout::NONE;
 use crate::records::constants::RAY_BIAS;
-use crate::records::{GpuMaterial, GpuTriangle, PackedScene};
-use glam::Vec3;
+use crate::records::{GpuMaterial, GpuTexture, GpuTriangle, PackedScene};
+use crate::scene::Wrap;
+use glam::{IVec2, Vec2, Vec3, Vec4};
 
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {
@@ -19,6 +20,8 @@ pub struct Surface {
     /// The largest coordinate of the ray's origin and of the hit: the position's rounding error is
     /// a few float steps of it.
     pub reach: f32,
+    /// Texture coordinates at the hit, where the primitive has them.
+    pub uv: Option<Vec2>,
 }
 
 pub fn max_abs(v: Vec3) -> f32 {
@@ -48,6 +51,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
                 shading: normal,
                 material: sphere.material,
                 reach,
+                uv: None,
             };
         }
         let triangle = &scene.triangles[hit.index as usize - scene.spheres.len()];
@@ -59,6 +63,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
             shading: triangle_shading(scene, triangle, ray, normal),
             material: triangle.material,
             reach,
+            uv: (triangle.uvs != NONE).then(|| triangle_uv(scene, triangle, ray)),
         };
     }
     let plane = &scene.planes[hit.index as usize];
@@ -75,7 +80,82 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
         shading: v3(plane.normal),
         material,
         reach,
+        uv: None,
     }
+}
+
+/// A textured triangle's corner texture coordinates interpolated at the hit.
+fn triangle_uv(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray) -> Vec2 {
+    let uvt = triangle_uvt(triangle, ray);
+    let uvs = &scene.triangle_uvs[triangle.uvs as usize];
+    let [u0, v0, u1, v1] = uvs.uv01;
+    (1.0 - uvt.x - uvt.y) * Vec2::new(u0, v0) + uvt.x * Vec2::new(u1, v1) + uvt.y * Vec2::from_array(uvs.uv2)
+}
+
+/// A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
+/// clamp, [0, 2] for mirror (the second copy mirrored).
+pub fn fold_coordinate(c: f32, wrap: u32) -> f32 {
+    if wrap == Wrap::Repeat.code() {
+        return c - c.floor();
+    }
+    if wrap == Wrap::Mirror.code() {
+        return c - 2.0 * (c * 0.5).floor();
+    }
+    c.clamp(0.0, 1.0)
+}
+
+/// Column or row `i` of an axis of `size` texels, where `i` may lie one outside the folded period.
+pub fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
+    if wrap == Wrap::Repeat.code() {
+        return (i + size) % size;
+    }
+    if wrap == Wrap::Mirror.code() {
+        let period = 2 * size;
+        let m = (i + period) % period;
+        return if m >= size { period - 1 - m } else { m };
+    }
+    i.clamp(0, size - 1)
+}
+
+fn texture_texel(scene: &PackedScene, texture: &GpuTexture, x: i32, y: i32) -> Vec4 {
+    let bits = scene.texture_pixels.0[(texture.offset + y as u32 * texture.width + x as u32) as usize];
+    Vec4::from_array(bits.map(|b| half::f16::from_bits(b).to_f32()))
+}
+
+fn lerp4(a: Vec4, b: Vec4, t: f32) -> Vec4 {
+    a * (1.0 - t) + b * t
+}
+
+/// Bilinear filtering without mipmaps: the four texels around the point (texel centres at +0.5),
+/// weighted by its distance to them.
+pub fn sample_texture(scene: &PackedScene, index: u32, uv: Vec2) -> Vec4 {
+    let texture = &scene.textures[index as usize];
+    let (wrap_u, wrap_v) = (texture.wrap & 0xff, texture.wrap >> 8);
+    let size = IVec2::new(texture.width as i32, texture.height as i32);
+    let p = Vec2::new(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * size.as_vec2() - 0.5;
+    let corner = p.floor();
+    let f = p - corner;
+    let i = corner.as_ivec2();
+    let x0 = wrap_texel(i.x, size.x, wrap_u);
+    let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
+    let y0 = wrap_texel(i.y, size.y, wrap_v);
+    let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
+    let texel = |x, y| texture_texel(scene, texture, x, y);
+    let near_row = lerp4(texel(x0, y0), texel(x1, y0), f.x);
+    let far_row = lerp4(texel(x0, y1), texel(x1, y1), f.x);
+    lerp4(near_row, far_row, f.y)
+}
+
+/// The surface's material: its colour times its texture's at the hit, where it has both.
+pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
+    let mut material = scene.materials[surface.material as usize];
+    if material.texture != NONE
+        && let Some(uv) = surface.uv
+    {
+        let texel = sample_texture(scene, material.texture, uv);
+        material.color = (v3(material.color) * texel.truncate()).to_array();
+    }
+    material
 }
 
 /// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's

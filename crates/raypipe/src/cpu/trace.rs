@@ -2,7 +2,7 @@
 
 use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use super::intersect::{Hit, HitKind, Primitives, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
-use super::shade::{direct_light, fresnel_schlick, offset_origin, reflect, surface_at};
+use super::shade::{direct_light, fresnel_schlick, offset_origin, reflect, surface_at, surface_material};
 use crate::error::MissingBvh;
 use crate::modes::Accel;
 pub use crate::records::constants::T_FAR;
@@ -148,7 +148,7 @@ impl<'a> Tracer<'a> {
                 result.normal = surface.shading;
                 result.depth = Some(hit.t);
             }
-            let material = self.scene.materials[surface.material as usize];
+            let material = surface_material(self.scene, &surface);
             let entering = surface.normal.dot(ray.dir) < 0.0;
             // The geometric normal picks the side new rays start on; the shading normal bends them.
             let normal = if entering { surface.normal } else { -surface.normal };
@@ -159,7 +159,7 @@ impl<'a> Tracer<'a> {
                 self.ray_count += 1;
                 self.occluded(ray, t_max)
             });
-            result.color += task.weight * light;
+            result.color += task.weight * (light + v3(material.emission));
             if task.depth >= max_depth {
                 continue;
             }

@@ -39,6 +39,12 @@ pub struct RecordArray {
     pub capacity: usize,
 }
 
+/// Where the textures' texels are bound: after the record arrays. They always travel in a texture,
+/// whatever the memory mode: images are what texture units are for.
+pub fn texture_pixels_binding(arrays: &[RecordArray]) -> u32 {
+    arrays.iter().map(|a| a.binding).max().unwrap_or(0) + 1
+}
+
 pub struct ShaderConfig<'a> {
     pub pipeline: Pipeline,
     pub memory: MemoryMode,
@@ -69,6 +75,12 @@ pub fn compose(config: &ShaderConfig) -> String {
     writeln!(w, "const WRITE_COST: bool = {};", config.write_cost).unwrap();
     writeln!(w, "const BVH_STACK_SIZE: u32 = {}u;", config.bvh_depth.max(1)).unwrap();
     writeln!(w, "@group(0) @binding(0) var<uniform> globals: Globals;").unwrap();
+    writeln!(
+        w,
+        "@group(0) @binding({}) var texture_pixels: texture_2d<f32>;",
+        texture_pixels_binding(config.arrays)
+    )
+    .unwrap();
     for array in config.arrays {
         let (name, ty, binding) = (array.name, array.wgsl_type, array.binding);
         match config.memory {

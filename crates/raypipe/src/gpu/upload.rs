@@ -1,11 +1,11 @@
 //! Bringing the scene to the shader: uniform buffers, storage buffers, or rgba32float textures.
 
-use super::shader::RecordArray;
+use super::shader::{RecordArray, texture_pixels_binding};
 use super::{GpuContext, GpuError};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
 use crate::modes::{Accel, MemoryMode};
-use crate::records::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene};
+use crate::records::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene, TexturePixels};
 use wgpu::util::DeviceExt;
 
 /// Texture rows are 2048 texels wide: the smallest maximum texture size WebGL2 guarantees.
@@ -30,6 +30,8 @@ pub struct SceneResources {
     pub layout_entries: Vec<wgpu::BindGroupLayoutEntry>,
     resources: Vec<Resource>,
     pub texels_per_row: u32,
+    /// Every texture's texels (rgba16float, `texels_per_row` wide), bound after the arrays.
+    texture_pixels: wgpu::TextureView,
 }
 
 enum Resource {
@@ -41,7 +43,8 @@ enum Resource {
 
 impl SceneResources {
     pub fn bind_entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
-        self.arrays
+        let mut entries: Vec<_> = self
+            .arrays
             .iter()
             .zip(&self.resources)
             .map(|(array, resource)| wgpu::BindGroupEntry {
@@ -51,7 +54,12 @@ impl SceneResources {
                     Resource::Texture(_, view) => wgpu::BindingResource::TextureView(view),
                 },
             })
-            .collect()
+            .collect();
+        entries.push(wgpu::BindGroupEntry {
+            binding: texture_pixels_binding(&self.arrays),
+            resource: wgpu::BindingResource::TextureView(&self.texture_pixels),
+        });
+        entries
     }
 
     /// Rewrites the arrays in place with `scene`'s records, which must be as many as those
@@ -116,6 +124,7 @@ pub fn upload(
         layout_entries: Vec::new(),
         resources: Vec::new(),
         texels_per_row,
+        texture_pixels: upload_texture_pixels(ctx, &scene.texture_pixels, texels_per_row)?,
     };
     for (index, (name, records)) in scene_records(scene, accel).into_iter().enumerate() {
         let array = record_array(index, name, records);
@@ -220,7 +229,60 @@ pub fn upload(
         out.resources.push(resource);
         out.arrays.push(array);
     }
+    out.layout_entries.push(wgpu::BindGroupLayoutEntry {
+        binding: texture_pixels_binding(&out.arrays),
+        visibility: stage,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    });
     Ok(out)
+}
+
+/// The textures' texels in one rgba16float texture, `texels_per_row` wide (one texel where the
+/// scene has no texture: a binding cannot be empty).
+fn upload_texture_pixels(
+    ctx: &GpuContext,
+    pixels: &TexturePixels,
+    texels_per_row: u32,
+) -> Result<wgpu::TextureView, GpuError> {
+    let limits = ctx.limits();
+    let rows = pixels.0.len().div_ceil(texels_per_row as usize).max(1);
+    if rows > limits.max_texture_dimension_2d as usize {
+        return Err(GpuError::TooBig {
+            memory: MemoryMode::Texture,
+            array: "texture pixel",
+            records: pixels.0.len(),
+            needed: format!("{rows} rows of {texels_per_row} texels"),
+            allowed: format!("{} rows", limits.max_texture_dimension_2d),
+        });
+    }
+    let width = if pixels.0.is_empty() { 1 } else { texels_per_row };
+    let mut texels = pixels.0.clone();
+    texels.resize(rows * width as usize, [0; 4]);
+    let texture = ctx.device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("texture pixels"),
+            size: wgpu::Extent3d {
+                width,
+                height: rows as u32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(&texels),
+    );
+    Ok(texture.create_view(&Default::default()))
 }
 
 /// The scene's record arrays in binding order (binding 0 is the globals); BVH modes add the nodes.
@@ -229,9 +291,11 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn R
         ("sphere", &scene.spheres),
         ("triangle", &scene.triangles),
         ("triangle_normals", &scene.triangle_normals),
+        ("triangle_uvs", &scene.triangle_uvs),
         ("plane", &scene.planes),
         ("light", &scene.lights),
         ("material", &scene.materials),
+        ("texture", &scene.textures),
     ];
     // A scene whose BVH is rebuilt on the GPU has none of its own: its node arrays come shared.
     static NO_NODES: Vec<GpuNode> = Vec::new();

@@ -119,6 +119,16 @@ fn check_face(face: &[i64], vertex_count: usize) -> Result<Vec<u32>, String> {
         .collect()
 }
 
+/// The rotation by Euler angles in degrees: about x, then y, then z.
+pub fn euler_rotation(degrees: Vec3) -> glam::Quat {
+    glam::Quat::from_euler(
+        glam::EulerRot::ZYX,
+        degrees.z.to_radians(),
+        degrees.y.to_radians(),
+        degrees.x.to_radians(),
+    )
+}
+
 impl Mesh {
     /// What every format shares: something to render, finite numbers, indices in range.
     pub fn validate(&self) -> Result<(), MeshError> {
@@ -169,12 +179,7 @@ impl Mesh {
 
     /// Rotates about the origin by Euler angles in degrees: about x, then y, then z.
     pub fn rotate(&mut self, degrees: Vec3) {
-        let r = glam::Quat::from_euler(
-            glam::EulerRot::ZYX,
-            degrees.z.to_radians(),
-            degrees.y.to_radians(),
-            degrees.x.to_radians(),
-        );
+        let r = euler_rotation(degrees);
         for p in &mut self.positions {
             *p = r * *p;
         }

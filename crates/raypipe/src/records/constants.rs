@@ -46,6 +46,9 @@ pub fn wgsl() -> String {
     ] {
         writeln!(out, "const {name}: u32 = {value:#x}u;").unwrap();
     }
+    for wrap in crate::scene::Wrap::ALL {
+        writeln!(out, "const {}: u32 = {}u;", wrap.wgsl_name(), wrap.code()).unwrap();
+    }
     out
 }
 

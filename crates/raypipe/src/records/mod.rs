@@ -11,7 +11,7 @@ pub mod packed;
 pub mod texels;
 
 pub use packed::{PackedBvh, PackedScene};
-pub use texels::{GpuRecord, MAX_TEXEL_INTEGER};
+pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, TexturePixels};
 
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::GpuNode;
@@ -155,7 +155,8 @@ pub struct GpuTriangle {
     /// Index of the triangle's vertex normals in the normal records, or `NONE` to shade flat.
     pub normals: u32,
     pub v2: [f32; 3],
-    pub _pad: u32,
+    /// Index of the corners' texture coordinates in the UV records, or `NONE`.
+    pub uvs: u32,
 }
 
 impl GpuSphere {
@@ -186,6 +187,27 @@ pub struct GpuTriangleNormals {
     pub _pad1: f32,
     pub n2: [f32; 3],
     pub _pad2: f32,
+}
+
+/// A textured triangle's corner texture coordinates, interpolated by barycentric coordinates.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangleUvs {
+    /// The first two corners' (u, v).
+    pub uv01: [f32; 4],
+    pub uv2: [f32; 2],
+    pub _pad: [f32; 2],
+}
+
+/// A texture: where its texels start among all textures' texels (row by row, `width` to a row),
+/// its size, and its wrap modes (`wrap_u | wrap_v << 8`, `Wrap::code`s).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    pub wrap: u32,
 }
 
 /// An infinite plane with its checkerboard frame precomputed, so no basis is derived in the shader.
@@ -226,6 +248,10 @@ pub struct GpuMaterial {
     pub reflect: f32,
     pub transmit: f32,
     pub ior: f32,
+    /// Added to the shaded colour.
+    pub emission: [f32; 3],
+    /// Index of the base-colour texture in the texture records, or `NONE`.
+    pub texture: u32,
 }
 
 /// One host struct's layout, for the naga layout test.
@@ -259,11 +285,13 @@ pub const LAYOUTS: &[StructLayout] = &[
     ]),
     struct_layout!(GpuBvhFrame, "BvhFrame", [origin, quantum, inverse_quantum]),
     struct_layout!(GpuSphere, "Sphere", [center, radius, material]),
-    struct_layout!(GpuTriangle, "Triangle", [v0, material, v1, normals, v2]),
+    struct_layout!(GpuTriangle, "Triangle", [v0, material, v1, normals, v2, uvs]),
     struct_layout!(GpuTriangleNormals, "TriangleNormals", [n0, n1, n2]),
+    struct_layout!(GpuTriangleUvs, "TriangleUvs", [uv01, uv2]),
+    struct_layout!(GpuTexture, "Texture", [offset, width, height, wrap]),
     struct_layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
     struct_layout!(GpuLight, "Light", [position, color]),
-    struct_layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior]),
+    struct_layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior, emission, texture]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
     struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
 ];

@@ -1,8 +1,8 @@
 //! A scene packed into records: what both tracers read.
 
 use super::{
-    GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere, GpuTriangle,
-    GpuTriangleNormals, MAX_TEXEL_INTEGER,
+    GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere, GpuTexture,
+    GpuTriangle, GpuTriangleNormals, GpuTriangleUvs, MAX_TEXEL_INTEGER, TexturePixels,
 };
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::{GpuNode, NONE};
@@ -65,9 +65,14 @@ pub struct PackedScene {
     pub triangles: Vec<GpuTriangle>,
     /// The vertex normals of the smooth triangles.
     pub triangle_normals: Vec<GpuTriangleNormals>,
+    /// The corner texture coordinates of the triangles that have them.
+    pub triangle_uvs: Vec<GpuTriangleUvs>,
     pub planes: Vec<GpuPlane>,
     pub lights: Vec<GpuLight>,
     pub materials: Vec<GpuMaterial>,
+    pub textures: Vec<GpuTexture>,
+    /// The textures' texels, one texture after another.
+    pub texture_pixels: TexturePixels,
     /// The BVH, once [`PackedScene::build_bvh`] or [`PackedScene::set_bvh`] made it.
     pub bvh: Option<PackedBvh>,
 }
@@ -85,6 +90,7 @@ impl PackedScene {
             ("planes", scene.planes.len()),
             ("lights", scene.lights.len()),
             ("materials", scene.materials.len()),
+            ("textures", scene.textures.len()),
         ] {
             if count > MAX_RECORDS {
                 return Err(InputError::of(
@@ -120,6 +126,7 @@ impl PackedScene {
             })
             .collect();
         let mut triangle_normals = Vec::new();
+        let mut triangle_uvs = Vec::new();
         let triangles = scene
             .triangles
             .iter()
@@ -137,13 +144,24 @@ impl PackedScene {
                     }
                     None => NONE,
                 };
+                let uvs = match t.uvs {
+                    Some([a, b, c]) => {
+                        triangle_uvs.push(GpuTriangleUvs {
+                            uv01: [a.x, a.y, b.x, b.y],
+                            uv2: c.to_array(),
+                            _pad: [0.0; 2],
+                        });
+                        triangle_uvs.len() as u32 - 1
+                    }
+                    None => NONE,
+                };
                 GpuTriangle {
                     v0: v0.to_array(),
                     material: t.material,
                     v1: v1.to_array(),
                     normals,
                     v2: v2.to_array(),
-                    _pad: 0,
+                    uvs,
                 }
             })
             .collect();
@@ -191,6 +209,23 @@ impl PackedScene {
                 reflect: m.reflect,
                 transmit: m.transmit,
                 ior: m.ior,
+                emission: m.emission.to_array(),
+                texture: m.texture.unwrap_or(NONE),
+            })
+            .collect();
+        let mut texture_pixels = Vec::new();
+        let textures = scene
+            .textures
+            .iter()
+            .map(|t| {
+                let record = GpuTexture {
+                    offset: texture_pixels.len() as u32,
+                    width: t.width,
+                    height: t.height,
+                    wrap: t.wrap[0].code() | t.wrap[1].code() << 8,
+                };
+                texture_pixels.extend_from_slice(&t.texels);
+                record
             })
             .collect();
         Ok(Self {
@@ -199,9 +234,12 @@ impl PackedScene {
             spheres,
             triangles,
             triangle_normals,
+            triangle_uvs,
             planes,
             lights,
             materials,
+            textures,
+            texture_pixels: TexturePixels(texture_pixels),
             bvh: None,
         })
     }

@@ -1,6 +1,6 @@
 //! The texture memory route: every record as rgba32float texels, decoded by `texels.wgsl`.
 
-use super::{GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTriangle, GpuTriangleNormals};
+use super::{GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTexture, GpuTriangle, GpuTriangleNormals, GpuTriangleUvs};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
 use bytemuck::Pod;
@@ -37,9 +37,31 @@ impl GpuRecord for GpuTriangle {
         let [cx, cy, cz] = self.v2;
         out.push([ax, ay, az, self.material as f32]);
         out.push([bx, by, bz, link_texel(self.normals)]);
-        out.push([cx, cy, cz, 0.0]);
+        out.push([cx, cy, cz, link_texel(self.uvs)]);
     }
 }
+
+impl GpuRecord for GpuTriangleUvs {
+    const WGSL_TYPE: &'static str = "TriangleUvs";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        let [u2, v2] = self.uv2;
+        out.push(self.uv01);
+        out.push([u2, v2, 0.0, 0.0]);
+    }
+}
+
+impl GpuRecord for GpuTexture {
+    const WGSL_TYPE: &'static str = "Texture";
+    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
+        // The offset stays below MAX_TEXEL_INTEGER (`scene::texture::MAX_TEXELS`), so it is exact.
+        out.push([self.offset, self.width, self.height, self.wrap].map(|n| n as f32));
+    }
+}
+
+/// Every texture's texels, one after another, as the GPU's rgba16float texture holds them (half
+/// floats' bits): the pixels `GpuTexture::offset` points into.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TexturePixels(pub Vec<[u16; 4]>);
 
 impl GpuRecord for GpuTriangleNormals {
     const WGSL_TYPE: &'static str = "TriangleNormals";
@@ -78,8 +100,10 @@ impl GpuRecord for GpuMaterial {
     const WGSL_TYPE: &'static str = "Material";
     fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
         let [r, g, b] = self.color;
+        let [er, eg, eb] = self.emission;
         out.push([r, g, b, self.specular]);
         out.push([self.shininess, self.reflect, self.transmit, self.ior]);
+        out.push([er, eg, eb, link_texel(self.texture)]);
     }
 }
 

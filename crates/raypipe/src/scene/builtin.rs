@@ -177,6 +177,7 @@ pub fn whitted() -> Scene {
         ],
         planes: vec![floor(-1.0, 0, 1, 1.0)],
         triangles: Vec::new(),
+        textures: Vec::new(),
         motion: None,
     }
 }
@@ -222,6 +223,7 @@ fn cloud_scene(spheres: Vec<Sphere>, floor_y: f32) -> Scene {
         spheres,
         planes: vec![floor(floor_y, 0, 1, 0.5)],
         triangles: Vec::new(),
+        textures: Vec::new(),
         motion: None,
     }
 }

@@ -200,6 +200,7 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
             reflect: r.reflect.unwrap_or(d.reflect),
             transmit: r.transmit.unwrap_or(d.transmit),
             ior: r.ior.unwrap_or(d.ior),
+            ..d
         });
     }
     // Resolves a material name; an element without one gets the default material, added on first use.
@@ -266,6 +267,10 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
     }
     for (m, (placement, element, at)) in def.mesh.iter().zip(placements) {
         let path = base.join(&m.get_ref().file);
+        if super::gltf::is_gltf_path(&path) {
+            add_gltf(&mut scene, &path, &placement).map_err(|e| e.nested_in(None, at, element.clone()))?;
+            continue;
+        }
         let mesh = crate::mesh::load(&path).map_err(|e| e.nested_in(None, at, element.clone()))?;
         add_mesh(&mut scene, mesh, &placement).map_err(|e| e.with_element(element).with_line(at))?;
     }
@@ -288,6 +293,21 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
         InputError { element, ..e }.with_line(at)
     })?;
     Ok(scene)
+}
+
+/// A glTF's triangles placed by a mesh table, after the file's own node transforms, with the file's
+/// materials and textures (the table's material colours spheres only); or spheres on its surface.
+fn add_gltf(scene: &mut Scene, path: &Path, placement: &Placement) -> Result<(), InputError> {
+    let shown = path.display().to_string();
+    let file = super::gltf::load(path)?;
+    if file.camera.is_some() || !file.lights.is_empty() {
+        log::info!("{shown}: its camera and lights are not used in a scene file");
+    }
+    match placement.as_ {
+        MeshAs::Triangles => file.add_triangles(scene, placement, &file.similarity(placement)),
+        MeshAs::Spheres => add_mesh(scene, file.mesh(), placement),
+    }
+    .map_err(|e| e.in_origin(shown))
 }
 
 /// A mesh table's placement, its material resolved.

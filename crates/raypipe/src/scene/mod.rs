@@ -6,10 +6,14 @@
 
 pub mod builtin;
 pub mod file;
+pub mod gltf;
 pub mod model;
+pub mod texture;
+
+pub use texture::{Texture, Wrap};
 
 use crate::error::{Element, InputError};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::Path;
 
 /// A pinhole camera. The ray convention is documented in `docs/scene-format.md` and implemented in
@@ -67,6 +71,11 @@ pub struct Material {
     pub transmit: f32,
     /// Index of refraction of the inside of the surface (the outside is vacuum, 1.0).
     pub ior: f32,
+    /// Light the surface gives off itself, added to its shaded colour.
+    pub emission: Vec3,
+    /// A texture of the scene's whose colour, at the hit's texture coordinates, multiplies `color`
+    /// (on triangles that have coordinates).
+    pub texture: Option<u32>,
 }
 
 impl Default for Material {
@@ -78,6 +87,8 @@ impl Default for Material {
             reflect: 0.0,
             transmit: 0.0,
             ior: 1.5,
+            emission: Vec3::ZERO,
+            texture: None,
         }
     }
 }
@@ -95,6 +106,8 @@ pub struct Triangle {
     pub vertices: [Vec3; 3],
     /// Vertex normals to interpolate for shading; `None` shades with the geometric normal.
     pub normals: Option<[Vec3; 3]>,
+    /// Texture coordinates of the corners, for a textured material.
+    pub uvs: Option<[Vec2; 3]>,
     pub material: u32,
 }
 
@@ -125,6 +138,8 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     pub triangles: Vec<Triangle>,
     pub planes: Vec<Plane>,
+    /// The images materials are textured with.
+    pub textures: Vec<Texture>,
     /// How the spheres move from frame to frame; `None` for a still scene.
     pub motion: Option<Motion>,
 }
@@ -197,8 +212,9 @@ pub fn unit_vector(v: Vec3) -> Option<Vec3> {
 }
 
 impl Scene {
-    /// Loads a scene by built-in name (`whitted`, `random:100:7`, ...), from a TOML file, or from a
-    /// model file (`.ply`, `.obj`, `.off`) with a camera that frames it.
+    /// Loads a scene by built-in name (`whitted`, `random:100:7`, ...), from a TOML file, from a
+    /// model file (`.ply`, `.obj`, `.off`) with a camera that frames it, or from a glTF
+    /// (`.gltf`, `.glb`) with its own camera and lights where it has them.
     pub fn load(spec: &str) -> Result<Scene, InputError> {
         Self::load_with(spec, &model::ModelOptions::default())
     }
@@ -207,13 +223,13 @@ impl Scene {
     /// for anything else.
     pub fn load_with(spec: &str, options: &model::ModelOptions) -> Result<Scene, InputError> {
         let path = Path::new(spec);
-        if crate::mesh::is_model_path(path) {
+        if model::is_model_file(path) {
             return model::model_scene(path, options);
         }
         if !options.is_default() {
             return Err(InputError::new(format!(
                 "placement, sphere count and rotation apply to model files ({}) only",
-                crate::mesh::MeshFormat::extension_list()
+                model::model_extension_list()
             ))
             .in_origin(spec));
         }
@@ -226,7 +242,7 @@ impl Scene {
             Some(_) if path.exists() => {
                 return Err(InputError::new(format!(
                     "unknown model format (expected a .toml scene, or a model ending in {})",
-                    crate::mesh::MeshFormat::extension_list()
+                    model::model_extension_list()
                 ))
                 .in_origin(spec));
             }
@@ -239,12 +255,21 @@ impl Scene {
     }
 
     /// A scene from a file's contents rather than its path, for hosts without a file system (a web
-    /// page given a file): a TOML scene, or a model (`.ply`, `.obj`, `.off`) framed as
-    /// [`Scene::load`] frames it. `name` is the file's name: its extension picks the format, and
-    /// every error starts with it. A TOML scene's `[[mesh]]` files are read relative to the
-    /// working directory, where there is one.
+    /// page given a file): a TOML scene, a model (`.ply`, `.obj`, `.off`) framed as
+    /// [`Scene::load`] frames it, or a glTF (a `.glb`, or a `.gltf` whose buffers and images are
+    /// `data:` URIs: there is no folder to read others from). `name` is the file's name: its
+    /// extension picks the format, and every error starts with it. A TOML scene's `[[mesh]]` files
+    /// are read relative to the working directory, where there is one.
     pub fn from_bytes(name: &str, bytes: &[u8]) -> Result<Scene, InputError> {
         let path = Path::new(name);
+        if gltf::is_gltf_path(path) {
+            let mut notices = Vec::new();
+            let file = gltf::parse(bytes, gltf::Files::None, &mut notices).map_err(|e| e.in_origin(name))?;
+            for notice in notices {
+                log::info!("{name}: {notice}");
+            }
+            return model::gltf_scene(&file, name, &model::ModelOptions::default());
+        }
         if let Some(format) = crate::mesh::MeshFormat::from_path(path) {
             let mut notices = Vec::new();
             let mesh = crate::mesh::parse(bytes, format, &mut notices).map_err(|e| e.in_origin(name))?;
@@ -256,7 +281,7 @@ impl Scene {
         if !path.extension().is_some_and(|ext| ext.eq_ignore_ascii_case("toml")) {
             return Err(InputError::new(format!(
                 "unknown file type (expected a .toml scene, or a model ending in {})",
-                crate::mesh::MeshFormat::extension_list()
+                model::model_extension_list()
             ))
             .in_origin(name));
         }
@@ -312,8 +337,23 @@ impl Scene {
                 return Err(InputError::of(Element::Light(i), out_of_reach("position")));
             }
         }
+        for (i, texture) in self.textures.iter().enumerate() {
+            texture
+                .validate()
+                .map_err(|msg| InputError::of(Element::Texture(i), msg))?;
+        }
+        let texels: u64 = self.textures.iter().map(|t| t.texels.len() as u64).sum();
+        if texels > texture::MAX_TEXELS {
+            return Err(InputError::of(
+                Element::Scene,
+                format!(
+                    "the textures hold {texels} texels, more than the {} a scene takes",
+                    texture::MAX_TEXELS
+                ),
+            ));
+        }
         for (i, m) in self.materials.iter().enumerate() {
-            validate_material(m).map_err(|msg| InputError::of(Element::Material(i), msg))?;
+            validate_material(m, self.textures.len()).map_err(|msg| InputError::of(Element::Material(i), msg))?;
         }
         let material_count = self.materials.len() as u32;
         let check_material = |element: &dyn Fn() -> Element, index: u32| {
@@ -354,6 +394,11 @@ impl Scene {
                 && !normals.iter().all(|n| n.is_finite())
             {
                 return Err(InputError::of(element(), "normals must be finite"));
+            }
+            if let Some(uvs) = t.uvs
+                && !uvs.iter().all(|uv| uv.is_finite())
+            {
+                return Err(InputError::of(element(), "texture coordinates must be finite"));
             }
             check_material(&element, t.material)?;
         }
@@ -417,9 +462,19 @@ impl RenderSettings {
     }
 }
 
-fn validate_material(m: &Material) -> Result<(), String> {
+pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<(), String> {
     if !finite_vec(m.color) {
         return Err("color must be finite".into());
+    }
+    if !(finite_vec(m.emission) && m.emission.min_element() >= 0.0) {
+        return Err("emission must be finite and not negative".into());
+    }
+    if let Some(texture) = m.texture
+        && texture as usize >= texture_count
+    {
+        return Err(format!(
+            "texture index {texture} out of range ({texture_count} textures)"
+        ));
     }
     for (name, value) in [
         ("specular", m.specular),

@@ -1,6 +1,7 @@
 //! Meshes in scenes: a model placed (normalized, scaled, moved) and added as triangles or as spheres
 //! on its surface; and the scene `raypipe render MODEL` gets, which frames one model.
 
+use super::gltf::{GltfLight, GltfScene};
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, Triangle};
 use crate::bvh::aabb::Aabb;
 use crate::error::InputError;
@@ -178,6 +179,7 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
                 scene.triangles.push(Triangle {
                     vertices: mesh.corners(t),
                     normals: corner_normals.as_ref().map(|n| n[f]),
+                    uvs: None,
                     material,
                 });
             }
@@ -248,7 +250,20 @@ impl ModelOptions {
 pub fn model_scene(path: &Path, options: &ModelOptions) -> Result<Scene, InputError> {
     let shown = path.display().to_string();
     options.placement().map_err(|e| e.in_origin(&shown))?;
+    if super::gltf::is_gltf_path(path) {
+        return gltf_scene(&super::gltf::load(path)?, &shown, options);
+    }
     scene_around(mesh::load(path)?, &shown, options)
+}
+
+/// Whether `path` names a model file by its extension: a mesh (.ply, .obj, .off) or a glTF.
+pub fn is_model_file(path: &Path) -> bool {
+    mesh::is_model_path(path) || super::gltf::is_gltf_path(path)
+}
+
+/// The model extensions read, for messages: ".ply, .obj, .off, .gltf, .glb".
+pub fn model_extension_list() -> String {
+    format!("{}, .gltf, .glb", mesh::MeshFormat::extension_list())
 }
 
 /// [`model_scene`] for a mesh already parsed (a file a web page was given); `shown` names it in
@@ -257,60 +272,150 @@ pub fn scene_around(mesh: Mesh, shown: &str, options: &ModelOptions) -> Result<S
     let placement = options.placement().map_err(|e| e.in_origin(shown))?;
     let mut scene = Scene {
         settings: RenderSettings::default(),
-        materials: vec![
-            Material {
-                color: Vec3::new(0.85, 0.6, 0.45),
-                specular: 0.25,
-                shininess: 40.0,
-                ..Material::default()
-            },
-            Material {
-                color: Vec3::splat(0.85),
-                ..Material::default()
-            },
-            Material {
-                color: Vec3::splat(0.35),
-                ..Material::default()
-            },
-        ],
+        materials: framing_materials(),
         ..Scene::default()
     };
     add_mesh(&mut scene, mesh, &placement).map_err(|e| e.in_origin(shown))?;
-    let bounds = scene_bounds(&scene);
-    let center = bounds.centroid();
-    let radius = ((bounds.max - bounds.min) * 0.5).length();
-    let fov: f32 = 35.0;
-    // About the distance where the bounding sphere fills the vertical field of view; a bit nearer,
-    // since the bounding box's corners are seldom filled.
-    let distance = 0.85 * radius / (fov.to_radians() * 0.5).sin();
-    let view = Vec3::new(0.0, 0.3, 1.0).normalize();
-    scene.camera = Camera {
-        eye: center + view * distance,
-        target: center,
-        up: Vec3::Y,
-        fov_degrees: fov,
-    };
-    scene.lights = vec![
-        Light {
-            position: center + Vec3::new(3.0, 5.0, 4.0) * radius,
-            color: Vec3::splat(0.8),
-        },
-        Light {
-            position: center + Vec3::new(-4.0, 2.0, 1.0) * radius,
-            color: Vec3::splat(0.3),
-        },
-    ];
-    scene.planes.push(Plane {
-        point: Vec3::new(0.0, bounds.min.y, 0.0),
-        normal: Vec3::Y,
-        material: 1,
-        checker: Some(Checker {
-            material: 2,
-            size: radius * 0.25,
-        }),
-    });
+    let framing = Framing::of(&scene);
+    scene.camera = framing.camera();
+    scene.lights = framing.lights();
+    scene.planes.push(framing.floor());
     scene.validate().map_err(|e| e.in_origin(shown))?;
     Ok(scene)
+}
+
+/// The scene for `raypipe render FILE.glb`: the file's triangles, materials and textures in its own
+/// units (placed by the options' rotation, if any), its camera and lights. Without a camera it is
+/// framed as a model is, on the floor; without lights it gets a model's two.
+pub fn gltf_scene(gltf: &GltfScene, shown: &str, options: &ModelOptions) -> Result<Scene, InputError> {
+    let placement = Placement {
+        normalize: false,
+        ..options.placement().map_err(|e| e.in_origin(shown))?
+    };
+    let mut scene = Scene {
+        settings: RenderSettings::default(),
+        materials: framing_materials(),
+        ..Scene::default()
+    };
+    let place = gltf.similarity(&placement);
+    match placement.as_ {
+        MeshAs::Triangles => gltf.add_triangles(&mut scene, &placement, &place),
+        MeshAs::Spheres => add_mesh(&mut scene, gltf.mesh(), &placement),
+    }
+    .map_err(|e| e.in_origin(shown))?;
+    let framing = Framing::of(&scene);
+    match gltf.camera {
+        Some(camera) => {
+            scene.camera = Camera {
+                eye: place.point(camera.eye),
+                target: place.point(camera.target),
+                up: place.direction(camera.up),
+                ..camera
+            }
+        }
+        None => {
+            scene.camera = framing.camera();
+            scene.planes.push(framing.floor());
+        }
+    }
+    scene.lights = gltf
+        .lights
+        .iter()
+        .map(|light| match *light {
+            GltfLight::Point(light) => Light {
+                position: place.point(light.position),
+                ..light
+            },
+            // Far enough that the scene sees nearly parallel light, and well within reach.
+            GltfLight::Directional { direction, color } => Light {
+                position: framing.center - place.direction(direction) * framing.radius.max(1e-3) * 1000.0,
+                color,
+            },
+        })
+        .collect();
+    if scene.lights.is_empty() {
+        scene.lights = framing.lights();
+    }
+    scene.validate().map_err(|e| e.in_origin(shown))?;
+    Ok(scene)
+}
+
+/// A framed model's materials: clay for the model (material 0), then the floor's two squares.
+fn framing_materials() -> Vec<Material> {
+    vec![
+        Material {
+            color: Vec3::new(0.85, 0.6, 0.45),
+            specular: 0.25,
+            shininess: 40.0,
+            ..Material::default()
+        },
+        Material {
+            color: Vec3::splat(0.85),
+            ..Material::default()
+        },
+        Material {
+            color: Vec3::splat(0.35),
+            ..Material::default()
+        },
+    ]
+}
+
+/// How a lone model is shown: a camera on its bounding sphere, two lights, a checkered floor that
+/// touches it (materials 1 and 2 of [`framing_materials`]).
+struct Framing {
+    center: Vec3,
+    radius: f32,
+    bounds: Aabb,
+}
+
+impl Framing {
+    fn of(scene: &Scene) -> Self {
+        let bounds = scene_bounds(scene);
+        Self {
+            center: bounds.centroid(),
+            radius: ((bounds.max - bounds.min) * 0.5).length(),
+            bounds,
+        }
+    }
+
+    fn camera(&self) -> Camera {
+        let fov: f32 = 35.0;
+        // About the distance where the bounding sphere fills the vertical field of view; a bit
+        // nearer, since the bounding box's corners are seldom filled.
+        let distance = 0.85 * self.radius / (fov.to_radians() * 0.5).sin();
+        let view = Vec3::new(0.0, 0.3, 1.0).normalize();
+        Camera {
+            eye: self.center + view * distance,
+            target: self.center,
+            up: Vec3::Y,
+            fov_degrees: fov,
+        }
+    }
+
+    fn lights(&self) -> Vec<Light> {
+        vec![
+            Light {
+                position: self.center + Vec3::new(3.0, 5.0, 4.0) * self.radius,
+                color: Vec3::splat(0.8),
+            },
+            Light {
+                position: self.center + Vec3::new(-4.0, 2.0, 1.0) * self.radius,
+                color: Vec3::splat(0.3),
+            },
+        ]
+    }
+
+    fn floor(&self) -> Plane {
+        Plane {
+            point: Vec3::new(0.0, self.bounds.min.y, 0.0),
+            normal: Vec3::Y,
+            material: 1,
+            checker: Some(Checker {
+                material: 2,
+                size: self.radius * 0.25,
+            }),
+        }
+    }
 }
 
 /// The box around the scene's spheres and triangles.

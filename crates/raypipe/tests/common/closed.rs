@@ -137,6 +137,7 @@ pub fn seen_from_inside(
         .map(|f| Triangle {
             vertices: f.map(|i| placed[i as usize]),
             normals: None,
+            uvs: None,
             material: 0,
         })
         .collect();

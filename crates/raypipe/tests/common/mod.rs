@@ -25,6 +25,7 @@ pub fn whitted_with_quad(width: u32, height: u32) -> Scene {
         scene.triangles.push(raypipe::scene::Triangle {
             vertices: [q[a], q[b], q[c]],
             normals: None,
+            uvs: None,
             material: 1,
         });
     }

@@ -84,6 +84,7 @@ fn one_quad(accel: Accel) -> PackedScene {
     let triangle = |a, b, c| Triangle {
         vertices: [corner(a), corner(b), corner(c)],
         normals: None,
+        uvs: None,
         material: 0,
     };
     let mut scene = Scene {

@@ -16,6 +16,9 @@ struct Surface {
     // The largest coordinate of the ray's origin and of the hit: the position's rounding error is a
     // few float steps of it.
     reach: f32,
+    // Texture coordinates at the hit, where the primitive has them (has_uv).
+    uv: vec2<f32>,
+    has_uv: bool,
 }
 
 fn max_abs(v: vec3<f32>) -> f32 {
@@ -43,6 +46,13 @@ fn triangle_shading(triangle: Triangle, ray: Ray, normal: vec3<f32>) -> vec3<f32
     return select(shading, -shading, dot(shading, normal) < 0.0);
 }
 
+// A textured triangle's corner texture coordinates interpolated at the hit.
+fn triangle_uv(triangle: Triangle, ray: Ray) -> vec2<f32> {
+    let uvt = triangle_uvt(triangle, ray);
+    let uvs = load_triangle_uvs(triangle.uvs);
+    return (1.0 - uvt.x - uvt.y) * uvs.uv01.xy + uvt.x * uvs.uv01.zw + uvt.y * uvs.uv2;
+}
+
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let position = ray.origin + hit.t * ray.dir;
     let reach = max(max_abs(ray.origin), max_abs(position));
@@ -50,11 +60,15 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         if (hit.index < globals.scene.sphere_count) {
             let sphere = load_sphere(hit.index);
             let normal = normalize(position - sphere.center);
-            return Surface(position, normal, normal, sphere.material, reach);
+            return Surface(position, normal, normal, sphere.material, reach, vec2<f32>(0.0), false);
         }
         let triangle = load_triangle(hit.index - globals.scene.sphere_count);
         let normal = normalize_scaled(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
-        return Surface(position, normal, triangle_shading(triangle, ray, normal), triangle.material, reach);
+        let shading = triangle_shading(triangle, ray, normal);
+        if (triangle.uvs == NONE) {
+            return Surface(position, normal, shading, triangle.material, reach, vec2<f32>(0.0), false);
+        }
+        return Surface(position, normal, shading, triangle.material, reach, triangle_uv(triangle, ray), true);
     }
     let plane = load_plane(hit.index);
     let local = position - plane.point;
@@ -64,7 +78,70 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     if (cell - 2.0 * floor(cell * 0.5) != 0.0) {
         material = plane.checker_material;
     }
-    return Surface(position, plane.normal, plane.normal, material, reach);
+    return Surface(position, plane.normal, plane.normal, material, reach, vec2<f32>(0.0), false);
+}
+
+// A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
+// clamp, [0, 2] for mirror (the second copy mirrored). Done in floats, so that no coordinate is
+// too big for an integer.
+fn fold_coordinate(c: f32, wrap: u32) -> f32 {
+    if (wrap == WRAP_REPEAT) {
+        return c - floor(c);
+    }
+    if (wrap == WRAP_MIRROR) {
+        return c - 2.0 * floor(c * 0.5);
+    }
+    return clamp(c, 0.0, 1.0);
+}
+
+// Column or row i of an axis of `size` texels, where i may lie one outside the folded period.
+fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
+    if (wrap == WRAP_REPEAT) {
+        return (i + size) % size;
+    }
+    if (wrap == WRAP_MIRROR) {
+        let period = 2 * size;
+        let m = (i + period) % period;
+        return select(m, period - 1 - m, m >= size);
+    }
+    return clamp(i, 0, size - 1);
+}
+
+fn texture_texel(texture: Texture, x: i32, y: i32) -> vec4<f32> {
+    return textureLoad(texture_pixels, texel_coord(texture.offset + u32(y) * texture.width + u32(x)), 0);
+}
+
+fn lerp4(a: vec4<f32>, b: vec4<f32>, t: f32) -> vec4<f32> {
+    return a * (1.0 - t) + b * t;
+}
+
+// Bilinear filtering without mipmaps: the four texels around the point (texel centres at +0.5),
+// weighted by its distance to them.
+fn sample_texture(index: u32, uv: vec2<f32>) -> vec4<f32> {
+    let texture = load_texture(index);
+    let wrap_u = texture.wrap & 0xffu;
+    let wrap_v = texture.wrap >> 8u;
+    let size = vec2<i32>(i32(texture.width), i32(texture.height));
+    let p = vec2<f32>(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * vec2<f32>(size) - 0.5;
+    let corner = floor(p);
+    let f = p - corner;
+    let i = vec2<i32>(corner);
+    let x0 = wrap_texel(i.x, size.x, wrap_u);
+    let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
+    let y0 = wrap_texel(i.y, size.y, wrap_v);
+    let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
+    let near_row = lerp4(texture_texel(texture, x0, y0), texture_texel(texture, x1, y0), f.x);
+    let far_row = lerp4(texture_texel(texture, x0, y1), texture_texel(texture, x1, y1), f.x);
+    return lerp4(near_row, far_row, f.y);
+}
+
+// The surface's material: its colour times its texture's at the hit, where it has both.
+fn surface_material(surface: Surface) -> Material {
+    var material = load_material(surface.material);
+    if (material.texture != NONE && surface.has_uv) {
+        material.color *= sample_texture(material.texture, surface.uv).rgb;
+    }
+    return material;
 }
 
 // `side` points to where the new ray goes: the facing normal for reflection and shadows, its

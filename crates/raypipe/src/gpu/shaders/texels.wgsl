@@ -10,7 +10,16 @@ fn sphere_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Sphere {
 }
 
 fn triangle_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> Triangle {
-    return Triangle(t0.xyz, u32(t0.w), t1.xyz, link_from_texel(t1.w), t2.xyz);
+    return Triangle(t0.xyz, u32(t0.w), t1.xyz, link_from_texel(t1.w), t2.xyz, link_from_texel(t2.w));
+}
+
+fn triangle_uvs_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> TriangleUvs {
+    return TriangleUvs(t0, t1.xy);
+}
+
+fn texture_from_texels(t0: vec4<f32>) -> Texture {
+    let fields = vec4<u32>(t0);
+    return Texture(fields.x, fields.y, fields.z, fields.w);
 }
 
 fn triangle_normals_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> TriangleNormals {
@@ -25,8 +34,8 @@ fn light_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Light {
     return Light(t0.xyz, t1.xyz);
 }
 
-fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Material {
-    return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w);
+fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> Material {
+    return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w, t2.xyz, link_from_texel(t2.w));
 }
 
 // Node links travel as exact floats, with NONE and LEAF as -1.

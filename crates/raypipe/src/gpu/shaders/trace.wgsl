@@ -93,13 +93,13 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
             result.normal = surface.shading;
             result.depth = hit.t;
         }
-        let material = load_material(surface.material);
+        let material = surface_material(surface);
         let entering = dot(surface.normal, ray.dir) < 0.0;
         // The geometric normal picks the side new rays start on; the shading normal bends them.
         let normal = select(-surface.normal, surface.normal, entering);
         let shading = select(-surface.shading, surface.shading, entering);
         let view = -ray.dir;
-        result.color += task.weight * direct_light(surface, normal, shading, view, material);
+        result.color += task.weight * (direct_light(surface, normal, shading, view, material) + material.emission);
         if (task.depth >= MAX_DEPTH) {
             continue;
         }

@@ -52,12 +52,29 @@ struct Triangle {
     // Index of the vertex normals, or NONE to shade with the geometric normal.
     normals: u32,
     v2: vec3<f32>,
+    // Index of the corners' texture coordinates, or NONE.
+    uvs: u32,
 }
 
 struct TriangleNormals {
     n0: vec3<f32>,
     n1: vec3<f32>,
     n2: vec3<f32>,
+}
+
+struct TriangleUvs {
+    // The first two corners' (u, v).
+    uv01: vec4<f32>,
+    uv2: vec2<f32>,
+}
+
+// Where a texture's texels start among all textures' (row by row), its size, and its wrap modes
+// (u's | v's << 8; WRAP_* from the preamble).
+struct Texture {
+    offset: u32,
+    width: u32,
+    height: u32,
+    wrap: u32,
 }
 
 struct Plane {
@@ -82,6 +99,9 @@ struct Material {
     reflect: f32,
     transmit: f32,
     ior: f32,
+    emission: vec3<f32>,
+    // Index of the base-colour texture, or NONE.
+    texture: u32,
 }
 
 // A BVH node (src/bvh/layout.rs): internal nodes first, then leaves; the root is node 0.

@@ -1,0 +1,653 @@
+//! glTF 2.0 scenes: `.gltf` (JSON, with external or `data:` buffers and images) and `.glb`.
+//!
+//! The default scene's node hierarchy is flattened into world-space triangles (a mesh that several
+//! nodes use appears once for each), with the file's materials ([`material`]) and base-colour
+//! textures, its first perspective camera and its KHR_lights_punctual lights. Everything the file
+//! says is checked before it is used: references, every accessor against its buffer view and
+//! buffer, counts before allocating, the node graph for cycles and shared children, and numbers for
+//! NaN. Errors are one line naming the element (`mesh 3 primitive 0: accessor 7: ...`); what is
+//! read but not rendered (points, lines, skins, morph targets, unused textures) is reported as one
+//! notice each.
+
+mod data;
+mod material;
+
+pub use data::Files;
+pub use material::whitted;
+
+use super::model::{Normals, Placement};
+use super::{Camera, Light, Material, Scene, Texture, Triangle};
+use crate::error::InputError;
+use crate::mesh::Mesh;
+use data::{read_floats, read_indices};
+use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
+use gltf::json;
+use gltf::json::accessor::Type;
+use gltf::mesh::Mode;
+use std::collections::HashMap;
+use std::path::Path;
+use std::rc::Rc;
+
+/// The extensions read. KHR_mesh_quantization only widens the accessor types, which every
+/// attribute reader takes.
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_emissive_strength",
+    "KHR_mesh_quantization",
+];
+
+/// Whether `path` names a glTF file by its extension.
+pub fn is_gltf_path(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+/// One mesh primitive placed in the world: an indexed triangle list with its attributes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Primitive {
+    pub positions: Vec<Vec3>,
+    /// The file's vertex normals, where it has them.
+    pub normals: Option<Vec<Vec3>>,
+    /// TEXCOORD_0, where the file has it.
+    pub uvs: Option<Vec<Vec2>>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Index into [`GltfScene::materials`].
+    pub material: u32,
+}
+
+/// A light of the file: a point (spot lights become points at their place), or a direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GltfLight {
+    Point(Light),
+    /// Light arriving along `direction` (unit) from far away; placed once the scene's size is known.
+    Directional {
+        direction: Vec3,
+        color: Vec3,
+    },
+}
+
+/// What a glTF file's default scene holds, in world space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GltfScene {
+    pub primitives: Vec<Primitive>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    /// The first perspective camera met in the node hierarchy.
+    pub camera: Option<Camera>,
+    pub lights: Vec<GltfLight>,
+}
+
+/// Reads a `.gltf` or `.glb` file; its external files are read from its folder. Every error names
+/// the path; notices are logged.
+pub fn load(path: &Path) -> Result<GltfScene, InputError> {
+    let shown = path.display().to_string();
+    let bytes = crate::input::read_regular(path, "glTF file", crate::input::MAX_MODEL_BYTES)?;
+    let folder = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    let mut notices = Vec::new();
+    let scene = parse(&bytes, Files::Folder(folder), &mut notices).map_err(|e| e.in_origin(&shown))?;
+    for notice in notices {
+        log::info!("{shown}: {notice}");
+    }
+    Ok(scene)
+}
+
+/// Parses glTF JSON or GLB bytes; `files` says where external files may be read from. Things the
+/// file holds that are not rendered are reported in `notices`.
+pub fn parse(bytes: &[u8], files: Files, notices: &mut Vec<String>) -> Result<GltfScene, InputError> {
+    parse_document(bytes, files, notices).map_err(InputError::new)
+}
+
+fn parse_document(bytes: &[u8], files: Files, notices: &mut Vec<String>) -> Result<GltfScene, String> {
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
+        gltf::Error::Deserialize(e) => format!("not glTF JSON: {e}"),
+        other => format!("not a glTF file: {other}"),
+    })?;
+    let mut root = document.into_json();
+    check_extensions(&mut root, notices)?;
+    validate(&root)?;
+    let document = gltf::Document::from_json_without_validation(root);
+    let root = document.as_json();
+    let buffers = data::load_buffers(root, blob, files)?;
+    let mut materials = material::Materials::new();
+    materials.read(&document, &buffers, files, notices)?;
+    let mut reader = SceneReader {
+        root,
+        buffers: &buffers,
+        materials,
+        meshes: HashMap::new(),
+        primitives: Vec::new(),
+        triangles: 0,
+        skipped_modes: 0,
+        camera: None,
+        lights: Vec::new(),
+        notices,
+    };
+    for (node, world) in walk_nodes(&document, reader.notices)? {
+        reader.node(&node, world)?;
+    }
+    if reader.skipped_modes > 0 {
+        reader.notices.push(format!(
+            "{} primitives of points or lines are skipped",
+            reader.skipped_modes
+        ));
+    }
+    if reader.primitives.is_empty() {
+        return Err("the scene has no triangles".into());
+    }
+    let materials = reader.materials;
+    Ok(GltfScene {
+        primitives: reader.primitives,
+        materials: materials.materials,
+        textures: materials.textures,
+        camera: reader.camera,
+        lights: reader.lights,
+    })
+}
+
+/// Refuses a required extension that is not read; notes each used one that is ignored.
+fn check_extensions(root: &mut json::Root, notices: &mut Vec<String>) -> Result<(), String> {
+    if let Some(name) = root
+        .extensions_required
+        .iter()
+        .find(|name| !SUPPORTED_EXTENSIONS.contains(&name.as_str()))
+    {
+        return Err(format!(
+            "extension {} is required, and raypipe does not read it",
+            crate::error::quoted(name)
+        ));
+    }
+    for name in &root.extensions_used {
+        if !SUPPORTED_EXTENSIONS.contains(&name.as_str()) {
+            notices.push(format!("extension {} is ignored", crate::error::quoted(name)));
+        }
+    }
+    // Checked here against what raypipe reads; the crate's own list lacks KHR_mesh_quantization.
+    root.extensions_required.clear();
+    Ok(())
+}
+
+/// Every reference in range and every enum known (the crate's checks), first fault first.
+fn validate(root: &json::Root) -> Result<(), String> {
+    use gltf::json::validation::Validate;
+    let mut first = None;
+    root.validate(root, json::Path::new, &mut |path, error| {
+        first.get_or_insert_with(|| format!("{}: {error}", path()));
+    });
+    first.map_or(Ok(()), Err)
+}
+
+/// Each node of the default scene (or, without scenes, of every root) with its world matrix, parents
+/// before children. A node with two parents, a cycle, or a NaN in a transform is an error.
+fn walk_nodes<'a>(
+    document: &'a gltf::Document,
+    notices: &mut Vec<String>,
+) -> Result<Vec<(gltf::Node<'a>, Mat4)>, String> {
+    let count = document.nodes().len();
+    let mut parent: Vec<Option<usize>> = vec![None; count];
+    for node in document.nodes() {
+        for child in node.children() {
+            if let Some(first) = parent[child.index()].replace(node.index()) {
+                return Err(format!(
+                    "node {}: a child of nodes {first} and {} (a node has at most one parent)",
+                    child.index(),
+                    node.index()
+                ));
+            }
+        }
+    }
+    let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
+        Some(scene) => {
+            let mut listed = vec![false; count];
+            for node in scene.nodes() {
+                if let Some(p) = parent[node.index()] {
+                    return Err(format!(
+                        "scene {}: node {} is a child of node {p}, not a root",
+                        scene.index(),
+                        node.index()
+                    ));
+                }
+                if std::mem::replace(&mut listed[node.index()], true) {
+                    return Err(format!(
+                        "scene {}: node {} is listed twice",
+                        scene.index(),
+                        node.index()
+                    ));
+                }
+            }
+            scene.nodes().collect()
+        }
+        None => {
+            notices.push("no scene: every root node is drawn".into());
+            document.nodes().filter(|n| parent[n.index()].is_none()).collect()
+        }
+    };
+    // Every node has at most one parent, so a node that no root reaches lies on a cycle or below one.
+    let mut reached = vec![false; count];
+    let mut stack: Vec<usize> = document
+        .nodes()
+        .filter(|n| parent[n.index()].is_none())
+        .map(|n| n.index())
+        .collect();
+    while let Some(index) = stack.pop() {
+        reached[index] = true;
+        stack.extend(
+            document
+                .nodes()
+                .nth(index)
+                .into_iter()
+                .flat_map(|n| n.children().map(|c| c.index())),
+        );
+    }
+    if let Some(index) = reached.iter().position(|&r| !r) {
+        return Err(format!("node {index}: its parents form a cycle"));
+    }
+    let mut out = Vec::new();
+    let mut stack: Vec<(gltf::Node, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent_world)) = stack.pop() {
+        let world = parent_world * local_matrix(&node)?;
+        if !world.is_finite() {
+            return Err(format!("node {}: its world transform is not finite", node.index()));
+        }
+        let children: Vec<_> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+        out.push((node, world));
+    }
+    Ok(out)
+}
+
+/// A node's matrix, or its translation, rotation and scale composed (T * R * S).
+fn local_matrix(node: &gltf::Node) -> Result<Mat4, String> {
+    let what = format!("node {}", node.index());
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => {
+            let m = Mat4::from_cols_array_2d(&matrix);
+            if !m.is_finite() {
+                return Err(format!("{what}: matrix must be finite"));
+            }
+            Ok(m)
+        }
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            let (t, r, s) = (Vec3::from(translation), Quat::from_array(rotation), Vec3::from(scale));
+            if !(t.is_finite() && r.is_finite() && s.is_finite()) {
+                return Err(format!("{what}: translation, rotation and scale must be finite"));
+            }
+            let length = r.length();
+            if !(length > 0.5 && length < 2.0) {
+                return Err(format!("{what}: rotation must be a unit quaternion (length {length})"));
+            }
+            Ok(Mat4::from_scale_rotation_translation(s, r.normalize(), t))
+        }
+    }
+}
+
+/// A mesh primitive in its mesh's own space, read once however many nodes use the mesh.
+struct LocalPrimitive {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    triangles: Vec<[u32; 3]>,
+    material: u32,
+}
+
+struct SceneReader<'a> {
+    root: &'a json::Root,
+    buffers: &'a [Vec<u8>],
+    materials: material::Materials,
+    meshes: HashMap<usize, Rc<Vec<LocalPrimitive>>>,
+    primitives: Vec<Primitive>,
+    /// Triangles placed so far, against the most a render takes.
+    triangles: usize,
+    skipped_modes: usize,
+    camera: Option<Camera>,
+    lights: Vec<GltfLight>,
+    notices: &'a mut Vec<String>,
+}
+
+impl SceneReader<'_> {
+    fn node(&mut self, node: &gltf::Node, world: Mat4) -> Result<(), String> {
+        if let Some(mesh) = node.mesh() {
+            if node.skin().is_some() {
+                self.note_once("skins are not applied: skinned meshes are drawn in their rest pose");
+            }
+            let local = self.mesh(&mesh)?;
+            self.place(&local, world, node.index())?;
+        }
+        if let Some(camera) = node.camera()
+            && self.camera.is_none()
+        {
+            match camera.projection() {
+                gltf::camera::Projection::Perspective(perspective) => {
+                    let eye = world.transform_point3(Vec3::ZERO);
+                    let forward = world.transform_vector3(Vec3::NEG_Z);
+                    self.camera = Some(Camera {
+                        eye,
+                        target: eye + forward,
+                        up: world.transform_vector3(Vec3::Y),
+                        fov_degrees: perspective.yfov().to_degrees(),
+                    });
+                }
+                gltf::camera::Projection::Orthographic(_) => {
+                    self.note_once("orthographic cameras are skipped");
+                }
+            }
+        }
+        if let Some(light) = node.light() {
+            let what = format!("node {}: light {}", node.index(), light.index());
+            let color = Vec3::from(light.color()) * light.intensity();
+            if !(color.is_finite() && color.min_element() >= 0.0) {
+                return Err(format!(
+                    "{what}: colour times intensity must be finite and not negative"
+                ));
+            }
+            match light.kind() {
+                gltf::khr_lights_punctual::Kind::Directional => {
+                    let Some(direction) = crate::scene::unit_vector(world.transform_vector3(Vec3::NEG_Z)) else {
+                        return Err(format!("{what}: its node's transform collapses its direction"));
+                    };
+                    self.lights.push(GltfLight::Directional { direction, color });
+                }
+                kind => {
+                    if matches!(kind, gltf::khr_lights_punctual::Kind::Spot { .. }) {
+                        self.note_once("spot lights are drawn as point lights: their cones are not applied");
+                    }
+                    self.lights.push(GltfLight::Point(Light {
+                        position: world.transform_point3(Vec3::ZERO),
+                        color,
+                    }));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn note_once(&mut self, notice: &str) {
+        if !self.notices.iter().any(|n| n == notice) {
+            self.notices.push(notice.to_string());
+        }
+    }
+
+    fn mesh(&mut self, mesh: &gltf::Mesh) -> Result<Rc<Vec<LocalPrimitive>>, String> {
+        if let Some(local) = self.meshes.get(&mesh.index()) {
+            return Ok(local.clone());
+        }
+        let mut local = Vec::new();
+        for primitive in mesh.primitives() {
+            let what = format!("mesh {} primitive {}", mesh.index(), primitive.index());
+            if let Some(read) = self.primitive(&primitive).map_err(|e| format!("{what}: {e}"))? {
+                local.push(read);
+            }
+        }
+        let local = Rc::new(local);
+        self.meshes.insert(mesh.index(), local.clone());
+        Ok(local)
+    }
+
+    fn primitive(&mut self, primitive: &gltf::Primitive) -> Result<Option<LocalPrimitive>, String> {
+        let mode = primitive.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            self.skipped_modes += 1;
+            return Ok(None);
+        }
+        if primitive.morph_targets().next().is_some() {
+            self.note_once("morph targets are not applied: meshes are drawn with their base shape");
+        }
+        let attribute = |semantic: gltf::Semantic| primitive.get(&semantic).map(|a| a.index());
+        let position = attribute(gltf::Semantic::Positions).ok_or("no POSITION attribute")?;
+        let vectors = |index: usize, type_: Type| read_floats(self.root, self.buffers, index, &[type_]);
+        let (flat, _) = vectors(position, Type::Vec3)?;
+        let positions: Vec<Vec3> = flat.chunks_exact(3).map(Vec3::from_slice).collect();
+        if let Some(k) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(format!("accessor {position}: position {k} is not finite"));
+        }
+        let vertex_count = positions.len();
+        let same_count = |index: usize, len: usize| {
+            if len == vertex_count {
+                Ok(())
+            } else {
+                Err(format!(
+                    "accessor {index}: {len} elements where POSITION has {vertex_count}"
+                ))
+            }
+        };
+        let normals = match attribute(gltf::Semantic::Normals) {
+            Some(index) => {
+                let normals: Vec<Vec3> = vectors(index, Type::Vec3)?
+                    .0
+                    .chunks_exact(3)
+                    .map(Vec3::from_slice)
+                    .collect();
+                same_count(index, normals.len())?;
+                if let Some(k) = normals.iter().position(|n| !n.is_finite()) {
+                    return Err(format!("accessor {index}: normal {k} is not finite"));
+                }
+                Some(normals)
+            }
+            None => None,
+        };
+        let uvs = match attribute(gltf::Semantic::TexCoords(0)) {
+            Some(index) => {
+                let uvs: Vec<Vec2> = vectors(index, Type::Vec2)?
+                    .0
+                    .chunks_exact(2)
+                    .map(Vec2::from_slice)
+                    .collect();
+                same_count(index, uvs.len())?;
+                if let Some(k) = uvs.iter().position(|uv| !uv.is_finite()) {
+                    return Err(format!("accessor {index}: texture coordinate {k} is not finite"));
+                }
+                Some(uvs)
+            }
+            None => None,
+        };
+        let indices = match primitive.indices() {
+            Some(accessor) => read_indices(self.root, self.buffers, accessor.index(), vertex_count)?,
+            None => (0..vertex_count as u32).collect(),
+        };
+        let triangles = assemble(mode, &indices);
+        let material = self.materials.index_of(primitive.material().index());
+        Ok(Some(LocalPrimitive {
+            positions,
+            normals,
+            uvs,
+            triangles,
+            material,
+        }))
+    }
+
+    /// Adds a mesh's primitives at `world`: positions by the matrix, normals by its inverse
+    /// transpose, and the winding turned where the matrix mirrors.
+    fn place(&mut self, local: &[LocalPrimitive], world: Mat4, node: usize) -> Result<(), String> {
+        let linear = Mat3::from_mat4(world);
+        let determinant = linear.determinant();
+        let normal_matrix = (determinant != 0.0).then(|| linear.inverse().transpose());
+        for primitive in local {
+            self.triangles += primitive.triangles.len();
+            if self.triangles > crate::records::packed::MAX_RECORDS {
+                return Err(format!(
+                    "node {node}: the scene's triangles pass the {} a render takes",
+                    crate::records::packed::MAX_RECORDS
+                ));
+            }
+            let positions = primitive.positions.iter().map(|&p| world.transform_point3(p)).collect();
+            let normals = match (&primitive.normals, normal_matrix) {
+                (Some(normals), Some(m)) => Some(normals.iter().map(|&n| m * n).collect()),
+                _ => None,
+            };
+            let triangles = if determinant < 0.0 {
+                primitive.triangles.iter().map(|&[a, b, c]| [a, c, b]).collect()
+            } else {
+                primitive.triangles.clone()
+            };
+            self.primitives.push(Primitive {
+                positions,
+                normals,
+                uvs: primitive.uvs.clone(),
+                triangles,
+                material: primitive.material,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A primitive's triangles from its indices: lists as they are, strips and fans unrolled (every
+/// other strip triangle turned so that all keep the first one's winding).
+fn assemble(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+    match mode {
+        Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+            .map(|i| {
+                let [a, b, c] = [indices[i], indices[i + 1], indices[i + 2]];
+                if i % 2 == 0 { [a, b, c] } else { [b, a, c] }
+            })
+            .collect(),
+        Mode::TriangleFan => (1..indices.len().saturating_sub(1))
+            .map(|i| [indices[0], indices[i], indices[i + 1]])
+            .collect(),
+        _ => indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+    }
+}
+
+/// A similarity transform: rotate, scale uniformly, translate; what a placement does to a file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Similarity {
+    pub rotation: Quat,
+    pub scale: f32,
+    pub translation: Vec3,
+}
+
+impl Similarity {
+    pub fn point(&self, p: Vec3) -> Vec3 {
+        self.rotation * p * self.scale + self.translation
+    }
+
+    pub fn direction(&self, v: Vec3) -> Vec3 {
+        self.rotation * v
+    }
+}
+
+impl GltfScene {
+    /// Every primitive's positions as one mesh (for spheres on the surface, and bounds).
+    pub fn mesh(&self) -> Mesh {
+        let mut mesh = Mesh::default();
+        for primitive in &self.primitives {
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend_from_slice(&primitive.positions);
+            mesh.triangles
+                .extend(primitive.triangles.iter().map(|t| t.map(|i| i + base)));
+        }
+        mesh
+    }
+
+    /// The placement's transform of this scene: its rotation, then (with `normalize`) the box
+    /// centred at the origin with its longest side 2, then its scale and translation.
+    pub fn similarity(&self, placement: &Placement) -> Similarity {
+        let rotation = crate::mesh::euler_rotation(placement.rotate);
+        let (mut scale, mut translation) = (1.0, Vec3::ZERO);
+        if placement.normalize {
+            let bounds = crate::bvh::aabb::Aabb::around_points(
+                self.primitives
+                    .iter()
+                    .flat_map(|p| p.positions.iter().map(|&q| rotation * q)),
+            );
+            let longest = (bounds.max - bounds.min).max_element();
+            scale = if longest > 0.0 { 2.0 / longest } else { 1.0 };
+            translation = -bounds.centroid() * scale;
+        }
+        Similarity {
+            rotation,
+            scale: scale * placement.scale,
+            translation: translation * placement.scale + placement.translate,
+        }
+    }
+
+    /// Adds the scene's triangles, placed, to `scene`, with its materials and textures after the
+    /// scene's own. The file's vertex normals are used where `normals` is Auto and it has them;
+    /// other triangles get smooth (or, for Flat, no) normals as model files do.
+    pub fn add_triangles(
+        &self,
+        scene: &mut Scene,
+        placement: &Placement,
+        place: &Similarity,
+    ) -> Result<(), InputError> {
+        if scene.triangles.len() + self.mesh_triangle_count() > crate::records::packed::MAX_RECORDS {
+            return Err(InputError::new(format!(
+                "more than the {} triangles a render takes",
+                crate::records::packed::MAX_RECORDS
+            )));
+        }
+        let material_base = scene.materials.len() as u32;
+        let texture_base = scene.textures.len() as u32;
+        scene.materials.extend(self.materials.iter().map(|m| Material {
+            texture: m.texture.map(|t| t + texture_base),
+            ..*m
+        }));
+        scene.textures.extend(self.textures.iter().cloned());
+        for primitive in &self.primitives {
+            let positions: Vec<Vec3> = primitive.positions.iter().map(|&p| place.point(p)).collect();
+            let corner_normals: Option<Vec<[Vec3; 3]>> = match (placement.normals, &primitive.normals) {
+                (Normals::Flat, _) => None,
+                (Normals::Auto, Some(file)) => Some(
+                    primitive
+                        .triangles
+                        .iter()
+                        .map(|t| t.map(|i| place.direction(file[i as usize])))
+                        .collect(),
+                ),
+                (Normals::Smooth, _) | (Normals::Auto, None) => {
+                    let mesh = Mesh {
+                        positions: positions.clone(),
+                        normals: None,
+                        triangles: primitive.triangles.clone(),
+                    };
+                    Some(mesh.smooth_normals(placement.crease_degrees))
+                }
+            };
+            for (f, t) in primitive.triangles.iter().enumerate() {
+                scene.triangles.push(Triangle {
+                    vertices: t.map(|i| positions[i as usize]),
+                    normals: corner_normals.as_ref().map(|n| n[f]),
+                    uvs: primitive.uvs.as_ref().map(|uvs| t.map(|i| uvs[i as usize])),
+                    material: material_base + primitive.material,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn mesh_triangle_count(&self) -> usize {
+        self.primitives.iter().map(|p| p.triangles.len()).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strips_and_fans_keep_the_winding() {
+        assert_eq!(
+            assemble(Mode::TriangleStrip, &[0, 1, 2, 3, 4]),
+            vec![[0, 1, 2], [2, 1, 3], [2, 3, 4]]
+        );
+        assert_eq!(assemble(Mode::TriangleFan, &[0, 1, 2, 3]), vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(assemble(Mode::Triangles, &[0, 1, 2, 3]), vec![[0, 1, 2]]);
+        assert!(assemble(Mode::TriangleStrip, &[0, 1]).is_empty());
+    }
+
+    #[test]
+    fn gltf_paths_by_extension() {
+        assert!(is_gltf_path(Path::new("a/b.GLB")));
+        assert!(is_gltf_path(Path::new("b.gltf")));
+        assert!(!is_gltf_path(Path::new("b.ply")));
+    }
+}

@@ -1,0 +1,152 @@
+//! Images that materials are textured with: linear RGBA texels at half precision, with the wrap mode
+//! of each axis. Both tracers sample them alike (`sample_texture` in `shaders/shade.wgsl` and
+//! `cpu/shade.rs`): bilinear, from the four texels around the point, without mipmaps.
+
+use half::f16;
+
+/// What a texture coordinate outside [0, 1] reads (glTF's sampler wrap modes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    /// The image tiles the plane (glTF's REPEAT).
+    #[default]
+    Repeat,
+    /// The edge texels continue outwards (CLAMP_TO_EDGE).
+    Clamp,
+    /// The image tiles the plane, every other copy mirrored (MIRRORED_REPEAT).
+    Mirror,
+}
+
+impl Wrap {
+    pub const ALL: [Wrap; 3] = [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror];
+
+    /// The number the records carry, and its name in the shader's preamble.
+    pub fn code(self) -> u32 {
+        self as u32
+    }
+
+    pub fn wgsl_name(self) -> &'static str {
+        match self {
+            Wrap::Repeat => "WRAP_REPEAT",
+            Wrap::Clamp => "WRAP_CLAMP",
+            Wrap::Mirror => "WRAP_MIRROR",
+        }
+    }
+}
+
+/// The most texels a scene's textures hold together: 2^24, so that a texel's index is exact in
+/// the f32 records of texture memory (a 4096 x 4096 image, or sixteen of 1024 x 1024).
+pub const MAX_TEXELS: u64 = 1 << 24;
+/// The longest side of a texture.
+pub const MAX_TEXTURE_SIDE: u32 = 16384;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    pub width: u32,
+    pub height: u32,
+    /// Row by row from texture coordinate v = 0 (the image's first row, as glTF has it): linear
+    /// RGBA as IEEE half floats (their bits), the precision the GPU texture holds.
+    pub texels: Vec<[u16; 4]>,
+    /// Along u, then v.
+    pub wrap: [Wrap; 2],
+}
+
+impl Texture {
+    /// A texture from 8-bit sRGB-encoded RGBA (an image file's pixels), decoded to linear light;
+    /// alpha is linear already.
+    pub fn from_srgb8(width: u32, height: u32, rgba: &[u8], wrap: [Wrap; 2]) -> Texture {
+        let table: Vec<u16> = (0..=255u8)
+            .map(|c| f16::from_f32(srgb_to_linear(c)).to_bits())
+            .collect();
+        let texels = rgba
+            .chunks_exact(4)
+            .map(|p| {
+                [
+                    table[p[0] as usize],
+                    table[p[1] as usize],
+                    table[p[2] as usize],
+                    f16::from_f32(p[3] as f32 / 255.0).to_bits(),
+                ]
+            })
+            .collect();
+        Texture {
+            width,
+            height,
+            texels,
+            wrap,
+        }
+    }
+
+    /// A texture from linear RGBA values, rounded to half precision.
+    pub fn from_linear(width: u32, height: u32, rgba: &[[f32; 4]], wrap: [Wrap; 2]) -> Texture {
+        Texture {
+            width,
+            height,
+            texels: rgba.iter().map(|p| p.map(|c| f16::from_f32(c).to_bits())).collect(),
+            wrap,
+        }
+    }
+
+    /// The texel at column `x`, row `y`, as f32 (exact: every half is an f32).
+    pub fn texel(&self, x: u32, y: u32) -> [f32; 4] {
+        self.texels[(y * self.width + x) as usize].map(|bits| f16::from_bits(bits).to_f32())
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        let (w, h) = (self.width, self.height);
+        if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
+            return Err(format!("size {w}x{h}: each side must be in 1..={MAX_TEXTURE_SIDE}"));
+        }
+        if self.texels.len() as u64 != w as u64 * h as u64 {
+            return Err(format!("{} texels for a {w}x{h} image", self.texels.len()));
+        }
+        if self
+            .texels
+            .iter()
+            .flatten()
+            .any(|&bits| !f16::from_bits(bits).is_finite())
+        {
+            return Err("texels must be finite".into());
+        }
+        Ok(())
+    }
+}
+
+/// The sRGB transfer function's inverse (IEC 61966-2-1): an 8-bit encoded value to linear light.
+pub fn srgb_to_linear(encoded: u8) -> f32 {
+    let c = encoded as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_decodes_to_linear_light() {
+        assert_eq!(srgb_to_linear(0), 0.0);
+        assert_eq!(srgb_to_linear(255), 1.0);
+        // Mid-grey encodes about a fifth of the light.
+        assert!((srgb_to_linear(128) - 0.2158).abs() < 1e-3);
+        let texture = Texture::from_srgb8(1, 1, &[255, 128, 0, 51], [Wrap::Repeat; 2]);
+        let [r, g, b, a] = texture.texel(0, 0);
+        assert_eq!((r, b), (1.0, 0.0));
+        assert!((g - 0.2158).abs() < 1e-3 && (a - 0.2).abs() < 1e-3, "{g} {a}");
+        texture.validate().unwrap();
+    }
+
+    #[test]
+    fn sizes_and_texel_counts_are_checked() {
+        let mut texture = Texture::from_linear(2, 1, &[[0.0; 4]; 2], [Wrap::Clamp; 2]);
+        texture.validate().unwrap();
+        texture.height = 2;
+        assert_eq!(texture.validate().unwrap_err(), "2 texels for a 2x2 image");
+        texture.width = 0;
+        assert!(texture.validate().unwrap_err().starts_with("size 0x2"));
+        let infinite = Texture::from_linear(1, 1, &[[f32::INFINITY, 0.0, 0.0, 1.0]], [Wrap::Clamp; 2]);
+        assert_eq!(infinite.validate().unwrap_err(), "texels must be finite");
+    }
+}
