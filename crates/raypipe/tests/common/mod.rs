@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod closed;
+pub mod gltf_file;
 pub mod harness;
 pub mod models;
 

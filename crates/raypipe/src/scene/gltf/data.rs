@@ -34,9 +34,13 @@ pub fn read_uri(uri: &str, files: Files, cap: u64, what: &str) -> Result<Vec<u8>
         if payload.len() as u64 / 4 * 3 > cap + 3 {
             return Err(format!("{what}: data URI longer than the {cap} bytes it may hold"));
         }
-        return base64::engine::general_purpose::STANDARD
+        let bytes = base64::engine::general_purpose::STANDARD
             .decode(payload.trim_end())
-            .map_err(|e| format!("{what}: data URI is not base64: {e}"));
+            .map_err(|e| format!("{what}: data URI is not base64: {e}"))?;
+        if bytes.len() as u64 > cap {
+            return Err(format!("{what}: data URI holds {} bytes, more than the {cap} it may", bytes.len()));
+        }
+        return Ok(bytes);
     }
     let relative = relative_path(uri).map_err(|e| format!("{what}: {e}"))?;
     let Files::Folder(folder) = files else {

@@ -207,6 +207,11 @@ fn decode_image(bytes: &[u8], mime: Option<&str>, budget: u64) -> Result<(u32, u
 }
 
 fn decode_png(bytes: &[u8], check: impl Fn(u32, u32) -> Result<(), String>) -> Result<(u32, u32, Vec<u8>), String> {
+    // The size stands at a fixed place in the first chunk (IHDR): checked before the decoder reads on.
+    if bytes.len() >= 24 && &bytes[12..16] == b"IHDR" {
+        let number = |at: usize| u32::from_be_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+        check(number(16), number(20))?;
+    }
     let fail = |e: png::DecodingError| format!("PNG: {e}");
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);

@@ -188,7 +188,8 @@ fn walk_nodes<'a>(
     document: &'a gltf::Document,
     notices: &mut Vec<String>,
 ) -> Result<Vec<(gltf::Node<'a>, Mat4)>, String> {
-    let count = document.nodes().len();
+    let nodes: Vec<gltf::Node> = document.nodes().collect();
+    let count = nodes.len();
     let mut parent: Vec<Option<usize>> = vec![None; count];
     for node in document.nodes() {
         for child in node.children() {
@@ -200,6 +201,20 @@ fn walk_nodes<'a>(
                 ));
             }
         }
+    }
+    // Every node has at most one parent, so a node that no root reaches lies on a cycle or below one.
+    let mut reached = vec![false; count];
+    let mut stack: Vec<usize> = document
+        .nodes()
+        .filter(|n| parent[n.index()].is_none())
+        .map(|n| n.index())
+        .collect();
+    while let Some(index) = stack.pop() {
+        reached[index] = true;
+        stack.extend(nodes[index].children().map(|c| c.index()));
+    }
+    if let Some(index) = reached.iter().position(|&r| !r) {
+        return Err(format!("node {index}: its parents form a cycle"));
     }
     let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
         Some(scene) => {
@@ -227,26 +242,6 @@ fn walk_nodes<'a>(
             document.nodes().filter(|n| parent[n.index()].is_none()).collect()
         }
     };
-    // Every node has at most one parent, so a node that no root reaches lies on a cycle or below one.
-    let mut reached = vec![false; count];
-    let mut stack: Vec<usize> = document
-        .nodes()
-        .filter(|n| parent[n.index()].is_none())
-        .map(|n| n.index())
-        .collect();
-    while let Some(index) = stack.pop() {
-        reached[index] = true;
-        stack.extend(
-            document
-                .nodes()
-                .nth(index)
-                .into_iter()
-                .flat_map(|n| n.children().map(|c| c.index())),
-        );
-    }
-    if let Some(index) = reached.iter().position(|&r| !r) {
-        return Err(format!("node {index}: its parents form a cycle"));
-    }
     let mut out = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
     while let Some((node, parent_world)) = stack.pop() {

@@ -1,0 +1,248 @@
+//! glTF files for tests, written here from known geometry: a small builder that packs accessors into
+//! one binary buffer and writes the document three ways (a .gltf with data: URIs, a .gltf beside a
+//! .bin and image files, a .glb).
+#![allow(dead_code)]
+
+use base64::Engine;
+use serde_json::{Value, json};
+use std::path::Path;
+
+#[derive(Default)]
+pub struct GltfBuilder {
+    pub bin: Vec<u8>,
+    pub buffer_views: Vec<Value>,
+    pub accessors: Vec<Value>,
+    pub meshes: Vec<Value>,
+    pub nodes: Vec<Value>,
+    pub materials: Vec<Value>,
+    pub textures: Vec<Value>,
+    pub samplers: Vec<Value>,
+    /// Each image as PNG bytes; written into the buffer, as a data URI or as a file.
+    pub images: Vec<Vec<u8>>,
+    pub cameras: Vec<Value>,
+    pub lights: Vec<Value>,
+    /// The default scene's root nodes.
+    pub roots: Vec<usize>,
+    pub extensions_used: Vec<&'static str>,
+}
+
+/// How the document's binary data travels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Packing {
+    DataUris,
+    ExternalFiles,
+    Glb,
+}
+
+impl GltfBuilder {
+    fn view(&mut self, bytes: &[u8]) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        self.buffer_views.push(json!({
+            "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()
+        }));
+        self.bin.extend_from_slice(bytes);
+        self.buffer_views.len() - 1
+    }
+
+    /// An accessor of f32 elements of `width` components ("VEC3" for 3...), with min and max.
+    pub fn floats(&mut self, values: &[f32], width: usize) -> usize {
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        let type_ = ["SCALAR", "VEC2", "VEC3", "VEC4"][width - 1];
+        let column = |k: usize| values.iter().skip(k).step_by(width).copied();
+        let min: Vec<f32> = (0..width).map(|k| column(k).fold(f32::INFINITY, f32::min)).collect();
+        let max: Vec<f32> = (0..width).map(|k| column(k).fold(f32::NEG_INFINITY, f32::max)).collect();
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5126, "count": values.len() / width,
+            "type": type_, "min": min, "max": max
+        }));
+        self.accessors.len() - 1
+    }
+
+    pub fn indices(&mut self, indices: &[u16]) -> usize {
+        let bytes: Vec<u8> = indices.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5123, "count": indices.len(), "type": "SCALAR"
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// A mesh of one triangle-list primitive; `uvs` adds TEXCOORD_0.
+    pub fn mesh(&mut self, positions: &[[f32; 3]], uvs: Option<&[[f32; 2]]>, indices: &[u16], material: Option<usize>) -> usize {
+        let position = self.floats(positions.as_flattened(), 3);
+        let mut attributes = json!({ "POSITION": position });
+        if let Some(uvs) = uvs {
+            attributes["TEXCOORD_0"] = json!(self.floats(uvs.as_flattened(), 2));
+        }
+        let mut primitive = json!({ "attributes": attributes, "indices": self.indices(indices) });
+        if let Some(material) = material {
+            primitive["material"] = json!(material);
+        }
+        self.meshes.push(json!({ "primitives": [primitive] }));
+        self.meshes.len() - 1
+    }
+
+    pub fn node(&mut self, node: Value) -> usize {
+        self.nodes.push(node);
+        self.nodes.len() - 1
+    }
+
+    /// A base-colour texture of an RGBA8 image (`width` x `height`, row 0 at v = 0), with wrap
+    /// modes (10497 REPEAT, 33071 CLAMP_TO_EDGE, 33648 MIRRORED_REPEAT) and nearest filters.
+    pub fn texture(&mut self, rgba: &[u8], width: u32, height: u32, wrap: [u32; 2]) -> usize {
+        let mut png_bytes = Vec::new();
+        let mut encoder = png::Encoder::new(&mut png_bytes, width, height);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.write_header().unwrap().write_image_data(rgba).unwrap();
+        self.images.push(png_bytes);
+        self.samplers.push(json!({
+            "magFilter": 9728, "minFilter": 9728, "wrapS": wrap[0], "wrapT": wrap[1]
+        }));
+        self.textures
+            .push(json!({ "source": self.images.len() - 1, "sampler": self.samplers.len() - 1 }));
+        self.textures.len() - 1
+    }
+
+    pub fn material(&mut self, material: Value) -> usize {
+        self.materials.push(material);
+        self.materials.len() - 1
+    }
+
+    /// The document, with images and the buffer packed as `packing` says; `stem` names the
+    /// external files.
+    fn document(&self, packing: Packing, stem: &str) -> (Value, Vec<u8>, Vec<(String, Vec<u8>)>) {
+        let mut bin = self.bin.clone();
+        let mut buffer_views = self.buffer_views.clone();
+        let mut files = Vec::new();
+        let encode = |bytes: &[u8], mime: &str| {
+            format!("data:{mime};base64,{}", base64::engine::general_purpose::STANDARD.encode(bytes))
+        };
+        let images: Vec<Value> = self
+            .images
+            .iter()
+            .enumerate()
+            .map(|(i, png)| match packing {
+                Packing::DataUris => json!({ "uri": encode(png, "image/png") }),
+                Packing::ExternalFiles => {
+                    let name = format!("{stem} image {i}.png");
+                    files.push((name.clone(), png.clone()));
+                    json!({ "uri": name.replace(' ', "%20") })
+                }
+                Packing::Glb => {
+                    while bin.len() % 4 != 0 {
+                        bin.push(0);
+                    }
+                    buffer_views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": png.len() }));
+                    bin.extend_from_slice(png);
+                    json!({ "bufferView": buffer_views.len() - 1, "mimeType": "image/png" })
+                }
+            })
+            .collect();
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let buffer = match packing {
+            Packing::DataUris => json!({ "byteLength": bin.len(), "uri": encode(&bin, "application/octet-stream") }),
+            Packing::ExternalFiles => {
+                files.push((format!("{stem}.bin"), bin.clone()));
+                json!({ "byteLength": bin.len(), "uri": format!("{stem}.bin") })
+            }
+            Packing::Glb => json!({ "byteLength": bin.len() }),
+        };
+        let mut document = json!({
+            "asset": { "version": "2.0", "generator": "raypipe tests" },
+            "scene": 0,
+            "scenes": [{ "nodes": self.roots }],
+            "nodes": self.nodes,
+            "meshes": self.meshes,
+            "accessors": self.accessors,
+            "bufferViews": buffer_views,
+            "buffers": [buffer],
+        });
+        for (key, list) in [
+            ("materials", &self.materials),
+            ("textures", &self.textures),
+            ("samplers", &self.samplers),
+            ("cameras", &self.cameras),
+        ] {
+            if !list.is_empty() {
+                document[key] = json!(list);
+            }
+        }
+        if !images.is_empty() {
+            document["images"] = json!(images);
+        }
+        if !self.lights.is_empty() {
+            document["extensions"] = json!({ "KHR_lights_punctual": { "lights": self.lights } });
+        }
+        if !self.extensions_used.is_empty() {
+            document["extensionsUsed"] = json!(self.extensions_used);
+        }
+        (document, bin, files)
+    }
+
+    /// A .gltf with every buffer and image as a data: URI.
+    pub fn gltf(&self) -> Vec<u8> {
+        serde_json::to_vec_pretty(&self.document(Packing::DataUris, "").0).unwrap()
+    }
+
+    /// The file's bytes packed as `packing` says, written to `dir/stem.gltf` or `.glb` with any
+    /// external files beside it; returns the path.
+    pub fn write(&self, dir: &Path, stem: &str, packing: Packing) -> std::path::PathBuf {
+        let (document, bin, files) = self.document(packing, stem);
+        for (name, bytes) in files {
+            std::fs::write(dir.join(name), bytes).unwrap();
+        }
+        let path = dir.join(format!("{stem}.{}", if packing == Packing::Glb { "glb" } else { "gltf" }));
+        let bytes = match packing {
+            Packing::Glb => glb(&serde_json::to_vec(&document).unwrap(), &bin),
+            _ => serde_json::to_vec_pretty(&document).unwrap(),
+        };
+        std::fs::write(&path, bytes).unwrap();
+        path
+    }
+}
+
+/// A GLB container: the 12-byte header, the JSON chunk padded with spaces, the BIN chunk with zeros.
+pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let mut json = json.to_vec();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// A fresh, empty directory for a test's files (emptied if an earlier run left one).
+pub fn fresh_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A unit quad in the xy plane, corners (0,0) to (1,1), facing +z, with UVs that put texture row 0
+/// (v = 0) at the top (y = 1), as glTF images are: `uv_scale` times the unit square.
+pub fn quad(uv_scale: f32) -> ([[f32; 3]; 4], [[f32; 2]; 4], [u16; 6]) {
+    let positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let uvs = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]].map(|[u, v]: [f32; 2]| [u * uv_scale, v * uv_scale]);
+    (positions, uvs, [0, 1, 2, 0, 2, 3])
+}

@@ -1,0 +1,378 @@
+//! glTF files built here with known answers: node transforms against positions placed by hand,
+//! instances, cameras, lights, materials and textures, the three ways to pack a file, and hostile
+//! files that must end in one line naming the element.
+
+mod common;
+
+use common::gltf_file::{GltfBuilder, Packing, fresh_dir, glb, quad};
+use glam::Vec3;
+use raypipe::scene::Scene;
+use raypipe::scene::gltf::{Files, GltfLight, GltfScene, parse};
+use serde_json::{Value, json};
+
+const TRIANGLE: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+fn read(builder: &GltfBuilder) -> GltfScene {
+    parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() < 1e-5
+}
+
+fn assert_positions(actual: &[Vec3], expected: &[[f32; 3]]) {
+    assert_eq!(actual.len(), expected.len());
+    for (a, &e) in actual.iter().zip(expected) {
+        assert!(close(*a, Vec3::from(e)), "{actual:?} against {expected:?}");
+    }
+}
+
+/// A root translated by (1, 2, 3) whose child is translated by (0, 0, -1), turned 90 degrees about
+/// z and scaled by 2, holding one triangle.
+fn hierarchy(child: Value) -> GltfBuilder {
+    let mut b = GltfBuilder::default();
+    let mesh = b.mesh(&TRIANGLE, None, &[0, 1, 2], None);
+    let mut child = child;
+    child["mesh"] = json!(mesh);
+    let child = b.node(child);
+    let root = b.node(json!({ "translation": [1, 2, 3], "children": [child] }));
+    b.roots = vec![root];
+    b
+}
+
+#[test]
+fn node_hierarchy_places_triangles_as_by_hand() {
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    let file = read(&hierarchy(json!({
+        "translation": [0, 0, -1], "rotation": [0, 0, half, half], "scale": [2, 2, 2]
+    })));
+    // (x, y, z) scaled by 2, turned to (-y, x, z), moved by (0, 0, -1) and then (1, 2, 3).
+    assert_eq!(file.primitives.len(), 1);
+    assert_positions(&file.primitives[0].positions, &[[1.0, 2.0, 2.0], [1.0, 4.0, 2.0], [-1.0, 2.0, 2.0]]);
+    assert_eq!(file.primitives[0].triangles, vec![[0, 1, 2]]);
+}
+
+#[test]
+fn a_matrix_node_equals_its_trs_twin() {
+    // Column-major: the same turn, scale and translation as the test above.
+    let file = read(&hierarchy(json!({
+        "matrix": [0, 2, 0, 0, -2, 0, 0, 0, 0, 0, 2, 0, 0, 0, -1, 1]
+    })));
+    assert_positions(&file.primitives[0].positions, &[[1.0, 2.0, 2.0], [1.0, 4.0, 2.0], [-1.0, 2.0, 2.0]]);
+}
+
+#[test]
+fn a_mirroring_node_turns_the_winding() {
+    let file = read(&hierarchy(json!({ "scale": [-1, 1, 1] })));
+    assert_eq!(file.primitives[0].triangles, vec![[0, 2, 1]]);
+}
+
+#[test]
+fn an_instanced_mesh_appears_at_every_node() {
+    let mut b = GltfBuilder::default();
+    let mesh = b.mesh(&TRIANGLE, None, &[0, 1, 2], None);
+    let left = b.node(json!({ "mesh": mesh, "translation": [-5, 0, 0] }));
+    let right = b.node(json!({ "mesh": mesh, "translation": [5, 0, 0] }));
+    b.roots = vec![left, right];
+    let file = read(&b);
+    assert_eq!(file.primitives.len(), 2);
+    assert_positions(&file.primitives[0].positions, &[[-5.0, 0.0, 0.0], [-4.0, 0.0, 0.0], [-5.0, 1.0, 0.0]]);
+    assert_positions(&file.primitives[1].positions, &[[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]]);
+}
+
+#[test]
+fn strips_fans_and_points_by_mode() {
+    let mut b = GltfBuilder::default();
+    b.mesh(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]], None, &[0, 1, 2, 3], None);
+    b.meshes[0]["primitives"][0]["mode"] = json!(5);
+    let mut points = b.meshes[0]["primitives"][0].clone();
+    points["mode"] = json!(0);
+    b.meshes[0]["primitives"].as_array_mut().unwrap().push(points);
+    let node = b.node(json!({ "mesh": 0 }));
+    b.roots = vec![node];
+    let mut notices = Vec::new();
+    let file = parse(&b.gltf(), Files::None, &mut notices).unwrap();
+    assert_eq!(file.primitives[0].triangles, vec![[0, 1, 2], [2, 1, 3]]);
+    assert_eq!(file.primitives.len(), 1);
+    assert!(notices.iter().any(|n| n == "1 primitives of points or lines are skipped"), "{notices:?}");
+}
+
+#[test]
+fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
+    let mut b = GltfBuilder::default();
+    let mesh = b.mesh(&TRIANGLE, None, &[0, 1, 2], None);
+    let model = b.node(json!({ "mesh": mesh }));
+    b.cameras = vec![
+        json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.1 } }),
+        json!({ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.1 } }),
+    ];
+    // Turned 90 degrees about y: the camera's -z looks along -x.
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    let camera = b.node(json!({ "camera": 0, "translation": [4, 0, 0], "rotation": [0, half, 0, half] }));
+    let second = b.node(json!({ "camera": 1 }));
+    b.lights = vec![
+        json!({ "type": "point", "color": [1, 0.5, 0.25], "intensity": 2 }),
+        json!({ "type": "directional", "intensity": 0.5 }),
+    ];
+    b.extensions_used = vec!["KHR_lights_punctual"];
+    let point = b.node(json!({ "translation": [0, 3, 0], "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+    let sun = b.node(json!({ "extensions": { "KHR_lights_punctual": { "light": 1 } } }));
+    b.roots = vec![model, camera, second, point, sun];
+    let file = read(&b);
+    let camera = file.camera.unwrap();
+    assert!(close(camera.eye, Vec3::new(4.0, 0.0, 0.0)), "{camera:?}");
+    assert!(close(camera.target - camera.eye, Vec3::NEG_X), "{camera:?}");
+    assert!(close(camera.up, Vec3::Y), "{camera:?}");
+    assert!((camera.fov_degrees - 0.5f32.to_degrees()).abs() < 1e-4);
+    let GltfLight::Point(light) = file.lights[0] else { panic!("{:?}", file.lights) };
+    assert_eq!((light.position, light.color), (Vec3::new(0.0, 3.0, 0.0), Vec3::new(2.0, 1.0, 0.5)));
+    assert_eq!(
+        file.lights[1],
+        GltfLight::Directional { direction: Vec3::NEG_Z, color: Vec3::splat(0.5) }
+    );
+
+    let path = b.write(&fresh_dir("gltf-camera"), "scene", Packing::Glb);
+    let scene = Scene::load(path.to_str().unwrap()).unwrap();
+    assert_eq!(scene.camera, camera);
+    assert!(scene.planes.is_empty(), "a file with a camera gets no floor");
+    assert_eq!(scene.lights.len(), 2);
+    // The sun stands far up its beam, behind the scene's centre.
+    assert!(scene.lights[1].position.z > 100.0, "{:?}", scene.lights[1]);
+}
+
+#[test]
+fn without_camera_and_lights_a_file_is_framed_as_a_model() {
+    let mut b = GltfBuilder::default();
+    let mesh = b.mesh(&TRIANGLE, None, &[0, 1, 2], None);
+    b.roots = vec![b.node(json!({ "mesh": mesh }))];
+    let scene = Scene::from_bytes("t.gltf", &b.gltf()).unwrap();
+    assert_eq!((scene.lights.len(), scene.planes.len()), (2, 1));
+    assert_eq!(scene.planes[0].point.y, 0.0, "the floor touches the model's lowest point");
+    // The file's one primitive has no material: glTF's default material, after the floor's.
+    assert_eq!(scene.triangles[0].material, 3);
+    assert_eq!(scene.materials[3].color, Vec3::ONE);
+}
+
+#[test]
+fn materials_map_to_whitted_ones() {
+    let mut b = GltfBuilder::default();
+    let glass = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
+        "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1 }, "KHR_materials_ior": { "ior": 1.3 } }
+    }));
+    let lamp = b.material(json!({ "emissiveFactor": [1, 0.5, 0], "pbrMetallicRoughness": { "metallicFactor": 0 } }));
+    b.extensions_used = vec!["KHR_materials_transmission", "KHR_materials_ior"];
+    let a = b.mesh(&TRIANGLE, None, &[0, 1, 2], Some(glass));
+    let c = b.mesh(&TRIANGLE, None, &[0, 1, 2], Some(lamp));
+    b.roots = vec![b.node(json!({ "mesh": a })), b.node(json!({ "mesh": c }))];
+    let file = read(&b);
+    let glass = file.materials[0];
+    assert_eq!((glass.transmit, glass.ior, glass.reflect), (1.0, 1.3, 0.0));
+    let lamp = file.materials[1];
+    assert_eq!((lamp.emission, lamp.reflect), (Vec3::new(1.0, 0.5, 0.0), 0.0));
+    assert_eq!(file.primitives[1].material, 1);
+}
+
+/// A quad textured with a 2x2 checker (red, green / blue, white), its UVs `uv_scale` times the unit
+/// square, with wrap modes `wrap`.
+pub fn textured_quad(uv_scale: f32, wrap: [u32; 2]) -> GltfBuilder {
+    let mut b = GltfBuilder::default();
+    let checker = [255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255];
+    let texture = b.texture(&checker, 2, 2, wrap);
+    let material = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": texture }, "metallicFactor": 0 }
+    }));
+    let (positions, uvs, indices) = quad(uv_scale);
+    let mesh = b.mesh(&positions, Some(&uvs), &indices, Some(material));
+    b.roots = vec![b.node(json!({ "mesh": mesh }))];
+    b
+}
+
+#[test]
+fn textures_keep_their_texels_and_wrap_modes() {
+    let file = read(&textured_quad(2.0, [33071, 33648]));
+    assert_eq!(file.textures.len(), 1);
+    let texture = &file.textures[0];
+    assert_eq!((texture.width, texture.height), (2, 2));
+    use raypipe::scene::Wrap;
+    assert_eq!(texture.wrap, [Wrap::Clamp, Wrap::Mirror]);
+    // sRGB 255 and 0 decode to exactly 1 and 0.
+    assert_eq!(texture.texel(0, 0), [1.0, 0.0, 0.0, 1.0]);
+    assert_eq!(texture.texel(1, 1), [1.0, 1.0, 1.0, 1.0]);
+    assert_eq!(file.materials[0].texture, Some(0));
+    assert_eq!(file.primitives[0].uvs.as_ref().unwrap()[1], glam::Vec2::new(2.0, 2.0));
+}
+
+#[test]
+fn every_packing_gives_the_same_scene() {
+    let dir = fresh_dir("gltf-packings");
+    let b = textured_quad(3.0, [10497, 33071]);
+    let scenes: Vec<Scene> = [Packing::DataUris, Packing::ExternalFiles, Packing::Glb]
+        .into_iter()
+        .map(|packing| {
+            let path = b.write(&dir, &format!("{packing:?}"), packing);
+            Scene::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{packing:?}: {e}"))
+        })
+        .collect();
+    assert_eq!(scenes[0], scenes[1]);
+    assert_eq!(scenes[0], scenes[2]);
+    assert_eq!(scenes[0].textures.len(), 1);
+    // A page has no folder to read external files from.
+    let external = std::fs::read(dir.join("ExternalFiles.gltf")).unwrap();
+    let err = Scene::from_bytes("ExternalFiles.gltf", &external).unwrap_err().to_string();
+    assert!(err.starts_with("ExternalFiles.gltf: buffer 0: external file 'ExternalFiles.bin' cannot be read here"), "{err}");
+}
+
+#[test]
+fn a_gltf_mesh_table_places_the_file_after_its_own_transforms() {
+    let dir = fresh_dir("gltf-mesh-table");
+    let b = hierarchy(json!({}));
+    b.write(&dir, "tri", Packing::Glb);
+    std::fs::write(
+        dir.join("scene.toml"),
+        "[[mesh]]\nfile = \"tri.glb\"\nnormalize = false\nscale = 2\ntranslate = [0, 0, 10]\n\
+         [[mesh]]\nfile = \"tri.glb\"\nas = \"spheres\"\nradius = 0.1\n",
+    )
+    .unwrap();
+    let scene = Scene::load(dir.join("scene.toml").to_str().unwrap()).unwrap();
+    // The file puts the triangle at (1, 2, 3) + TRIANGLE; the table doubles it and moves it.
+    let t = &scene.triangles[0];
+    assert_eq!(t.vertices, [Vec3::new(2.0, 4.0, 16.0), Vec3::new(4.0, 4.0, 16.0), Vec3::new(2.0, 6.0, 16.0)]);
+    assert_eq!(scene.spheres.len(), 3);
+    // glTF's default material, after the table's default one.
+    assert_eq!(scene.materials[t.material as usize].color, Vec3::ONE);
+}
+
+/// The file of `hierarchy` with `edit` applied to its JSON, parsed; its error.
+fn refused(edit: impl FnOnce(&mut Value)) -> String {
+    let b = hierarchy(json!({}));
+    let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
+    edit(&mut document);
+    let bytes = serde_json::to_vec(&document).unwrap();
+    refused_bytes(&bytes)
+}
+
+fn refused_bytes(bytes: &[u8]) -> String {
+    match parse(bytes, Files::None, &mut Vec::new()) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => {
+            let message = e.to_string();
+            assert!(!message.contains('\n'), "{message}");
+            message
+        }
+    }
+}
+
+#[test]
+fn hostile_documents_end_in_one_line_naming_the_element() {
+    let cases: Vec<(&str, Box<dyn FnOnce(&mut Value)>, &str)> = vec![
+        ("accessor past its view", Box::new(|d| d["accessors"][0]["byteOffset"] = json!(40)), "accessor 0: 3 elements of 12 bytes"),
+        ("a count that lies", Box::new(|d| d["accessors"][0]["count"] = json!(300)), "accessor 0: 300 elements of 12 bytes"),
+        ("count 2^31", Box::new(|d| d["accessors"][0]["count"] = json!(1u64 << 31)), "accessor 0: count 2147483648 is more than"),
+        ("a view past its buffer", Box::new(|d| d["bufferViews"][0]["byteLength"] = json!(1000)), "reach past buffer 0"),
+        ("terabytes of buffer", Box::new(|d| d["buffers"][0]["byteLength"] = json!(1u64 << 42)), "buffer 0: byteLength 4398046511104 is more than"),
+        ("a buffer shorter than it says", Box::new(|d| d["buffers"][0]["byteLength"] = json!(1000)), "buffer 0: 44 bytes, less than its byteLength 1000"),
+        ("an index out of range", Box::new(|d| d["accessors"][0]["count"] = json!(2)), "accessor 1: index 2 is 2, out of range (2 vertices)"),
+        ("a mesh index out of range", Box::new(|d| d["nodes"][0]["mesh"] = json!(7)), "nodes[0].mesh: Index out of bounds"),
+        ("a cycle", Box::new(|d| d["nodes"][0]["children"] = json!([1])), "node 0: its parents form a cycle"),
+        ("two parents", Box::new(|d| { d["nodes"].as_array_mut().unwrap().push(json!({ "children": [0] })); }), "node 0: a child of nodes 1 and 2"),
+        ("a loop onto itself", Box::new(|d| d["nodes"][0]["children"] = json!([0])), "node 0: a child of nodes 0 and 1"),
+        ("a huge matrix number", Box::new(|d| d["nodes"][1]["matrix"] = json!([1e39, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1])), "node 1"),
+        ("a zero quaternion", Box::new(|d| d["nodes"][1]["rotation"] = json!([0, 0, 0, 0])), "node 1: rotation must be a unit quaternion"),
+        ("a required extension", Box::new(|d| d["extensionsRequired"] = json!(["KHR_draco_mesh_compression"])), "extension KHR_draco_mesh_compression is required"),
+        ("an absolute URI", Box::new(|d| d["buffers"][0]["uri"] = json!("/etc/passwd")), "is absolute"),
+        ("a URI out of the folder", Box::new(|d| d["buffers"][0]["uri"] = json!("../x.bin")), "leaves the glTF's folder"),
+        ("a root listed twice", Box::new(|d| d["scenes"][0]["nodes"] = json!([1, 1])), "scene 0: node 1 is listed twice"),
+        ("a child as a root", Box::new(|d| d["scenes"][0]["nodes"] = json!([0])), "scene 0: node 0 is a child of node 1, not a root"),
+        ("positions of the wrong type", Box::new(|d| d["accessors"][0]["type"] = json!("VEC2")), "accessor 0: type Vec2 where [Vec3] is expected"),
+    ];
+    for (what, edit, expected) in cases {
+        let message = refused(edit);
+        assert!(message.contains(expected), "{what}: {message}");
+    }
+}
+
+#[test]
+fn hostile_bytes_end_in_one_line() {
+    let b = hierarchy(json!({}));
+    let document = b.gltf();
+    let json_only: Value = serde_json::from_slice(&document).unwrap();
+    let container = glb(&serde_json::to_vec(&json_only).unwrap(), &b.bin);
+    // Truncated anywhere, the file is refused, never read past its end.
+    for cut in [1, 11, 12, 19, 20, container.len() / 2, container.len() - 1] {
+        refused_bytes(&container[..cut]);
+    }
+    for cut in [0, 1, document.len() / 2, document.len() - 1] {
+        refused_bytes(&document[..cut]);
+    }
+    // A chunk whose length says more than the file holds.
+    let mut lying = container.clone();
+    lying[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+    refused_bytes(&lying);
+    let message = refused_bytes(b"\xff\xfe{\"asset\":{}}");
+    assert!(message.starts_with("not glTF JSON"), "{message}");
+}
+
+#[test]
+fn external_files_are_read_from_the_folder_only() {
+    let dir = fresh_dir("gltf-external");
+    let b = hierarchy(json!({}));
+    let path = b.write(&dir, "model", Packing::ExternalFiles);
+    assert!(Scene::load(path.to_str().unwrap()).is_ok());
+    let mut document: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    #[cfg(unix)]
+    {
+        // A link out of the folder, and a FIFO inside it.
+        let outside = fresh_dir("gltf-outside").join("secret.bin");
+        std::fs::write(&outside, &b.bin).unwrap();
+        std::os::unix::fs::symlink(&outside, dir.join("link.bin")).unwrap();
+        for (uri, expected) in [("link.bin", "lies outside the glTF's folder"), ("missing.bin", "no such file")] {
+            document["buffers"][0]["uri"] = json!(uri);
+            let text = serde_json::to_vec(&document).unwrap();
+            let err = parse(&text, Files::Folder(&dir), &mut Vec::new()).unwrap_err().to_string();
+            assert!(err.contains(expected), "{uri}: {err}");
+        }
+        let fifo = dir.join("pipe.bin");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        document["buffers"][0]["uri"] = json!("pipe.bin");
+        let text = serde_json::to_vec(&document).unwrap();
+        let err = parse(&text, Files::Folder(&dir), &mut Vec::new()).unwrap_err().to_string();
+        assert!(err.contains("not a regular file"), "{err}");
+    }
+}
+
+#[test]
+fn a_huge_texture_is_refused_before_it_is_decoded() {
+    let b = textured_quad(1.0, [10497, 10497]);
+    let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
+    // A PNG header claiming 65536 x 65536 pixels, without its pixels.
+    let mut header = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\x01\0\0\0\x01\0\0\x08\x06\0\0\0".to_vec();
+    let crc = crc32(&header[12..29]);
+    header.extend_from_slice(&crc.to_be_bytes());
+    use base64::Engine;
+    let uri = format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&header));
+    document["images"][0]["uri"] = json!(uri);
+    let message = refused_bytes(&serde_json::to_vec(&document).unwrap());
+    assert_eq!(message, "material 0: image 0: 65536x65536 pixels: each side must be in 1..=16384");
+}
+
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &byte in bytes {
+        crc ^= byte as u32;
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xedb8_8320 } else { crc >> 1 };
+        }
+    }
+    !crc
+}
+
+#[test]
+fn unsupported_optional_extensions_are_ignored_with_a_notice() {
+    let b = hierarchy(json!({}));
+    let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
+    document["extensionsUsed"] = json!(["EXT_future_thing"]);
+    let mut notices = Vec::new();
+    parse(&serde_json::to_vec(&document).unwrap(), Files::None, &mut notices).unwrap();
+    assert_eq!(notices, vec!["extension EXT_future_thing is ignored"]);
+}
