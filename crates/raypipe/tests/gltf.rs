@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::gltf_file::{GltfBuilder, Packing, fresh_dir, glb, quad};
+use common::gltf_file::{GltfBuilder, Packing, fresh_dir, glb, textured_quad};
 use glam::Vec3;
 use raypipe::scene::Scene;
 use raypipe::scene::gltf::{Files, GltfLight, GltfScene, parse};
@@ -48,7 +48,10 @@ fn node_hierarchy_places_triangles_as_by_hand() {
     })));
     // (x, y, z) scaled by 2, turned to (-y, x, z), moved by (0, 0, -1) and then (1, 2, 3).
     assert_eq!(file.primitives.len(), 1);
-    assert_positions(&file.primitives[0].positions, &[[1.0, 2.0, 2.0], [1.0, 4.0, 2.0], [-1.0, 2.0, 2.0]]);
+    assert_positions(
+        &file.primitives[0].positions,
+        &[[1.0, 2.0, 2.0], [1.0, 4.0, 2.0], [-1.0, 2.0, 2.0]],
+    );
     assert_eq!(file.primitives[0].triangles, vec![[0, 1, 2]]);
 }
 
@@ -58,7 +61,10 @@ fn a_matrix_node_equals_its_trs_twin() {
     let file = read(&hierarchy(json!({
         "matrix": [0, 2, 0, 0, -2, 0, 0, 0, 0, 0, 2, 0, 0, 0, -1, 1]
     })));
-    assert_positions(&file.primitives[0].positions, &[[1.0, 2.0, 2.0], [1.0, 4.0, 2.0], [-1.0, 2.0, 2.0]]);
+    assert_positions(
+        &file.primitives[0].positions,
+        &[[1.0, 2.0, 2.0], [1.0, 4.0, 2.0], [-1.0, 2.0, 2.0]],
+    );
 }
 
 #[test]
@@ -76,14 +82,25 @@ fn an_instanced_mesh_appears_at_every_node() {
     b.roots = vec![left, right];
     let file = read(&b);
     assert_eq!(file.primitives.len(), 2);
-    assert_positions(&file.primitives[0].positions, &[[-5.0, 0.0, 0.0], [-4.0, 0.0, 0.0], [-5.0, 1.0, 0.0]]);
-    assert_positions(&file.primitives[1].positions, &[[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]]);
+    assert_positions(
+        &file.primitives[0].positions,
+        &[[-5.0, 0.0, 0.0], [-4.0, 0.0, 0.0], [-5.0, 1.0, 0.0]],
+    );
+    assert_positions(
+        &file.primitives[1].positions,
+        &[[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]],
+    );
 }
 
 #[test]
 fn strips_fans_and_points_by_mode() {
     let mut b = GltfBuilder::default();
-    b.mesh(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]], None, &[0, 1, 2, 3], None);
+    b.mesh(
+        &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+        None,
+        &[0, 1, 2, 3],
+        None,
+    );
     b.meshes[0]["primitives"][0]["mode"] = json!(5);
     let mut points = b.meshes[0]["primitives"][0].clone();
     points["mode"] = json!(0);
@@ -94,7 +111,12 @@ fn strips_fans_and_points_by_mode() {
     let file = parse(&b.gltf(), Files::None, &mut notices).unwrap();
     assert_eq!(file.primitives[0].triangles, vec![[0, 1, 2], [2, 1, 3]]);
     assert_eq!(file.primitives.len(), 1);
-    assert!(notices.iter().any(|n| n == "1 primitives of points or lines are skipped"), "{notices:?}");
+    assert!(
+        notices
+            .iter()
+            .any(|n| n == "1 primitives of points or lines are skipped"),
+        "{notices:?}"
+    );
 }
 
 #[test]
@@ -124,11 +146,19 @@ fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
     assert!(close(camera.target - camera.eye, Vec3::NEG_X), "{camera:?}");
     assert!(close(camera.up, Vec3::Y), "{camera:?}");
     assert!((camera.fov_degrees - 0.5f32.to_degrees()).abs() < 1e-4);
-    let GltfLight::Point(light) = file.lights[0] else { panic!("{:?}", file.lights) };
-    assert_eq!((light.position, light.color), (Vec3::new(0.0, 3.0, 0.0), Vec3::new(2.0, 1.0, 0.5)));
+    let GltfLight::Point(light) = file.lights[0] else {
+        panic!("{:?}", file.lights)
+    };
+    assert_eq!(
+        (light.position, light.color),
+        (Vec3::new(0.0, 3.0, 0.0), Vec3::new(2.0, 1.0, 0.5))
+    );
     assert_eq!(
         file.lights[1],
-        GltfLight::Directional { direction: Vec3::NEG_Z, color: Vec3::splat(0.5) }
+        GltfLight::Directional {
+            direction: Vec3::NEG_Z,
+            color: Vec3::splat(0.5)
+        }
     );
 
     let path = b.write(&fresh_dir("gltf-camera"), "scene", Packing::Glb);
@@ -147,7 +177,10 @@ fn without_camera_and_lights_a_file_is_framed_as_a_model() {
     b.roots = vec![b.node(json!({ "mesh": mesh }))];
     let scene = Scene::from_bytes("t.gltf", &b.gltf()).unwrap();
     assert_eq!((scene.lights.len(), scene.planes.len()), (2, 1));
-    assert_eq!(scene.planes[0].point.y, 0.0, "the floor touches the model's lowest point");
+    assert_eq!(
+        scene.planes[0].point.y, 0.0,
+        "the floor touches the model's lowest point"
+    );
     // The file's one primitive has no material: glTF's default material, after the floor's.
     assert_eq!(scene.triangles[0].material, 3);
     assert_eq!(scene.materials[3].color, Vec3::ONE);
@@ -171,21 +204,6 @@ fn materials_map_to_whitted_ones() {
     let lamp = file.materials[1];
     assert_eq!((lamp.emission, lamp.reflect), (Vec3::new(1.0, 0.5, 0.0), 0.0));
     assert_eq!(file.primitives[1].material, 1);
-}
-
-/// A quad textured with a 2x2 checker (red, green / blue, white), its UVs `uv_scale` times the unit
-/// square, with wrap modes `wrap`.
-pub fn textured_quad(uv_scale: f32, wrap: [u32; 2]) -> GltfBuilder {
-    let mut b = GltfBuilder::default();
-    let checker = [255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255];
-    let texture = b.texture(&checker, 2, 2, wrap);
-    let material = b.material(json!({
-        "pbrMetallicRoughness": { "baseColorTexture": { "index": texture }, "metallicFactor": 0 }
-    }));
-    let (positions, uvs, indices) = quad(uv_scale);
-    let mesh = b.mesh(&positions, Some(&uvs), &indices, Some(material));
-    b.roots = vec![b.node(json!({ "mesh": mesh }))];
-    b
 }
 
 #[test]
@@ -219,8 +237,13 @@ fn every_packing_gives_the_same_scene() {
     assert_eq!(scenes[0].textures.len(), 1);
     // A page has no folder to read external files from.
     let external = std::fs::read(dir.join("ExternalFiles.gltf")).unwrap();
-    let err = Scene::from_bytes("ExternalFiles.gltf", &external).unwrap_err().to_string();
-    assert!(err.starts_with("ExternalFiles.gltf: buffer 0: external file 'ExternalFiles.bin' cannot be read here"), "{err}");
+    let err = Scene::from_bytes("ExternalFiles.gltf", &external)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("ExternalFiles.gltf: buffer 0: external file 'ExternalFiles.bin' cannot be read here"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -237,7 +260,14 @@ fn a_gltf_mesh_table_places_the_file_after_its_own_transforms() {
     let scene = Scene::load(dir.join("scene.toml").to_str().unwrap()).unwrap();
     // The file puts the triangle at (1, 2, 3) + TRIANGLE; the table doubles it and moves it.
     let t = &scene.triangles[0];
-    assert_eq!(t.vertices, [Vec3::new(2.0, 4.0, 16.0), Vec3::new(4.0, 4.0, 16.0), Vec3::new(2.0, 6.0, 16.0)]);
+    assert_eq!(
+        t.vertices,
+        [
+            Vec3::new(2.0, 4.0, 16.0),
+            Vec3::new(4.0, 4.0, 16.0),
+            Vec3::new(2.0, 6.0, 16.0)
+        ]
+    );
     assert_eq!(scene.spheres.len(), 3);
     // glTF's default material, after the table's default one.
     assert_eq!(scene.materials[t.material as usize].color, Vec3::ONE);
@@ -263,28 +293,109 @@ fn refused_bytes(bytes: &[u8]) -> String {
     }
 }
 
+/// A change to a document's JSON.
+type Edit = Box<dyn FnOnce(&mut Value)>;
+
 #[test]
 fn hostile_documents_end_in_one_line_naming_the_element() {
-    let cases: Vec<(&str, Box<dyn FnOnce(&mut Value)>, &str)> = vec![
-        ("accessor past its view", Box::new(|d| d["accessors"][0]["byteOffset"] = json!(40)), "accessor 0: 3 elements of 12 bytes"),
-        ("a count that lies", Box::new(|d| d["accessors"][0]["count"] = json!(300)), "accessor 0: 300 elements of 12 bytes"),
-        ("count 2^31", Box::new(|d| d["accessors"][0]["count"] = json!(1u64 << 31)), "accessor 0: count 2147483648 is more than"),
-        ("a view past its buffer", Box::new(|d| d["bufferViews"][0]["byteLength"] = json!(1000)), "reach past buffer 0"),
-        ("terabytes of buffer", Box::new(|d| d["buffers"][0]["byteLength"] = json!(1u64 << 42)), "buffer 0: byteLength 4398046511104 is more than"),
-        ("a buffer shorter than it says", Box::new(|d| d["buffers"][0]["byteLength"] = json!(1000)), "buffer 0: 44 bytes, less than its byteLength 1000"),
-        ("an index out of range", Box::new(|d| d["accessors"][0]["count"] = json!(2)), "accessor 1: index 2 is 2, out of range (2 vertices)"),
-        ("a mesh index out of range", Box::new(|d| d["nodes"][0]["mesh"] = json!(7)), "nodes[0].mesh: Index out of bounds"),
-        ("a cycle", Box::new(|d| d["nodes"][0]["children"] = json!([1])), "node 0: its parents form a cycle"),
-        ("two parents", Box::new(|d| { d["nodes"].as_array_mut().unwrap().push(json!({ "children": [0] })); }), "node 0: a child of nodes 1 and 2"),
-        ("a loop onto itself", Box::new(|d| d["nodes"][0]["children"] = json!([0])), "node 0: a child of nodes 0 and 1"),
-        ("a huge matrix number", Box::new(|d| d["nodes"][1]["matrix"] = json!([1e39, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1])), "node 1"),
-        ("a zero quaternion", Box::new(|d| d["nodes"][1]["rotation"] = json!([0, 0, 0, 0])), "node 1: rotation must be a unit quaternion"),
-        ("a required extension", Box::new(|d| d["extensionsRequired"] = json!(["KHR_draco_mesh_compression"])), "extension KHR_draco_mesh_compression is required"),
-        ("an absolute URI", Box::new(|d| d["buffers"][0]["uri"] = json!("/etc/passwd")), "is absolute"),
-        ("a URI out of the folder", Box::new(|d| d["buffers"][0]["uri"] = json!("../x.bin")), "leaves the glTF's folder"),
-        ("a root listed twice", Box::new(|d| d["scenes"][0]["nodes"] = json!([1, 1])), "scene 0: node 1 is listed twice"),
-        ("a child as a root", Box::new(|d| d["scenes"][0]["nodes"] = json!([0])), "scene 0: node 0 is a child of node 1, not a root"),
-        ("positions of the wrong type", Box::new(|d| d["accessors"][0]["type"] = json!("VEC2")), "accessor 0: type Vec2 where [Vec3] is expected"),
+    let cases: Vec<(&str, Edit, &str)> = vec![
+        (
+            "accessor past its view",
+            Box::new(|d| d["accessors"][0]["byteOffset"] = json!(40)),
+            "accessor 0: 3 elements of 12 bytes",
+        ),
+        (
+            "a count that lies",
+            Box::new(|d| d["accessors"][0]["count"] = json!(300)),
+            "accessor 0: 300 elements of 12 bytes",
+        ),
+        (
+            "count 2^31",
+            Box::new(|d| d["accessors"][0]["count"] = json!(1u64 << 31)),
+            "accessor 0: count 2147483648 is more than",
+        ),
+        (
+            "a view past its buffer",
+            Box::new(|d| d["bufferViews"][0]["byteLength"] = json!(1000)),
+            "reach past buffer 0",
+        ),
+        (
+            "terabytes of buffer",
+            Box::new(|d| d["buffers"][0]["byteLength"] = json!(1u64 << 42)),
+            "buffer 0: byteLength 4398046511104 is more than",
+        ),
+        (
+            "a buffer shorter than it says",
+            Box::new(|d| d["buffers"][0]["byteLength"] = json!(1000)),
+            "buffer 0: 44 bytes, less than its byteLength 1000",
+        ),
+        (
+            "an index out of range",
+            Box::new(|d| d["accessors"][0]["count"] = json!(2)),
+            "accessor 1: index 2 is 2, out of range (2 vertices)",
+        ),
+        (
+            "a mesh index out of range",
+            Box::new(|d| d["nodes"][0]["mesh"] = json!(7)),
+            "nodes[0].mesh: Index out of bounds",
+        ),
+        (
+            "a cycle",
+            Box::new(|d| d["nodes"][0]["children"] = json!([1])),
+            "node 0: its parents form a cycle",
+        ),
+        (
+            "two parents",
+            Box::new(|d| {
+                d["nodes"].as_array_mut().unwrap().push(json!({ "children": [0] }));
+            }),
+            "node 0: a child of nodes 1 and 2",
+        ),
+        (
+            "a loop onto itself",
+            Box::new(|d| d["nodes"][0]["children"] = json!([0])),
+            "node 0: a child of nodes 0 and 1",
+        ),
+        (
+            "a huge matrix number",
+            Box::new(|d| d["nodes"][1]["matrix"] = json!([1e39, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1])),
+            "node 1",
+        ),
+        (
+            "a zero quaternion",
+            Box::new(|d| d["nodes"][1]["rotation"] = json!([0, 0, 0, 0])),
+            "node 1: rotation must be a unit quaternion",
+        ),
+        (
+            "a required extension",
+            Box::new(|d| d["extensionsRequired"] = json!(["KHR_draco_mesh_compression"])),
+            "extension KHR_draco_mesh_compression is required",
+        ),
+        (
+            "an absolute URI",
+            Box::new(|d| d["buffers"][0]["uri"] = json!("/etc/passwd")),
+            "is absolute",
+        ),
+        (
+            "a URI out of the folder",
+            Box::new(|d| d["buffers"][0]["uri"] = json!("../x.bin")),
+            "leaves the glTF's folder",
+        ),
+        (
+            "a root listed twice",
+            Box::new(|d| d["scenes"][0]["nodes"] = json!([1, 1])),
+            "scene 0: node 1 is listed twice",
+        ),
+        (
+            "a child as a root",
+            Box::new(|d| d["scenes"][0]["nodes"] = json!([0])),
+            "scene 0: node 0 is a child of node 1, not a root",
+        ),
+        (
+            "positions of the wrong type",
+            Box::new(|d| d["accessors"][0]["type"] = json!("VEC2")),
+            "accessor 0: type Vec2 where [Vec3] is expected",
+        ),
     ];
     for (what, edit, expected) in cases {
         let message = refused(edit);
@@ -326,17 +437,30 @@ fn external_files_are_read_from_the_folder_only() {
         let outside = fresh_dir("gltf-outside").join("secret.bin");
         std::fs::write(&outside, &b.bin).unwrap();
         std::os::unix::fs::symlink(&outside, dir.join("link.bin")).unwrap();
-        for (uri, expected) in [("link.bin", "lies outside the glTF's folder"), ("missing.bin", "no such file")] {
+        for (uri, expected) in [
+            ("link.bin", "lies outside the glTF's folder"),
+            ("missing.bin", "no such file"),
+        ] {
             document["buffers"][0]["uri"] = json!(uri);
             let text = serde_json::to_vec(&document).unwrap();
-            let err = parse(&text, Files::Folder(&dir), &mut Vec::new()).unwrap_err().to_string();
+            let err = parse(&text, Files::Folder(&dir), &mut Vec::new())
+                .unwrap_err()
+                .to_string();
             assert!(err.contains(expected), "{uri}: {err}");
         }
         let fifo = dir.join("pipe.bin");
-        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        assert!(
+            std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .unwrap()
+                .success()
+        );
         document["buffers"][0]["uri"] = json!("pipe.bin");
         let text = serde_json::to_vec(&document).unwrap();
-        let err = parse(&text, Files::Folder(&dir), &mut Vec::new()).unwrap_err().to_string();
+        let err = parse(&text, Files::Folder(&dir), &mut Vec::new())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("not a regular file"), "{err}");
     }
 }
@@ -350,10 +474,16 @@ fn a_huge_texture_is_refused_before_it_is_decoded() {
     let crc = crc32(&header[12..29]);
     header.extend_from_slice(&crc.to_be_bytes());
     use base64::Engine;
-    let uri = format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&header));
+    let uri = format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&header)
+    );
     document["images"][0]["uri"] = json!(uri);
     let message = refused_bytes(&serde_json::to_vec(&document).unwrap());
-    assert_eq!(message, "material 0: image 0: 65536x65536 pixels: each side must be in 1..=16384");
+    assert_eq!(
+        message,
+        "material 0: image 0: 65536x65536 pixels: each side must be in 1..=16384"
+    );
 }
 
 fn crc32(bytes: &[u8]) -> u32 {
@@ -361,7 +491,11 @@ fn crc32(bytes: &[u8]) -> u32 {
     for &byte in bytes {
         crc ^= byte as u32;
         for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xedb8_8320 } else { crc >> 1 };
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
         }
     }
     !crc

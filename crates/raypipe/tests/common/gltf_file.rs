@@ -26,6 +26,13 @@ pub struct GltfBuilder {
     pub extensions_used: Vec<&'static str>,
 }
 
+/// A document with its binary buffer and the external files it names.
+struct Packed {
+    document: Value,
+    bin: Vec<u8>,
+    files: Vec<(String, Vec<u8>)>,
+}
+
 /// How the document's binary data travels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Packing {
@@ -36,9 +43,7 @@ pub enum Packing {
 
 impl GltfBuilder {
     fn view(&mut self, bytes: &[u8]) -> usize {
-        while self.bin.len() % 4 != 0 {
-            self.bin.push(0);
-        }
+        pad(&mut self.bin, 0);
         self.buffer_views.push(json!({
             "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()
         }));
@@ -53,7 +58,9 @@ impl GltfBuilder {
         let type_ = ["SCALAR", "VEC2", "VEC3", "VEC4"][width - 1];
         let column = |k: usize| values.iter().skip(k).step_by(width).copied();
         let min: Vec<f32> = (0..width).map(|k| column(k).fold(f32::INFINITY, f32::min)).collect();
-        let max: Vec<f32> = (0..width).map(|k| column(k).fold(f32::NEG_INFINITY, f32::max)).collect();
+        let max: Vec<f32> = (0..width)
+            .map(|k| column(k).fold(f32::NEG_INFINITY, f32::max))
+            .collect();
         self.accessors.push(json!({
             "bufferView": view, "componentType": 5126, "count": values.len() / width,
             "type": type_, "min": min, "max": max
@@ -71,7 +78,13 @@ impl GltfBuilder {
     }
 
     /// A mesh of one triangle-list primitive; `uvs` adds TEXCOORD_0.
-    pub fn mesh(&mut self, positions: &[[f32; 3]], uvs: Option<&[[f32; 2]]>, indices: &[u16], material: Option<usize>) -> usize {
+    pub fn mesh(
+        &mut self,
+        positions: &[[f32; 3]],
+        uvs: Option<&[[f32; 2]]>,
+        indices: &[u16],
+        material: Option<usize>,
+    ) -> usize {
         let position = self.floats(positions.as_flattened(), 3);
         let mut attributes = json!({ "POSITION": position });
         if let Some(uvs) = uvs {
@@ -114,12 +127,15 @@ impl GltfBuilder {
 
     /// The document, with images and the buffer packed as `packing` says; `stem` names the
     /// external files.
-    fn document(&self, packing: Packing, stem: &str) -> (Value, Vec<u8>, Vec<(String, Vec<u8>)>) {
+    fn document(&self, packing: Packing, stem: &str) -> Packed {
         let mut bin = self.bin.clone();
         let mut buffer_views = self.buffer_views.clone();
         let mut files = Vec::new();
         let encode = |bytes: &[u8], mime: &str| {
-            format!("data:{mime};base64,{}", base64::engine::general_purpose::STANDARD.encode(bytes))
+            format!(
+                "data:{mime};base64,{}",
+                base64::engine::general_purpose::STANDARD.encode(bytes)
+            )
         };
         let images: Vec<Value> = self
             .images
@@ -133,18 +149,14 @@ impl GltfBuilder {
                     json!({ "uri": name.replace(' ', "%20") })
                 }
                 Packing::Glb => {
-                    while bin.len() % 4 != 0 {
-                        bin.push(0);
-                    }
+                    pad(&mut bin, 0);
                     buffer_views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": png.len() }));
                     bin.extend_from_slice(png);
                     json!({ "bufferView": buffer_views.len() - 1, "mimeType": "image/png" })
                 }
             })
             .collect();
-        while bin.len() % 4 != 0 {
-            bin.push(0);
-        }
+        pad(&mut bin, 0);
         let buffer = match packing {
             Packing::DataUris => json!({ "byteLength": bin.len(), "uri": encode(&bin, "application/octet-stream") }),
             Packing::ExternalFiles => {
@@ -182,22 +194,25 @@ impl GltfBuilder {
         if !self.extensions_used.is_empty() {
             document["extensionsUsed"] = json!(self.extensions_used);
         }
-        (document, bin, files)
+        Packed { document, bin, files }
     }
 
     /// A .gltf with every buffer and image as a data: URI.
     pub fn gltf(&self) -> Vec<u8> {
-        serde_json::to_vec_pretty(&self.document(Packing::DataUris, "").0).unwrap()
+        serde_json::to_vec_pretty(&self.document(Packing::DataUris, "").document).unwrap()
     }
 
     /// The file's bytes packed as `packing` says, written to `dir/stem.gltf` or `.glb` with any
     /// external files beside it; returns the path.
     pub fn write(&self, dir: &Path, stem: &str, packing: Packing) -> std::path::PathBuf {
-        let (document, bin, files) = self.document(packing, stem);
+        let Packed { document, bin, files } = self.document(packing, stem);
         for (name, bytes) in files {
             std::fs::write(dir.join(name), bytes).unwrap();
         }
-        let path = dir.join(format!("{stem}.{}", if packing == Packing::Glb { "glb" } else { "gltf" }));
+        let path = dir.join(format!(
+            "{stem}.{}",
+            if packing == Packing::Glb { "glb" } else { "gltf" }
+        ));
         let bytes = match packing {
             Packing::Glb => glb(&serde_json::to_vec(&document).unwrap(), &bin),
             _ => serde_json::to_vec_pretty(&document).unwrap(),
@@ -210,13 +225,9 @@ impl GltfBuilder {
 /// A GLB container: the 12-byte header, the JSON chunk padded with spaces, the BIN chunk with zeros.
 pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     let mut json = json.to_vec();
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
+    pad(&mut json, b' ');
     let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
+    pad(&mut bin, 0);
     let total = 12 + 8 + json.len() + 8 + bin.len();
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
@@ -229,6 +240,11 @@ pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     out.extend_from_slice(b"BIN\0");
     out.extend_from_slice(&bin);
     out
+}
+
+/// Pads `bytes` to a multiple of 4 bytes, as glTF aligns buffer views and GLB chunks.
+fn pad(bytes: &mut Vec<u8>, with: u8) {
+    bytes.resize(bytes.len().next_multiple_of(4), with);
 }
 
 /// A fresh, empty directory for a test's files (emptied if an earlier run left one).
@@ -245,4 +261,44 @@ pub fn quad(uv_scale: f32) -> ([[f32; 3]; 4], [[f32; 2]; 4], [u16; 6]) {
     let positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
     let uvs = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]].map(|[u, v]: [f32; 2]| [u * uv_scale, v * uv_scale]);
     (positions, uvs, [0, 1, 2, 0, 2, 3])
+}
+
+/// A 2x2 RGBA image, row by row: red, green; blue, white.
+pub const CHECKER: [[u8; 4]; 4] = [
+    [255, 0, 0, 255],
+    [0, 255, 0, 255],
+    [0, 0, 255, 255],
+    [255, 255, 255, 255],
+];
+
+/// glTF's wrap modes, by their sampler numbers.
+pub const REPEAT: u32 = 10497;
+pub const CLAMP_TO_EDGE: u32 = 33071;
+pub const MIRRORED_REPEAT: u32 = 33648;
+
+/// A quad textured with a 2x2 checker (red, green / blue, white), its UVs `uv_scale` times the unit
+/// square, with wrap modes `wrap`.
+pub fn textured_quad(uv_scale: f32, wrap: [u32; 2]) -> GltfBuilder {
+    let mut b = GltfBuilder::default();
+    let checker = CHECKER.as_flattened();
+    let texture = b.texture(checker, 2, 2, wrap);
+    let material = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": texture }, "metallicFactor": 0 }
+    }));
+    let (positions, uvs, indices) = quad(uv_scale);
+    let mesh = b.mesh(&positions, Some(&uvs), &indices, Some(material));
+    b.roots = vec![b.node(json!({ "mesh": mesh }))];
+    b
+}
+
+/// The textured quad seen square-on by a camera of the file's own, at distance 1, whose view the
+/// quad fills exactly: pixel (x, y) of a square image of `size` looks at uv = ((x + 0.5) / size,
+/// (y + 0.5) / size) times `uv_scale`.
+pub fn framed_textured_quad(uv_scale: f32, wrap: [u32; 2]) -> GltfBuilder {
+    let mut b = textured_quad(uv_scale, wrap);
+    let fov = 2.0 * 0.5f32.atan();
+    b.cameras = vec![json!({ "type": "perspective", "perspective": { "yfov": fov, "znear": 0.01 } })];
+    let camera = b.node(json!({ "camera": 0, "translation": [0.5, 0.5, 1.0] }));
+    b.roots.push(camera);
+    b
 }

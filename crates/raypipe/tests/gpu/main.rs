@@ -10,6 +10,7 @@ mod common;
 mod analytic;
 mod display;
 mod frames;
+mod gltf;
 mod gpu_build;
 mod gpu_vs_cpu;
 mod memory_modes;
@@ -24,6 +25,7 @@ fn main() -> std::process::ExitCode {
         display::tests(),
         frames::tests(),
         gpu_build::tests(),
+        gltf::tests(),
         gpu_vs_cpu::tests(),
         memory_modes::tests(),
         pipelines::tests(),

@@ -38,7 +38,10 @@ pub fn read_uri(uri: &str, files: Files, cap: u64, what: &str) -> Result<Vec<u8>
             .decode(payload.trim_end())
             .map_err(|e| format!("{what}: data URI is not base64: {e}"))?;
         if bytes.len() as u64 > cap {
-            return Err(format!("{what}: data URI holds {} bytes, more than the {cap} it may", bytes.len()));
+            return Err(format!(
+                "{what}: data URI holds {} bytes, more than the {cap} it may",
+                bytes.len()
+            ));
         }
         return Ok(bytes);
     }

@@ -1,0 +1,241 @@
+//! glTF scenes on the GPU and the CPU: a file's camera gives the pinhole's depth at every pixel, a
+//! checker texture shows its texels where the UVs say under every wrap mode, in every memory mode
+//! and pipeline, and the same file packed three ways renders the same image.
+
+use crate::common::gltf_file::{
+    CHECKER, CLAMP_TO_EDGE, GltfBuilder, MIRRORED_REPEAT, Packing, REPEAT, framed_textured_quad, fresh_dir,
+};
+use crate::common::harness::Test;
+use crate::common::*;
+use raypipe::Choice;
+use raypipe::gpu::{GpuContext, RendererOptions};
+use raypipe::image::Frame;
+use raypipe::image::diff::Tolerance;
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::records::PackedScene;
+use raypipe::scene::Scene;
+use raypipe::scene::gltf::{Files, parse};
+use raypipe::scene::model::{ModelOptions, gltf_scene};
+
+/// 36 pixels a side: with the UVs doubled, every ninth pixel from the fifth looks at a texel's
+/// centre, where bilinear filtering gives the texel itself.
+const SIZE: u32 = 36;
+
+/// The scene of a builder's file at SIZE x SIZE, lit by ambient light alone at full strength, so
+/// that a pixel's colour is its surface's albedo.
+fn albedo_scene(builder: &GltfBuilder) -> PackedScene {
+    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
+    let mut scene = gltf_scene(&file, "test.gltf", &ModelOptions::default()).unwrap();
+    scene.settings.width = SIZE;
+    scene.settings.height = SIZE;
+    scene.settings.ambient = 1.0;
+    scene.lights.clear();
+    let mut packed = PackedScene::new(&scene).unwrap();
+    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed
+}
+
+/// The texel each texel-centre pixel must show along one axis, by wrap mode: the UVs run over
+/// [0, 2], so the second half repeats, clamps to the last texel, or mirrors.
+fn texel_along(wrap: u32, n: usize) -> usize {
+    match wrap {
+        REPEAT => n % 2,
+        CLAMP_TO_EDGE => n.min(1),
+        MIRRORED_REPEAT => [0, 1, 1, 0][n],
+        _ => unreachable!(),
+    }
+}
+
+fn check_texels(frame: &Frame, wrap: [u32; 2], device: &str) {
+    for nv in 0..4 {
+        for nu in 0..4 {
+            let (px, py) = (9 * nu + 4, 9 * nv + 4);
+            let texel = texel_along(wrap[1], nv) * 2 + texel_along(wrap[0], nu);
+            let expected = CHECKER[texel].map(|c| c as f32 / 255.0);
+            let got = frame.color[(py * SIZE as usize) + px];
+            for c in 0..3 {
+                assert!(
+                    (got[c] - expected[c]).abs() < 1e-3,
+                    "{device}, wrap {wrap:?}: pixel ({px}, {py}) is {got:?}, texel {texel} is {expected:?}"
+                );
+            }
+        }
+    }
+}
+
+fn cpu_checker_texels_land_where_the_uvs_say() {
+    for wrap in [
+        [REPEAT, CLAMP_TO_EDGE],
+        [MIRRORED_REPEAT, REPEAT],
+        [CLAMP_TO_EDGE, MIRRORED_REPEAT],
+    ] {
+        let scene = albedo_scene(&framed_textured_quad(2.0, wrap));
+        check_texels(&render_cpu(&scene, Accel::Threaded), wrap, "cpu");
+    }
+}
+
+/// Every memory mode and pipeline against the CPU, texel by texel and image by image; the memory
+/// modes and pipelines against each other bit for bit.
+fn gpu_checker_texels_in_every_memory_mode_and_pipeline(ctx: &GpuContext) {
+    for wrap in [[REPEAT, CLAMP_TO_EDGE], [MIRRORED_REPEAT, REPEAT]] {
+        let scene = albedo_scene(&framed_textured_quad(2.0, wrap));
+        let cpu = render_cpu(&scene, Accel::Threaded);
+        let mut first: Option<Frame> = None;
+        for &pipeline in Pipeline::ALL {
+            for memory in ctx.memory_modes() {
+                let options = RendererOptions {
+                    pipeline,
+                    memory,
+                    accel: Accel::Threaded,
+                    ..Default::default()
+                };
+                let frame = pollster::block_on(renderer(ctx, &scene, options).read_frame())
+                    .unwrap()
+                    .frame;
+                let name = format!("gltf-texture-{pipeline:?}-{memory:?}-{}-{}", wrap[0], wrap[1]);
+                check_texels(&frame, wrap, &name);
+                assert_frames_match(&name, &frame, &cpu);
+                match &first {
+                    None => first = Some(frame),
+                    Some(first) => assert_images_match(&name, &frame.display(), &first.display(), Tolerance::EXACT),
+                }
+            }
+        }
+    }
+}
+
+/// A file's camera is a pinhole: the quad it fills is at the depth the pinhole model gives at every
+/// pixel, on both devices.
+fn the_file_camera_gives_the_pinhole_depth(ctx: &GpuContext) {
+    let scene = albedo_scene(&framed_textured_quad(1.0, [REPEAT, REPEAT]));
+    let tan = 0.5f64;
+    let cpu = render_cpu(&scene, Accel::Threaded);
+    let gpu = render_gpu(ctx, &scene, MemoryMode::Storage, Accel::Threaded);
+    for (device, frame) in [("cpu", &cpu), ("gpu", &gpu)] {
+        let depth = frame.depth();
+        for py in 0..SIZE {
+            for px in 0..SIZE {
+                let x = (2.0 * (px as f64 + 0.5) / SIZE as f64 - 1.0) * tan;
+                let y = (1.0 - 2.0 * (py as f64 + 0.5) / SIZE as f64) * tan;
+                let expected = (x * x + y * y + 1.0).sqrt();
+                let got = depth.data[(py * SIZE + px) as usize] as f64;
+                assert!(
+                    (got - expected).abs() <= 2e-6 * expected,
+                    "{device}: pixel ({px}, {py}) depth {got}, expected {expected}"
+                );
+            }
+        }
+    }
+}
+
+/// One file as a .gltf with data: URIs, a .gltf beside its .bin and PNG, and a .glb: one image.
+fn every_packing_renders_the_same_image(ctx: &GpuContext) {
+    let dir = fresh_dir("gltf-gpu-packings");
+    let builder = framed_textured_quad(3.0, [REPEAT, MIRRORED_REPEAT]);
+    let frames: Vec<Frame> = [Packing::DataUris, Packing::ExternalFiles, Packing::Glb]
+        .into_iter()
+        .map(|packing| {
+            let path = builder.write(&dir, &format!("{packing:?}"), packing);
+            let mut scene = Scene::load(path.to_str().unwrap()).unwrap();
+            scene.settings.width = 48;
+            scene.settings.height = 40;
+            let mut packed = PackedScene::new(&scene).unwrap();
+            packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+            render_gpu(ctx, &packed, MemoryMode::Storage, Accel::Threaded)
+        })
+        .collect();
+    for (packing, frame) in ["external files", "glb"].iter().zip(&frames[1..]) {
+        assert_images_match(packing, &frame.display(), &frames[0].display(), Tolerance::EXACT);
+    }
+}
+
+/// A glass and a mirror material from glTF render as the same scene written in TOML with the
+/// materials the mapping gives.
+fn glass_and_mirror_match_their_toml_twin(ctx: &GpuContext) {
+    use serde_json::json;
+    let mut b = GltfBuilder::default();
+    let glass = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
+        "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1 }, "KHR_materials_ior": { "ior": 1.5 } }
+    }));
+    let mirror = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 1, "roughnessFactor": 0 }
+    }));
+    let red =
+        b.material(json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.1, 0.1, 1], "metallicFactor": 0 } }));
+    b.extensions_used = vec!["KHR_materials_transmission", "KHR_materials_ior", "KHR_lights_punctual"];
+    let quad = |b: &mut GltfBuilder, material, x0: f32, z: f32| {
+        let positions = [[x0, -1.0, z], [x0 + 1.5, -1.0, z], [x0 + 1.5, 1.0, z], [x0, 1.0, z]];
+        b.mesh(&positions, None, &[0, 1, 2, 0, 2, 3], Some(material))
+    };
+    let meshes = [
+        quad(&mut b, glass, -1.6, 0.0),
+        quad(&mut b, mirror, 0.1, 0.5),
+        quad(&mut b, red, -3.0, 3.0),
+    ];
+    for mesh in meshes {
+        let node = b.node(json!({ "mesh": mesh }));
+        b.roots.push(node);
+    }
+    b.cameras = vec![json!({ "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.01 } })];
+    let camera = b.node(json!({ "camera": 0, "translation": [0, 0.3, -5], "rotation": [0, 1, 0, 0] }));
+    b.lights = vec![json!({ "type": "point", "intensity": 0.9 })];
+    let light = b.node(json!({ "translation": [2, 4, -4], "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+    b.roots.extend([camera, light]);
+    let file = parse(&b.gltf(), Files::None, &mut Vec::new()).unwrap();
+    let mut from_gltf = gltf_scene(&file, "materials.gltf", &ModelOptions::default()).unwrap();
+
+    // The mapping: glass transmits all and reflects nothing; the mirror reflects all with no
+    // diffuse colour; both get the highlight of a perfectly smooth surface.
+    let toml = "[camera]\neye = [0, 0.3, -5]\ntarget = [0, 0.3, -4]\nfov = 45.83662\n\
+        [material.clay]\ncolor = [0.85, 0.6, 0.45]\nspecular = 0.25\nshininess = 40\n\
+        [material.floor_a]\ncolor = [0.85, 0.85, 0.85]\n[material.floor_b]\ncolor = [0.35, 0.35, 0.35]\n\
+        [material.glass]\ncolor = [0, 0, 0]\nspecular = 0.5\nshininess = 10000\ntransmit = 1\nior = 1.5\n\
+        [material.mirror]\ncolor = [0, 0, 0]\nspecular = 0.5\nshininess = 10000\nreflect = 1\n\
+        [material.red]\ncolor = [0.9, 0.1, 0.1]\nspecular = 0\nshininess = 1\n\
+        [[light]]\nposition = [2, 4, -4]\ncolor = [0.9, 0.9, 0.9]\n";
+    let mut from_toml = raypipe::scene::file::parse(toml).unwrap();
+    // The same triangles; TOML's materials sort by name (clay, floor_a, floor_b, glass, mirror,
+    // red), which is the glTF scene's order: the framing's three, then the file's.
+    from_toml.triangles = from_gltf.triangles.clone();
+    let (a, b) = (from_gltf.camera, from_toml.camera);
+    assert!((a.eye - b.eye).length() < 1e-6 && (a.target - b.target).length() < 1e-6 && (a.up - b.up).length() < 1e-6);
+    assert!((a.fov_degrees - b.fov_degrees).abs() < 1e-4);
+    from_toml.camera = from_gltf.camera;
+    for scene in [&mut from_gltf, &mut from_toml] {
+        scene.settings.width = 64;
+        scene.settings.height = 48;
+    }
+    assert_eq!(from_gltf.materials[3..], from_toml.materials[3..]);
+    assert_eq!(from_gltf.lights, from_toml.lights);
+    let render = |scene: &Scene| {
+        let mut packed = PackedScene::new(scene).unwrap();
+        packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+        (
+            render_gpu(ctx, &packed, MemoryMode::Storage, Accel::Threaded),
+            render_cpu(&packed, Accel::Threaded),
+        )
+    };
+    let (gltf_gpu, gltf_cpu) = render(&from_gltf);
+    let (toml_gpu, _) = render(&from_toml);
+    assert_frames_match("gltf-materials-gpu-vs-cpu", &gltf_gpu, &gltf_cpu);
+    assert_images_match(
+        "gltf-materials-vs-toml",
+        &gltf_gpu.display(),
+        &toml_gpu.display(),
+        Tolerance::EXACT,
+    );
+    // The glass shows the red quad behind it, and the mirror the scene before it: neither is black.
+    let lit = gltf_gpu.color.iter().filter(|c| c[0] + c[1] + c[2] > 0.05).count();
+    assert!(lit > gltf_gpu.color.len() / 4, "the image is dark");
+}
+
+pub fn tests() -> Vec<Test> {
+    crate::tests![
+        plain cpu_checker_texels_land_where_the_uvs_say,
+        gpu gpu_checker_texels_in_every_memory_mode_and_pipeline,
+        gpu the_file_camera_gives_the_pinhole_depth,
+        gpu every_packing_renders_the_same_image,
+        gpu glass_and_mirror_match_their_toml_twin,
+    ]
+}
