@@ -475,3 +475,95 @@ fn frame_sequences_show_progress_on_a_terminal() {
     );
     assert!(shown.contains("wrote "), "{shown}");
 }
+
+/// One triangle as a .gltf, its buffer a data URI: 3 positions, then 3 u16 indices.
+const TRIANGLE_GLTF: &str = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}],
+"bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":6}],
+"buffers":[{"byteLength":44,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}]}"#;
+
+#[test]
+fn hostile_gltf_files_are_one_line_and_exit_2() {
+    let dir = test_dir("hostile-gltf");
+    let good = dir.join("triangle.gltf");
+    std::fs::write(&good, TRIANGLE_GLTF).unwrap();
+    let rendered = dir.join("triangle.png");
+    let output = raypipe(&[
+        "render",
+        path_str(&good),
+        "--device",
+        "cpu",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "-q",
+        "-o",
+        path_str(&rendered),
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+
+    let link = dir.join("zero.glb");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+    assert_clean_error(
+        &raypipe(&["render", path_str(&link), "--device", "cpu"]),
+        &["zero.glb: cannot read glTF file: not a regular file"],
+    );
+    let zeros = dir.join("zeros.glb");
+    std::fs::write(&zeros, vec![0u8; 100_000]).unwrap();
+    let output = raypipe(&["render", path_str(&zeros), "--device", "cpu"]);
+    assert_clean_error(&output, &["zeros.glb: not a glTF file"]);
+    assert!(output.stderr.len() < 400, "{} bytes of error", output.stderr.len());
+
+    for (name, from, to, expected) in [
+        (
+            "escape.gltf",
+            "data:application/octet-stream;base64,",
+            "../",
+            "buffer 0: URI '../",
+        ),
+        (
+            "absolute.gltf",
+            "data:application/octet-stream;base64,",
+            "/etc/",
+            "buffer 0: URI '/etc/",
+        ),
+        (
+            "count.gltf",
+            "\"count\":3,\"type\":\"VEC3\"",
+            "\"count\":2147483648,\"type\":\"VEC3\"",
+            "accessor 0: count 2147483648",
+        ),
+        (
+            "index.gltf",
+            "AAABAAIA",
+            "AAABAAMA",
+            "mesh 0 primitive 0: accessor 1: index 2 is 3, out of range (3 vertices)",
+        ),
+        (
+            "draco.gltf",
+            "\"asset\"",
+            "\"extensionsRequired\":[\"KHR_draco_mesh_compression\"],\"asset\"",
+            "extension KHR_draco_mesh_compression is required",
+        ),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, TRIANGLE_GLTF.replace(from, to)).unwrap();
+        let output = raypipe(&["render", path_str(&path), "--device", "cpu"]);
+        assert_clean_error(&output, &[&format!("{name}: "), expected]);
+    }
+
+    // A scene file's glTF mesh: the scene file, its line and mesh table, then the glTF's own error.
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, "[[mesh]]\nfile = \"draco.gltf\"\n").unwrap();
+    assert_clean_error(
+        &raypipe(&["render", path_str(&scene), "--device", "cpu"]),
+        &[
+            "scene.toml:1: mesh 0: ",
+            "draco.gltf: extension KHR_draco_mesh_compression is required",
+        ],
+    );
+}

@@ -298,3 +298,35 @@ proptest! {
         }
     }
 }
+
+/// A gigabyte of zeros (a sparse file: no disk) named as a model is refused by its first bytes,
+/// each format with its own reason.
+#[test]
+fn a_sparse_gigabyte_is_refused_by_its_header() {
+    let dir = common::models::test_dir("sparse-models");
+    for (name, expected) in [
+        ("zeros.ply", "zeros.ply:1: expected 'ply': not a PLY file"),
+        ("zeros.off", "zeros.off:1: expected the keyword OFF"),
+        ("zeros.obj", "zeros.obj: not a text file: a NUL byte at byte 0"),
+        ("zeros.glb", "zeros.glb: not a glTF file"),
+    ] {
+        let path = dir.join(name);
+        std::fs::File::create(&path).unwrap().set_len(1 << 30).unwrap();
+        let error = raypipe::scene::Scene::load(path.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        std::fs::remove_file(&path).unwrap();
+        assert!(error.starts_with(&format!("{}/{expected}", dir.display())), "{error}");
+        assert!(error.len() < 300, "{error}");
+    }
+    // A header that never ends within the first bytes read.
+    let path = dir.join("endless.ply");
+    let mut header = b"ply\nformat ascii 1.0\n".to_vec();
+    header.resize(200_000, b'\n');
+    std::fs::write(&path, &header).unwrap();
+    let error = raypipe::scene::Scene::load(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(error.starts_with(&format!("{}/endless.ply", dir.display())), "{error}");
+    assert!(error.contains("no end_header in the first 65536 bytes"), "{error}");
+}

@@ -48,6 +48,20 @@ impl MeshFormat {
             .map(|&(_, format)| format)
     }
 
+    /// Refuses a file whose first bytes (`head`; the whole file where `whole`) cannot begin a file
+    /// of this format, before the rest of it is read. What the head does not settle is left to
+    /// the parser.
+    pub fn check_head(self, head: &[u8], whole: bool) -> Result<(), MeshError> {
+        match self {
+            Self::Ply => ply::check_head(head, whole),
+            Self::Off => off::check_head(head, whole),
+            Self::Obj => match head.iter().position(|&b| b == 0) {
+                Some(at) => Err(MeshError::new(format!("not a text file: a NUL byte at byte {at}"))),
+                None => Ok(()),
+            },
+        }
+    }
+
     /// The extensions read, for messages: ".ply, .obj, .off".
     pub fn extension_list() -> String {
         Self::BY_EXTENSION.map(|(ext, _)| format!(".{ext}")).join(", ")
@@ -70,7 +84,10 @@ pub fn load(path: &Path) -> Result<Mesh, InputError> {
         ))
         .in_origin(&shown)
     })?;
-    let bytes = crate::input::read_regular(path, "model file", crate::input::MAX_MODEL_BYTES)?;
+    let bytes =
+        crate::input::read_regular_after_head(path, "model file", crate::input::MAX_MODEL_BYTES, |head, whole| {
+            format.check_head(head, whole)
+        })?;
     let mut notices = Vec::new();
     let mesh = parse(&bytes, format, &mut notices).map_err(|e| e.in_origin(&shown))?;
     for notice in notices {

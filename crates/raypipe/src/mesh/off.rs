@@ -25,26 +25,46 @@ fn number<T: std::str::FromStr>(line: usize, token: &str, what: &str) -> Result<
     })
 }
 
+/// Whether the keyword says the vertices carry normals; an error where it is no OFF keyword.
+fn keyword_has_normals(line: usize, keyword: &str) -> Result<bool, MeshError> {
+    match keyword {
+        "OFF" | "COFF" => Ok(false),
+        "NOFF" | "CNOFF" => Ok(true),
+        _ => Err(MeshError::at(
+            line,
+            format!(
+                "expected the keyword OFF, COFF, NOFF or CNOFF (got '{}')",
+                crate::error::quoted(keyword)
+            ),
+        )),
+    }
+}
+
+/// The keyword, from the file's first bytes: its first record must be one.
+pub fn check_head(head: &[u8], whole: bool) -> Result<(), MeshError> {
+    let text = match std::str::from_utf8(head) {
+        Ok(text) => text,
+        // The head may end inside a character; what comes before it must be text.
+        Err(e) if !whole && e.error_len().is_none() => std::str::from_utf8(&head[..e.valid_up_to()]).unwrap_or(""),
+        Err(e) => return Err(MeshError::new(format!("not a text file: {e}"))),
+    };
+    match records(text).next() {
+        Some((line, header)) => keyword_has_normals(line, header[0]).map(|_| ()),
+        None if whole => Ok(()),
+        None => Err(MeshError::new(format!(
+            "no OFF keyword in the first {} bytes",
+            head.len()
+        ))),
+    }
+}
+
 pub fn parse(bytes: &[u8]) -> Result<Mesh, MeshError> {
     let text = std::str::from_utf8(bytes).map_err(|e| MeshError::new(format!("not a text file: {e}")))?;
     let mut records = records(text);
     let (line, header) = records
         .next()
         .ok_or_else(|| MeshError::new("empty file: no OFF header"))?;
-    let keyword = header[0];
-    let has_normals = match keyword {
-        "OFF" | "COFF" => false,
-        "NOFF" | "CNOFF" => true,
-        _ => {
-            return Err(MeshError::at(
-                line,
-                format!(
-                    "expected the keyword OFF, COFF, NOFF or CNOFF (got '{}')",
-                    crate::error::quoted(keyword)
-                ),
-            ));
-        }
-    };
+    let has_normals = keyword_has_normals(line, header[0])?;
     // The counts follow on the keyword's line or on the next record.
     let (count_line, counts) = if header.len() > 1 {
         (line, header[1..].to_vec())

@@ -11,6 +11,20 @@ use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Encoding, Property, PropertyAccess, PropertyAccessResult, PropertyType};
 use std::io::Cursor;
 
+/// The magic line and, where the head is not the whole file, the header's end within it.
+pub fn check_head(head: &[u8], whole: bool) -> Result<(), MeshError> {
+    if !(head.starts_with(b"ply\n") || head.starts_with(b"ply\r\n")) {
+        return Err(MeshError::at(1, "expected 'ply': not a PLY file"));
+    }
+    if !whole && !head.windows(10).any(|w| w == b"end_header") {
+        return Err(MeshError::new(format!(
+            "no end_header in the first {} bytes: not a PLY header",
+            head.len()
+        )));
+    }
+    Ok(())
+}
+
 #[derive(Default)]
 struct PlyVertex {
     values: [f64; 6],

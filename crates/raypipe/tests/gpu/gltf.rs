@@ -230,6 +230,35 @@ fn glass_and_mirror_match_their_toml_twin(ctx: &GpuContext) {
     assert!(lit > gltf_gpu.color.len() / 4, "the image is dark");
 }
 
+/// The shared glTF samples (a texture, node animation, skins; drawn at rest), on the GPU in
+/// storage and texture memory against the CPU.
+fn gltf_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path) {
+    for name in [
+        "BoxTextured",
+        "BoxAnimated",
+        "RiggedSimple",
+        "SimpleSkin",
+        "AnimatedTriangle",
+    ] {
+        let path = models.join("gltf").join(format!("{name}.gltf"));
+        let mut scene = Scene::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{e}"));
+        scene.settings.width = 64;
+        scene.settings.height = 48;
+        let mut packed = PackedScene::new(&scene).unwrap();
+        packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+        let cpu = render_cpu(&packed, Accel::Threaded);
+        let hits = cpu.depth().data.iter().filter(|d| d.is_finite()).count();
+        assert!(
+            hits > 64 * 48 / 10,
+            "{name}: the model is out of view ({hits} pixels hit)"
+        );
+        for memory in [MemoryMode::Storage, MemoryMode::Texture] {
+            let gpu = render_gpu(ctx, &packed, memory, Accel::Threaded);
+            assert_frames_match(&format!("gltf-sample-{name}-{memory:?}"), &gpu, &cpu);
+        }
+    }
+}
+
 pub fn tests() -> Vec<Test> {
     crate::tests![
         plain cpu_checker_texels_land_where_the_uvs_say,
@@ -237,5 +266,6 @@ pub fn tests() -> Vec<Test> {
         gpu the_file_camera_gives_the_pinhole_depth,
         gpu every_packing_renders_the_same_image,
         gpu glass_and_mirror_match_their_toml_twin,
+        gpu_models gltf_samples_match_the_cpu,
     ]
 }

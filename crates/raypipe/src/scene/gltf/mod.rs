@@ -84,7 +84,9 @@ pub struct GltfScene {
 /// the path; notices are logged.
 pub fn load(path: &Path) -> Result<GltfScene, InputError> {
     let shown = path.display().to_string();
-    let bytes = crate::input::read_regular(path, "glTF file", crate::input::MAX_MODEL_BYTES)?;
+    let bytes = crate::input::read_regular_after_head(path, "glTF file", crate::input::MAX_MODEL_BYTES, |head, _| {
+        check_head(head).map_err(InputError::new)
+    })?;
     let folder = match path.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent,
         _ => Path::new("."),
@@ -95,6 +97,17 @@ pub fn load(path: &Path) -> Result<GltfScene, InputError> {
         log::info!("{shown}: {notice}");
     }
     Ok(scene)
+}
+
+/// A GLB starts with its magic, glTF JSON with `{` (after a byte-order mark or white space).
+fn check_head(head: &[u8]) -> Result<(), String> {
+    let text = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head);
+    match text.iter().find(|b| !b.is_ascii_whitespace()) {
+        _ if head.starts_with(b"glTF") => Ok(()),
+        Some(b'{') => Ok(()),
+        None if head.is_empty() => Err("empty file".into()),
+        _ => Err("not a glTF file: it starts with neither '{' nor the GLB magic 'glTF'".into()),
+    }
 }
 
 /// Parses glTF JSON or GLB bytes; `files` says where external files may be read from. Things the
