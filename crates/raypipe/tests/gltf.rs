@@ -510,3 +510,27 @@ fn unsupported_optional_extensions_are_ignored_with_a_notice() {
     parse(&serde_json::to_vec(&document).unwrap(), Files::None, &mut notices).unwrap();
     assert_eq!(notices, vec!["extension EXT_future_thing is ignored"]);
 }
+
+/// A 16x8 JPEG (made with Pillow, quality 95): its left half (200, 30, 40), its right half
+/// (20, 180, 60), in sRGB.
+const JPEG_BASE64: &str = "/9j/4AAQSkZJRgABAQAAAQABAAD/2wBDAAIBAQEBAQIBAQECAgICAgQDAgICAgUEBAMEBgUGBgYFBgYGBwkIBgcJBwYGCAsICQoKCgoKBggLDAsKDAkKCgr/2wBDAQICAgICAgUDAwUKBwYHCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgr/wAARCAAIABADASIAAhEBAxEB/8QAHwAAAQUBAQEBAQEAAAAAAAAAAAECAwQFBgcICQoL/8QAtRAAAgEDAwIEAwUFBAQAAAF9AQIDAAQRBRIhMUEGE1FhByJxFDKBkaEII0KxwRVS0fAkM2JyggkKFhcYGRolJicoKSo0NTY3ODk6Q0RFRkdISUpTVFVWV1hZWmNkZWZnaGlqc3R1dnd4eXqDhIWGh4iJipKTlJWWl5iZmqKjpKWmp6ipqrKztLW2t7i5usLDxMXGx8jJytLT1NXW19jZ2uHi4+Tl5ufo6erx8vP09fb3+Pn6/8QAHwEAAwEBAQEBAQEBAQAAAAAAAAECAwQFBgcICQoL/8QAtREAAgECBAQDBAcFBAQAAQJ3AAECAxEEBSExBhJBUQdhcRMiMoEIFEKRobHBCSMzUvAVYnLRChYkNOEl8RcYGRomJygpKjU2Nzg5OkNERUZHSElKU1RVVldYWVpjZGVmZ2hpanN0dXZ3eHl6goOEhYaHiImKkpOUlZaXmJmaoqOkpaanqKmqsrO0tba3uLm6wsPExcbHyMnK0tPU1dbX2Nna4uPk5ebn6Onq8vP09fb3+Pn6/9oADAMBAAIRAxEAPwD5Hr6Qoor8NzD7Pz/Q9z9ov/zTH/c7/wC6h//Z";
+
+#[test]
+fn jpeg_textures_decode_to_linear_texels() {
+    let b = textured_quad(1.0, [10497, 10497]);
+    let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
+    document["images"][0] = json!({ "uri": format!("data:image/jpeg;base64,{JPEG_BASE64}") });
+    let file = parse(&serde_json::to_vec(&document).unwrap(), Files::None, &mut Vec::new()).unwrap();
+    let texture = &file.textures[0];
+    assert_eq!((texture.width, texture.height), (16, 8));
+    use raypipe::scene::texture::srgb_to_linear;
+    for ((x, y), srgb) in [((2, 2), [200u8, 30, 40]), ((13, 5), [20, 180, 60])] {
+        let texel = texture.texel(x, y);
+        for c in 0..3 {
+            // JPEG is lossy: within a few 8-bit steps of the colour it was given.
+            let (low, high) = (srgb_to_linear(srgb[c].saturating_sub(4)), srgb_to_linear(srgb[c].saturating_add(4)));
+            assert!(texel[c] >= low && texel[c] <= high, "texel ({x}, {y}) is {texel:?}, made from {srgb:?}");
+        }
+        assert_eq!(texel[3], 1.0);
+    }
+}
