@@ -528,8 +528,14 @@ fn jpeg_textures_decode_to_linear_texels() {
         let texel = texture.texel(x, y);
         for c in 0..3 {
             // JPEG is lossy: within a few 8-bit steps of the colour it was given.
-            let (low, high) = (srgb_to_linear(srgb[c].saturating_sub(4)), srgb_to_linear(srgb[c].saturating_add(4)));
-            assert!(texel[c] >= low && texel[c] <= high, "texel ({x}, {y}) is {texel:?}, made from {srgb:?}");
+            let (low, high) = (
+                srgb_to_linear(srgb[c].saturating_sub(4)),
+                srgb_to_linear(srgb[c].saturating_add(4)),
+            );
+            assert!(
+                texel[c] >= low && texel[c] <= high,
+                "texel ({x}, {y}) is {texel:?}, made from {srgb:?}"
+            );
         }
         assert_eq!(texel[3], 1.0);
     }

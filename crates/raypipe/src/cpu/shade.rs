@@ -3,7 +3,7 @@
 use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
 use crate::bvh::layout::NONE;
 use crate::records::constants::RAY_BIAS;
-use crate::records::{GpuMaterial, GpuTexture, GpuTriangle, PackedScene};
+use crate::records::{GpuMaterial, GpuTriangle, PackedScene};
 use crate::scene::Wrap;
 use glam::{IVec2, Vec2, Vec3, Vec4};
 
@@ -117,21 +117,20 @@ pub fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
     i.clamp(0, size - 1)
 }
 
-fn texture_texel(scene: &PackedScene, texture: &GpuTexture, x: i32, y: i32) -> Vec4 {
-    let bits = scene.texture_pixels.0[(texture.offset + y as u32 * texture.width + x as u32) as usize];
-    Vec4::from_array(bits.map(|b| half::f16::from_bits(b).to_f32()))
+fn texture_texel(scene: &PackedScene, material: &GpuMaterial, x: i32, y: i32) -> Vec4 {
+    let index = material.texture_offset + y as u32 * material.texture_width + x as u32;
+    Vec4::from_array(scene.texture_pixels.0[index as usize].map(|b| half::f16::from_bits(b).to_f32()))
 }
 
 fn lerp4(a: Vec4, b: Vec4, t: f32) -> Vec4 {
     a * (1.0 - t) + b * t
 }
 
-/// Bilinear filtering without mipmaps: the four texels around the point (texel centres at +0.5),
-/// weighted by its distance to them.
-pub fn sample_texture(scene: &PackedScene, index: u32, uv: Vec2) -> Vec4 {
-    let texture = &scene.textures[index as usize];
-    let (wrap_u, wrap_v) = (texture.wrap & 0xff, texture.wrap >> 8);
-    let size = IVec2::new(texture.width as i32, texture.height as i32);
+/// The material's texture at `uv`. Bilinear filtering without mipmaps: the four texels around the
+/// point (texel centres at +0.5), weighted by its distance to them.
+pub fn sample_texture(scene: &PackedScene, material: &GpuMaterial, uv: Vec2) -> Vec4 {
+    let (wrap_u, wrap_v) = (material.texture_wrap & 0xff, material.texture_wrap >> 8);
+    let size = IVec2::new(material.texture_width as i32, material.texture_height as i32);
     let p = Vec2::new(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * size.as_vec2() - 0.5;
     let corner = p.floor();
     let f = p - corner;
@@ -140,7 +139,7 @@ pub fn sample_texture(scene: &PackedScene, index: u32, uv: Vec2) -> Vec4 {
     let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
     let y0 = wrap_texel(i.y, size.y, wrap_v);
     let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
-    let texel = |x, y| texture_texel(scene, texture, x, y);
+    let texel = |x, y| texture_texel(scene, material, x, y);
     let near_row = lerp4(texel(x0, y0), texel(x1, y0), f.x);
     let far_row = lerp4(texel(x0, y1), texel(x1, y1), f.x);
     lerp4(near_row, far_row, f.y)
@@ -149,10 +148,10 @@ pub fn sample_texture(scene: &PackedScene, index: u32, uv: Vec2) -> Vec4 {
 /// The surface's material: its colour times its texture's at the hit, where it has both.
 pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
     let mut material = scene.materials[surface.material as usize];
-    if material.texture != NONE
+    if material.texture_offset != NONE
         && let Some(uv) = surface.uv
     {
-        let texel = sample_texture(scene, material.texture, uv);
+        let texel = sample_texture(scene, &material, uv);
         material.color = (v3(material.color) * texel.truncate()).to_array();
     }
     material

@@ -295,7 +295,6 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn R
         ("plane", &scene.planes),
         ("light", &scene.lights),
         ("material", &scene.materials),
-        ("texture", &scene.textures),
     ];
     // A scene whose BVH is rebuilt on the GPU has none of its own: its node arrays come shared.
     static NO_NODES: Vec<GpuNode> = Vec::new();

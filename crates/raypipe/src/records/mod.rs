@@ -199,17 +199,6 @@ pub struct GpuTriangleUvs {
     pub _pad: [f32; 2],
 }
 
-/// A texture: where its texels start among all textures' texels (row by row, `width` to a row),
-/// its size, and its wrap modes (`wrap_u | wrap_v << 8`, `Wrap::code`s).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuTexture {
-    pub offset: u32,
-    pub width: u32,
-    pub height: u32,
-    pub wrap: u32,
-}
-
 /// An infinite plane with its checkerboard frame precomputed, so no basis is derived in the shader.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -250,8 +239,15 @@ pub struct GpuMaterial {
     pub ior: f32,
     /// Added to the shaded colour.
     pub emission: [f32; 3],
-    /// Index of the base-colour texture in the texture records, or `NONE`.
-    pub texture: u32,
+    /// The base-colour texture: its first texel among all textures' texels (row by row,
+    /// `texture_width` to a row), or `NONE` where the material has none. Travelling in the
+    /// material, a texture needs no array (and binding) of its own.
+    pub texture_offset: u32,
+    pub texture_width: u32,
+    pub texture_height: u32,
+    /// Its wrap modes, `wrap_u | wrap_v << 8` (`Wrap::code`s).
+    pub texture_wrap: u32,
+    pub _pad: u32,
 }
 
 /// One host struct's layout, for the naga layout test.
@@ -288,10 +284,12 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuTriangle, "Triangle", [v0, material, v1, normals, v2, uvs]),
     struct_layout!(GpuTriangleNormals, "TriangleNormals", [n0, n1, n2]),
     struct_layout!(GpuTriangleUvs, "TriangleUvs", [uv01, uv2]),
-    struct_layout!(GpuTexture, "Texture", [offset, width, height, wrap]),
     struct_layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
     struct_layout!(GpuLight, "Light", [position, color]),
-    struct_layout!(GpuMaterial, "Material", [color, specular, shininess, reflect, transmit, ior, emission, texture]),
+    struct_layout!(GpuMaterial, "Material", [
+        color, specular, shininess, reflect, transmit, ior, emission, texture_offset, texture_width, texture_height,
+        texture_wrap,
+    ]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
     struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
 ];

@@ -1,8 +1,8 @@
 //! A scene packed into records: what both tracers read.
 
 use super::{
-    GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere, GpuTexture,
-    GpuTriangle, GpuTriangleNormals, GpuTriangleUvs, MAX_TEXEL_INTEGER, TexturePixels,
+    GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere, GpuTriangle,
+    GpuTriangleNormals, GpuTriangleUvs, MAX_TEXEL_INTEGER, TexturePixels,
 };
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::{GpuNode, NONE};
@@ -70,8 +70,7 @@ pub struct PackedScene {
     pub planes: Vec<GpuPlane>,
     pub lights: Vec<GpuLight>,
     pub materials: Vec<GpuMaterial>,
-    pub textures: Vec<GpuTexture>,
-    /// The textures' texels, one texture after another.
+    /// The textures' texels, one texture after another; materials say where theirs start.
     pub texture_pixels: TexturePixels,
     /// The BVH, once [`PackedScene::build_bvh`] or [`PackedScene::set_bvh`] made it.
     pub bvh: Option<PackedBvh>,
@@ -199,33 +198,37 @@ impl PackedScene {
                 _pad1: 0.0,
             })
             .collect();
-        let materials = scene
-            .materials
-            .iter()
-            .map(|m| GpuMaterial {
-                color: m.color.to_array(),
-                specular: m.specular,
-                shininess: m.shininess,
-                reflect: m.reflect,
-                transmit: m.transmit,
-                ior: m.ior,
-                emission: m.emission.to_array(),
-                texture: m.texture.unwrap_or(NONE),
-            })
-            .collect();
+        // Every texture's texels, one after another: where each starts.
         let mut texture_pixels = Vec::new();
-        let textures = scene
+        let texture_offsets: Vec<u32> = scene
             .textures
             .iter()
             .map(|t| {
-                let record = GpuTexture {
-                    offset: texture_pixels.len() as u32,
-                    width: t.width,
-                    height: t.height,
-                    wrap: t.wrap[0].code() | t.wrap[1].code() << 8,
-                };
                 texture_pixels.extend_from_slice(&t.texels);
-                record
+                (texture_pixels.len() - t.texels.len()) as u32
+            })
+            .collect();
+        let materials = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let texture = m
+                    .texture
+                    .map(|t| (texture_offsets[t as usize], &scene.textures[t as usize]));
+                GpuMaterial {
+                    color: m.color.to_array(),
+                    specular: m.specular,
+                    shininess: m.shininess,
+                    reflect: m.reflect,
+                    transmit: m.transmit,
+                    ior: m.ior,
+                    emission: m.emission.to_array(),
+                    texture_offset: texture.map_or(NONE, |(offset, _)| offset),
+                    texture_width: texture.map_or(0, |(_, t)| t.width),
+                    texture_height: texture.map_or(0, |(_, t)| t.height),
+                    texture_wrap: texture.map_or(0, |(_, t)| t.wrap[0].code() | t.wrap[1].code() << 8),
+                    _pad: 0,
+                }
             })
             .collect();
         Ok(Self {
@@ -238,7 +241,6 @@ impl PackedScene {
             planes,
             lights,
             materials,
-            textures,
             texture_pixels: TexturePixels(texture_pixels),
             bvh: None,
         })

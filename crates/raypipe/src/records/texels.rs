@@ -1,6 +1,6 @@
 //! The texture memory route: every record as rgba32float texels, decoded by `texels.wgsl`.
 
-use super::{GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTexture, GpuTriangle, GpuTriangleNormals, GpuTriangleUvs};
+use super::{GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTriangle, GpuTriangleNormals, GpuTriangleUvs};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
 use bytemuck::Pod;
@@ -50,16 +50,8 @@ impl GpuRecord for GpuTriangleUvs {
     }
 }
 
-impl GpuRecord for GpuTexture {
-    const WGSL_TYPE: &'static str = "Texture";
-    fn push_texels(&self, out: &mut Vec<[f32; 4]>) {
-        // The offset stays below MAX_TEXEL_INTEGER (`scene::texture::MAX_TEXELS`), so it is exact.
-        out.push([self.offset, self.width, self.height, self.wrap].map(|n| n as f32));
-    }
-}
-
 /// Every texture's texels, one after another, as the GPU's rgba16float texture holds them (half
-/// floats' bits): the pixels `GpuTexture::offset` points into.
+/// floats' bits): the pixels `GpuMaterial::texture_offset` points into.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TexturePixels(pub Vec<[u16; 4]>);
 
@@ -103,7 +95,9 @@ impl GpuRecord for GpuMaterial {
         let [er, eg, eb] = self.emission;
         out.push([r, g, b, self.specular]);
         out.push([self.shininess, self.reflect, self.transmit, self.ior]);
-        out.push([er, eg, eb, link_texel(self.texture)]);
+        out.push([er, eg, eb, link_texel(self.texture_offset)]);
+        // The offset stays below MAX_TEXEL_INTEGER (`scene::texture::MAX_TEXELS`), so it is exact.
+        out.push([self.texture_width, self.texture_height, self.texture_wrap, 0].map(|n| n as f32));
     }
 }
 

@@ -107,21 +107,21 @@ fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
     return clamp(i, 0, size - 1);
 }
 
-fn texture_texel(texture: Texture, x: i32, y: i32) -> vec4<f32> {
-    return textureLoad(texture_pixels, texel_coord(texture.offset + u32(y) * texture.width + u32(x)), 0);
+fn texture_texel(material: Material, x: i32, y: i32) -> vec4<f32> {
+    let index = material.texture_offset + u32(y) * material.texture_width + u32(x);
+    return textureLoad(texture_pixels, texel_coord(index), 0);
 }
 
 fn lerp4(a: vec4<f32>, b: vec4<f32>, t: f32) -> vec4<f32> {
     return a * (1.0 - t) + b * t;
 }
 
-// Bilinear filtering without mipmaps: the four texels around the point (texel centres at +0.5),
-// weighted by its distance to them.
-fn sample_texture(index: u32, uv: vec2<f32>) -> vec4<f32> {
-    let texture = load_texture(index);
-    let wrap_u = texture.wrap & 0xffu;
-    let wrap_v = texture.wrap >> 8u;
-    let size = vec2<i32>(i32(texture.width), i32(texture.height));
+// The material's texture at uv. Bilinear filtering without mipmaps: the four texels around the
+// point (texel centres at +0.5), weighted by its distance to them.
+fn sample_texture(material: Material, uv: vec2<f32>) -> vec4<f32> {
+    let wrap_u = material.texture_wrap & 0xffu;
+    let wrap_v = material.texture_wrap >> 8u;
+    let size = vec2<i32>(i32(material.texture_width), i32(material.texture_height));
     let p = vec2<f32>(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * vec2<f32>(size) - 0.5;
     let corner = floor(p);
     let f = p - corner;
@@ -130,16 +130,16 @@ fn sample_texture(index: u32, uv: vec2<f32>) -> vec4<f32> {
     let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
     let y0 = wrap_texel(i.y, size.y, wrap_v);
     let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
-    let near_row = lerp4(texture_texel(texture, x0, y0), texture_texel(texture, x1, y0), f.x);
-    let far_row = lerp4(texture_texel(texture, x0, y1), texture_texel(texture, x1, y1), f.x);
+    let near_row = lerp4(texture_texel(material, x0, y0), texture_texel(material, x1, y0), f.x);
+    let far_row = lerp4(texture_texel(material, x0, y1), texture_texel(material, x1, y1), f.x);
     return lerp4(near_row, far_row, f.y);
 }
 
 // The surface's material: its colour times its texture's at the hit, where it has both.
 fn surface_material(surface: Surface) -> Material {
     var material = load_material(surface.material);
-    if (material.texture != NONE && surface.has_uv) {
-        material.color *= sample_texture(material.texture, surface.uv).rgb;
+    if (material.texture_offset != NONE && surface.has_uv) {
+        material.color *= sample_texture(material, surface.uv).rgb;
     }
     return material;
 }

@@ -17,10 +17,6 @@ fn triangle_uvs_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> TriangleUvs {
     return TriangleUvs(t0, t1.xy);
 }
 
-fn texture_from_texels(t0: vec4<f32>) -> Texture {
-    let fields = vec4<u32>(t0);
-    return Texture(fields.x, fields.y, fields.z, fields.w);
-}
 
 fn triangle_normals_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> TriangleNormals {
     return TriangleNormals(t0.xyz, t1.xyz, t2.xyz);
@@ -34,8 +30,9 @@ fn light_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Light {
     return Light(t0.xyz, t1.xyz);
 }
 
-fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> Material {
-    return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w, t2.xyz, link_from_texel(t2.w));
+fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>) -> Material {
+    let texture = vec3<u32>(t3.xyz);
+    return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w, t2.xyz, link_from_texel(t2.w), texture.x, texture.y, texture.z);
 }
 
 // Node links travel as exact floats, with NONE and LEAF as -1.

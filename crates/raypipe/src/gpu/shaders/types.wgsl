@@ -68,15 +68,6 @@ struct TriangleUvs {
     uv2: vec2<f32>,
 }
 
-// Where a texture's texels start among all textures' (row by row), its size, and its wrap modes
-// (u's | v's << 8; WRAP_* from the preamble).
-struct Texture {
-    offset: u32,
-    width: u32,
-    height: u32,
-    wrap: u32,
-}
-
 struct Plane {
     point: vec3<f32>,
     material: u32,
@@ -100,8 +91,12 @@ struct Material {
     transmit: f32,
     ior: f32,
     emission: vec3<f32>,
-    // Index of the base-colour texture, or NONE.
-    texture: u32,
+    // The base-colour texture: its first texel among all textures' (row by row), or NONE; its
+    // size; its wrap modes (u's | v's << 8; WRAP_* from the preamble).
+    texture_offset: u32,
+    texture_width: u32,
+    texture_height: u32,
+    texture_wrap: u32,
 }
 
 // A BVH node (src/bvh/layout.rs): internal nodes first, then leaves; the root is node 0.
