@@ -339,6 +339,12 @@ fn hostile_documents_end_in_one_line_naming_the_element() {
             Box::new(|d| d["nodes"][0]["mesh"] = json!(7)),
             "nodes[0].mesh: Index out of bounds",
         ),
+        // gltf-json's own validation would panic on this one (the fuzz target found it).
+        (
+            "a POSITION accessor out of range",
+            Box::new(|d| d["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(9)),
+            "mesh 0 primitive 0: POSITION accessor 9 does not exist (2 accessors)",
+        ),
         (
             "a cycle",
             Box::new(|d| d["nodes"][0]["children"] = json!([1])),

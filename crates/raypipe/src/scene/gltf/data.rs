@@ -189,6 +189,66 @@ fn component(bytes: &[u8], component: ComponentType, normalized: bool) -> f32 {
     }
 }
 
+/// An accessor and its component and element types, by index.
+fn lookup(root: &json::Root, index: usize) -> Result<(&json::Accessor, ComponentType, Type), String> {
+    let accessor = root
+        .accessors
+        .get(index)
+        .ok_or_else(|| format!("accessor {index} does not exist"))?;
+    let (component_type, type_) = accessor_types(accessor).ok_or_else(|| format!("accessor {index}: invalid type"))?;
+    Ok((accessor, component_type, type_))
+}
+
+/// Where an accessor's elements lie in its buffer view: checked to hold them all.
+struct Elements<'a> {
+    bytes: &'a [u8],
+    offset: usize,
+    stride: usize,
+}
+
+impl<'a> Elements<'a> {
+    /// The elements of `accessor`, `count` of `element_size` bytes; `None` where it has no view
+    /// (its elements are zeros, before any sparse substitution).
+    fn of(
+        root: &json::Root,
+        buffers: &'a [Vec<u8>],
+        accessor: &json::Accessor,
+        element_size: usize,
+        count: usize,
+    ) -> Result<Option<Self>, String> {
+        let Some(view) = accessor.buffer_view else {
+            // Zeros cost memory that no byte of the file pays for: at most twice the buffers' size.
+            let paid = 2 * buffers.iter().map(|b| b.len() as u64).sum::<u64>();
+            if (count * element_size) as u64 > paid.max(1 << 20) {
+                return Err(format!(
+                    "{count} elements without a buffer view: more than twice the file's buffers"
+                ));
+            }
+            return Ok(None);
+        };
+        let bytes = view_bytes(root, buffers, view.value())?;
+        let stride = element_stride(root, view.value(), element_size);
+        let offset = accessor.byte_offset.map_or(0, |o| o.0);
+        let offset = usize::try_from(offset).map_err(|_| format!("byteOffset {offset} is beyond any buffer"))?;
+        check_span(bytes.len(), offset, stride, element_size, count)?;
+        Ok(Some(Self { bytes, offset, stride }))
+    }
+
+    /// Element `e`'s bytes, and what follows them.
+    fn at(&self, e: usize) -> &'a [u8] {
+        &self.bytes[self.offset + e * self.stride..]
+    }
+}
+
+/// An accessor's count, refused above `limit` before anything is allocated.
+fn bounded_count(accessor: &json::Accessor, limit: u64, what: &str) -> Result<usize, String> {
+    let count = accessor.count.0;
+    if count > limit {
+        return Err(format!("count {count} is more than the {limit} {what}"));
+    }
+    Ok(count as usize)
+}
+
 /// An accessor's elements as f32s, `width` to an element; `types` lists the element types the
 /// caller takes. Sparse substitutions are applied. Errors start with `accessor N: `.
 pub fn read_floats(
@@ -198,43 +258,32 @@ pub fn read_floats(
     types: &[Type],
 ) -> Result<(Vec<f32>, usize), String> {
     let what = format!("accessor {index}");
-    let accessor = root
-        .accessors
-        .get(index)
-        .ok_or_else(|| format!("{what} does not exist"))?;
-    let (component_type, type_) = accessor_types(accessor).ok_or_else(|| format!("{what}: invalid type"))?;
+    let (accessor, component_type, type_) = lookup(root, index)?;
     if !types.contains(&type_) {
         return Err(format!("{what}: type {type_:?} where {types:?} is expected"));
     }
     let width = type_.multiplicity();
-    let count = accessor.count.0;
-    if count > MAX_ACCESSOR_COUNT {
-        return Err(format!(
-            "{what}: count {count} is more than the {MAX_ACCESSOR_COUNT} elements an accessor may have"
-        ));
-    }
-    let count = count as usize;
+    let count = bounded_count(accessor, MAX_ACCESSOR_COUNT, "elements an accessor may have")
+        .map_err(|e| format!("{what}: {e}"))?;
     let size = component_size(component_type);
+    let elements = Elements::of(root, buffers, accessor, width * size, count).map_err(|e| format!("{what}: {e}"))?;
     let mut values = vec![0.0f32; count * width];
-    if let Some(view_index) = accessor.buffer_view {
-        let bytes = view_bytes(root, buffers, view_index.value()).map_err(|e| format!("{what}: {e}"))?;
-        let stride = element_stride(root, view_index.value(), width * size);
-        let offset = accessor.byte_offset.map_or(0, |o| o.0) as usize;
-        check_span(bytes.len(), offset, stride, width * size, count).map_err(|e| format!("{what}: {e}"))?;
+    if let Some(elements) = elements {
         for (e, element) in values.chunks_exact_mut(width).enumerate() {
-            let at = offset + e * stride;
+            let bytes = elements.at(e);
             for (c, value) in element.iter_mut().enumerate() {
-                *value = component(&bytes[at + c * size..], component_type, accessor.normalized);
+                *value = component(&bytes[c * size..], component_type, accessor.normalized);
             }
         }
     }
     if let Some(sparse) = &accessor.sparse {
-        let substitutes = sparse.count.0 as usize;
-        if substitutes as u64 > count as u64 {
+        let substitutes = sparse.count.0;
+        if substitutes > count as u64 {
             return Err(format!(
                 "{what}: sparse count {substitutes} is more than the count {count}"
             ));
         }
+        let substitutes = substitutes as usize;
         let indices = sparse_indices(root, buffers, &sparse.indices, substitutes)
             .map_err(|e| format!("{what}: sparse indices: {e}"))?;
         let bytes = view_bytes(root, buffers, sparse.values.buffer_view.value()).map_err(|e| format!("{what}: {e}"))?;
@@ -317,11 +366,7 @@ pub fn read_indices(
     vertex_count: usize,
 ) -> Result<Vec<u32>, String> {
     let what = format!("accessor {index}");
-    let accessor = root
-        .accessors
-        .get(index)
-        .ok_or_else(|| format!("{what} does not exist"))?;
-    let (component_type, type_) = accessor_types(accessor).ok_or_else(|| format!("{what}: invalid type"))?;
+    let (accessor, component_type, type_) = lookup(root, index)?;
     if type_ != Type::Scalar
         || !matches!(
             component_type,
@@ -332,32 +377,24 @@ pub fn read_indices(
             "{what}: indices must be unsigned scalars (got {component_type:?} {type_:?})"
         ));
     }
-    // Exact for every u32: f32 is not, so the values are read as integers.
-    let count = accessor.count.0;
-    if count > MAX_ACCESSOR_COUNT * 3 {
-        return Err(format!(
-            "{what}: count {count} is more than the indices of a render's triangles"
-        ));
+    if accessor.sparse.is_some() {
+        return Err(format!("{what}: sparse index accessors are not read"));
     }
-    let count = count as usize;
+    let count = bounded_count(accessor, MAX_ACCESSOR_COUNT * 3, "indices of a render's triangles")
+        .map_err(|e| format!("{what}: {e}"))?;
     let size = component_size(component_type);
+    let elements = Elements::of(root, buffers, accessor, size, count).map_err(|e| format!("{what}: {e}"))?;
+    // Read as integers: f32 is not exact for every u32.
     let mut values = vec![0u32; count];
-    if let Some(view_index) = accessor.buffer_view {
-        let bytes = view_bytes(root, buffers, view_index.value()).map_err(|e| format!("{what}: {e}"))?;
-        let stride = element_stride(root, view_index.value(), size);
-        let offset = accessor.byte_offset.map_or(0, |o| o.0) as usize;
-        check_span(bytes.len(), offset, stride, size, count).map_err(|e| format!("{what}: {e}"))?;
+    if let Some(elements) = elements {
         for (e, value) in values.iter_mut().enumerate() {
-            let b = &bytes[offset + e * stride..];
+            let b = elements.at(e);
             *value = match component_type {
                 ComponentType::U8 => b[0] as u32,
                 ComponentType::U16 => u16::from_le_bytes([b[0], b[1]]) as u32,
                 _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
             };
         }
-    }
-    if accessor.sparse.is_some() {
-        return Err(format!("{what}: sparse index accessors are not read"));
     }
     if let Some((k, &bad)) = values.iter().enumerate().find(|&(_, &v)| v as usize >= vertex_count) {
         return Err(format!(

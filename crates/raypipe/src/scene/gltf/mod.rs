@@ -188,6 +188,23 @@ fn check_extensions(root: &mut json::Root, notices: &mut Vec<String>) -> Result<
 /// Every reference in range and every enum known (the crate's checks), first fault first.
 fn validate(root: &json::Root) -> Result<(), String> {
     use gltf::json::validation::Validate;
+    // gltf-json 1.4.1 reads a primitive's POSITION accessor before it checks the index (its
+    // `primitive_validate_hook` indexes the accessors directly): checked here first, or a file
+    // naming an accessor past the end would panic there (found by the fuzz target).
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position)
+                && index.value() >= root.accessors.len()
+            {
+                return Err(format!(
+                    "mesh {m} primitive {p}: POSITION accessor {} does not exist ({} accessors)",
+                    index.value(),
+                    root.accessors.len()
+                ));
+            }
+        }
+    }
     let mut first = None;
     root.validate(root, json::Path::new, &mut |path, error| {
         first.get_or_insert_with(|| format!("{}: {error}", path()));
