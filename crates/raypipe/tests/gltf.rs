@@ -422,6 +422,17 @@ fn hostile_bytes_end_in_one_line() {
     for cut in [0, 1, document.len() / 2, document.len() - 1] {
         refused_bytes(&document[..cut]);
     }
+    // A total length shorter than the header (gltf's own reader would subtract past zero), and
+    // longer than the file.
+    for length in [0u32, 11, container.len() as u32 + 1] {
+        let mut short = container.clone();
+        short[8..12].copy_from_slice(&length.to_le_bytes());
+        let message = refused_bytes(&short);
+        assert!(
+            message.starts_with(&format!("GLB header: total length {length}")),
+            "{message}"
+        );
+    }
     // A chunk whose length says more than the file holds.
     let mut lying = container.clone();
     lying[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
