@@ -76,9 +76,9 @@ pub struct PackedScene {
     pub bvh: Option<PackedBvh>,
 }
 
-/// The most records of one kind a render takes: indices up to 2^24 - 1 stay exact in the f32
-/// texels of texture memory.
-pub const MAX_RECORDS: usize = MAX_TEXEL_INTEGER as usize - 1;
+pub use crate::scene::MAX_RECORDS;
+// Every record index must stay exact in the f32 texels of texture memory.
+const _: () = assert!(MAX_RECORDS < MAX_TEXEL_INTEGER as usize);
 
 impl PackedScene {
     /// Packs a validated scene with its render settings.

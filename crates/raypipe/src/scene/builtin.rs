@@ -18,7 +18,7 @@ pub const NAMES: &[&str] = &[
 ];
 
 /// Largest primitive count a procedural family accepts: `raypipe bvh` builds trees this large;
-/// renders take at most [`crate::records::packed::MAX_RECORDS`] primitives.
+/// renders take at most [`crate::scene::MAX_RECORDS`] primitives.
 pub const MAX_COUNT: usize = 1 << 26;
 
 /// Returns `Ok(None)` when `name` is not a built-in (it may be a file), `Err` when it is one with bad
@@ -36,7 +36,7 @@ pub fn by_name(name: &str) -> Result<Option<Scene>, InputError> {
             Ok(n) if (1..=MAX_COUNT).contains(&n) => Ok(n),
             _ => Err(fail(format!(
                 "count must be an integer in 1..={MAX_COUNT} (renders take up to {})",
-                crate::records::packed::MAX_RECORDS
+                crate::scene::MAX_RECORDS
             ))),
         }
     };

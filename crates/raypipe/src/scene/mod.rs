@@ -428,6 +428,11 @@ impl Scene {
     }
 }
 
+/// The most records of one kind a render takes: indices up to 2^24 - 1 stay exact in the f32
+/// texels of texture memory (`records::MAX_TEXEL_INTEGER`). Scenes and their loaders refuse more
+/// before building them.
+pub const MAX_RECORDS: usize = (1 << 24) - 1;
+
 /// The largest image side we accept; far beyond any adapter's texture limit is a typo, not a request.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// The deepest bounce count we accept; the shader keeps a ray stack of this many entries plus one.

@@ -122,10 +122,10 @@ impl Placement {
         }
         match self.spheres {
             SphereCount::Sampled(0) => return fail("spheres must be at least 1".into()),
-            SphereCount::Sampled(n) if n > crate::records::packed::MAX_RECORDS => {
+            SphereCount::Sampled(n) if n > crate::scene::MAX_RECORDS => {
                 return fail(format!(
                     "spheres must be at most {} (got {n})",
-                    crate::records::packed::MAX_RECORDS
+                    crate::scene::MAX_RECORDS
                 ));
             }
             _ => {}

@@ -518,10 +518,10 @@ impl SceneReader<'_> {
         let normal_matrix = (determinant != 0.0).then(|| linear.inverse().transpose());
         for primitive in local {
             self.triangles += primitive.triangles.len();
-            if self.triangles > crate::records::packed::MAX_RECORDS {
+            if self.triangles > crate::scene::MAX_RECORDS {
                 return Err(format!(
                     "node {node}: the scene's triangles pass the {} a render takes",
-                    crate::records::packed::MAX_RECORDS
+                    crate::scene::MAX_RECORDS
                 ));
             }
             let positions = primitive.positions.iter().map(|&p| world.transform_point3(p)).collect();
@@ -625,10 +625,10 @@ impl GltfScene {
         placement: &Placement,
         place: &Similarity,
     ) -> Result<(), InputError> {
-        if scene.triangles.len() + self.mesh_triangle_count() > crate::records::packed::MAX_RECORDS {
+        if scene.triangles.len() + self.mesh_triangle_count() > crate::scene::MAX_RECORDS {
             return Err(InputError::new(format!(
                 "more than the {} triangles a render takes",
-                crate::records::packed::MAX_RECORDS
+                crate::scene::MAX_RECORDS
             )));
         }
         let material_base = scene.materials.len() as u32;
