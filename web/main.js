@@ -107,6 +107,26 @@ async function main() {
     select.value = scene;
   }
   wire(viewer);
+  const model = new URLSearchParams(window.location.search).get("model");
+  if (model) await fetchModel(viewer, model);
+}
+
+/// Opens `?model=URL`, fetched relative to the page: the file's name (the URL's last segment) picks
+/// its format. A failed fetch shows its line, as a broken file does, and the scene stays.
+async function fetchModel(viewer, url) {
+  let response;
+  try {
+    response = await fetch(new URL(url, window.location.href));
+  } catch (error) {
+    viewer.report(`${url}: cannot fetch: ${error.message}`);
+    return;
+  }
+  if (!response.ok) {
+    viewer.report(`${url}: cannot fetch: HTTP ${response.status} ${response.statusText}`.trimEnd());
+    return;
+  }
+  const name = decodeURIComponent(new URL(response.url).pathname.split("/").pop() || url);
+  viewer.open_file(name, new Uint8Array(await response.arrayBuffer()));
 }
 
 watch();

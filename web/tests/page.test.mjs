@@ -129,6 +129,13 @@ function reference(spec, width, height) {
   return file;
 }
 
+/// `raypipe render FILE --device cpu` at a size: the reference of a file the page opens.
+function fileReference(file, width, height) {
+  const out = path.join(references, `${path.basename(file)}-${width}x${height}.png`);
+  execFileSync(raypipe, ["render", file, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "-q", "-o", out]);
+  return out;
+}
+
 /// `raypipe diff` of `actual` against `expected`: both the mean and the p99 within bounds, or the
 /// difference image is written beside the screenshot and the test fails. Passing screenshots are
 /// removed.
@@ -265,10 +272,7 @@ for (const backend of ["webgpu", "webgl2"]) {
       assert.equal(opened.primitives, 12);
       await until(page, (s, frames) => s.frames >= frames, "a frame of the glTF", { arg: opened.frames + 2 });
       const shot = await screenshot(page, `${backend}-box-textured`);
-      const expected = path.join(references, `BoxTextured-${size.width}x${size.height}.png`);
-      execFileSync(raypipe, ["render", BOX_TEXTURED, "--device", "cpu", "--width", `${size.width}`,
-        "--height", `${size.height}`, "-q", "-o", expected]);
-      assertSimilar(shot, expected);
+      assertSimilar(shot, fileReference(BOX_TEXTURED, size.width, size.height));
 
       const glb = Buffer.from("glTF\x02\x00\x00\x00\xff\x00\x00\x00", "latin1");
       await page.setInputFiles("#file", { name: "cut.glb", mimeType: "model/gltf-binary", buffer: glb });
@@ -278,6 +282,34 @@ for (const backend of ["webgpu", "webgl2"]) {
       await shows(page, broken.error);
       assert.deepEqual(page.errors, []);
       await page.close();
+    });
+
+    test("?model=URL opens a file fetched beside the page as raypipe render shows it; a 404 and a broken file show their line and the scene stays", async () => {
+      const models = path.join(site, "test-models");
+      fs.mkdirSync(models, { recursive: true });
+      const tetrahedron = path.join(models, "tetrahedron.obj");
+      fs.writeFileSync(tetrahedron, TETRAHEDRON_OBJ);
+      fs.writeFileSync(path.join(models, "broken.ply"), BROKEN_PLY);
+      fs.rmSync(path.join(models, "missing.ply"), { force: true });
+      const query = `width=${size.width}&height=${size.height}&backend=${backend}&spp=1`;
+
+      const page = await open(`model=test-models/tetrahedron.obj&${query}`);
+      const opened = await until(page, (s) => s.scene === "tetrahedron.obj" && !s.busy && s.samples >= s.spp, "the model");
+      assert.equal(opened.primitives, 4);
+      await until(page, (s, frames) => s.frames >= frames, "a frame of the model", { arg: opened.frames + 2 });
+      assertSimilar(await screenshot(page, `${backend}-model-url`), fileReference(tetrahedron, size.width, size.height));
+      assert.deepEqual(page.errors, []);
+      await page.close();
+
+      for (const [file, line] of [["missing.ply", /^test-models\/missing\.ply: cannot fetch: HTTP 404/], ["broken.ply", /^broken\.ply:11: /]]) {
+        const failing = await open(`model=test-models/${file}&${query}`);
+        const failed = await until(failing, (s) => s.error != null && s.frames >= 1, `the error of ${file}`);
+        assert.match(failed.error, line);
+        assert.ok(!failed.error.includes("\n"), failed.error);
+        assert.equal(failed.scene, "whitted");
+        await shows(failing, failed.error);
+        await failing.close();
+      }
     });
 
     test("bounce:N stands still when paused, equal to the CPU's first frame, and moves between frames", async () => {

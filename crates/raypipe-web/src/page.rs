@@ -480,7 +480,7 @@ impl Viewer {
                 this.tracer.renderer.restart();
                 return;
             }
-            Setting::Width(_) | Setting::Height(_) | Setting::Backend(_) => {
+            Setting::Model(_) | Setting::Width(_) | Setting::Height(_) | Setting::Backend(_) => {
                 return self.fail(format!(
                     "{key} is set in the page's address only (reload with ?{key}={value})"
                 ));
@@ -507,8 +507,15 @@ impl Viewer {
         this.publish();
     }
 
-    /// Opens a file the page was given (the file input, or a drop): a TOML scene or a PLY, OBJ or
-    /// OFF model, parsed here. A broken one shows its error and the current scene stays.
+    /// Shows a failure of the page's script (a model URL that could not be fetched): the message
+    /// line, and the current scene stays.
+    pub fn report(&self, why: String) {
+        self.fail(why);
+    }
+
+    /// Opens a file the page was given (the file input, a drop, or the `model` URL): a TOML scene,
+    /// a PLY, OBJ or OFF model, or a glTF, parsed here. A broken one shows its error and the
+    /// current scene stays.
     pub fn open_file(&self, name: String, bytes: Vec<u8>) {
         let loaded = Scene::from_bytes(&name, &bytes).map_err(|e| e.to_string());
         Page::open_scene(&self.page, name, loaded);

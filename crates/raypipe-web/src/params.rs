@@ -41,6 +41,8 @@ pub const MAX_SPP: u32 = 4096;
 #[derive(Clone, Debug, PartialEq)]
 pub enum Setting {
     Scene(String),
+    /// A model or scene file to fetch, by a URL relative to the page (the page's script fetches it).
+    Model(String),
     Accel(Accel),
     Memory(MemoryMode),
     Pipeline(Pipeline),
@@ -55,7 +57,7 @@ pub enum Setting {
 
 /// The keys, for messages.
 pub const KEYS: &[&str] = &[
-    "scene", "accel", "memory", "pipeline", "depth", "aov", "paused", "spp", "width", "height", "backend",
+    "scene", "model", "accel", "memory", "pipeline", "depth", "aov", "paused", "spp", "width", "height", "backend",
 ];
 
 impl Setting {
@@ -77,6 +79,8 @@ impl Setting {
         Ok(match key {
             "scene" if value.is_empty() => return Err("scene=: name a scene".into()),
             "scene" => Setting::Scene(value.to_string()),
+            "model" if value.is_empty() => return Err("model=: give a file's URL".into()),
+            "model" => Setting::Model(value.to_string()),
             "accel" => Setting::Accel(choice(key, value)?),
             "memory" => Setting::Memory(choice(key, value)?),
             "pipeline" => Setting::Pipeline(choice(key, value)?),
@@ -100,6 +104,8 @@ impl Setting {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StartParams {
     pub scene: String,
+    /// A file to fetch and open once the page runs, by a URL relative to the page.
+    pub model: Option<String>,
     pub accel: Accel,
     /// `None`: the backend's default (storage on WebGPU, texture on WebGL2).
     pub memory: Option<MemoryMode>,
@@ -119,6 +125,7 @@ impl Default for StartParams {
     fn default() -> Self {
         Self {
             scene: "whitted".into(),
+            model: None,
             accel: Accel::Threaded,
             memory: None,
             pipeline: Pipeline::Fragment,
@@ -151,6 +158,7 @@ impl StartParams {
     fn apply(&mut self, setting: Setting) {
         match setting {
             Setting::Scene(name) => self.scene = name,
+            Setting::Model(url) => self.model = Some(url),
             Setting::Accel(accel) => self.accel = accel,
             Setting::Memory(memory) => self.memory = Some(memory),
             Setting::Pipeline(pipeline) => self.pipeline = pipeline,
@@ -181,6 +189,7 @@ mod tests {
             ("depth", "3"),
             ("aov", "normal"),
             ("spp", "1"),
+            ("model", "models/bunny.ply"),
         ];
         let (params, errors) = StartParams::from_pairs(query);
         assert!(errors.is_empty(), "{errors:?}");
@@ -188,6 +197,7 @@ mod tests {
             params,
             StartParams {
                 scene: "random:2000".into(),
+                model: Some("models/bunny.ply".into()),
                 accel: Accel::Threaded,
                 memory: Some(MemoryMode::Texture),
                 pipeline: Pipeline::Fragment,
@@ -221,7 +231,7 @@ mod tests {
                 "accel=bvh: expected one of brute, stack, stackless, threaded",
                 "width=0: expected a whole number in 1..=8192",
                 "depth=33: expected a whole number in 0..=32",
-                "unknown setting 'colour' (known: scene, accel, memory, pipeline, depth, aov, paused, spp, width, height, backend)",
+                "unknown setting 'colour' (known: scene, model, accel, memory, pipeline, depth, aov, paused, spp, width, height, backend)",
             ]
         );
     }
@@ -243,5 +253,6 @@ mod tests {
         assert_eq!(Setting::parse("paused", "true"), Ok(Setting::Paused(true)));
         assert!(Setting::parse("paused", "yes").is_err());
         assert!(Setting::parse("scene", "").is_err());
+        assert!(Setting::parse("model", "").is_err());
     }
 }

@@ -339,6 +339,15 @@ fn hostile_documents_end_in_one_line_naming_the_element() {
             Box::new(|d| d["nodes"][0]["mesh"] = json!(7)),
             "nodes[0].mesh: Index out of bounds",
         ),
+        (
+            "a perspective camera without its object",
+            Box::new(|d| {
+                d["cameras"] =
+                    json!([{ "type": "perspective", "orthographic": { "xmag": 1, "ymag": 1, "zfar": 2, "znear": 1 } }]);
+                d["nodes"][1]["camera"] = json!(0);
+            }),
+            "camera 0: of type perspective, without its perspective object",
+        ),
         // gltf-json's own validation would panic on this one (the fuzz target found it).
         (
             "a POSITION accessor out of range",
@@ -556,4 +565,26 @@ fn jpeg_textures_decode_to_linear_texels() {
         }
         assert_eq!(texel[3], 1.0);
     }
+}
+
+/// An image with neither a uri nor a buffer view is refused (gltf's own accessor would panic); an
+/// image in a buffer view without its mimeType is known by its first bytes.
+#[test]
+fn images_without_a_source_or_a_type() {
+    let b = textured_quad(1.0, [10497, 10497]);
+    let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
+    document["images"][0] = json!({});
+    let message = refused_bytes(&serde_json::to_vec(&document).unwrap());
+    assert_eq!(message, "material 0: image 0: neither a bufferView nor a uri");
+
+    let dir = fresh_dir("gltf-image-type");
+    let path = b.write(&dir, "untyped", Packing::Glb);
+    let bytes = std::fs::read(&path).unwrap();
+    let json_length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut document: Value = serde_json::from_slice(&bytes[20..20 + json_length]).unwrap();
+    document["images"][0].as_object_mut().unwrap().remove("mimeType");
+    let bin_start = 20 + json_length + 8;
+    let untyped = glb(&serde_json::to_vec(&document).unwrap(), &bytes[bin_start..]);
+    let file = parse(&untyped, Files::None, &mut Vec::new()).unwrap();
+    assert_eq!(file.textures.len(), 1);
 }

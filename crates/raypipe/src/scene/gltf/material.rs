@@ -121,26 +121,28 @@ impl Materials {
             WrappingMode::ClampToEdge => Wrap::Clamp,
             WrappingMode::MirroredRepeat => Wrap::Mirror,
         });
-        let image = texture.source();
-        if let Some(&index) = self.by_image.get(&(image.index(), wrap)) {
+        let image = texture.source().index();
+        if let Some(&index) = self.by_image.get(&(image, wrap)) {
             return Ok(index);
         }
-        let what = format!("image {}", image.index());
-        let (bytes, mime) = match image.source() {
-            gltf::image::Source::View { view, mime_type } => {
-                let bytes = view_bytes(root, buffers, view.index())
-                    .map_err(|e| format!("{what}: {e}"))?
-                    .to_vec();
-                (bytes, Some(mime_type))
-            }
-            gltf::image::Source::Uri { uri, mime_type } => (read_uri(uri, files, MAX_IMAGE_BYTES, &what)?, mime_type),
+        let what = format!("image {image}");
+        // Read from the JSON: gltf's `Image::source` unwraps a missing uri and a view's missing
+        // mimeType, which no validation checks (found by the fuzz target).
+        let json = &root.images[image];
+        let mime = json.mime_type.as_ref().map(|m| m.0.as_str());
+        let bytes = match (&json.buffer_view, &json.uri) {
+            (Some(view), _) => view_bytes(root, buffers, view.value())
+                .map_err(|e| format!("{what}: {e}"))?
+                .to_vec(),
+            (None, Some(uri)) => read_uri(uri, files, MAX_IMAGE_BYTES, &what)?,
+            (None, None) => return Err(format!("{what}: neither a bufferView nor a uri")),
         };
         let budget = MAX_TEXELS - self.texels;
         let (width, height, rgba) = decode_image(&bytes, mime, budget).map_err(|e| format!("{what}: {e}"))?;
         self.texels += width as u64 * height as u64;
         self.textures.push(Texture::from_srgb8(width, height, &rgba, wrap));
         let index = self.textures.len() as u32 - 1;
-        self.by_image.insert((image.index(), wrap), index);
+        self.by_image.insert((image, wrap), index);
         Ok(index)
     }
 }

@@ -371,20 +371,27 @@ impl SceneReader<'_> {
         if let Some(camera) = node.camera()
             && self.camera.is_none()
         {
-            match camera.projection() {
-                gltf::camera::Projection::Perspective(perspective) => {
+            // Read from the JSON: gltf's `Camera::projection` unwraps the object its type names,
+            // which validation only checks for one of the two being there.
+            let json = &self.root.cameras[camera.index()];
+            match (json.type_, &json.perspective) {
+                (json::validation::Checked::Valid(json::camera::Type::Perspective), Some(perspective)) => {
                     let eye = world.transform_point3(Vec3::ZERO);
                     let forward = world.transform_vector3(Vec3::NEG_Z);
                     self.camera = Some(Camera {
                         eye,
                         target: eye + forward,
                         up: world.transform_vector3(Vec3::Y),
-                        fov_degrees: perspective.yfov().to_degrees(),
+                        fov_degrees: perspective.yfov.to_degrees(),
                     });
                 }
-                gltf::camera::Projection::Orthographic(_) => {
-                    self.note_once("orthographic cameras are skipped");
+                (json::validation::Checked::Valid(json::camera::Type::Perspective), None) => {
+                    return Err(format!(
+                        "camera {}: of type perspective, without its perspective object",
+                        camera.index()
+                    ));
                 }
+                _ => self.note_once("orthographic cameras are skipped"),
             }
         }
         if let Some(light) = node.light() {
