@@ -119,8 +119,8 @@ fn strips_fans_and_points_by_mode() {
     );
 }
 
-#[test]
-fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
+/// A triangle, two cameras (the first turned to look along -x), a point light and a sun.
+fn cameras_and_lights() -> GltfBuilder {
     let mut b = GltfBuilder::default();
     let mesh = b.mesh(&TRIANGLE, None, &[0, 1, 2], None);
     let model = b.node(json!({ "mesh": mesh }));
@@ -140,6 +140,12 @@ fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
     let point = b.node(json!({ "translation": [0, 3, 0], "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
     let sun = b.node(json!({ "extensions": { "KHR_lights_punctual": { "light": 1 } } }));
     b.roots = vec![model, camera, second, point, sun];
+    b
+}
+
+#[test]
+fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
+    let b = cameras_and_lights();
     let file = read(&b);
     let camera = file.camera.unwrap();
     assert!(close(camera.eye, Vec3::new(4.0, 0.0, 0.0)), "{camera:?}");
@@ -186,8 +192,8 @@ fn without_camera_and_lights_a_file_is_framed_as_a_model() {
     assert_eq!(scene.materials[3].color, Vec3::ONE);
 }
 
-#[test]
-fn materials_map_to_whitted_ones() {
+/// A glass triangle (transmission, ior 1.3) and a glowing one.
+fn glass_and_lamp() -> GltfBuilder {
     let mut b = GltfBuilder::default();
     let glass = b.material(json!({
         "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
@@ -198,6 +204,12 @@ fn materials_map_to_whitted_ones() {
     let a = b.mesh(&TRIANGLE, None, &[0, 1, 2], Some(glass));
     let c = b.mesh(&TRIANGLE, None, &[0, 1, 2], Some(lamp));
     b.roots = vec![b.node(json!({ "mesh": a })), b.node(json!({ "mesh": c }))];
+    b
+}
+
+#[test]
+fn materials_map_to_whitted_ones() {
+    let b = glass_and_lamp();
     let file = read(&b);
     let glass = file.materials[0];
     assert_eq!((glass.transmit, glass.ior, glass.reflect), (1.0, 1.3, 0.0));
@@ -587,4 +599,62 @@ fn images_without_a_source_or_a_type() {
     let untyped = glb(&serde_json::to_vec(&document).unwrap(), &bytes[bin_start..]);
     let file = parse(&untyped, Files::None, &mut Vec::new()).unwrap();
     assert_eq!(file.textures.len(), 1);
+}
+
+/// Every file these tests generate passes the Khronos glTF-Validator (npm gltf-validator, run by
+/// web/validate-gltf.mjs), so that they test glTF and not a dialect of raypipe's own. Skipped,
+/// with a message, where Node.js or the package (`npm ci --prefix web`) is missing, unless
+/// RAYPIPE_REQUIRE_VALIDATOR=1 (CI) makes that a failure.
+#[test]
+fn generated_files_pass_the_khronos_validator() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let script = root.join("web/validate-gltf.mjs");
+    let package = root.join("web/node_modules/gltf-validator");
+    let node = std::process::Command::new("node").arg("--version").output();
+    if !package.is_dir() || node.is_err() {
+        let why = format!("Node.js or {} is missing (npm ci --prefix web)", package.display());
+        assert!(
+            std::env::var("RAYPIPE_REQUIRE_VALIDATOR").as_deref() != Ok("1"),
+            "{why}"
+        );
+        eprintln!("skipped: {why}");
+        return;
+    }
+    let dir = fresh_dir("gltf-validator");
+    let mut files = Vec::new();
+    let builders = [
+        (
+            "hierarchy",
+            hierarchy(json!({ "translation": [0, 0, -1], "rotation": [0, 0, 0.6, 0.8], "scale": [2, 2, 2] })),
+        ),
+        (
+            "matrix",
+            hierarchy(json!({ "matrix": [0, 2, 0, 0, -2, 0, 0, 0, 0, 0, 2, 0, 0, 0, -1, 1] })),
+        ),
+        ("cameras-and-lights", cameras_and_lights()),
+        ("materials", glass_and_lamp()),
+        ("textured", textured_quad(2.0, [10497, 33071])),
+        ("framed", common::gltf_file::framed_textured_quad(2.0, [33648, 10497])),
+    ];
+    for (stem, builder) in &builders {
+        for packing in [Packing::DataUris, Packing::ExternalFiles, Packing::Glb] {
+            files.push(builder.write(&dir, &format!("{stem}-{packing:?}"), packing));
+        }
+    }
+    let output = std::process::Command::new("node")
+        .arg(&script)
+        .args(&files)
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        output.status.success(),
+        "{report}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_eq!(
+        report.lines().filter(|l| l.ends_with("0 errors, 0 warnings")).count(),
+        files.len(),
+        "{report}"
+    );
 }
