@@ -33,7 +33,12 @@ fn binary_ply(mesh: &Mesh) -> Vec<u8> {
 
 /// One mesh as a GLB: one node, one primitive, u32 indices.
 fn glb(mesh: &Mesh) -> Vec<u8> {
-    let mut bin: Vec<u8> = mesh.positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
+    let mut bin: Vec<u8> = mesh
+        .positions
+        .iter()
+        .flat_map(|p| p.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
     let positions_length = bin.len();
     bin.extend(mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()));
     let bounds = mesh.bounds();
@@ -56,7 +61,13 @@ fn glb(mesh: &Mesh) -> Vec<u8> {
     bin.resize(bin.len().next_multiple_of(4), 0);
     let total = 12 + 8 + json.len() + 8 + bin.len();
     let mut out = Vec::with_capacity(total);
-    for word in [u32::from_le_bytes(*b"glTF"), 2, total as u32, json.len() as u32, u32::from_le_bytes(*b"JSON")] {
+    for word in [
+        u32::from_le_bytes(*b"glTF"),
+        2,
+        total as u32,
+        json.len() as u32,
+        u32::from_le_bytes(*b"JSON"),
+    ] {
         out.extend(word.to_le_bytes());
     }
     out.extend(json);
@@ -77,8 +88,18 @@ fn load(c: &mut Criterion) {
     let bunny_bytes = std::fs::read(models.join("bunny.ply")).unwrap();
     let bunny = mesh::parse(&bunny_bytes, MeshFormat::Ply, &mut Vec::new()).unwrap();
     let cases = [
-        ("RiggedSimple", &rigged, Some(("gltf (data URIs, as shipped)", rigged_bytes.clone())), None),
-        ("Bunny", &bunny, None, Some(("ply (ASCII, as shipped)", bunny_bytes.clone()))),
+        (
+            "RiggedSimple",
+            &rigged,
+            Some(("gltf (data URIs, as shipped)", rigged_bytes.clone())),
+            None,
+        ),
+        (
+            "Bunny",
+            &bunny,
+            None,
+            Some(("ply (ASCII, as shipped)", bunny_bytes.clone())),
+        ),
     ];
     for (name, mesh, shipped_gltf, shipped_ply) in cases {
         let mut group = c.benchmark_group(format!("load_{name}"));
