@@ -93,6 +93,25 @@ fn scripted_frames_are_the_render(_: &GpuContext) {
     }
 }
 
+/// A glTF scene (the shared BoxTextured sample, its texture sampled in the shader) shows in the
+/// window as `render` draws it, in storage and in texture memory.
+fn a_gltf_scene_views_as_it_renders(_: &GpuContext) {
+    let Some(models) = crate::common::harness::models_dir() else {
+        let required = std::env::var("RAYPIPE_REQUIRE_MODELS").as_deref() == Ok("1");
+        assert!(!required, "../shared/models is missing");
+        eprintln!("skipped: ../shared/models is missing");
+        return;
+    };
+    let dir = test_dir("view-gltf");
+    let scene = models.join("gltf/BoxTextured.gltf");
+    let scene = scene.to_str().unwrap();
+    let render = rendered(&dir, scene, &[]);
+    for memory in ["storage", "texture"] {
+        let shot = viewed(&dir, scene, &["--memory", memory], 3);
+        matches(&shot, &render).unwrap_or_else(|e| panic!("BoxTextured in {memory} memory: {e}"));
+    }
+}
+
 /// A still frame gathers one sample per frame up to --spp, then stays: twelve frames with
 /// `--spp 8` are `render --spp 8`, not its one-sample image.
 fn still_frames_gather_render_spp(_: &GpuContext) {
@@ -333,6 +352,7 @@ fn dropped_files_load_or_leave_the_scene(_: &GpuContext) {
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu_window scripted_frames_are_the_render,
+        gpu_window a_gltf_scene_views_as_it_renders,
         gpu_window still_frames_gather_render_spp,
         gpu_window the_window_shows_the_frame,
         gpu_window orbit_and_motion_change_the_frames,
