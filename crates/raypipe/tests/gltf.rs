@@ -4,7 +4,8 @@
 
 mod common;
 
-use common::gltf_file::{GltfBuilder, Packing, fresh_dir, glb, textured_quad};
+use common::gltf_file::{GltfBuilder, Packing, glb, textured_quad};
+use common::models::test_dir;
 use glam::Vec3;
 use raypipe::scene::Scene;
 use raypipe::scene::gltf::{Files, GltfLight, GltfScene, parse};
@@ -167,7 +168,7 @@ fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
         }
     );
 
-    let path = b.write(&fresh_dir("gltf-camera"), "scene", Packing::Glb);
+    let path = b.write(&test_dir("gltf-camera"), "scene", Packing::Glb);
     let scene = Scene::load(path.to_str().unwrap()).unwrap();
     assert_eq!(scene.camera, camera);
     assert!(scene.planes.is_empty(), "a file with a camera gets no floor");
@@ -235,7 +236,7 @@ fn textures_keep_their_texels_and_wrap_modes() {
 
 #[test]
 fn every_packing_gives_the_same_scene() {
-    let dir = fresh_dir("gltf-packings");
+    let dir = test_dir("gltf-packings");
     let b = textured_quad(3.0, [10497, 33071]);
     let scenes: Vec<Scene> = [Packing::DataUris, Packing::ExternalFiles, Packing::Glb]
         .into_iter()
@@ -260,7 +261,7 @@ fn every_packing_gives_the_same_scene() {
 
 #[test]
 fn a_gltf_mesh_table_places_the_file_after_its_own_transforms() {
-    let dir = fresh_dir("gltf-mesh-table");
+    let dir = test_dir("gltf-mesh-table");
     let b = hierarchy(json!({}));
     b.write(&dir, "tri", Packing::Glb);
     std::fs::write(
@@ -464,7 +465,7 @@ fn hostile_bytes_end_in_one_line() {
 
 #[test]
 fn external_files_are_read_from_the_folder_only() {
-    let dir = fresh_dir("gltf-external");
+    let dir = test_dir("gltf-external");
     let b = hierarchy(json!({}));
     let path = b.write(&dir, "model", Packing::ExternalFiles);
     assert!(Scene::load(path.to_str().unwrap()).is_ok());
@@ -472,7 +473,7 @@ fn external_files_are_read_from_the_folder_only() {
     #[cfg(unix)]
     {
         // A link out of the folder, and a FIFO inside it.
-        let outside = fresh_dir("gltf-outside").join("secret.bin");
+        let outside = test_dir("gltf-outside").join("secret.bin");
         std::fs::write(&outside, &b.bin).unwrap();
         std::os::unix::fs::symlink(&outside, dir.join("link.bin")).unwrap();
         for (uri, expected) in [
@@ -589,7 +590,7 @@ fn images_without_a_source_or_a_type() {
     let message = refused_bytes(&serde_json::to_vec(&document).unwrap());
     assert_eq!(message, "material 0: image 0: neither a bufferView nor a uri");
 
-    let dir = fresh_dir("gltf-image-type");
+    let dir = test_dir("gltf-image-type");
     let path = b.write(&dir, "untyped", Packing::Glb);
     let bytes = std::fs::read(&path).unwrap();
     let json_length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
@@ -620,7 +621,7 @@ fn generated_files_pass_the_khronos_validator() {
         eprintln!("skipped: {why}");
         return;
     }
-    let dir = fresh_dir("gltf-validator");
+    let dir = test_dir("gltf-validator");
     let mut files = Vec::new();
     let builders = [
         (

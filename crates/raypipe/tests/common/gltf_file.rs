@@ -247,14 +247,6 @@ fn pad(bytes: &mut Vec<u8>, with: u8) {
     bytes.resize(bytes.len().next_multiple_of(4), with);
 }
 
-/// A fresh, empty directory for a test's files (emptied if an earlier run left one).
-pub fn fresh_dir(name: &str) -> std::path::PathBuf {
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// A unit quad in the xy plane, corners (0,0) to (1,1), facing +z, with UVs that put texture row 0
 /// (v = 0) at the top (y = 1), as glTF images are: `uv_scale` times the unit square.
 pub fn quad(uv_scale: f32) -> ([[f32; 3]; 4], [[f32; 2]; 4], [u16; 6]) {

@@ -202,9 +202,11 @@ pub fn every_format(model: &TestModel) -> Vec<(&'static str, Vec<u8>)> {
     ]
 }
 
-/// A fresh directory for a test's files.
+/// A fresh, empty directory for a test's files: what an earlier run left there is removed first, so
+/// that no old output can satisfy a new run.
 pub fn test_dir(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }

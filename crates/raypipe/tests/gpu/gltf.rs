@@ -3,7 +3,7 @@
 //! and pipeline, and the same file packed three ways renders the same image.
 
 use crate::common::gltf_file::{
-    CHECKER, CLAMP_TO_EDGE, GltfBuilder, MIRRORED_REPEAT, Packing, REPEAT, framed_textured_quad, fresh_dir,
+    CHECKER, CLAMP_TO_EDGE, GltfBuilder, MIRRORED_REPEAT, Packing, REPEAT, framed_textured_quad,
 };
 use crate::common::harness::Test;
 use crate::common::*;
@@ -130,7 +130,7 @@ fn the_file_camera_gives_the_pinhole_depth(ctx: &GpuContext) {
 
 /// One file as a .gltf with data: URIs, a .gltf beside its .bin and PNG, and a .glb: one image.
 fn every_packing_renders_the_same_image(ctx: &GpuContext) {
-    let dir = fresh_dir("gltf-gpu-packings");
+    let dir = test_dir("gltf-gpu-packings");
     let builder = framed_textured_quad(3.0, [REPEAT, MIRRORED_REPEAT]);
     let frames: Vec<Frame> = [Packing::DataUris, Packing::ExternalFiles, Packing::Glb]
         .into_iter()
