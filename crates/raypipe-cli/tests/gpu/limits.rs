@@ -4,7 +4,6 @@
 use crate::common::harness::Test;
 use crate::common::{assert_clean_error, raypipe};
 use raypipe::gpu::GpuContext;
-use std::time::{Duration, Instant};
 
 fn render(args: &[&str]) -> std::process::Output {
     let out = crate::common::models::test_dir("limits").join("out.png");
@@ -16,7 +15,6 @@ fn limits_are_one_line_that_names_the_scene_and_a_way_out(ctx: &GpuContext) {
     let limits = ctx.limits();
     let side = limits.max_texture_dimension_2d;
     let target_bytes = side as u64 * side as u64 * 16;
-    let started = Instant::now();
     let (w, h) = (side.to_string(), side.to_string());
     if target_bytes > limits.max_buffer_size {
         assert_clean_error(
@@ -41,8 +39,6 @@ fn limits_are_one_line_that_names_the_scene_and_a_way_out(ctx: &GpuContext) {
             "use --memory storage",
         ],
     );
-    // Refused up front: nothing of 4 GiB was allocated and drawn into first.
-    assert!(started.elapsed() < Duration::from_secs(60), "{:?}", started.elapsed());
 }
 
 pub fn tests() -> Vec<Test> {
