@@ -327,7 +327,8 @@ for (const backend of ["webgpu", "webgl2"]) {
       await page.locator("input[data-key=paused]").uncheck();
       const moved = await until(page, (s) => !s.paused && s.motionFrame >= 3 && s.samples >= 1, "motion");
       // WebGL2 rebuilds on the CPU and reports its time; WebGPU rebuilds in compute passes, untimed.
-      if (backend === "webgl2") assert.ok(moved.buildMs > 0, `a CPU rebuild reports its time (${moved.buildMs})`);
+      // (The browser's clock is coarse: a small build may read as 0 ms.)
+      if (backend === "webgl2") assert.equal(typeof moved.buildMs, "number", "a CPU rebuild reports its time");
       else assert.equal(moved.buildMs, null, "a GPU rebuild reports no CPU time");
       const later = await screenshot(page, `${backend}-bounce-later`);
       assert.ok(differ(later, firstAgain), "the spheres did not move");
