@@ -21,10 +21,15 @@ fn path_str(path: &Path) -> &str {
 
 /// whitted at `width` x `height` on the CPU, written to `path`.
 fn tiny_render(path: &Path, width: u32, height: u32) {
+    tiny_render_of("whitted", path, width, height);
+}
+
+/// `scene` at `width` x `height` on the CPU, written to `path`.
+fn tiny_render_of(scene: &str, path: &Path, width: u32, height: u32) {
     let (w, h) = (width.to_string(), height.to_string());
     let args = [
         "render",
-        "whitted",
+        scene,
         "--device",
         "cpu",
         "--width",
@@ -489,21 +494,7 @@ fn hostile_gltf_files_are_one_line_and_exit_2() {
     let dir = test_dir("hostile-gltf");
     let good = dir.join("triangle.gltf");
     std::fs::write(&good, TRIANGLE_GLTF).unwrap();
-    let rendered = dir.join("triangle.png");
-    let output = raypipe(&[
-        "render",
-        path_str(&good),
-        "--device",
-        "cpu",
-        "--width",
-        "16",
-        "--height",
-        "12",
-        "-q",
-        "-o",
-        path_str(&rendered),
-    ]);
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    tiny_render_of(path_str(&good), &dir.join("triangle.png"), 16, 12);
 
     let link = dir.join("zero.glb");
     let _ = std::fs::remove_file(&link);
