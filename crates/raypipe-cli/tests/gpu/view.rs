@@ -276,6 +276,9 @@ fn the_window_survives_hiding_resizing_and_closes_cleanly(_: &GpuContext) {
          xdotool key p
          for i in $(seq 120); do [ -f raypipe-001.png ] && break; sleep 0.5; done
          python3 '{close}' $W
+         # Bounded: a viewer that ignores the request is killed, and the test fails instead of hanging.
+         for i in $(seq 120); do kill -0 $pid 2>/dev/null || break; sleep 0.5; done
+         kill $pid 2>/dev/null
          wait $pid
          echo exit=$?",
         dir = dir.display(),

@@ -23,7 +23,7 @@ pub enum Body {
     Models(fn(&Path)),
     GpuModels(fn(&GpuContext, &Path)),
     /// A GPU and a virtual X display to open windows on (`xvfb-run`, with imagemagick's `import` to
-    /// capture it and `xdotool` to type and drag).
+    /// capture it, `xdotool` to type and drag, `python3` to ask a window to close).
     GpuWindow(fn(&GpuContext)),
 }
 
@@ -58,9 +58,10 @@ pub fn models_dir() -> Option<PathBuf> {
     dir.join("bunny.ply").is_file().then_some(dir)
 }
 
-/// Whether `xvfb-run`, imagemagick's `import` and `xdotool` are on PATH.
+/// Whether `xvfb-run`, imagemagick's `import`, `xdotool` and `python3` (which sends a window its
+/// close request) are on PATH.
 fn virtual_display() -> bool {
-    ["xvfb-run", "import", "xdotool"].iter().all(|tool| {
+    ["xvfb-run", "import", "xdotool", "python3"].iter().all(|tool| {
         std::env::var_os("PATH").is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join(tool).is_file()))
     })
 }
@@ -112,7 +113,7 @@ pub fn run(tests: Vec<Test>) -> ExitCode {
     let needs_display = tests.iter().any(|t| matches!(t.body, Body::GpuWindow(_)));
     if needs_display && !display {
         eprintln!(
-            "xvfb-run, imagemagick's import or xdotool not found: the window tests are ignored{}",
+            "xvfb-run, imagemagick's import, xdotool or python3 not found: the window tests are ignored{}",
             if required("RAYPIPE_REQUIRE_DISPLAY") {
                 ", and fail because RAYPIPE_REQUIRE_DISPLAY=1"
             } else {
@@ -151,7 +152,9 @@ fn trial(test: Test, resources: &Arc<Resources>) -> Trial {
             (Body::Models(f), _, Some(models)) => f(models),
             (Body::GpuModels(f), Some(gpu), Some(models)) => f(gpu, models),
             (Body::GpuWindow(f), Some(gpu), _) if resources.display => f(gpu),
-            (Body::GpuWindow(_), Some(_), _) => return Err(Failed::from("xvfb-run, import or xdotool not found")),
+            (Body::GpuWindow(_), Some(_), _) => {
+                return Err(Failed::from("xvfb-run, import, xdotool or python3 not found"));
+            }
             (_, None, _) => return Err(Failed::from("no GPU adapter found")),
             (_, _, None) => return Err(Failed::from("../shared/models/ not found")),
         }
