@@ -46,7 +46,7 @@ fn every_host_struct_matches_its_wgsl_twin() {
     let host_layouts = host_layouts();
     let mut seen = Vec::new();
     let types = parse(&raypipe::gpu::shader::records_source());
-    let display = parse(raypipe::gpu::display::shader_source());
+    let display = parse(&raypipe::gpu::display::shader_source());
     for (_, ty) in types.types.iter().chain(display.types.iter()) {
         let (Some(name), naga::TypeInner::Struct { members, span }) = (&ty.name, &ty.inner) else {
             continue;
@@ -120,10 +120,7 @@ fn every_shader_variant_validates() {
 fn the_build_layout_and_display_shaders_validate() {
     let mut sources = vec![
         ("threaded layout".to_string(), raypipe::gpu::threaded::shader_source()),
-        (
-            "display".to_string(),
-            raypipe::gpu::display::shader_source().to_string(),
-        ),
+        ("display".to_string(), raypipe::gpu::display::shader_source()),
     ];
     for bits in [MortonBits::Bits30, MortonBits::Bits63] {
         for variant in build_variants() {
@@ -183,5 +180,141 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
             count <= 8,
             "the {accel:?} fragment shader binds {count} storage buffers"
         );
+    }
+}
+
+/// A number shared with Rust: its WGSL name and Rust's value (scalars, flattened).
+type Shared = (String, Vec<f64>);
+
+/// A constant's value as naga evaluated it: its scalars in order (an array's or vector's
+/// components flattened).
+fn constant_values(module: &naga::Module, expression: naga::Handle<naga::Expression>) -> Vec<f64> {
+    match &module.global_expressions[expression] {
+        naga::Expression::Literal(literal) => vec![match *literal {
+            naga::Literal::F32(v) => v as f64,
+            naga::Literal::U32(v) => v as f64,
+            naga::Literal::I32(v) => v as f64,
+            naga::Literal::Bool(v) => v as u8 as f64,
+            naga::Literal::AbstractInt(v) => v as f64,
+            naga::Literal::AbstractFloat(v) => v,
+            ref other => panic!("a literal of an unexpected type: {other:?}"),
+        }],
+        naga::Expression::Compose { components, .. } => {
+            components.iter().flat_map(|&c| constant_values(module, c)).collect()
+        }
+        other => panic!("a constant of an unexpected kind: {other:?}"),
+    }
+}
+
+/// Every number a shader module shares with Rust, by its WGSL name, as Rust has it; and each
+/// module's source. The shaders get these from generated preambles: the hand-written WGSL must not
+/// define them (checked below), and what the preambles define must be Rust's value.
+fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
+    use raypipe::bvh::layout::{LEAF, NONE};
+    use raypipe::bvh::threaded::{LEAF_BIT, MAX_QUANTUM, TINY_EXTENT};
+    use raypipe::records::constants::*;
+    let one = |name: &str, value: f64| (name.to_string(), vec![value]);
+    let mut records = vec![
+        one("T_FAR", T_FAR as f64),
+        one("MIN_WEIGHT", MIN_WEIGHT as f64),
+        one("DEPTH_MISS", DEPTH_MISS as f64),
+        one("RAY_BIAS", RAY_BIAS as f64),
+        one("PARALLEL_EPSILON", PARALLEL_EPSILON as f64),
+        one("TINY_DIRECTION", TINY_DIRECTION as f64),
+        one("NO_HIT", NO_HIT as f64),
+        one("R2_STEP_X", R2_STEP[0] as f64),
+        one("R2_STEP_Y", R2_STEP[1] as f64),
+        one("LEAF", LEAF as f64),
+        one("NONE", NONE as f64),
+        one("LEAF_BIT", LEAF_BIT as f64),
+        one("MAX_QUANTUM", MAX_QUANTUM as f64),
+        one("TINY_EXTENT", TINY_EXTENT as f64),
+    ];
+    records.extend(raypipe::scene::Wrap::ALL.map(|w| one(w.wgsl_name(), w.code() as f64)));
+    let mut tracer = records.clone();
+    tracer.push(one("COMPUTE_TILE", raypipe::gpu::shader::COMPUTE_TILE as f64));
+    tracer.push(one("TEXELS_PER_ROW", TEXELS_PER_ROW as f64));
+    let source = compose(&ShaderConfig {
+        pipeline: Pipeline::Compute,
+        memory: MemoryMode::Texture,
+        accel: Accel::Threaded,
+        max_depth: 5,
+        bvh_depth: 1,
+        arrays: &record_arrays(&PackedScene::new(&builtin::whitted()).unwrap(), Accel::Threaded),
+        texels_per_row: TEXELS_PER_ROW,
+        write_cost: false,
+    });
+    let mut build = records.clone();
+    build.push(one("GROUP", raypipe::gpu::build::GROUP as f64));
+    build.push(one("DIGIT_BITS", raypipe::gpu::build::DIGIT_BITS as f64));
+    build.push(one("DIGITS", (1u32 << raypipe::gpu::build::DIGIT_BITS) as f64));
+    let mut threaded = records;
+    threaded.push(one("GROUP", raypipe::gpu::threaded::GROUP as f64));
+    let mut display: Vec<_> = raypipe::gpu::DisplayView::ALL
+        .iter()
+        .map(|&v| one(&format!("DISPLAY_{}", v.name().to_uppercase()), v as u32 as f64))
+        .collect();
+    let stops = raypipe::image::heatmap::STOPS;
+    display.push(one("HEAT_STOP_COUNT", stops.len() as f64));
+    display.push(("HEAT_STOPS".into(), stops.iter().flatten().map(|&c| c as f64).collect()));
+    let build_source = raypipe::gpu::build::shader_source(MortonBits::Bits63, build_variants().next().unwrap());
+    vec![
+        ("tracer".into(), source, tracer),
+        ("build".into(), build_source, build),
+        (
+            "threaded layout".into(),
+            raypipe::gpu::threaded::shader_source(),
+            threaded,
+        ),
+        ("display".into(), raypipe::gpu::display::shader_source(), display),
+    ]
+}
+
+#[test]
+fn shared_constants_come_from_rust() {
+    let shaders = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gpu/shaders");
+    let hand_written: Vec<(String, String)> = std::fs::read_dir(&shaders)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "wgsl"))
+        .map(|p| {
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read_to_string(&p).unwrap(),
+            )
+        })
+        .collect();
+    assert!(
+        hand_written.len() >= 10,
+        "{} WGSL files in {}",
+        hand_written.len(),
+        shaders.display()
+    );
+    for (module_name, source, numbers) in shared_numbers() {
+        let module = parse(&source);
+        for (name, expected) in &numbers {
+            let (_, constant) = module
+                .constants
+                .iter()
+                .find(|(_, c)| c.name.as_deref() == Some(name.as_str()))
+                .unwrap_or_else(|| panic!("{module_name}: no constant {name}"));
+            let got = constant_values(&module, constant.init);
+            assert_eq!(&got, expected, "{module_name}: WGSL's {name} is not Rust's");
+            for (file, text) in &hand_written {
+                assert!(
+                    !text.contains(&format!("const {name}:")) && !text.contains(&format!("const {name} =")),
+                    "{file} defines {name} by hand: it comes from Rust, in the preamble"
+                );
+            }
+        }
+    }
+    // Workgroup sizes are named constants too, never literals.
+    for (file, text) in &hand_written {
+        for size in text.split("@workgroup_size(").skip(1) {
+            assert!(
+                !size.starts_with(|c: char| c.is_ascii_digit()),
+                "{file}: a literal workgroup size"
+            );
+        }
     }
 }

@@ -25,7 +25,7 @@ pub const LEAF_BIT: u32 = 1 << 31;
 /// The largest quantized coordinate: corners are 16-bit.
 pub const MAX_QUANTUM: u32 = 0xffff;
 /// Extents below 2^-100 get a quantum of 1: any box is then one or two units wide, still a bound.
-const TINY_EXTENT: f32 = power_of_two(-100);
+pub const TINY_EXTENT: f32 = power_of_two(-100);
 
 /// A node of the threaded BVH; node i is the i-th in depth-first order, left child first.
 #[repr(C)]

@@ -24,7 +24,7 @@ const LBVH: &str = include_str!("shaders/lbvh.wgsl");
 const RADIX_SORT: &str = include_str!("shaders/radix_sort.wgsl");
 
 /// Invocations per workgroup.
-const GROUP: u32 = 256;
+pub const GROUP: u32 = 256;
 /// Items per block of the reduction kernels: `BLOCK / GROUP` per invocation. Fewer, longer blocks
 /// spare CPU adapters barriers: on lavapipe the morton phase of 1M took 35 to 44 ms with blocks of
 /// 1,024, 21 to 24 ms with 8,192.
@@ -34,8 +34,8 @@ const SCRATCH_BOUNDS: u32 = 0;
 const SCRATCH_BLOCKS: u32 = 8;
 const _: () = assert!(SCRATCH_BOUNDS + 6 <= SCRATCH_BLOCKS);
 
-/// The radix sort's digit (radix_sort.wgsl's DIGIT_BITS).
-const DIGIT_BITS: u32 = 8;
+/// The radix sort's digit, in bits (radix_sort.wgsl's, from the preamble).
+pub const DIGIT_BITS: u32 = 8;
 const DIGITS: u64 = 1 << DIGIT_BITS;
 /// Pairs per invocation of the kernel that counts every pass's digits.
 const HISTOGRAM_ITEMS: u32 = 16;
@@ -331,6 +331,8 @@ fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, p.y, high); }"
     format!(
         "// Generated: the build's sizes (src/gpu/build.rs) and {}-bit Morton codes.
 const GROUP: u32 = {GROUP}u;
+const DIGIT_BITS: u32 = {DIGIT_BITS}u;
+const DIGITS: u32 = {DIGITS}u;
 const BLOCK: u32 = {BLOCK}u;
 const ITEMS: u32 = {}u;
 const SCRATCH_BOUNDS: u32 = {SCRATCH_BOUNDS}u;

@@ -4,6 +4,7 @@
 
 use super::GpuContext;
 use super::renderer::{FrameTargets, target_entry};
+use crate::Choice;
 use crate::impl_choice;
 use crate::records::StructLayout;
 use crate::struct_layout;
@@ -56,9 +57,39 @@ pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
     [view, target_srgb, depth_far, cost_max, samples, _pad0, _pad1, _pad2]
 )];
 
-/// The display pass's WGSL.
-pub fn shader_source() -> &'static str {
-    DISPLAY
+/// The display pass's WGSL: its numbers from Rust (the views' numbering, the heat map's stops),
+/// then display.wgsl.
+pub fn shader_source() -> String {
+    use std::fmt::Write;
+    let mut out = String::from("// Generated: src/gpu/display.rs.\n");
+    for &view in DisplayView::ALL {
+        writeln!(
+            out,
+            "const DISPLAY_{}: u32 = {}u;",
+            view.name().to_uppercase(),
+            view as u32
+        )
+        .unwrap();
+    }
+    let stops = crate::image::heatmap::STOPS;
+    let vectors: Vec<String> = stops
+        .iter()
+        .map(|s| {
+            format!(
+                "vec3<f32>({})",
+                s.map(crate::records::constants::float_literal).join(", ")
+            )
+        })
+        .collect();
+    writeln!(out, "const HEAT_STOP_COUNT: u32 = {}u;", stops.len()).unwrap();
+    writeln!(
+        out,
+        "const HEAT_STOPS = array<vec3<f32>, {}>({});",
+        stops.len(),
+        vectors.join(", ")
+    )
+    .unwrap();
+    out + DISPLAY
 }
 
 /// The display pass for targets of one format.
@@ -75,7 +106,7 @@ impl Display {
         let device = &ctx.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("display"),
-            source: wgpu::ShaderSource::Wgsl(DISPLAY.into()),
+            source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("display"),

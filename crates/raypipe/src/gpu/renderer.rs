@@ -31,7 +31,7 @@ const TARGET_BYTES_PER_PIXEL: u32 = 16;
 /// A triangle whose clip-space corners cover the whole viewport.
 const FULLSCREEN_TRIANGLE: [[f32; 2]; 3] = [[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]];
 /// The compute kernel's workgroup side (`@workgroup_size(8, 8)` in compute.wgsl).
-const COMPUTE_TILE: u32 = 8;
+use super::shader::COMPUTE_TILE;
 
 /// The shader stage that runs the tracer: what its bindings are visible to.
 pub(super) fn tracer_stage(pipeline: Pipeline) -> wgpu::ShaderStages {

@@ -9,6 +9,10 @@ use crate::modes::{Accel, MemoryMode, Pipeline};
 use crate::records::constants;
 use std::fmt::Write;
 
+/// The side of the compute pipeline's square workgroups, in pixels (compute.wgsl's, from the
+/// preamble).
+pub const COMPUTE_TILE: u32 = 8;
+
 /// The records shared with the host.
 pub const TYPES: &str = include_str!("shaders/types.wgsl");
 
@@ -74,6 +78,7 @@ pub fn compose(config: &ShaderConfig) -> String {
     writeln!(w, "const TEXELS_PER_ROW: u32 = {}u;", config.texels_per_row).unwrap();
     writeln!(w, "const WRITE_COST: bool = {};", config.write_cost).unwrap();
     writeln!(w, "const BVH_STACK_SIZE: u32 = {}u;", config.bvh_depth.max(1)).unwrap();
+    writeln!(w, "const COMPUTE_TILE: u32 = {COMPUTE_TILE}u;").unwrap();
     writeln!(w, "@group(0) @binding(0) var<uniform> globals: Globals;").unwrap();
     writeln!(
         w,

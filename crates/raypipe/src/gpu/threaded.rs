@@ -14,7 +14,7 @@ use crate::struct_layout;
 
 const LAYOUT: &str = include_str!("shaders/threaded.wgsl");
 /// Invocations per workgroup, one node each.
-const GROUP: u32 = 256;
+pub const GROUP: u32 = 256;
 const FRAME_BYTES: u64 = std::mem::size_of::<GpuBvhFrame>() as u64;
 
 /// The kernels' parameters (`LayoutParams` in types.wgsl).

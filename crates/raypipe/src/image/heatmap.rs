@@ -3,7 +3,7 @@
 use super::FloatImage;
 
 /// Stops of an "inferno"-like scale: dark for cheap pixels, bright for expensive ones.
-const STOPS: [[f32; 3]; 5] = [
+pub const STOPS: [[f32; 3]; 5] = [
     [0.0, 0.0, 0.02],
     [0.34, 0.06, 0.43],
     [0.73, 0.21, 0.33],

@@ -2,6 +2,7 @@
 //! every shader's preamble ([`wgsl`]), so that neither side can drift from the other.
 
 use crate::bvh::layout::{LEAF, NONE};
+use crate::bvh::threaded::{LEAF_BIT, MAX_QUANTUM, TINY_EXTENT};
 use std::fmt::Write;
 
 /// Where a ray that hits nothing ends.
@@ -35,12 +36,15 @@ pub fn wgsl() -> String {
         ("PARALLEL_EPSILON", PARALLEL_EPSILON),
         ("TINY_DIRECTION", TINY_DIRECTION),
         ("NO_HIT", NO_HIT),
+        ("MAX_QUANTUM", MAX_QUANTUM as f32),
+        ("TINY_EXTENT", TINY_EXTENT),
     ] {
         writeln!(out, "const {name}: f32 = {};", float_literal(value)).unwrap();
     }
     for (name, value) in [
         ("LEAF", LEAF),
         ("NONE", NONE),
+        ("LEAF_BIT", LEAF_BIT),
         ("R2_STEP_X", R2_STEP[0]),
         ("R2_STEP_Y", R2_STEP[1]),
     ] {

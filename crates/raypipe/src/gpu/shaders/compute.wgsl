@@ -29,10 +29,10 @@ fn tile_row(group_row: u32, rows: u32) -> u32 {
     return (group_row * step) % rows;
 }
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(COMPUTE_TILE, COMPUTE_TILE)
 fn cs_main(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
            @builtin(local_invocation_id) local: vec3<u32>) {
-    let pixel = vec2<u32>(group.x, tile_row(group.y, groups.y)) * 8u + local.xy;
+    let pixel = vec2<u32>(group.x, tile_row(group.y, groups.y)) * COMPUTE_TILE + local.xy;
     // The last workgroups of a row or column reach past the image.
     if (f32(pixel.x) >= globals.camera.width || f32(pixel.y) >= globals.camera.height) {
         return;

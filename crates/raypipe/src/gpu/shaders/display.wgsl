@@ -18,10 +18,8 @@ struct DisplayParams {
     _pad2: u32,
 }
 
-const DISPLAY_COLOR: u32 = 0u;
-const DISPLAY_DEPTH: u32 = 1u;
-const DISPLAY_NORMAL: u32 = 2u;
-const DISPLAY_COST: u32 = 3u;
+// DISPLAY_COLOR, DISPLAY_DEPTH, DISPLAY_NORMAL and DISPLAY_COST (DisplayView's numbers) and
+// HEAT_STOPS (heatmap.rs's STOPS) come from the preamble (src/gpu/display.rs).
 
 @group(0) @binding(0) var<uniform> params: DisplayParams;
 @group(0) @binding(1) var color_target: texture_2d<u32>;
@@ -52,15 +50,10 @@ fn srgb_to_linear(x: f32) -> f32 {
 
 // The heat map's scale (heatmap.rs's STOPS): dark for cheap pixels, bright for expensive ones.
 fn color_scale(x: f32) -> vec3<f32> {
-    var stops = array<vec3<f32>, 5>(
-        vec3<f32>(0.0, 0.0, 0.02),
-        vec3<f32>(0.34, 0.06, 0.43),
-        vec3<f32>(0.73, 0.21, 0.33),
-        vec3<f32>(0.98, 0.55, 0.04),
-        vec3<f32>(0.99, 1.0, 0.64),
-    );
-    let s = clamp(x, 0.0, 1.0) * 4.0;
-    let i = min(u32(s), 3u);
+    var stops = HEAT_STOPS;
+    let last = f32(HEAT_STOP_COUNT - 1u);
+    let s = clamp(x, 0.0, 1.0) * last;
+    let i = min(u32(s), HEAT_STOP_COUNT - 2u);
     let f = s - f32(i);
     return stops[i] + (stops[i + 1u] - stops[i]) * f;
 }

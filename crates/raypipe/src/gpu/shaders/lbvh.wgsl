@@ -96,7 +96,7 @@ fn reduce_bounds(lid: u32) {
 const BIG: f32 = 3.0e38;
 
 // Compute the bounds of primitive centroids: per block, then over the blocks.
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn bounds_partial(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                   @builtin(local_invocation_index) lid: u32) {
     let block = flat_group(wid, groups);
@@ -118,7 +118,7 @@ fn bounds_partial(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
     }
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn bounds_final(@builtin(local_invocation_index) lid: u32) {
     var lo = vec3<f32>(BIG);
     var hi = vec3<f32>(-BIG);
@@ -156,7 +156,7 @@ fn shift_left_64(v: vec2<u32>, s: u32) -> vec2<u32> {
 }
 
 // Compute Morton codes of primitive centroids: the expression of bvh::morton::Grid::code.
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn morton(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
           @builtin(local_invocation_index) lid: u32) {
     let i = flat_group(wid, groups) * GROUP + lid;
@@ -192,7 +192,7 @@ fn scan_shared_inclusive(lid: u32) {
 // subtree's sibling lies on. The CPU's keys hold the same bits under another number of leading
 // zeros: its lengths differ from these by a constant, and every comparison of two lengths comes out
 // the same on both devices.
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn split_prefixes(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                   @builtin(local_invocation_index) lid: u32) {
     let i = flat_group(wid, groups) * GROUP + lid;
@@ -297,7 +297,7 @@ fn escape_after(last: u32, after: i32) -> u32 {
 //
 // Each invocation takes MERGE_RUN consecutive leaves and starts the next as soon as its climb stops,
 // so invocations that run in lockstep stay busy.
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
          @builtin(local_invocation_index) lid: u32) {
     let n = params.count;

@@ -15,8 +15,7 @@
 // While the sort runs, `climb` holds its words (the merges use it afterwards): each pass's digit
 // starts; each pass's tile ticket; then the look-back words of two passes, a pass's tile by tile.
 
-const DIGIT_BITS: u32 = 8u;
-const DIGITS: u32 = 256u;
+// DIGIT_BITS and DIGITS (1 << DIGIT_BITS) come from the preamble (src/gpu/build.rs).
 
 // A look-back word: a flag in the top two bits, a count of pairs below.
 const NOT_READY: u32 = 0u;
@@ -53,7 +52,7 @@ fn digit_of(p: Pair, sweep: u32) -> u32 {
 var<workgroup> pass_digit_counts: array<atomic<u32>, SORT_PASSES * DIGITS>;
 
 // Count the digits of every pass, HISTOGRAM_ITEMS pairs per invocation.
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn sort_histogram(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                   @builtin(local_invocation_index) lid: u32) {
     let block = flat_group(wid, groups);
@@ -80,7 +79,7 @@ fn sort_histogram(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
 }
 
 // Turn every pass's digit counts into the digit starts: an exclusive scan per pass.
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn sort_digit_starts(@builtin(local_invocation_index) lid: u32) {
     for (var sweep = 0u; sweep < SORT_PASSES; sweep++) {
         let count = atomicLoad(&climb[digit_start_slot(sweep, lid)]);

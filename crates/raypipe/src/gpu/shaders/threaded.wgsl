@@ -1,6 +1,6 @@
 // The threaded BVH (src/bvh/threaded.rs) laid out on the GPU from a built LBVH node array, node for
-// node and bit for bit as the CPU lays it out. Both kernels run 256 invocations per workgroup, one
-// per node, in a 2D grid of workgroups.
+// node and bit for bit as the CPU lays it out. Both kernels run GROUP invocations per workgroup,
+// one per node, in a 2D grid of workgroups.
 
 // LayoutParams is in types.wgsl, beside the other records with a host twin.
 
@@ -12,10 +12,8 @@
 // The quantization frame, as the globals hold it.
 @group(0) @binding(4) var<storage, read_write> frame: BvhFrame;
 
-// GROUP (invocations per workgroup) comes from the preamble (src/gpu/threaded.rs).
-const MAX_QUANTUM: f32 = 65535.0;
-// Extents below 2^-100 get a quantum of 1.
-const TINY_EXTENT: f32 = 0x1p-100f;
+// GROUP (invocations per workgroup) comes from the preamble (src/gpu/threaded.rs); MAX_QUANTUM
+// and TINY_EXTENT (below which an extent gets a quantum of 1) from src/bvh/threaded.rs.
 const MIN_NORMAL: f32 = 0x1p-126f;
 
 fn node_index(wid: vec3<u32>, groups: vec3<u32>, lid: u32) -> u32 {
@@ -26,7 +24,7 @@ fn node_index(wid: vec3<u32>, groups: vec3<u32>, lid: u32) -> u32 {
 // which is twice its first leaf's position plus the left turns on the way down from the root. In
 // Karras's numbering a right child's index is its first leaf's (its position, for a leaf), and a
 // left child shares its parent's first leaf, so one climb to the root finds both.
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn depth_first_order(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                      @builtin(local_invocation_index) lid: u32) {
     let index = node_index(wid, groups, lid);
@@ -84,7 +82,7 @@ fn quantize(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inverse: vec3<f32>)
 
 // Writes every node to its depth-first position, its escape link renumbered; node 0 also writes
 // the frame.
-@compute @workgroup_size(256)
+@compute @workgroup_size(GROUP)
 fn threaded_nodes(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                   @builtin(local_invocation_index) lid: u32) {
     let index = node_index(wid, groups, lid);

@@ -113,7 +113,7 @@ struct BvhNode {
     escape: u32,
 }
 
-// LEAF and NONE (0xffffffff) come from the preamble (src/records/constants.rs).
+// LEAF, NONE (0xffffffff) and LEAF_BIT come from the preamble (src/records/constants.rs).
 
 // A node of the threaded BVH (src/bvh/threaded.rs), in depth-first order: 16-bit box corners in
 // quanta of the globals' frame (min.x | min.y << 16, min.z | max.x << 16, max.y | max.z << 16) and
@@ -122,8 +122,6 @@ struct ThreadedNode {
     bounds: vec3<u32>,
     link: u32,
 }
-
-const LEAF_BIT: u32 = 0x80000000u;
 
 fn is_leaf(node: ThreadedNode) -> bool {
     return (node.link & LEAF_BIT) != 0u;
