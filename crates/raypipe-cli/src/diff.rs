@@ -21,6 +21,27 @@ pub enum Metric {
     Flip,
 }
 
+/// The tests' pass marks (`Tolerance` in src/image/diff.rs), for `--tolerance`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum NamedTolerance {
+    /// GPU against CPU colour: mean error at most 1e-3, its 99th percentile at most 0.02.
+    Color,
+    /// First-hit distance between devices: mean at most 1e-3, 99th percentile at most 1e-4.
+    Depth,
+    /// Equal: both 0.
+    Exact,
+}
+
+impl NamedTolerance {
+    pub fn tolerance(self) -> diff::Tolerance {
+        match self {
+            NamedTolerance::Color => diff::Tolerance::COLOR,
+            NamedTolerance::Depth => diff::Tolerance::DEPTH,
+            NamedTolerance::Exact => diff::Tolerance::EXACT,
+        }
+    }
+}
+
 #[derive(Args)]
 pub struct DiffArgs {
     a: PathBuf,
@@ -33,6 +54,10 @@ pub struct DiffArgs {
     threshold: f64,
     #[arg(long, value_enum, default_value_t)]
     metric: Metric,
+    /// Pass where both the mean and the 99th percentile are within one of the tests' tolerances,
+    /// instead of --metric and --threshold: the pass mark a browser test shares with the Rust ones.
+    #[arg(long, value_enum, conflicts_with_all = ["threshold", "metric"])]
+    tolerance: Option<NamedTolerance>,
 }
 
 fn threshold(text: &str) -> Result<f64, String> {
@@ -107,6 +132,18 @@ pub fn run(args: DiffArgs) -> anyhow::Result<ExitCode> {
         stats.differing,
         stats.pixels
     );
+    if let Some(named) = args.tolerance {
+        let tolerance = named.tolerance();
+        if let Some(out) = &args.out {
+            let full_scale = (10.0 * tolerance.p99).max(1e-6);
+            io::write(&diff::error_image(&errors, a.width, a.height, full_scale), out)?;
+        }
+        if let Err(mismatch) = tolerance.check(&stats) {
+            crate::say!("FAIL: {mismatch}");
+            return Ok(ExitCode::from(1));
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     let measured = match (args.metric, &flip) {
         (Metric::Mean, _) => stats.mean,
         (Metric::P99, _) => stats.p99,

@@ -121,6 +121,24 @@ fn diff_exits_by_threshold_and_writes_a_difference_image() {
     );
     assert!(String::from_utf8_lossy(&differ.stdout).contains("p99"));
     assert!(d.exists());
+    // The tests' own pass marks by name: the images are equal to themselves, and depth 1 against
+    // depth 5 is beyond the colour tolerance.
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    assert_eq!(raypipe(&["diff", a, a, "--tolerance", "exact"]).status.code(), Some(0));
+    let beyond = raypipe(&["diff", a, b, "--tolerance", "color"]);
+    assert_eq!(
+        beyond.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&beyond.stdout)
+    );
+    assert!(String::from_utf8_lossy(&beyond.stdout).contains("FAIL: "));
+    let both = raypipe(&["diff", a, b, "--tolerance", "color", "--metric", "p99"]);
+    assert_eq!(
+        both.status.code(),
+        Some(2),
+        "--tolerance and --metric together are refused"
+    );
 }
 
 /// A grey ramp, and the same ramp with a white 16x16 square: images whose FLIP is known.
