@@ -1,6 +1,6 @@
 // The page's controls: they pass the user's input to the viewer (wasm) and show what
 // window.raypipeStatus, which the viewer publishes every frame, says.
-import init, { start } from "./raypipe_web.js";
+import init, { controls as offered, start } from "./raypipe_web.js";
 
 const canvas = document.getElementById("frame");
 const message = document.getElementById("message");
@@ -96,8 +96,21 @@ function wire(viewer) {
   });
 }
 
+/// The controls' lists, limits and file types, as the wasm module (Rust) has them.
+function fill() {
+  const { choices, accept, maxDepth, maxSpp } = offered();
+  for (const [key, names] of Object.entries(choices)) {
+    const select = controls.querySelector(`select[data-key=${key}]`);
+    for (const name of names) select.add(new Option(name));
+  }
+  document.getElementById("file").accept = accept;
+  controls.querySelector("[data-key=depth]").max = String(maxDepth);
+  controls.querySelector("[data-key=spp]").max = String(maxSpp);
+}
+
 async function main() {
   await init();
+  fill();
   const viewer = await start(canvas, window.location.search);
   window.raypipeViewer = viewer;
   const scene = new URLSearchParams(window.location.search).get("scene");

@@ -15,4 +15,4 @@ mod console;
 mod page;
 
 #[cfg(target_arch = "wasm32")]
-pub use page::{Viewer, start};
+pub use page::{Viewer, controls, start};

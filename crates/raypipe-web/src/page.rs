@@ -88,6 +88,26 @@ pub async fn start(canvas: web_sys::HtmlCanvasElement, query: String) -> Result<
     }
 }
 
+/// What the page's controls offer, from Rust: `{ choices: { accel: [names], memory, pipeline,
+/// aov }, accept: ".ply,...", maxDepth, maxSpp }`. The page's script fills its controls from it.
+#[wasm_bindgen]
+pub fn controls() -> JsValue {
+    let object = js_sys::Object::new();
+    let set = |target: &js_sys::Object, key: &str, value: JsValue| {
+        js_sys::Reflect::set(target, &key.into(), &value).expect("setting a property of a plain object");
+    };
+    let choices = js_sys::Object::new();
+    for (key, names) in crate::params::control_choices() {
+        let list: js_sys::Array = names.into_iter().map(JsValue::from).collect();
+        set(&choices, key, list.into());
+    }
+    set(&object, "choices", choices.into());
+    set(&object, "accept", crate::params::file_accept().into());
+    set(&object, "maxDepth", raypipe::scene::MAX_DEPTH_LIMIT.into());
+    set(&object, "maxSpp", crate::params::MAX_SPP.into());
+    object.into()
+}
+
 fn query_pairs(search: &web_sys::UrlSearchParams) -> Vec<(String, String)> {
     let mut pairs = Vec::new();
     let entries = js_sys::try_iter(&search.entries()).ok().flatten();

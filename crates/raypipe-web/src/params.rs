@@ -173,6 +173,26 @@ impl StartParams {
     }
 }
 
+/// The page's select lists, by the setting each one sets: every name its `Choice` has. The page's
+/// script fills its controls from these (through the wasm module), so the HTML holds no copy.
+pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
+    fn names<T: Choice + 'static>() -> Vec<&'static str> {
+        T::ALL.iter().map(|c| c.name()).collect()
+    }
+    vec![
+        ("accel", names::<Accel>()),
+        ("memory", names::<MemoryMode>()),
+        ("pipeline", names::<Pipeline>()),
+        ("aov", names::<DisplayView>()),
+    ]
+}
+
+/// What the page's file input takes: every model and scene format the library reads.
+pub fn file_accept() -> String {
+    let models = raypipe::scene::model::model_extension_list().replace(' ', "");
+    format!("{models},.toml")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -234,6 +254,19 @@ mod tests {
                 "unknown setting 'colour' (known: scene, model, accel, memory, pipeline, depth, aov, paused, spp, width, height, backend)",
             ]
         );
+    }
+
+    #[test]
+    fn every_listed_control_value_parses() {
+        let lists = control_choices();
+        assert_eq!(lists.len(), 4);
+        for (key, names) in lists {
+            assert!(names.len() >= 2, "{key}: {names:?}");
+            for name in names {
+                assert!(Setting::parse(key, name).is_ok(), "{key}={name}");
+            }
+        }
+        assert_eq!(file_accept(), ".ply,.obj,.off,.gltf,.glb,.toml");
     }
 
     #[test]
