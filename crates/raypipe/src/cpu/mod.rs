@@ -62,7 +62,7 @@ pub fn render_with(
                             surface = trace.normal.extend(depth).to_array();
                         }
                     }
-                    (average(sum, samples, count), surface)
+                    (crate::image::sample_mean(sum, samples, count), surface)
                 })
                 .collect();
             row_done();
@@ -75,15 +75,4 @@ pub fn render_with(
         frame.surface[pixel] = surface;
     }
     Ok(frame)
-}
-
-/// A pixel's colour sums over `samples` samples as a frame holds them: the mean radiance, and the
-/// count's total (rays) or mean (cost per primary ray). The GPU's readback divides the same way.
-pub fn average(sum: Vec4, samples: u32, count: Count) -> [f32; 4] {
-    let n = samples as f32;
-    let counted = match count {
-        Count::Rays => sum.w,
-        Count::Cost => sum.w / n,
-    };
-    [sum.x / n, sum.y / n, sum.z / n, counted]
 }

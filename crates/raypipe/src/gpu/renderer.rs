@@ -465,7 +465,7 @@ impl Renderer {
 
     /// Traces `samples` samples per pixel from the start (at least 1), one submission each so that
     /// no submission runs long, with `prepare` recorded before the first; reads the average back
-    /// (as [`crate::cpu::render_with`] computes it). The GPU time is the sum of the trace passes'.
+    /// (as [`crate::image::sample_mean`] computes it, for the CPU reference too). The GPU time is the sum of the trace passes'.
     pub async fn render_samples(
         &mut self,
         samples: u32,
@@ -528,7 +528,7 @@ impl Renderer {
         let samples = targets.samples().max(1);
         frame.color = sums
             .into_iter()
-            .map(|sum| crate::cpu::average(glam::Vec4::from_array(sum), samples, self.options.count))
+            .map(|sum| crate::image::sample_mean(glam::Vec4::from_array(sum), samples, self.options.count))
             .collect();
         frame.surface = bytemuck::pod_collect_to_vec(&self.readbacks[1].read(&ctx.device).await?);
         Ok(frame)

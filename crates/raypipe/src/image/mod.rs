@@ -5,6 +5,9 @@ pub mod heatmap;
 
 pub use crate::records::constants::DEPTH_MISS;
 
+use crate::modes::Count;
+use glam::Vec4;
+
 /// What a render produces: the fragment shader's two outputs per pixel, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
@@ -123,4 +126,15 @@ impl Frame {
             data,
         }
     }
+}
+
+/// A pixel's colour sums over `samples` samples as a frame holds them: the mean radiance, and the
+/// count's total (rays) or mean (cost per primary ray). The CPU reference and the GPU's readback both divide here.
+pub fn sample_mean(sum: Vec4, samples: u32, count: Count) -> [f32; 4] {
+    let n = samples as f32;
+    let counted = match count {
+        Count::Rays => sum.w,
+        Count::Cost => sum.w / n,
+    };
+    [sum.x / n, sum.y / n, sum.z / n, counted]
 }
