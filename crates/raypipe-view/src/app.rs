@@ -295,7 +295,10 @@ impl Viewer {
             KeyCode::KeyH => self.show_panel = !self.show_panel,
             KeyCode::KeyP => {
                 let path = self.host.screenshot_path(self.modes.view);
-                let said = self.screenshot(&path);
+                let said = match self.screenshot(&path) {
+                    Ok(()) => format!("saved {}", path.display()),
+                    Err(why) => why,
+                };
                 log::info!("{said}");
                 self.message = Some(said);
             }
@@ -309,9 +312,10 @@ impl Viewer {
     /// Saves the current frame (the mean of its samples, read back) to `path`; says what happened.
     /// A tracer that has drawn nothing yet (a mode switched this very frame) traces its first
     /// sample now.
-    fn screenshot(&mut self, path: &std::path::Path) -> String {
+    /// Saves the frame shown (tracing one sample first where none is); the error says why not.
+    fn screenshot(&mut self, path: &std::path::Path) -> Result<(), String> {
         let Some(gpu) = &mut self.gpu else {
-            return "no frame yet".into();
+            return Err("no frame yet".into());
         };
         let tracer = &mut gpu.tracer;
         if tracer.renderer.samples() == 0 {
@@ -319,13 +323,8 @@ impl Viewer {
             tracer.encode(&mut encoder, self.modes.accel);
             gpu.ctx.queue.submit([encoder.finish()]);
         }
-        match block_on(tracer.renderer.read_back()) {
-            Ok(frame) => match self.host.save(&frame, self.modes.view, path) {
-                Ok(()) => format!("saved {}", path.display()),
-                Err(why) => why,
-            },
-            Err(error) => error.to_string(),
-        }
+        let frame = block_on(tracer.renderer.read_back()).map_err(|e| e.to_string())?;
+        self.host.save(&frame, self.modes.view, path)
     }
 
     /// Applies held keys and the script's orbit to the camera, for a frame `seconds` long.
@@ -491,11 +490,10 @@ impl Viewer {
         if self.frames_drawn < script.frames.max(1) {
             return;
         }
-        if let Some(path) = &script.screenshot {
-            let said = self.screenshot(path);
-            if !said.starts_with("saved") {
-                return self.fail(event_loop, ViewError::Scene(said));
-            }
+        if let Some(path) = &script.screenshot
+            && let Err(why) = self.screenshot(path)
+        {
+            return self.fail(event_loop, ViewError::Scene(why));
         }
         event_loop.exit();
     }
