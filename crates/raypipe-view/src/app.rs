@@ -284,8 +284,7 @@ impl Viewer {
             self.input.held.remove(&code);
             return;
         }
-        // winit's key names are the browser's `KeyboardEvent.code` names, which ModeKey reads.
-        if let Some(key) = ModeKey::from_code(&format!("{code:?}")) {
+        if let Some(key) = mode_key(code) {
             return self.set_modes(self.modes.after(key));
         }
         let mut asked = self.modes;
@@ -605,5 +604,45 @@ impl ApplicationHandler for Viewer {
             event_loop.set_control_flow(ControlFlow::Poll);
         }
         gpu.window.request_redraw();
+    }
+}
+
+/// The mode key a window's key is (`ModeKey::from_code` reads the page's).
+fn mode_key(code: KeyCode) -> Option<ModeKey> {
+    Some(match code {
+        KeyCode::KeyB => ModeKey::Accel,
+        KeyCode::KeyG => ModeKey::Pipeline,
+        KeyCode::KeyM => ModeKey::Memory,
+        KeyCode::KeyV => ModeKey::View,
+        KeyCode::BracketLeft => ModeKey::FewerBounces,
+        KeyCode::BracketRight => ModeKey::MoreBounces,
+        KeyCode::Space => ModeKey::Pause,
+        _ => return None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A window and a page map the same keys to the same modes: winit's key names are the
+    /// browser's `KeyboardEvent.code` names.
+    #[test]
+    fn window_and_page_keys_agree() {
+        let codes = [
+            KeyCode::KeyB,
+            KeyCode::KeyG,
+            KeyCode::KeyM,
+            KeyCode::KeyV,
+            KeyCode::BracketLeft,
+            KeyCode::BracketRight,
+            KeyCode::Space,
+            KeyCode::KeyW,
+            KeyCode::Enter,
+        ];
+        for code in codes {
+            assert_eq!(mode_key(code), ModeKey::from_code(&format!("{code:?}")), "{code:?}");
+        }
+        assert_eq!(codes.iter().filter(|&&c| mode_key(c).is_some()).count(), 7);
     }
 }
