@@ -129,7 +129,8 @@ fn gpu_builder(c: &mut Criterion) {
             b.iter_custom(|iterations| {
                 (0..iterations)
                     .map(|_| {
-                        let timings = pollster::block_on(builder.build(false)).expect("the build runs");
+                        let timings = pollster::block_on(builder.build(raypipe::gpu::build::Codes::Computed))
+                            .expect("the build runs");
                         Duration::from_secs_f64(timings.total() / 1e3)
                     })
                     .sum()

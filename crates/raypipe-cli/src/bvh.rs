@@ -7,7 +7,7 @@ use raypipe::bvh::lbvh::{Hierarchy, LbvhBuilder};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
 use raypipe::bvh::{BuildTimings, Bvh};
-use raypipe::gpu::build::GpuLbvhBuilder;
+use raypipe::gpu::build::{Codes, GpuLbvhBuilder};
 use raypipe::gpu::{Backend, GpuContext};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
@@ -128,9 +128,9 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
             ))?;
             gpu_variant = format!("; {}", builder.variant().describe());
             block_on(builder.write_scene(&packed))?;
-            block_on(builder.build(false))?;
+            block_on(builder.build(Codes::Computed))?;
             let timings = (0..runs)
-                .map(|_| block_on(builder.build(false)))
+                .map(|_| block_on(builder.build(Codes::Computed)))
                 .collect::<Result<Vec<_>, _>>()?;
             let bvh = Bvh {
                 nodes: block_on(builder.read_nodes())?,

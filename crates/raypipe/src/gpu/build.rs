@@ -34,6 +34,15 @@ const SCRATCH_BOUNDS: u32 = 0;
 const SCRATCH_BLOCKS: u32 = 8;
 const _: () = assert!(SCRATCH_BOUNDS + 6 <= SCRATCH_BLOCKS);
 
+/// Where a build's Morton codes come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Codes {
+    /// Computed by the build from the primitives' centroids (its first kernel).
+    Computed,
+    /// Written by the caller with `GpuLbvhBuilder::write_codes` (the first kernel is skipped).
+    Given,
+}
+
 /// The radix sort's digit, in bits (radix_sort.wgsl's, from the preamble).
 pub const DIGIT_BITS: u32 = 8;
 const DIGITS: u64 = 1 << DIGIT_BITS;
@@ -566,9 +575,9 @@ impl GpuLbvhBuilder {
             .write_buffer(&self.buffers.pairs, 0, bytemuck::cast_slice(&words));
     }
 
-    /// Records a build into `encoder`: from the spheres, or from the codes of `write_codes` when
-    /// `given_codes` is set.
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, given_codes: bool) {
+    /// Records a build into `encoder`: from the spheres' codes computed here, or from the codes of
+    /// `write_codes`.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, codes: Codes) {
         let b = &self.buffers;
         let n = b.count();
         if n == 0 {
@@ -595,7 +604,7 @@ impl GpuLbvhBuilder {
                 pass.dispatch_workgroups(x, y, 1);
             }
         };
-        if given_codes {
+        if codes == Codes::Given {
             phase(encoder, 0, &[]);
         } else {
             phase(
@@ -643,11 +652,11 @@ impl GpuLbvhBuilder {
 
     /// Builds and waits; returns the GPU time of each phase (zeros where the adapter has no
     /// timestamp queries).
-    pub async fn build(&self, given_codes: bool) -> Result<BuildTimings, GpuError> {
+    pub async fn build(&self, codes: Codes) -> Result<BuildTimings, GpuError> {
         self.ctx
             .checked("building the LBVH on the GPU", || {
                 let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-                self.encode(&mut encoder, given_codes);
+                self.encode(&mut encoder, codes);
                 self.ctx.queue.submit([encoder.finish()]);
                 Ok(())
             })

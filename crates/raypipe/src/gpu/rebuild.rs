@@ -43,7 +43,7 @@ impl SceneRebuild {
     /// Records the build (and the threaded layout) of the primitives as they will be when the
     /// encoder reaches it.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
-        self.builder.encode(encoder, false);
+        self.builder.encode(encoder, super::build::Codes::Computed);
         if let Some(layout) = &self.layout {
             layout.encode(encoder);
         }

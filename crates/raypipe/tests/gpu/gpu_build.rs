@@ -10,7 +10,7 @@ use raypipe::bvh::sah::sah_cost;
 use raypipe::bvh::threaded::threaded_nodes;
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::gpu::GpuContext;
-use raypipe::gpu::build::{BuildVariant, GpuLbvhBuilder, SiblingBoxes};
+use raypipe::gpu::build::{BuildVariant, Codes, GpuLbvhBuilder, SiblingBoxes};
 use raypipe::gpu::threaded::GpuThreadedLayout;
 use raypipe::records::{GpuSphere, PackedScene};
 use raypipe::rng::SplitMix64;
@@ -66,7 +66,7 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
     block_on(builder.resize(spheres.len(), 0)).unwrap();
     builder.write_spheres(spheres);
     builder.write_codes(&codes);
-    block_on(builder.build(true)).unwrap();
+    block_on(builder.build(Codes::Given)).unwrap();
     let nodes = block_on(builder.read_nodes()).unwrap();
     let first_difference = nodes.iter().zip(&cpu.nodes).position(|(g, c)| g != c);
     assert_eq!(nodes.len(), cpu.nodes.len(), "{what}: node counts");
@@ -173,7 +173,7 @@ fn check_own_codes(mut builder: GpuLbvhBuilder, bits: MortonBits) {
         let spheres = random_spheres(n, 11, centres);
         block_on(builder.resize(n, 0)).unwrap();
         builder.write_spheres(&spheres);
-        block_on(builder.build(false)).unwrap();
+        block_on(builder.build(Codes::Computed)).unwrap();
         let bvh = Bvh {
             nodes: block_on(builder.read_nodes()).unwrap(),
             primitive_count: n,
@@ -210,13 +210,13 @@ fn spheres_and_triangles_build_alike(ctx: &GpuContext) {
     let mut builder = block_on(GpuLbvhBuilder::new(ctx, MortonBits::Bits30, 0, 0)).unwrap();
     block_on(builder.write_scene(&packed)).unwrap();
     builder.write_codes(&codes);
-    block_on(builder.build(true)).unwrap();
+    block_on(builder.build(Codes::Given)).unwrap();
     assert!(
         block_on(builder.read_nodes()).unwrap() == cpu.nodes,
         "GPU and CPU nodes differ"
     );
 
-    block_on(builder.build(false)).unwrap();
+    block_on(builder.build(Codes::Computed)).unwrap();
     let own = Bvh {
         nodes: block_on(builder.read_nodes()).unwrap(),
         primitive_count: boxes.len(),
