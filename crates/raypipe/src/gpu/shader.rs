@@ -32,10 +32,44 @@ const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
 const SHADE: &str = include_str!("shaders/shade.wgsl");
 const TRACE: &str = include_str!("shaders/trace.wgsl");
 
+/// The scene's record arrays, each read by the shader through `load_<name>(i)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RecordKind {
+    Sphere,
+    Triangle,
+    TriangleNormals,
+    TriangleUvs,
+    Plane,
+    Light,
+    Material,
+    /// The BVH's build layout (the stackless walk's).
+    Node,
+    /// The BVH depth-first in 16-byte nodes (the stack and threaded walks').
+    ThreadedNode,
+}
+
+impl RecordKind {
+    /// The array's name in the shader (`load_<name>`, `<name>_records`, `<name>_texels`) and in
+    /// messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            RecordKind::Sphere => "sphere",
+            RecordKind::Triangle => "triangle",
+            RecordKind::TriangleNormals => "triangle_normals",
+            RecordKind::TriangleUvs => "triangle_uvs",
+            RecordKind::Plane => "plane",
+            RecordKind::Light => "light",
+            RecordKind::Material => "material",
+            RecordKind::Node => "node",
+            RecordKind::ThreadedNode => "threaded_node",
+        }
+    }
+}
+
 /// A scene array the shader reads through `load_<name>(i)`, bound at `binding` in group 0.
 #[derive(Clone, Copy, Debug)]
 pub struct RecordArray {
-    pub name: &'static str,
+    pub kind: RecordKind,
     pub wgsl_type: &'static str,
     pub texels: usize,
     pub binding: u32,
@@ -87,7 +121,7 @@ pub fn compose(config: &ShaderConfig) -> String {
     )
     .unwrap();
     for array in config.arrays {
-        let (name, ty, binding) = (array.name, array.wgsl_type, array.binding);
+        let (name, ty, binding) = (array.kind.name(), array.wgsl_type, array.binding);
         match config.memory {
             MemoryMode::Storage => {
                 writeln!(

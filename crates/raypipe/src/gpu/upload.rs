@@ -1,6 +1,6 @@
 //! Bringing the scene to the shader: uniform buffers, storage buffers, or rgba32float textures.
 
-use super::shader::{RecordArray, texture_pixels_binding};
+use super::shader::{RecordArray, RecordKind, texture_pixels_binding};
 use super::{GpuContext, GpuError};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
@@ -65,7 +65,7 @@ impl SceneResources {
     /// Rewrites the arrays in place with `scene`'s records, which must be as many as those
     /// uploaded (a moving scene, its BVH rebuilt on the CPU): no new buffer, texture or pipeline.
     pub fn write(&self, queue: &wgpu::Queue, scene: &PackedScene, accel: Accel) -> Result<(), GpuError> {
-        for ((name, records), (array, resource)) in scene_records(scene, accel)
+        for ((kind, records), (array, resource)) in scene_records(scene, accel)
             .into_iter()
             .zip(self.arrays.iter().zip(&self.resources))
         {
@@ -73,8 +73,9 @@ impl SceneResources {
                 return Err(GpuError::Operation {
                     what: "rewriting the scene",
                     message: format!(
-                        "{} {name} records, where {} were uploaded",
+                        "{} {} records, where {} were uploaded",
                         records.len(),
+                        kind.name(),
                         array.capacity
                     ),
                 });
@@ -126,13 +127,14 @@ pub fn upload(
         texels_per_row,
         texture_pixels: upload_texture_pixels(ctx, &scene.texture_pixels, texels_per_row)?,
     };
-    for (index, (name, records)) in scene_records(scene, accel).into_iter().enumerate() {
-        let array = record_array(index, name, records);
+    for (index, (kind, records)) in scene_records(scene, accel).into_iter().enumerate() {
+        let array = record_array(index, kind, records);
+        let name = kind.name();
         let binding = array.binding;
-        let shared_buffer = match (shared, name) {
-            (Some(shared), "sphere") => Some(shared.spheres.clone()),
-            (Some(shared), "node") => Some(shared.nodes.clone()),
-            (Some(shared), "threaded_node") => shared.threaded_nodes.clone(),
+        let shared_buffer = match (shared, kind) {
+            (Some(shared), RecordKind::Sphere) => Some(shared.spheres.clone()),
+            (Some(shared), RecordKind::Node) => Some(shared.nodes.clone()),
+            (Some(shared), RecordKind::ThreadedNode) => shared.threaded_nodes.clone(),
             _ => None,
         };
         let (ty, resource) = match memory {
@@ -286,15 +288,15 @@ fn upload_texture_pixels(
 }
 
 /// The scene's record arrays in binding order (binding 0 is the globals); BVH modes add the nodes.
-fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn RecordSlice)> {
-    let mut records: Vec<(&'static str, &dyn RecordSlice)> = vec![
-        ("sphere", &scene.spheres),
-        ("triangle", &scene.triangles),
-        ("triangle_normals", &scene.triangle_normals),
-        ("triangle_uvs", &scene.triangle_uvs),
-        ("plane", &scene.planes),
-        ("light", &scene.lights),
-        ("material", &scene.materials),
+fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn RecordSlice)> {
+    let mut records: Vec<(RecordKind, &dyn RecordSlice)> = vec![
+        (RecordKind::Sphere, &scene.spheres),
+        (RecordKind::Triangle, &scene.triangles),
+        (RecordKind::TriangleNormals, &scene.triangle_normals),
+        (RecordKind::TriangleUvs, &scene.triangle_uvs),
+        (RecordKind::Plane, &scene.planes),
+        (RecordKind::Light, &scene.lights),
+        (RecordKind::Material, &scene.materials),
     ];
     // A scene whose BVH is rebuilt on the GPU has none of its own: its node arrays come shared.
     static NO_NODES: Vec<GpuNode> = Vec::new();
@@ -302,10 +304,11 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(&'static str, &dyn R
     let bvh = scene.bvh.as_ref();
     match accel {
         Accel::Brute => {}
-        Accel::Stack | Accel::Threaded => {
-            records.push(("threaded_node", bvh.map_or(&NO_THREADED_NODES, |b| &b.threaded_nodes)))
-        }
-        Accel::Stackless => records.push(("node", bvh.map_or(&NO_NODES, |b| &b.nodes))),
+        Accel::Stack | Accel::Threaded => records.push((
+            RecordKind::ThreadedNode,
+            bvh.map_or(&NO_THREADED_NODES, |b| &b.threaded_nodes),
+        )),
+        Accel::Stackless => records.push((RecordKind::Node, bvh.map_or(&NO_NODES, |b| &b.nodes))),
     }
     records
 }
@@ -315,14 +318,14 @@ pub fn record_arrays(scene: &PackedScene, accel: Accel) -> Vec<RecordArray> {
     scene_records(scene, accel)
         .into_iter()
         .enumerate()
-        .map(|(index, (name, records))| record_array(index, name, records))
+        .map(|(index, (kind, records))| record_array(index, kind, records))
         .collect()
 }
 
 /// The array at `index` among the scene's record arrays: bindings follow the globals' 0.
-fn record_array(index: usize, name: &'static str, records: &dyn RecordSlice) -> RecordArray {
+fn record_array(index: usize, kind: RecordKind, records: &dyn RecordSlice) -> RecordArray {
     RecordArray {
-        name,
+        kind,
         wgsl_type: records.wgsl_type(),
         texels: records.texels(),
         binding: index as u32 + 1,
