@@ -6,6 +6,7 @@
 //! Morton codes are 30-bit or 63-bit, as on the CPU; the width picks the key type the kernels are
 //! compiled with.
 
+use super::Capacity;
 use super::compute::{buffer_entry, grid, kernels, storage_buffer};
 use super::readback::read_buffer;
 use super::shader::records_source;
@@ -731,8 +732,8 @@ impl Buffers {
                 memory: MemoryMode::Storage,
                 array: "node",
                 records: (2 * count).saturating_sub(1),
-                needed: format!("{node_bytes} bytes"),
-                allowed: limits.max_storage_buffer_binding_size.to_string(),
+                needed: Capacity::Bytes(node_bytes),
+                allowed: Capacity::Bytes(limits.max_storage_buffer_binding_size),
             });
         }
         let device = &ctx.device;

@@ -3,6 +3,7 @@
 use super::context::Backend;
 use crate::error::MissingBvh;
 use crate::modes::MemoryMode;
+use std::fmt;
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
@@ -22,9 +23,8 @@ pub enum GpuError {
         memory: MemoryMode,
         array: &'static str,
         records: usize,
-        /// What the records need, in words ("640000 bytes", "3 rows of 2048 texels").
-        needed: String,
-        allowed: String,
+        needed: Capacity,
+        allowed: Capacity,
     },
     /// A BVH rebuilt on the GPU reaches the shader through storage buffers only.
     #[error("a BVH rebuilt on the GPU is read from storage memory, not {memory} memory")]
@@ -50,4 +50,35 @@ pub enum GpuError {
     Readback(String),
     #[error("WGPU_BACKEND={0:?} names no backend wgpu knows (vulkan, gl, metal, dx12, webgpu)")]
     UnknownBackendEnv(String),
+}
+
+/// What a record array needs, or an adapter allows, in the unit of its memory mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Capacity {
+    /// A buffer binding's bytes.
+    Bytes(u64),
+    /// A texture's rows, of `texels_per_row` where they are a record array's.
+    TextureRows { rows: u64, texels_per_row: Option<u32> },
+    /// Indices exact in the f32 texels of texture memory: at most `records` of them, where given.
+    ExactIndices { records: Option<u64> },
+}
+
+impl fmt::Display for Capacity {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Capacity::Bytes(bytes) => write!(f, "{bytes} bytes"),
+            Capacity::TextureRows {
+                rows,
+                texels_per_row: Some(width),
+            } => write!(f, "{rows} rows of {width} texels"),
+            Capacity::TextureRows {
+                rows,
+                texels_per_row: None,
+            } => write!(f, "{rows} rows"),
+            Capacity::ExactIndices { records: None } => f.write_str("exact float indices"),
+            Capacity::ExactIndices { records: Some(n) } => {
+                write!(f, "{n} records, what a texel can index exactly")
+            }
+        }
+    }
 }

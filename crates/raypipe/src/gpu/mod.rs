@@ -17,6 +17,6 @@ pub mod upload;
 
 pub use context::{Backend, GpuContext};
 pub use display::{Display, DisplayView};
-pub use error::GpuError;
+pub use error::{Capacity, GpuError};
 pub use rebuild::SceneRebuild;
 pub use renderer::{Renderer, RendererOptions, TimedFrame};

@@ -1,7 +1,7 @@
 //! Bringing the scene to the shader: uniform buffers, storage buffers, or rgba32float textures.
 
 use super::shader::{RecordArray, RecordKind, texture_pixels_binding};
-use super::{GpuContext, GpuError};
+use super::{Capacity, GpuContext, GpuError};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
 use crate::modes::{Accel, MemoryMode};
@@ -159,8 +159,8 @@ pub fn upload(
                         memory,
                         array: name,
                         records: records.len(),
-                        needed: format!("{} bytes", bytes.len()),
-                        allowed: limit.to_string(),
+                        needed: Capacity::Bytes(bytes.len() as u64),
+                        allowed: Capacity::Bytes(limit),
                     });
                 }
                 let buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -177,8 +177,10 @@ pub fn upload(
                         memory,
                         array: name,
                         records: records.len(),
-                        needed: "exact float indices".into(),
-                        allowed: format!("{MAX_TEXEL_INTEGER} records, what a texel can index exactly"),
+                        needed: Capacity::ExactIndices { records: None },
+                        allowed: Capacity::ExactIndices {
+                            records: Some(MAX_TEXEL_INTEGER as u64),
+                        },
                     });
                 }
                 let mut texels = records.texel_data();
@@ -188,8 +190,14 @@ pub fn upload(
                         memory,
                         array: name,
                         records: records.len(),
-                        needed: format!("{rows} rows of {texels_per_row} texels"),
-                        allowed: format!("{} rows", limits.max_texture_dimension_2d),
+                        needed: Capacity::TextureRows {
+                            rows: rows as u64,
+                            texels_per_row: Some(texels_per_row),
+                        },
+                        allowed: Capacity::TextureRows {
+                            rows: limits.max_texture_dimension_2d as u64,
+                            texels_per_row: None,
+                        },
                     });
                 }
                 texels.resize(rows * texels_per_row as usize, [0.0; 4]);
@@ -258,8 +266,14 @@ fn upload_texture_pixels(
             memory: MemoryMode::Texture,
             array: "texture pixel",
             records: pixels.0.len(),
-            needed: format!("{rows} rows of {texels_per_row} texels"),
-            allowed: format!("{} rows", limits.max_texture_dimension_2d),
+            needed: Capacity::TextureRows {
+                rows: rows as u64,
+                texels_per_row: Some(texels_per_row),
+            },
+            allowed: Capacity::TextureRows {
+                rows: limits.max_texture_dimension_2d as u64,
+                texels_per_row: None,
+            },
         });
     }
     let width = if pixels.0.is_empty() { 1 } else { texels_per_row };
