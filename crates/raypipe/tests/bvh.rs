@@ -269,6 +269,14 @@ fn a_reused_builder_equals_a_fresh_one() {
     }
 }
 
+/// A key too narrow for the codes is refused, not a wrong tree: 63-bit codes need a u128 key.
+#[test]
+#[should_panic(expected = "63-bit Morton codes do not fit a key of 32 code bits")]
+fn a_u64_key_refuses_63_bit_codes() {
+    let boxes = [Aabb::around_sphere(Vec3::ZERO, 1.0), Aabb::around_sphere(Vec3::X, 1.0)];
+    LbvhBuilder::<u64>::new().build(&boxes, MortonBits::Bits63);
+}
+
 type Traversal = fn(&PackedBvh, &Primitives, &Ray, Hit, bool) -> Hit;
 
 const TRAVERSALS: [(&str, Traversal); 3] = [

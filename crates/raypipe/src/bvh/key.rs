@@ -13,6 +13,8 @@ use std::ops::{BitXor, Not};
 /// After the sort, the same type with the sorted position in place of the primitive is what the
 /// hierarchy search compares (see [`shares_more`]).
 pub trait Key: Copy + Default + Ord + BitXor<Output = Self> + Not<Output = Self> + Send + Sync + 'static {
+    /// The widest Morton code the key holds above the index.
+    const CODE_BITS: u32;
     fn new(code: u64, primitive: u32) -> Self;
     fn code(self) -> u64;
     fn primitive(self) -> u32;
@@ -29,6 +31,7 @@ pub trait Key: Copy + Default + Ord + BitXor<Output = Self> + Not<Output = Self>
 }
 
 impl Key for u64 {
+    const CODE_BITS: u32 = 32;
     fn new(code: u64, primitive: u32) -> Self {
         (code << 32) | primitive as u64
     }
@@ -52,6 +55,7 @@ impl Key for u64 {
 }
 
 impl Key for u128 {
+    const CODE_BITS: u32 = 64;
     fn new(code: u64, primitive: u32) -> Self {
         ((code as u128) << 32) | primitive as u128
     }

@@ -190,6 +190,17 @@ impl<K: Key> LbvhBuilder<K> {
         }
     }
 
+    /// A key too narrow for the codes would shift their top bits away and build a wrong tree
+    /// without a word: refused, as the caller's mistake it is.
+    fn check_width(bits: MortonBits) {
+        assert!(
+            bits.total_bits() <= K::CODE_BITS,
+            "{}-bit Morton codes do not fit a key of {} code bits: use LbvhBuilder::<u128>",
+            bits.total_bits(),
+            K::CODE_BITS
+        );
+    }
+
     /// Merges `leaves` leaves per task ([`Hierarchy::Merges`]): small chunks leave more of the tree
     /// to the serial merge that joins them, which tests want.
     pub fn with_merge_chunk(mut self, leaves: usize) -> Self {
@@ -199,7 +210,9 @@ impl<K: Key> LbvhBuilder<K> {
     }
 
     /// Builds over `boxes`, computing Morton codes of their centroids; the tree is in [`Self::nodes`].
+    /// The key must hold codes of `bits` (`u64` for 30-bit codes, `u128` for 63-bit ones).
     pub fn build(&mut self, boxes: &[Aabb], bits: MortonBits) -> BuildTimings {
+        Self::check_width(bits);
         let start = Instant::now();
         self.morton_keys(boxes, bits, None);
         let morton = ms_since(start);
@@ -210,6 +223,7 @@ impl<K: Key> LbvhBuilder<K> {
 
     /// Builds over `boxes` with the given Morton codes (so devices can be compared on identical input).
     pub fn build_with_codes(&mut self, boxes: &[Aabb], codes: &[u64], bits: MortonBits) -> BuildTimings {
+        Self::check_width(bits);
         assert_eq!(boxes.len(), codes.len());
         self.morton_keys(boxes, bits, Some(codes));
         self.build_from_keys(boxes, bits)
