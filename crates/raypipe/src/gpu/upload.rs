@@ -184,50 +184,17 @@ pub fn upload(
                     });
                 }
                 let mut texels = records.texel_data();
-                let rows = texels.len().div_ceil(texels_per_row as usize).max(1);
-                if rows > limits.max_texture_dimension_2d as usize {
-                    return Err(GpuError::TooBig {
-                        memory,
-                        array: name,
-                        records: records.len(),
-                        needed: Capacity::TextureRows {
-                            rows: rows as u64,
-                            texels_per_row: Some(texels_per_row),
-                        },
-                        allowed: Capacity::TextureRows {
-                            rows: limits.max_texture_dimension_2d as u64,
-                            texels_per_row: None,
-                        },
-                    });
-                }
+                let rows = texture_rows(ctx, (name, records.len()), texels.len(), texels_per_row)?;
                 texels.resize(rows * texels_per_row as usize, [0.0; 4]);
-                let size = wgpu::Extent3d {
-                    width: texels_per_row,
-                    height: rows as u32,
-                    depth_or_array_layers: 1,
-                };
-                let texture = ctx.device.create_texture_with_data(
-                    &ctx.queue,
-                    &wgpu::TextureDescriptor {
-                        label: Some(name),
-                        size,
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: wgpu::TextureFormat::Rgba32Float,
-                        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                        view_formats: &[],
-                    },
-                    wgpu::util::TextureDataOrder::LayerMajor,
+                let texture = texel_texture(
+                    ctx,
+                    name,
+                    wgpu::TextureFormat::Rgba32Float,
+                    (texels_per_row, rows as u32),
                     bytemuck::cast_slice(&texels),
                 );
-                let ty = wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                };
                 let view = texture.create_view(&Default::default());
-                (ty, Resource::Texture(texture, view))
+                (texture_binding(), Resource::Texture(texture, view))
             }
         };
         out.layout_entries.push(wgpu::BindGroupLayoutEntry {
@@ -242,11 +209,7 @@ pub fn upload(
     out.layout_entries.push(wgpu::BindGroupLayoutEntry {
         binding: texture_pixels_binding(&out.arrays),
         visibility: stage,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
+        ty: texture_binding(),
         count: None,
     });
     Ok(out)
@@ -259,46 +222,85 @@ fn upload_texture_pixels(
     pixels: &TexturePixels,
     texels_per_row: u32,
 ) -> Result<wgpu::TextureView, GpuError> {
-    let limits = ctx.limits();
-    let rows = pixels.0.len().div_ceil(texels_per_row as usize).max(1);
-    if rows > limits.max_texture_dimension_2d as usize {
+    let rows = texture_rows(ctx, ("texture pixel", pixels.0.len()), pixels.0.len(), texels_per_row)?;
+    let width = if pixels.0.is_empty() { 1 } else { texels_per_row };
+    let mut texels = pixels.0.clone();
+    texels.resize(rows * width as usize, [0; 4]);
+    let texture = texel_texture(
+        ctx,
+        "texture pixels",
+        wgpu::TextureFormat::Rgba16Float,
+        (width, rows as u32),
+        bytemuck::cast_slice(&texels),
+    );
+    Ok(texture.create_view(&Default::default()))
+}
+
+/// The rows `texels` texels take at `texels_per_row` (at least one), or why the adapter's textures
+/// cannot hold them; `array` names the records and counts them, for the message.
+fn texture_rows(
+    ctx: &GpuContext,
+    array: (&'static str, usize),
+    texels: usize,
+    texels_per_row: u32,
+) -> Result<usize, GpuError> {
+    let rows = texels.div_ceil(texels_per_row as usize).max(1);
+    let most = ctx.limits().max_texture_dimension_2d;
+    if rows > most as usize {
         return Err(GpuError::TooBig {
             memory: MemoryMode::Texture,
-            array: "texture pixel",
-            records: pixels.0.len(),
+            array: array.0,
+            records: array.1,
             needed: Capacity::TextureRows {
                 rows: rows as u64,
                 texels_per_row: Some(texels_per_row),
             },
             allowed: Capacity::TextureRows {
-                rows: limits.max_texture_dimension_2d as u64,
+                rows: most as u64,
                 texels_per_row: None,
             },
         });
     }
-    let width = if pixels.0.is_empty() { 1 } else { texels_per_row };
-    let mut texels = pixels.0.clone();
-    texels.resize(rows * width as usize, [0; 4]);
-    let texture = ctx.device.create_texture_with_data(
+    Ok(rows)
+}
+
+/// A 2D texture of `size` (width, rows) texels of `format`, holding `bytes`: the texel route's
+/// arrays and the textures' pixels, read with `textureLoad`.
+fn texel_texture(
+    ctx: &GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+    size: (u32, u32),
+    bytes: &[u8],
+) -> wgpu::Texture {
+    ctx.device.create_texture_with_data(
         &ctx.queue,
         &wgpu::TextureDescriptor {
-            label: Some("texture pixels"),
+            label: Some(label),
             size: wgpu::Extent3d {
-                width,
-                height: rows as u32,
+                width: size.0,
+                height: size.1,
                 depth_or_array_layers: 1,
             },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba16Float,
+            format,
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         },
         wgpu::util::TextureDataOrder::LayerMajor,
-        bytemuck::cast_slice(&texels),
-    );
-    Ok(texture.create_view(&Default::default()))
+        bytes,
+    )
+}
+
+/// How the shader binds a texel texture: unfiltered floats, read with `textureLoad`.
+fn texture_binding() -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: false,
+    }
 }
 
 /// The scene's record arrays in binding order (binding 0 is the globals); BVH modes add the nodes.
