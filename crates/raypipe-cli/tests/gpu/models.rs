@@ -30,6 +30,40 @@ fn the_bunny_renders_as_20k_spheres(models: &Path) {
     assert!(clay > image.len() / 3 / 20, "{clay} clay pixels of {}", image.len() / 3);
 }
 
+/// A glTF sample through `bvh` (a tree over every triangle of its node hierarchy) and `bench` (its
+/// triangles, each mode's image checked against brute force's before it is timed).
+fn a_gltf_sample_goes_through_bvh_and_bench(models: &Path) {
+    let sample = models.join("gltf/BoxAnimated.gltf");
+    let sample = sample.to_str().unwrap();
+    let triangles = raypipe::scene::Scene::load(sample).unwrap().triangles.len();
+    let output = raypipe(&["bvh", sample, "--json"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["primitives"].as_u64(), Some(triangles as u64), "{report}");
+    let out = test_dir("cli-gltf-bench");
+    let output = raypipe(&[
+        "bench",
+        sample,
+        "--as",
+        "triangles",
+        "--accel",
+        "brute,threaded",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--frames",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(out.join("results.csv").is_file());
+}
+
 pub fn tests() -> Vec<Test> {
-    crate::tests![models the_bunny_renders_as_20k_spheres]
+    crate::tests![
+        models the_bunny_renders_as_20k_spheres,
+        models a_gltf_sample_goes_through_bvh_and_bench,
+    ]
 }
