@@ -303,11 +303,9 @@ fn add_gltf(scene: &mut Scene, path: &Path, placement: &Placement) -> Result<(),
     if file.camera.is_some() || !file.lights.is_empty() {
         log::info!("{shown}: its camera and lights are not used in a scene file");
     }
-    match placement.as_ {
-        MeshAs::Triangles => file.add_triangles(scene, placement, &file.similarity(placement)),
-        MeshAs::Spheres => add_mesh(scene, file.mesh(), placement),
-    }
-    .map_err(|e| e.in_origin(shown))
+    super::model::place_gltf(scene, &file, placement)
+        .map(|_| ())
+        .map_err(|e| e.in_origin(shown))
 }
 
 /// A mesh table's placement, its material resolved.

@@ -1,7 +1,7 @@
 //! Meshes in scenes: a model placed (normalized, scaled, moved) and added as triangles or as spheres
 //! on its surface; and the scene `raypipe render MODEL` gets, which frames one model.
 
-use super::gltf::{GltfLight, GltfScene};
+use super::gltf::{GltfLight, GltfScene, Similarity};
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, Triangle};
 use crate::bvh::aabb::Aabb;
 use crate::error::InputError;
@@ -207,6 +207,18 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
     Ok(())
 }
 
+/// Adds a glTF to `scene`, placed after the file's own node transforms: its triangles with its
+/// materials and textures, or spheres on its surface. Returns the placement's transform, which the
+/// file's camera and lights take too.
+pub fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) -> Result<Similarity, InputError> {
+    let place = gltf.similarity(placement);
+    match placement.as_ {
+        MeshAs::Triangles => gltf.add_triangles(scene, placement, &place)?,
+        MeshAs::Spheres => add_mesh(scene, gltf.mesh(), placement)?,
+    }
+    Ok(place)
+}
+
 /// What a caller says of a model file it renders alone: triangles or spheres, how many spheres, a
 /// rotation.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -297,12 +309,7 @@ pub fn gltf_scene(gltf: &GltfScene, shown: &str, options: &ModelOptions) -> Resu
         materials: framing_materials(),
         ..Scene::default()
     };
-    let place = gltf.similarity(&placement);
-    match placement.as_ {
-        MeshAs::Triangles => gltf.add_triangles(&mut scene, &placement, &place),
-        MeshAs::Spheres => add_mesh(&mut scene, gltf.mesh(), &placement),
-    }
-    .map_err(|e| e.in_origin(shown))?;
+    let place = place_gltf(&mut scene, gltf, &placement).map_err(|e| e.in_origin(shown))?;
     let framing = Framing::of(&scene);
     match gltf.camera {
         Some(camera) => {

@@ -249,14 +249,10 @@ fn bounded_count(accessor: &json::Accessor, limit: u64, what: &str) -> Result<us
     Ok(count as usize)
 }
 
-/// An accessor's elements as f32s, `width` to an element; `types` lists the element types the
-/// caller takes. Sparse substitutions are applied. Errors start with `accessor N: `.
-pub fn read_floats(
-    root: &json::Root,
-    buffers: &[Vec<u8>],
-    index: usize,
-    types: &[Type],
-) -> Result<(Vec<f32>, usize), String> {
+/// An accessor's elements as f32s, one after another (as many to an element as its type has);
+/// `types` lists the element types the caller takes. Sparse substitutions are applied. Errors start
+/// with `accessor N: `.
+pub fn read_floats(root: &json::Root, buffers: &[Vec<u8>], index: usize, types: &[Type]) -> Result<Vec<f32>, String> {
     let what = format!("accessor {index}");
     let (accessor, component_type, type_) = lookup(root, index)?;
     if !types.contains(&type_) {
@@ -300,7 +296,7 @@ pub fn read_floats(
             }
         }
     }
-    Ok((values, width))
+    Ok(values)
 }
 
 fn accessor_types(accessor: &json::Accessor) -> Option<(ComponentType, Type)> {

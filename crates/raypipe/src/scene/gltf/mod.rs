@@ -456,52 +456,21 @@ impl SceneReader<'_> {
         }
         let attribute = |semantic: gltf::Semantic| primitive.get(&semantic).map(|a| a.index());
         let position = attribute(gltf::Semantic::Positions).ok_or("no POSITION attribute")?;
-        let vectors = |index: usize, type_: Type| read_floats(self.root, self.buffers, index, &[type_]);
-        let (flat, _) = vectors(position, Type::Vec3)?;
-        let positions: Vec<Vec3> = flat.chunks_exact(3).map(Vec3::from_slice).collect();
-        if let Some(k) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(format!("accessor {position}: position {k} is not finite"));
-        }
+        let positions: Vec<Vec3> = self
+            .vectors::<3>(position, Type::Vec3, None, "position")?
+            .into_iter()
+            .map(Vec3::from)
+            .collect();
+        let vertex_count = Some(positions.len());
+        let normals = attribute(gltf::Semantic::Normals)
+            .map(|index| self.vectors::<3>(index, Type::Vec3, vertex_count, "normal"))
+            .transpose()?
+            .map(|normals| normals.into_iter().map(Vec3::from).collect());
+        let uvs = attribute(gltf::Semantic::TexCoords(0))
+            .map(|index| self.vectors::<2>(index, Type::Vec2, vertex_count, "texture coordinate"))
+            .transpose()?
+            .map(|uvs| uvs.into_iter().map(Vec2::from).collect());
         let vertex_count = positions.len();
-        let same_count = |index: usize, len: usize| {
-            if len == vertex_count {
-                Ok(())
-            } else {
-                Err(format!(
-                    "accessor {index}: {len} elements where POSITION has {vertex_count}"
-                ))
-            }
-        };
-        let normals = match attribute(gltf::Semantic::Normals) {
-            Some(index) => {
-                let normals: Vec<Vec3> = vectors(index, Type::Vec3)?
-                    .0
-                    .chunks_exact(3)
-                    .map(Vec3::from_slice)
-                    .collect();
-                same_count(index, normals.len())?;
-                if let Some(k) = normals.iter().position(|n| !n.is_finite()) {
-                    return Err(format!("accessor {index}: normal {k} is not finite"));
-                }
-                Some(normals)
-            }
-            None => None,
-        };
-        let uvs = match attribute(gltf::Semantic::TexCoords(0)) {
-            Some(index) => {
-                let uvs: Vec<Vec2> = vectors(index, Type::Vec2)?
-                    .0
-                    .chunks_exact(2)
-                    .map(Vec2::from_slice)
-                    .collect();
-                same_count(index, uvs.len())?;
-                if let Some(k) = uvs.iter().position(|uv| !uv.is_finite()) {
-                    return Err(format!("accessor {index}: texture coordinate {k} is not finite"));
-                }
-                Some(uvs)
-            }
-            None => None,
-        };
         let indices = match primitive.indices() {
             Some(accessor) => read_indices(self.root, self.buffers, accessor.index(), vertex_count)?,
             None => (0..vertex_count as u32).collect(),
@@ -515,6 +484,34 @@ impl SceneReader<'_> {
             triangles,
             material,
         }))
+    }
+
+    /// A vertex attribute's elements of `N` floats, every one finite, and as many as POSITION's
+    /// (`vertex_count`) where that is given; `what` names an element in messages.
+    fn vectors<const N: usize>(
+        &self,
+        index: usize,
+        type_: Type,
+        vertex_count: Option<usize>,
+        what: &str,
+    ) -> Result<Vec<[f32; N]>, String> {
+        let floats = read_floats(self.root, self.buffers, index, &[type_])?;
+        let elements: Vec<[f32; N]> = floats
+            .chunks_exact(N)
+            .map(|c| c.try_into().expect("chunks of N"))
+            .collect();
+        if let Some(count) = vertex_count
+            && elements.len() != count
+        {
+            return Err(format!(
+                "accessor {index}: {} elements where POSITION has {count}",
+                elements.len()
+            ));
+        }
+        if let Some(k) = elements.iter().position(|e| !e.iter().all(|c| c.is_finite())) {
+            return Err(format!("accessor {index}: {what} {k} is not finite"));
+        }
+        Ok(elements)
     }
 
     /// Adds a mesh's primitives at `world`: positions by the matrix, normals by its inverse
