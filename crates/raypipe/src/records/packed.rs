@@ -204,8 +204,9 @@ impl PackedScene {
             .textures
             .iter()
             .map(|t| {
+                let offset = texture_pixels.len() as u32;
                 texture_pixels.extend_from_slice(&t.texels);
-                (texture_pixels.len() - t.texels.len()) as u32
+                offset
             })
             .collect();
         let materials = scene
