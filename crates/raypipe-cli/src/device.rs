@@ -9,10 +9,11 @@ use raypipe::bvh::BuildTimings;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::{self, Count};
-use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{Backend, GpuContext, RecordKind, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
+use raypipe::records::packed::MovedRecords;
 use raypipe::scene::Scene;
 use std::time::{Duration, Instant};
 
@@ -176,31 +177,39 @@ pub struct FramesOutcome {
     pub rays: Vec<u64>,
 }
 
-/// Renders `frames` frames of a (moving) scene, rebuilding the BVH every frame, and hands each
-/// frame to `emit`. On the GPU a [`SceneRebuild`] runs in compute passes in the same submission as
-/// the frame; this needs storage memory. On the CPU, one reusable builder serves every frame.
+/// Renders a moving scene at each of `times` (a frame number and its time in seconds), rebuilding
+/// the BVH every frame, and hands each frame to `emit` with its number. On the GPU a
+/// [`SceneRebuild`] runs in compute passes in the same submission as the frame; this needs storage
+/// memory. On the CPU, one reusable builder serves every frame. Each frame rewrites only the
+/// records its motion moves.
 pub fn render_frames(
     scene: &Scene,
     options: &RenderOptions,
-    frames: u32,
+    times: &[(u32, f32)],
     mut emit: impl FnMut(u32, &Frame) -> anyhow::Result<()>,
 ) -> anyhow::Result<FramesOutcome> {
     ensure!(
         options.count == Count::Rays,
         "--aov cost renders single frames; drop --frames"
     );
-    let first = PackedScene::new(scene)?;
+    let motion = scene
+        .motion
+        .as_ref()
+        .ok_or_else(|| anyhow::anyhow!("the scene does not move"))?;
+    let Some(&(_, first_time)) = times.first() else {
+        anyhow::bail!("no frames to render");
+    };
+    let mut packed = PackedScene::new(&scene.at_time(first_time)?)?;
     let mut outcome = FramesOutcome {
         device: String::new(),
         builds: Vec::new(),
         render_ms: Vec::new(),
         rays: Vec::new(),
     };
-    let spheres_at = |frame: u32| -> anyhow::Result<PackedScene> { Ok(PackedScene::new(&scene.at_frame(frame))?) };
     // One bar for the sequence; none inside a frame.
     let bar = progress_bar(
         options.progress,
-        frames as u64,
+        times.len() as u64,
         "{spinner} frames {bar:40} {pos}/{len}, {eta} left {msg}",
     );
     let options = &RenderOptions {
@@ -215,12 +224,16 @@ pub fn render_frames(
             );
             outcome.device = ctx.describe();
             bar.set_message("(compiling the BVH build and the tracer)");
-            let rebuild = block_on(SceneRebuild::new(&ctx, &first, options.accel, MortonBits::Bits30))?;
-            let mut renderer = build_renderer(&ctx, &first, Some(&rebuild), options)?;
+            let rebuild = block_on(SceneRebuild::new(&ctx, &packed, options.accel, MortonBits::Bits30))?;
+            let mut renderer = build_renderer(&ctx, &packed, Some(&rebuild), options)?;
             bar.set_message("");
-            for frame in 0..frames {
-                if frame > 0 {
-                    rebuild.write_spheres(&spheres_at(frame)?.spheres);
+            for (index, &(frame, t)) in times.iter().enumerate() {
+                if index > 0 {
+                    let moved = packed.apply(&motion.moved(scene, t)?);
+                    rebuild.write_moved(&packed, moved);
+                    if moved == MovedRecords::Triangles {
+                        renderer.write_records(&packed, &[RecordKind::TriangleNormals])?;
+                    }
                 }
                 let start = Instant::now();
                 let timed = block_on(renderer.render_samples(options.samples, |encoder| {
@@ -241,13 +254,10 @@ pub fn render_frames(
         None => {
             outcome.device = cpu_description();
             let mut builder = LbvhBuilder::<u64>::new();
-            // Frame 0 is packed already.
-            let mut first = Some(first);
-            for frame in 0..frames {
-                let mut packed = match first.take() {
-                    Some(packed) => packed,
-                    None => spheres_at(frame)?,
-                };
+            for (index, &(frame, t)) in times.iter().enumerate() {
+                if index > 0 {
+                    packed.apply(&motion.moved(scene, t)?);
+                }
                 if options.accel.uses_bvh() {
                     let timings = builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
                     packed.set_bvh(builder.to_bvh());

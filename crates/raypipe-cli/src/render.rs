@@ -11,6 +11,7 @@ use raypipe::image::{FloatImage, Frame, heatmap};
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
+use raypipe::scene::animation::ClipChoice;
 use raypipe::scene::model::is_model_file;
 use raypipe::scene::model::{MeshAs, ModelOptions, Normals};
 use std::io::IsTerminal;
@@ -78,9 +79,27 @@ pub struct SceneArgs {
     pub accel: Accel,
     #[arg(long, value_enum, default_value_t)]
     pub aov: Aov,
+    /// With a glTF that has animations: the one that plays, by name or index (default the first).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub animation: Option<String>,
+    /// For a moving scene (an animated glTF, bounce:N): its time in seconds (with --frames, the
+    /// first frame's). Past the end of an animation it holds its last pose, unless --loop.
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    pub time: Option<f32>,
+    /// With --time and --frames: an animation starts again at its end.
+    #[arg(long = "loop")]
+    pub looping: bool,
 }
 
 impl SceneArgs {
+    /// The motion time `t` seconds asks for: checked, and wrapped where --loop says.
+    pub fn scene_time(&self, scene: &Scene, t: f32) -> anyhow::Result<f32> {
+        anyhow::ensure!(t.is_finite(), "--time must be a finite number of seconds");
+        Ok(match &scene.motion {
+            Some(motion) if self.looping => motion.looped(t),
+            _ => t,
+        })
+    }
     /// The scene, with the size and depth the flags give.
     pub fn load(&self) -> anyhow::Result<Scene> {
         let model = ModelOptions {
@@ -89,8 +108,15 @@ impl SceneArgs {
             rotate: self.rotate,
             normals: self.normals,
             crease: self.crease,
+            animation: self.animation.as_deref().map(ClipChoice::parse),
         };
         let mut scene = load_scene(&self.spec, &model)?;
+        if scene.motion.is_none() && (self.time.is_some() || self.looping) {
+            bail!(
+                "{}: --time and --loop apply to moving scenes (an animated glTF, bounce:N)",
+                self.spec
+            );
+        }
         // Legal but probably not meant: said once, here, rather than per packed frame.
         if scene.spheres.is_empty() && scene.triangles.is_empty() && scene.planes.is_empty() {
             log::warn!(
@@ -130,11 +156,40 @@ pub struct RenderArgs {
     /// Say nothing on success (by default one line on standard error says what was written).
     #[arg(short, long)]
     quiet: bool,
-    /// Render this many frames of a moving scene (bounce:N), rebuilding the BVH every frame (on the
-    /// GPU with --memory storage). Writes the last frame, or every frame when the output name holds
-    /// a printf-style number such as frame_%04d.png.
-    #[arg(long)]
-    frames: Option<u32>,
+    /// Render frames of a moving scene (an animated glTF, bounce:N), rebuilding the BVH every
+    /// frame (on the GPU with --memory storage): K for frames 0 to K-1, or A..B for frames A to
+    /// B-1 only, so that a sequence splits across machines into the same files. Frame k is at
+    /// --time plus k / --fps seconds. Writes the last frame, or every frame when the output name
+    /// holds a printf-style number such as frame_%04d.png (numbered by k).
+    #[arg(long, value_name = "K|A..B", value_parser = parse_frames)]
+    frames: Option<std::ops::Range<u32>>,
+    /// Frames per second of scene time, for --frames.
+    #[arg(long, default_value_t = 30.0, value_parser = parse_fps)]
+    fps: f32,
+}
+
+/// `K` (frames 0 to K-1) or `A..B` (frames A to B-1).
+fn parse_frames(text: &str) -> Result<std::ops::Range<u32>, String> {
+    let number = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{t}' is not a frame number (expected K or A..B)"))
+    };
+    let range = match text.split_once("..") {
+        Some((a, b)) => number(a)?..number(b)?,
+        None => 0..number(text)?,
+    };
+    if range.is_empty() {
+        return Err(format!("{text}: no frames (A..B renders frames A to B-1)"));
+    }
+    Ok(range)
+}
+
+fn parse_fps(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(fps) if fps > 0.0 && fps <= 10_000.0 => Ok(fps),
+        _ => Err(format!("'{text}': frames per second must be a number in (0, 10000]")),
+    }
 }
 
 /// The most samples per pixel `--spp` takes: far past where an 8-bit image stops changing.
@@ -144,7 +199,7 @@ pub const MAX_SPP: u32 = 65_536;
 pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
     if !model.is_default() && !is_model_file(std::path::Path::new(spec)) {
         bail!(
-            "scene '{spec}': --as, --spheres, --rotate, --normals and --crease apply to model files ({})",
+            "scene '{spec}': --as, --spheres, --rotate, --normals, --crease and --animation apply to model files ({})",
             raypipe::scene::model::model_extension_list()
         );
     }
@@ -234,11 +289,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         );
     }
     // Found before the render, not after it.
-    match numbered(&output.to_string_lossy(), 0) {
-        Some(first) if args.frames.is_some() => io::check_writable(Path::new(&first))?,
+    match (numbered(&output.to_string_lossy(), 0), &args.frames) {
+        (Some(_), Some(frames)) => {
+            let first = numbered(&output.to_string_lossy(), frames.start).expect("a pattern");
+            io::check_writable(Path::new(&first))?
+        }
         _ => io::check_writable(&output)?,
     }
     let scene = args.scene.load()?;
+    let start = args.scene.time.unwrap_or(0.0);
     let options = RenderOptions {
         device: args.device,
         backend: args.scene.backend,
@@ -254,15 +313,33 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         warm_up: args.stats,
         samples: args.spp,
     };
-    if let Some(frames) = args.frames {
+    if let Some(frames) = args.frames.clone() {
         // Sequences time steady frames instead of a warm-up.
         let options = RenderOptions {
             warm_up: false,
             ..options
         };
-        return render_sequence(&args, &scene, &output, is_exr, frames, &options);
+        anyhow::ensure!(
+            scene.motion.is_some(),
+            "{}: --frames renders a moving scene (an animated glTF, bounce:N)",
+            args.scene.spec
+        );
+        // Frame k's time depends on k alone: a split run poses the frames of a whole one.
+        let times = frames
+            .map(|k| {
+                Ok((
+                    k,
+                    args.scene
+                        .scene_time(&scene, start + (k as f64 / args.fps as f64) as f32)?,
+                ))
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        return render_sequence(&args, &scene, &output, is_exr, &times, &options);
     }
-    let mut packed = PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene.spec))?;
+    let posed = scene
+        .at_time(args.scene.scene_time(&scene, start)?)
+        .map_err(|e| e.in_origin(&args.scene.spec))?;
+    let mut packed = PackedScene::new(&posed).map_err(|e| e.in_origin(&args.scene.spec))?;
     if args.scene.accel.uses_bvh() {
         packed.build_bvh(MortonBits::default());
     }
@@ -345,17 +422,18 @@ fn render_sequence(
     scene: &Scene,
     output: &Path,
     is_exr: bool,
-    frames: u32,
+    times: &[(u32, f32)],
     options: &RenderOptions,
 ) -> anyhow::Result<ExitCode> {
-    anyhow::ensure!(frames >= 1, "--frames must be at least 1");
+    let frames = times.len();
+    let last = times.last().map(|&(k, _)| k);
     let name = output.to_string_lossy().to_string();
     let pattern = numbered(&name, 0).is_some();
-    let outcome = render_frames(scene, options, frames, |frame, image| {
+    let outcome = render_frames(scene, options, times, |frame, image| {
         if pattern {
             let path = numbered(&name, frame).expect("checked above");
             io::write_as(&aov_image(args.scene.aov, is_exr, image), Path::new(&path), is_exr)?;
-        } else if frame + 1 == frames {
+        } else if Some(frame) == last {
             io::write_as(&aov_image(args.scene.aov, is_exr, image), output, is_exr)?;
         }
         Ok(())
@@ -372,11 +450,12 @@ fn render_sequence(
     if args.stats {
         let s = &scene.settings;
         crate::say!(
-            "scene: {}, {}x{}, {} spheres, {frames} frames",
+            "scene: {}, {}x{}, {} spheres, {} triangles, {frames} frames",
             args.scene.spec,
             s.width,
             s.height,
-            scene.spheres.len()
+            scene.spheres.len(),
+            scene.triangles.len()
         );
         say_device(args, &outcome.device)?;
         // The first frame pays for pipeline compilation on some drivers: medians skip it.

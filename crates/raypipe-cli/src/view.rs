@@ -110,6 +110,10 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             paused: false,
             vsync: !args.no_vsync,
         },
+        time: match args.scene.time {
+            Some(t) => args.scene.scene_time(&scene, t)?,
+            None => 0.0,
+        },
         scene,
         samples: args.spp,
         backend: args.scene.backend,

@@ -13,10 +13,12 @@ mod app;
 mod camera;
 #[cfg(not(target_arch = "wasm32"))]
 mod panel;
+pub mod player;
 pub mod tracer;
 
 pub use camera::CameraControl;
-pub use tracer::{Tracer, next_texture, present_format};
+pub use player::{Clock, Player, TracerRequest, surface_config};
+pub use tracer::{TraceError, Tracer, next_texture, present_format};
 
 use raypipe::gpu::{Backend, DisplayView, GpuContext, GpuError};
 use raypipe::image::Frame;
@@ -34,7 +36,7 @@ pub struct Modes {
     /// Bounces after the primary ray.
     pub depth: u32,
     pub view: DisplayView,
-    /// Whether moving scenes stand still.
+    /// Whether moving scenes stand still (at the time they reached).
     pub paused: bool,
     /// Whether presentation waits for the display's refresh.
     pub vsync: bool,
@@ -141,6 +143,8 @@ pub struct ViewerOptions {
     /// Samples per pixel a still frame gathers, one per frame, before the viewer stops tracing
     /// (progressive anti-aliasing; 1 shows `render`'s unjittered image).
     pub samples: u32,
+    /// Where a moving scene's motion starts, in seconds.
+    pub time: f32,
     pub backend: Option<Backend>,
     pub script: Option<Script>,
 }

@@ -22,6 +22,17 @@ pub struct Readout<'a> {
     pub message: Option<&'a str>,
 }
 
+/// A moving scene's clock, as the panel shows and changes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Playback {
+    /// Seconds into the motion.
+    pub time: f32,
+    /// Where the motion starts again; `None` for endless motion.
+    pub duration: Option<f32>,
+    /// Scene seconds per second.
+    pub speed: f32,
+}
+
 pub const KEYS: &str = "drag: orbit · right or middle drag: pan · wheel: dolly · WASD/QE: fly · R: reset\n\
     G: pipeline · B: acceleration · M: memory · [ ]: depth · V: view · Space: pause · Y: vsync · P: screenshot · H: panel";
 
@@ -36,8 +47,9 @@ fn choose<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T) {
         });
 }
 
-/// Draws the panel; returns the modes the user asked for.
-pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout) -> Modes {
+/// Draws the panel; returns the modes the user asked for. A moving scene's `playback` gets a time
+/// slider (where its motion ends) and a speed, which change it in place.
+pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout, playback: Option<&mut Playback>) -> Modes {
     let mut asked = *modes;
     egui::Window::new("raypipe")
         .anchor(egui::Align2::LEFT_TOP, [8.0, 8.0])
@@ -67,7 +79,18 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout) -> Modes {
             choose::<MemoryMode>(ui, "memory", &mut asked.memory);
             choose::<DisplayView>(ui, "view", &mut asked.view);
             ui.add(egui::Slider::new(&mut asked.depth, 0..=raypipe::scene::MAX_DEPTH_LIMIT).text("depth"));
-            ui.checkbox(&mut asked.paused, "pause motion");
+            if let Some(playback) = playback {
+                ui.checkbox(&mut asked.paused, "pause motion");
+                match playback.duration {
+                    Some(duration) if duration > 0.0 => {
+                        ui.add(egui::Slider::new(&mut playback.time, 0.0..=duration).text("time (s)"));
+                    }
+                    _ => {
+                        ui.label(format!("time {:.2} s", playback.time));
+                    }
+                }
+                ui.add(egui::Slider::new(&mut playback.speed, 0.0..=4.0).text("speed"));
+            }
             ui.checkbox(&mut asked.vsync, "vsync");
             if let Some(message) = readout.message {
                 ui.separator();

@@ -1,15 +1,32 @@
 //! What the viewer traces with: the scene packed for its modes, a renderer, and for a moving scene
 //! the per-frame rebuild: on the GPU in storage memory, on the CPU otherwise. Rebuilt whole when a
 //! mode changes. Building one is async: a window blocks on it, a web page awaits it.
+//!
+//! A moving scene keeps its packed records: each new time rewrites only the records that move
+//! (spheres, or triangles with their normals), then the BVH over them.
 
 use crate::Modes;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
+use raypipe::error::InputError;
 use raypipe::gpu::build::depth_bound;
-use raypipe::gpu::{Display, DisplayView, GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{Display, DisplayView, GpuContext, GpuError, RecordKind, Renderer, RendererOptions, SceneRebuild};
 use raypipe::modes::{Accel, Count, MemoryMode};
 use raypipe::records::PackedScene;
+use raypipe::records::packed::MovedRecords;
 use raypipe::scene::{Camera, Scene};
+
+/// Why a tracer could not be made or moved.
+#[derive(Debug, thiserror::Error)]
+pub enum TraceError {
+    /// The device cannot trace with the modes asked for.
+    #[error("{0}")]
+    Modes(String),
+    #[error(transparent)]
+    Scene(#[from] InputError),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
 
 /// The depth view's far end, in multiples of the distance to the target.
 const DEPTH_FAR: f32 = 3.0;
@@ -28,8 +45,10 @@ pub struct Tracer {
     pub primitives: usize,
     /// The BVH's build time on the CPU, where it was built there (once).
     pub cpu_build_ms: Option<f64>,
-    /// The frame of the motion the scene stands at; `None` until it first moves there.
-    pub motion_frame: Option<u32>,
+    /// The time of the motion the scene stands at, in seconds; `None` until it first moves.
+    pub time: Option<f32>,
+    /// A moving scene's records as last posed: each new time rewrites the ones that move.
+    moving: Option<PackedScene>,
 }
 
 impl Tracer {
@@ -39,11 +58,12 @@ impl Tracer {
         modes: &Modes,
         size: (u32, u32),
         camera: &Camera,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, TraceError> {
+        modes.check(ctx).map_err(TraceError::Modes)?;
         let mut scene = scene.clone();
         scene.settings.max_depth = modes.depth;
         (scene.settings.width, scene.settings.height) = size;
-        let mut packed = PackedScene::new(&scene).map_err(|e| e.to_string())?;
+        let mut packed = PackedScene::new(&scene)?;
         packed.set_camera(camera, size.0, size.1);
         let options = RendererOptions {
             pipeline: modes.pipeline,
@@ -64,46 +84,43 @@ impl Tracer {
                 packed.set_bvh(builder.to_bvh());
             }
             let bound = depth_bound(primitives, MortonBits::Bits30);
-            let renderer = Renderer::with_depth_bound(ctx, &packed, options, bound)
-                .await
-                .map_err(|e| e.to_string())?;
+            let renderer = Renderer::with_depth_bound(ctx, &packed, options, bound).await?;
             return Ok(Self {
                 renderer,
                 rebuild: None,
                 cpu_rebuild: Some(builder),
                 primitives,
                 cpu_build_ms,
-                motion_frame: None,
+                time: None,
+                moving: Some(packed),
             });
         }
         if scene.motion.is_some() {
-            let rebuild = SceneRebuild::new(ctx, &packed, modes.accel, MortonBits::Bits30)
-                .await
-                .map_err(|e| e.to_string())?;
-            let renderer = Renderer::with_rebuild(ctx, &packed, &rebuild, options)
-                .await
-                .map_err(|e| e.to_string())?;
+            let rebuild = SceneRebuild::new(ctx, &packed, modes.accel, MortonBits::Bits30).await?;
+            let renderer = Renderer::with_rebuild(ctx, &packed, &rebuild, options).await?;
             return Ok(Self {
                 renderer,
                 rebuild: Some(rebuild),
                 cpu_rebuild: None,
                 primitives,
                 cpu_build_ms: None,
-                motion_frame: None,
+                time: None,
+                moving: Some(packed),
             });
         }
         let cpu_build_ms = modes
             .accel
             .uses_bvh()
             .then(|| packed.build_bvh(MortonBits::Bits30).total());
-        let renderer = Renderer::new(ctx, &packed, options).await.map_err(|e| e.to_string())?;
+        let renderer = Renderer::new(ctx, &packed, options).await?;
         Ok(Self {
             renderer,
             rebuild: None,
             cpu_rebuild: None,
             primitives,
             cpu_build_ms,
-            motion_frame: None,
+            time: None,
+            moving: None,
         })
     }
 
@@ -119,26 +136,35 @@ impl Tracer {
         self.renderer.encode(encoder);
     }
 
-    /// Moves the scene to `frame` of its motion: the spheres written to the GPU rebuild's buffers,
-    /// or the BVH rebuilt on the CPU and the records rewritten. Returns the CPU build's time.
-    /// The samples start again.
-    pub fn advance(&mut self, scene: &Scene, frame: u32, accel: Accel) -> Result<Option<f64>, String> {
-        let mut moved = PackedScene::new(&scene.at_frame(frame)).map_err(|e| e.to_string())?;
-        self.motion_frame = Some(frame);
+    /// Moves the scene (as loaded) to `t` seconds of its motion: the moved records written to the
+    /// GPU rebuild's buffers, or the BVH rebuilt on the CPU and the moved records and nodes
+    /// rewritten. Returns the CPU build's time. The samples start again.
+    pub fn pose(&mut self, scene: &Scene, t: f32, accel: Accel) -> Result<Option<f64>, TraceError> {
+        let (Some(motion), Some(packed)) = (&scene.motion, &mut self.moving) else {
+            return Ok(None);
+        };
+        let moved = packed.apply(&motion.moved(scene, t)?);
+        self.time = Some(t);
         self.renderer.restart();
         if let Some(rebuild) = &self.rebuild {
-            rebuild.write_spheres(&moved.spheres);
+            rebuild.write_moved(packed, moved);
+            // Triangles' normals are the renderer's own.
+            if moved == MovedRecords::Triangles {
+                self.renderer.write_records(packed, &[RecordKind::TriangleNormals])?;
+            }
             return Ok(None);
         }
         let Some(builder) = &mut self.cpu_rebuild else {
             return Ok(None);
         };
         let mut ms = None;
+        let mut kinds = RecordKind::moved(moved).to_vec();
         if accel.uses_bvh() {
-            ms = Some(builder.build(&moved.primitive_boxes(), MortonBits::Bits30).total());
-            moved.set_bvh(builder.to_bvh());
+            ms = Some(builder.build(&packed.primitive_boxes(), MortonBits::Bits30).total());
+            packed.set_bvh(builder.to_bvh());
+            kinds.extend([RecordKind::Node, RecordKind::ThreadedNode]);
         }
-        self.renderer.write_scene(&moved).map_err(|e| e.to_string())?;
+        self.renderer.write_records(packed, &kinds)?;
         Ok(ms)
     }
 }

@@ -9,19 +9,17 @@
 //! message shown.
 
 use crate::params::{Setting, StartParams, WebBackend};
+use glam::Vec3;
 use raypipe::Choice;
 use raypipe::gpu::{Display, GpuContext};
 use raypipe::scene::Scene;
-use raypipe_view::{CameraControl, ModeKey, Modes, Tracer, next_texture, present_format};
+use raypipe_view::{ModeKey, Modes, Player, TracerRequest, next_texture, present_format, surface_config};
 use std::cell::RefCell;
 use std::collections::HashSet;
 use std::rc::Rc;
 use wasm_bindgen::JsCast;
 use wasm_bindgen::prelude::*;
 use web_time::Instant;
-
-/// Fly speed: the distance to the target per second.
-const FLY_PER_SECOND: f32 = 0.8;
 
 /// The page's handle on the viewer: the controls' calls land here.
 #[wasm_bindgen]
@@ -35,20 +33,10 @@ struct Page {
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
     display: Display,
-    tracer: Tracer,
-    name: String,
-    scene: Scene,
-    modes: Modes,
-    camera: CameraControl,
-    /// Samples per pixel a still frame gathers.
-    spp: u32,
-    motion_frame: u32,
-    /// Frames presented.
-    frames: u32,
-    /// The one-line message shown on the page, if any.
-    error: Option<String>,
-    /// Counts tracer requests: a tracer that lands after a later request is dropped.
-    requested: u32,
+    /// The scene, modes, camera, tracer and clock. Its frame rate is the wall clock's between
+    /// presented frames: the browser paces them by the GPU's progress. Timestamp queries are not
+    /// read here, since their read would hold the renderer across the browser's event loop.
+    player: Player,
     /// A tracer is being built.
     busy: bool,
     held: HashSet<String>,
@@ -56,12 +44,6 @@ struct Page {
     first_frame_ms: Option<f64>,
     last_frame: Instant,
     last_presented: Instant,
-    fps: f64,
-    /// Wall-clock milliseconds between animation frames (smoothed): the browser paces them by the
-    /// GPU's progress. Timestamp queries are not read here, since their read would hold the
-    /// renderer across the browser's event loop.
-    frame_ms: f64,
-    build_ms: Option<f64>,
 }
 
 /// Starts the viewer on `canvas` with the settings of `query` (the URL's `?...`). Where the page
@@ -193,17 +175,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
     }
     let caps = surface.get_capabilities(&ctx.adapter);
     let format = present_format(&caps).ok_or_else(|| format!("{} cannot present to the canvas", ctx.describe()))?;
-    let config = wgpu::SurfaceConfiguration {
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        format,
-        width: params.width,
-        height: params.height,
-        present_mode: wgpu::PresentMode::Fifo,
-        desired_maximum_frame_latency: 2,
-        alpha_mode: caps.alpha_modes[0],
-        view_formats: vec![],
-        color_space: Default::default(),
-    };
+    let config = surface_config(&caps, format, (params.width, params.height), true);
     surface.configure(&ctx.device, &config);
     (scene.settings.width, scene.settings.height) = (params.width, params.height);
     let modes = Modes {
@@ -215,37 +187,27 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         paused: params.paused,
         vsync: true,
     };
-    modes.check(&ctx).map_err(|why| format!("{}: {why}", params.scene))?;
-    let camera = CameraControl::new(scene.camera);
-    let tracer = Tracer::new(&ctx, &scene, &modes, (config.width, config.height), &camera.camera)
+    let size = (config.width, config.height);
+    let mut player = Player::new(&ctx, params.scene.clone(), scene, modes, size, params.spp)
         .await
         .map_err(|why| format!("{}: {why}", params.scene))?;
+    player.message = (!errors.is_empty()).then(|| errors.join("; "));
+    player.seek(params.time);
+    player.clock.speed = params.speed;
     let now = Instant::now();
     Ok(Page {
         backend,
         display: Display::new(&ctx, format),
-        build_ms: tracer.cpu_build_ms,
         ctx,
         surface,
         config,
-        tracer,
-        name: params.scene,
-        scene,
-        modes,
-        camera,
-        spp: params.spp,
-        motion_frame: 0,
-        frames: 0,
-        error: (!errors.is_empty()).then(|| errors.join("; ")),
-        requested: 0,
+        player,
         busy: false,
         held: HashSet::new(),
         started: now,
         first_frame_ms: None,
         last_frame: now,
         last_presented: now,
-        fps: 0.0,
-        frame_ms: 0.0,
     })
 }
 
@@ -276,67 +238,37 @@ fn request_animation_frame(callback: &Closure<dyn FnMut()>) {
 impl Page {
     fn frame(page: &Rc<RefCell<Page>>) {
         let mut this = page.borrow_mut();
+        let this = &mut *this;
         let now = Instant::now();
         let seconds = (now - this.last_frame).as_secs_f64();
         this.last_frame = now;
-        this.fly(seconds as f32);
-        let moving = this.scene.motion.is_some() && !this.modes.paused;
-        if moving && this.frames > 0 {
-            this.motion_frame += 1;
-        }
-        let camera = this.camera.camera;
-        this.tracer.renderer.set_camera(&camera);
-        if this.scene.motion.is_some() && this.tracer.motion_frame != Some(this.motion_frame) {
-            let this = &mut *this;
-            match this.tracer.advance(&this.scene, this.motion_frame, this.modes.accel) {
-                Ok(Some(ms)) => this.build_ms = Some(ms),
-                Ok(None) => {}
-                Err(why) => this.error = Some(why),
-            }
-        }
-        let trace = this.tracer.renderer.samples() < this.spp;
+        let trace = this.player.advance(seconds as f32, this.fly());
         let Some(texture) = next_texture(&this.surface, &this.ctx.device, &this.config) else {
             return;
         };
         let view = texture.texture.create_view(&Default::default());
-        let ctx = this.ctx.clone();
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        if trace {
-            let accel = this.modes.accel;
-            this.tracer.encode(&mut encoder, accel);
-        }
-        this.tracer
-            .show(&this.display, &mut encoder, &view, this.modes.view, &camera);
-        ctx.queue.submit([encoder.finish()]);
-        ctx.queue.present(texture);
-        this.frames += 1;
+        let mut encoder = this.ctx.device.create_command_encoder(&Default::default());
+        this.player.encode(&mut encoder, &this.display, &view, trace);
+        this.ctx.queue.submit([encoder.finish()]);
+        this.ctx.queue.present(texture);
         if this.first_frame_ms.is_none() {
             this.first_frame_ms = Some((now - this.started).as_secs_f64() * 1e3);
         }
         // Between presented frames: a callback that found no texture to draw into presented none.
-        let presented = (now - this.last_presented).as_secs_f64().max(1e-6);
+        let presented = (now - this.last_presented).as_secs_f64();
         this.last_presented = now;
-        if this.frames > 1 {
-            this.fps = if this.fps == 0.0 {
-                1.0 / presented
-            } else {
-                0.9 * this.fps + 0.1 / presented
-            };
-            this.frame_ms = 1e3 / this.fps;
-        }
+        this.player.finish(presented, None);
         this.publish();
     }
 
-    /// Moves the camera by the held fly keys, for a frame `seconds` long.
-    fn fly(&mut self, seconds: f32) {
+    /// The fly direction the held keys ask for: forward (W, S), right (D, A), up (E, Q).
+    fn fly(&self) -> Vec3 {
         let held = |k: &str| self.held.contains(k) as i32 as f32;
-        let step = FLY_PER_SECOND * seconds.min(0.25);
-        let forward = held("KeyW") - held("KeyS");
-        let right = held("KeyD") - held("KeyA");
-        let up = held("KeyE") - held("KeyQ");
-        if (forward, right, up) != (0.0, 0.0, 0.0) {
-            self.camera.fly(forward * step, right * step, up * step);
-        }
+        Vec3::new(
+            held("KeyW") - held("KeyS"),
+            held("KeyD") - held("KeyA"),
+            held("KeyE") - held("KeyQ"),
+        )
     }
 
     /// `window.raypipeStatus`: what runs, for the page's readout and for tests.
@@ -346,107 +278,77 @@ impl Page {
             let _ = js_sys::Reflect::set(&status, &key.into(), &value);
         };
         let optional = |value: Option<f64>| value.map_or(JsValue::NULL, JsValue::from);
-        set("frames", self.frames.into());
+        let player = &self.player;
+        let modes = &player.modes;
+        set("frames", player.frames.into());
         set("backend", self.backend.name().into());
         set("adapter", self.ctx.describe().into());
-        set("scene", self.name.clone().into());
-        set("error", self.error.clone().map_or(JsValue::NULL, JsValue::from));
+        set("scene", player.name.clone().into());
+        set("error", player.message.clone().map_or(JsValue::NULL, JsValue::from));
         set("busy", self.busy.into());
         set("width", self.config.width.into());
         set("height", self.config.height.into());
-        set("primitives", (self.tracer.primitives as u32).into());
-        set("pipeline", self.modes.pipeline.name().into());
-        set("accel", self.modes.accel.name().into());
-        set("memory", self.modes.memory.name().into());
+        set("primitives", (player.tracer.primitives as u32).into());
+        set("pipeline", modes.pipeline.name().into());
+        set("accel", modes.accel.name().into());
+        set("memory", modes.memory.name().into());
         set("memories", memory_names(&self.ctx).into());
-        set("depth", self.modes.depth.into());
-        set("aov", self.modes.view.name().into());
-        set("paused", self.modes.paused.into());
-        set("moving", self.scene.motion.is_some().into());
-        set("motionFrame", self.motion_frame.into());
-        set("samples", self.tracer.renderer.targets().samples().into());
-        set("spp", self.spp.into());
-        set("fps", self.fps.into());
-        set("frameMs", self.frame_ms.into());
-        set("buildMs", optional(self.build_ms));
+        set("depth", modes.depth.into());
+        set("aov", modes.view.name().into());
+        set("paused", modes.paused.into());
+        set("moving", player.scene.motion.is_some().into());
+        set("time", player.clock.time.into());
+        set("duration", optional(player.duration().map(f64::from)));
+        set("speed", player.clock.speed.into());
+        set("samples", player.tracer.renderer.targets().samples().into());
+        set("spp", player.spp.into());
+        set("fps", player.rate.fps.into());
+        set("frameMs", player.rate.frame_ms.into());
+        set("buildMs", optional(player.build_ms));
         set("firstFrameMs", optional(self.first_frame_ms));
         if let Some(window) = web_sys::window() {
             let _ = js_sys::Reflect::set(&window, &"raypipeStatus".into(), &status);
         }
     }
 
-    /// Builds a tracer for `modes` (and `scene`, where one is given) and swaps it in when it is
-    /// ready; on failure the current one stays and the message shows.
-    fn retrace(page: &Rc<RefCell<Page>>, modes: Modes, new_scene: Option<(String, Scene)>) {
-        let (ctx, name, traced, size, camera, request) = {
+    /// Builds the tracer `request` asks for and swaps it in when it is ready (unless a later
+    /// request came first); on failure the current one stays and the message shows.
+    fn build(page: &Rc<RefCell<Page>>, request: TracerRequest) {
+        let ctx = {
             let mut this = page.borrow_mut();
-            if let Err(why) = modes.check(&this.ctx) {
-                this.error = Some(why);
-                return;
-            }
-            this.requested += 1;
             this.busy = true;
             // The last request's message no longer applies.
-            this.error = None;
+            this.player.message = None;
             this.publish();
-            // The tracer is built after this borrow ends: it gets a scene of its own.
-            let (name, traced) = match new_scene {
-                Some((name, scene)) => (Some(name), scene),
-                None => (None, this.scene.clone()),
-            };
-            let camera = if name.is_some() {
-                traced.camera
-            } else {
-                this.camera.camera
-            };
-            let size = (this.config.width, this.config.height);
-            (this.ctx.clone(), name, traced, size, camera, this.requested)
+            this.ctx.clone()
         };
         let page = page.clone();
         wasm_bindgen_futures::spawn_local(async move {
-            let result = Tracer::new(&ctx, &traced, &modes, size, &camera).await;
+            let built = request.build(&ctx).await;
             let mut this = page.borrow_mut();
-            if this.requested != request {
+            if !this.player.is_current(&request) {
                 return;
             }
             this.busy = false;
-            match result {
-                Ok(tracer) => {
-                    this.build_ms = tracer.cpu_build_ms;
-                    this.tracer = tracer;
-                    this.modes = modes;
-                    this.error = None;
-                    if let Some(name) = name {
-                        this.camera = CameraControl::new(traced.camera);
-                        this.scene = traced;
-                        this.name = name;
-                        this.motion_frame = 0;
-                    }
-                }
-                Err(why) => {
-                    let name = name.unwrap_or_else(|| this.name.clone());
-                    log::warn!("{name}: {why}");
-                    this.error = Some(format!("{name}: {why}"));
-                }
-            }
+            this.player.install(request, built);
             this.publish();
         });
     }
 
     /// A new scene: its size is the canvas's; it replaces the current one once its tracer is built.
     fn open_scene(page: &Rc<RefCell<Page>>, name: String, loaded: Result<Scene, String>) {
-        let modes = page.borrow().modes;
         match loaded {
             Ok(mut scene) => {
-                let this = page.borrow();
-                (scene.settings.width, scene.settings.height) = (this.config.width, this.config.height);
-                drop(this);
-                Page::retrace(page, modes, Some((name, scene)));
+                let request = {
+                    let mut this = page.borrow_mut();
+                    (scene.settings.width, scene.settings.height) = (this.config.width, this.config.height);
+                    this.player.open(name, scene)
+                };
+                Page::build(page, request);
             }
             Err(why) => {
-                log::warn!("{why}");
                 let mut this = page.borrow_mut();
-                this.error = Some(why);
+                this.player.say(why);
                 this.publish();
             }
         }
@@ -482,7 +384,7 @@ impl Viewer {
             Ok(setting) => setting,
             Err(why) => return self.fail(why),
         };
-        let mut asked = self.page.borrow().modes;
+        let mut asked = self.page.borrow().player.modes;
         match setting {
             Setting::Scene(name) => {
                 let loaded = builtin_scene(&name).map_err(|why| format!("{name}: {why}"));
@@ -496,8 +398,17 @@ impl Viewer {
             Setting::Paused(paused) => asked.paused = paused,
             Setting::Spp(spp) => {
                 let mut this = self.page.borrow_mut();
-                this.spp = spp;
-                this.tracer.renderer.restart();
+                this.player.spp = spp;
+                this.player.tracer.renderer.restart();
+                return;
+            }
+            Setting::Time(time) => {
+                let mut this = self.page.borrow_mut();
+                this.player.seek(time);
+                return;
+            }
+            Setting::Speed(speed) => {
+                self.page.borrow_mut().player.clock.speed = speed;
                 return;
             }
             Setting::Model(_) | Setting::Width(_) | Setting::Height(_) | Setting::Backend(_) => {
@@ -510,20 +421,20 @@ impl Viewer {
     }
 
     fn set_modes(&self, asked: Modes) {
-        let current = self.page.borrow().modes;
-        if asked.needs_new_tracer(&current) {
-            return Page::retrace(&self.page, asked, None);
+        let request = self.page.borrow_mut().player.set_modes(asked);
+        match request {
+            Some(request) => Page::build(&self.page, request),
+            None => {
+                let mut this = self.page.borrow_mut();
+                this.player.message = None;
+                this.publish();
+            }
         }
-        let mut this = self.page.borrow_mut();
-        this.modes = asked;
-        this.error = None;
-        this.publish();
     }
 
     fn fail(&self, why: String) {
-        log::warn!("{why}");
         let mut this = self.page.borrow_mut();
-        this.error = Some(why);
+        this.player.say(why);
         this.publish();
     }
 
@@ -547,15 +458,15 @@ impl Viewer {
         let mut this = self.page.borrow_mut();
         if pan {
             let height = this.config.height as f32;
-            this.camera.pan(dx, dy, height);
+            this.player.camera.pan(dx, dy, height);
         } else {
-            this.camera.orbit(dx, dy);
+            this.player.camera.orbit(dx, dy);
         }
     }
 
     /// Wheel steps towards the target (negative: away).
     pub fn dolly(&self, steps: f32) {
-        self.page.borrow_mut().camera.dolly(steps);
+        self.page.borrow_mut().player.camera.dolly(steps);
     }
 
     /// A key by its `KeyboardEvent.code`: the viewer's keys (R, B, G, M, V, [ ], Space, and
@@ -575,13 +486,13 @@ impl Viewer {
             return false;
         }
         if code == "KeyR" {
-            self.page.borrow_mut().camera.reset();
+            self.page.borrow_mut().player.camera.reset();
             return true;
         }
         let Some(key) = ModeKey::from_code(code) else {
             return false;
         };
-        let asked = self.page.borrow().modes.after(key);
+        let asked = self.page.borrow().player.modes.after(key);
         self.set_modes(asked);
         true
     }

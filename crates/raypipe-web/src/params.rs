@@ -35,6 +35,10 @@ impl_choice!(
 pub const MAX_SIDE: u32 = 8192;
 /// The most samples per pixel a still frame gathers.
 pub const MAX_SPP: u32 = 4096;
+/// The latest start time the page takes, in seconds (a day: far past any clip).
+pub const MAX_TIME: f32 = 86_400.0;
+/// The fastest playback, in scene seconds per second.
+pub const MAX_SPEED: f32 = 16.0;
 
 /// A change the page's controls or its URL ask for. `None` in a mode means "the backend's default"
 /// until one is asked for.
@@ -49,6 +53,10 @@ pub enum Setting {
     Depth(u32),
     View(DisplayView),
     Paused(bool),
+    /// Seconds into the motion.
+    Time(f32),
+    /// Scene seconds per second.
+    Speed(f32),
     Spp(u32),
     Width(u32),
     Height(u32),
@@ -57,7 +65,8 @@ pub enum Setting {
 
 /// The keys, for messages.
 pub const KEYS: &[&str] = &[
-    "scene", "model", "accel", "memory", "pipeline", "depth", "aov", "paused", "spp", "width", "height", "backend",
+    "scene", "model", "accel", "memory", "pipeline", "depth", "aov", "paused", "time", "speed", "spp", "width",
+    "height", "backend",
 ];
 
 impl Setting {
@@ -76,6 +85,12 @@ impl Setting {
                 )),
             }
         };
+        let seconds = |most: f32| -> Result<f32, String> {
+            match value.parse::<f32>() {
+                Ok(x) if (0.0..=most).contains(&x) => Ok(x),
+                _ => Err(format!("{key}={value}: expected a number of seconds in 0..={most}")),
+            }
+        };
         Ok(match key {
             "scene" if value.is_empty() => return Err("scene=: name a scene".into()),
             "scene" => Setting::Scene(value.to_string()),
@@ -91,6 +106,8 @@ impl Setting {
                 "false" | "0" => false,
                 _ => return Err(format!("{key}={value}: expected true or false")),
             }),
+            "time" => Setting::Time(seconds(MAX_TIME)?),
+            "speed" => Setting::Speed(seconds(MAX_SPEED)?),
             "spp" => Setting::Spp(number(1..=MAX_SPP)?),
             "width" => Setting::Width(number(1..=MAX_SIDE)?),
             "height" => Setting::Height(number(1..=MAX_SIDE)?),
@@ -114,6 +131,9 @@ pub struct StartParams {
     pub depth: Option<u32>,
     pub view: DisplayView,
     pub paused: bool,
+    /// Where a moving scene's motion starts, in seconds.
+    pub time: f32,
+    pub speed: f32,
     pub spp: u32,
     pub width: u32,
     pub height: u32,
@@ -132,6 +152,8 @@ impl Default for StartParams {
             depth: None,
             view: DisplayView::Color,
             paused: false,
+            time: 0.0,
+            speed: 1.0,
             spp: 64,
             width: 960,
             height: 540,
@@ -165,6 +187,8 @@ impl StartParams {
             Setting::Depth(depth) => self.depth = Some(depth),
             Setting::View(view) => self.view = view,
             Setting::Paused(paused) => self.paused = paused,
+            Setting::Time(time) => self.time = time,
+            Setting::Speed(speed) => self.speed = speed,
             Setting::Spp(spp) => self.spp = spp,
             Setting::Width(width) => self.width = width,
             Setting::Height(height) => self.height = height,
@@ -210,6 +234,8 @@ mod tests {
             ("aov", "normal"),
             ("spp", "1"),
             ("model", "models/bunny.ply"),
+            ("time", "1.5"),
+            ("speed", "0.5"),
         ];
         let (params, errors) = StartParams::from_pairs(query);
         assert!(errors.is_empty(), "{errors:?}");
@@ -224,6 +250,8 @@ mod tests {
                 depth: Some(3),
                 view: DisplayView::Normal,
                 paused: false,
+                time: 1.5,
+                speed: 0.5,
                 spp: 1,
                 width: 320,
                 height: 240,
@@ -240,6 +268,7 @@ mod tests {
             ("depth", "33"),
             ("colour", "red"),
             ("height", "200"),
+            ("time", "NaN"),
         ];
         let (params, errors) = StartParams::from_pairs(query);
         assert_eq!(params.height, 200);
@@ -251,7 +280,8 @@ mod tests {
                 "accel=bvh: expected one of brute, stack, stackless, threaded",
                 "width=0: expected a whole number in 1..=8192",
                 "depth=33: expected a whole number in 0..=32",
-                "unknown setting 'colour' (known: scene, model, accel, memory, pipeline, depth, aov, paused, spp, width, height, backend)",
+                "unknown setting 'colour' (known: scene, model, accel, memory, pipeline, depth, aov, paused, time, speed, spp, width, height, backend)",
+                "time=NaN: expected a number of seconds in 0..=86400",
             ]
         );
     }

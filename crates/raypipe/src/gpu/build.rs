@@ -688,10 +688,11 @@ impl GpuLbvhBuilder {
         }
     }
 
-    /// The spheres and nodes, for a renderer to read in place.
+    /// The primitives and nodes, for a renderer to read in place.
     pub fn shared_buffers(&self) -> SharedBuffers {
         SharedBuffers {
             spheres: self.buffers.spheres.clone(),
+            triangles: self.buffers.triangles.clone(),
             nodes: self.buffers.nodes.clone(),
             threaded_nodes: None,
             bvh_frame: None,

@@ -20,3 +20,4 @@ pub use display::{Display, DisplayView};
 pub use error::{Capacity, GpuError};
 pub use rebuild::SceneRebuild;
 pub use renderer::{Renderer, RendererOptions, TimedFrame};
+pub use shader::RecordKind;

@@ -3,7 +3,7 @@
 //! into the same encoder as the frame so that no round trip to the host separates build and trace.
 //!
 //! `render --frames`, `bench --rebuild` and a live viewer use it the same way: write the moved
-//! spheres, [`SceneRebuild::encode`], then [`super::Renderer::encode`] (or `read_frame_after`).
+//! primitives, [`SceneRebuild::encode`], then [`super::Renderer::encode`] (or `read_frame_after`).
 
 use super::build::{GpuLbvhBuilder, depth_bound};
 use super::threaded::GpuThreadedLayout;
@@ -12,6 +12,7 @@ use super::{GpuContext, GpuError};
 use crate::bvh::BuildTimings;
 use crate::bvh::morton::MortonBits;
 use crate::modes::Accel;
+use crate::records::packed::MovedRecords;
 use crate::records::{GpuSphere, PackedScene};
 
 pub struct SceneRebuild {
@@ -21,8 +22,8 @@ pub struct SceneRebuild {
 }
 
 impl SceneRebuild {
-    /// Kernels and buffers for `scene`'s primitives, which are written once here; the triangles
-    /// stand still, the spheres may move ([`SceneRebuild::write_spheres`]).
+    /// Kernels and buffers for `scene`'s primitives, which are written here; they may move
+    /// ([`SceneRebuild::write_moved`]).
     pub async fn new(ctx: &GpuContext, scene: &PackedScene, accel: Accel, bits: MortonBits) -> Result<Self, GpuError> {
         let mut builder = GpuLbvhBuilder::new(ctx, bits, scene.spheres.len(), scene.triangles.len()).await?;
         builder.write_scene(scene).await?;
@@ -38,6 +39,16 @@ impl SceneRebuild {
     /// New sphere positions for the next build (as many as the scene had).
     pub fn write_spheres(&self, spheres: &[GpuSphere]) {
         self.builder.write_spheres(spheres);
+    }
+
+    /// The primitives a motion moved in `scene`, for the next build and for the renderers that
+    /// read them from here. (Moved triangles' normals live with the renderer:
+    /// [`super::Renderer::write_records`].)
+    pub fn write_moved(&self, scene: &PackedScene, moved: MovedRecords) {
+        match moved {
+            MovedRecords::Spheres => self.builder.write_spheres(&scene.spheres),
+            MovedRecords::Triangles => self.builder.write_triangles(&scene.triangles),
+        }
     }
 
     /// Records the build (and the threaded layout) of the primitives as they will be when the

@@ -11,7 +11,7 @@
 
 use super::readback::TextureReadback;
 use super::rebuild::SceneRebuild;
-use super::shader::{ShaderConfig, compose};
+use super::shader::{RecordKind, ShaderConfig, compose};
 use super::threaded::encode_frame_copy;
 use super::timing::PassTimestamps;
 use super::upload::{SceneResources, SharedBuffers, upload};
@@ -207,15 +207,24 @@ impl Renderer {
     /// must have as many records of each kind as the one the renderer was made with, and a tree no
     /// deeper than the renderer's stack.
     pub fn write_scene(&mut self, scene: &PackedScene) -> Result<(), GpuError> {
-        self.resources.write(&self.ctx.queue, scene, self.options.accel)?;
+        self.write_records(scene, &RecordKind::ALL)
+    }
+
+    /// [`Renderer::write_scene`] for the arrays of `kinds` only: what a motion moved, and the BVH
+    /// rebuilt over it. The samples start again.
+    pub fn write_records(&mut self, scene: &PackedScene, kinds: &[RecordKind]) -> Result<(), GpuError> {
+        self.resources
+            .write(&self.ctx.queue, scene, self.options.accel, kinds)?;
         self.restart();
-        self.globals.bvh_frame = scene.globals.bvh_frame;
-        let offset = std::mem::offset_of!(GpuGlobals, bvh_frame) as u64;
-        self.ctx.queue.write_buffer(
-            &self.globals_buffer,
-            offset,
-            bytemuck::bytes_of(&self.globals.bvh_frame),
-        );
+        if kinds.contains(&RecordKind::ThreadedNode) {
+            self.globals.bvh_frame = scene.globals.bvh_frame;
+            let offset = std::mem::offset_of!(GpuGlobals, bvh_frame) as u64;
+            self.ctx.queue.write_buffer(
+                &self.globals_buffer,
+                offset,
+                bytemuck::bytes_of(&self.globals.bvh_frame),
+            );
+        }
         Ok(())
     }
 

@@ -7,6 +7,7 @@
 
 use crate::modes::{Accel, MemoryMode, Pipeline};
 use crate::records::constants;
+use crate::records::packed::MovedRecords;
 use std::fmt::Write;
 
 /// The side of the compute pipeline's square workgroups, in pixels (compute.wgsl's, from the
@@ -49,6 +50,26 @@ pub enum RecordKind {
 }
 
 impl RecordKind {
+    pub const ALL: [RecordKind; 9] = [
+        RecordKind::Sphere,
+        RecordKind::Triangle,
+        RecordKind::TriangleNormals,
+        RecordKind::TriangleUvs,
+        RecordKind::Plane,
+        RecordKind::Light,
+        RecordKind::Material,
+        RecordKind::Node,
+        RecordKind::ThreadedNode,
+    ];
+
+    /// The records a motion rewrote.
+    pub fn moved(moved: MovedRecords) -> &'static [RecordKind] {
+        match moved {
+            MovedRecords::Spheres => &[RecordKind::Sphere],
+            MovedRecords::Triangles => &[RecordKind::Triangle, RecordKind::TriangleNormals],
+        }
+    }
+
     /// The array's name in the shader (`load_<name>`, `<name>_records`, `<name>_texels`) and in
     /// messages.
     pub fn name(self) -> &'static str {

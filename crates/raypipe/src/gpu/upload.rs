@@ -11,12 +11,13 @@ use wgpu::util::DeviceExt;
 /// Texture rows are 2048 texels wide: the smallest maximum texture size WebGL2 guarantees.
 pub const TEXELS_PER_ROW: u32 = 2048;
 
-/// Buffers that already live on the GPU and replace the scene's own in storage memory: the spheres
-/// and nodes of a [`super::rebuild::SceneRebuild`], rebuilt there every frame, and the threaded
-/// nodes and their quantization frame laid out from them.
+/// Buffers that already live on the GPU and replace the scene's own in storage memory: the
+/// primitives and nodes of a [`super::rebuild::SceneRebuild`], rebuilt there every frame, and the
+/// threaded nodes and their quantization frame laid out from them.
 #[derive(Clone, Debug)]
 pub struct SharedBuffers {
     pub spheres: wgpu::Buffer,
+    pub triangles: wgpu::Buffer,
     pub nodes: wgpu::Buffer,
     /// For the stack and threaded walks.
     pub threaded_nodes: Option<wgpu::Buffer>,
@@ -62,13 +63,23 @@ impl SceneResources {
         entries
     }
 
-    /// Rewrites the arrays in place with `scene`'s records, which must be as many as those
-    /// uploaded (a moving scene, its BVH rebuilt on the CPU): no new buffer, texture or pipeline.
-    pub fn write(&self, queue: &wgpu::Queue, scene: &PackedScene, accel: Accel) -> Result<(), GpuError> {
+    /// Rewrites the arrays of the `kinds` given in place with `scene`'s records, which must be as
+    /// many as those uploaded (a moving scene, its BVH rebuilt on the CPU): no new buffer, texture
+    /// or pipeline. Arrays another owner writes are left to it.
+    pub fn write(
+        &self,
+        queue: &wgpu::Queue,
+        scene: &PackedScene,
+        accel: Accel,
+        kinds: &[RecordKind],
+    ) -> Result<(), GpuError> {
         for ((kind, records), (array, resource)) in scene_records(scene, accel)
             .into_iter()
             .zip(self.arrays.iter().zip(&self.resources))
         {
+            if !kinds.contains(&kind) {
+                continue;
+            }
             if records.len() != array.capacity {
                 return Err(GpuError::Operation {
                     what: "rewriting the scene",
@@ -133,6 +144,7 @@ pub fn upload(
         let binding = array.binding;
         let shared_buffer = match (shared, kind) {
             (Some(shared), RecordKind::Sphere) => Some(shared.spheres.clone()),
+            (Some(shared), RecordKind::Triangle) => Some(shared.triangles.clone()),
             (Some(shared), RecordKind::Node) => Some(shared.nodes.clone()),
             (Some(shared), RecordKind::ThreadedNode) => shared.threaded_nodes.clone(),
             _ => None,

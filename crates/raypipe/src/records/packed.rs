@@ -10,7 +10,7 @@ use crate::bvh::morton::MortonBits;
 use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
 use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Moved, Scene};
 use glam::Vec3;
 
 /// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
@@ -52,6 +52,14 @@ impl PackedBvh {
 pub fn primitive_boxes(spheres: &[GpuSphere], triangles: &[GpuTriangle]) -> Vec<Aabb> {
     let spheres = spheres.iter().map(GpuSphere::bounds);
     spheres.chain(triangles.iter().map(GpuTriangle::bounds)).collect()
+}
+
+/// Which records a motion rewrote.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MovedRecords {
+    Spheres,
+    /// Triangles and their vertex normals.
+    Triangles,
 }
 
 /// The scene as the tracers read it.
@@ -245,6 +253,37 @@ impl PackedScene {
             texture_pixels: TexturePixels(texture_pixels),
             bvh: None,
         })
+    }
+
+    /// Moves the primitives `moved` names, in place: sphere centres, or triangle corners and their
+    /// normals' records. Nothing else is repacked; the BVH, if any, is out of date until rebuilt.
+    /// The records that changed are returned.
+    pub fn apply(&mut self, moved: &Moved) -> MovedRecords {
+        match moved {
+            Moved::Spheres(centers) => {
+                for (sphere, center) in self.spheres.iter_mut().zip(centers) {
+                    sphere.center = center.to_array();
+                }
+                MovedRecords::Spheres
+            }
+            Moved::Triangles(runs) => {
+                for run in runs {
+                    let records = &mut self.triangles[run.first..run.first + run.vertices.len()];
+                    for (k, record) in records.iter_mut().enumerate() {
+                        let [v0, v1, v2] = run.vertices[k];
+                        (record.v0, record.v1, record.v2) = (v0.to_array(), v1.to_array(), v2.to_array());
+                        if let Some(normals) = &run.normals
+                            && record.normals != NONE
+                        {
+                            let [n0, n1, n2] = normals[k];
+                            let slot = &mut self.triangle_normals[record.normals as usize];
+                            (slot.n0, slot.n1, slot.n2) = (n0.to_array(), n1.to_array(), n2.to_array());
+                        }
+                    }
+                }
+                MovedRecords::Triangles
+            }
+        }
     }
 
     /// Spheres and triangles: the primitives the BVH is built over, in its index order.

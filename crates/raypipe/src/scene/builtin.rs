@@ -297,7 +297,7 @@ pub fn random(n: usize, seed: u64) -> Scene {
 }
 
 /// `random(n, seed)` set in motion: every sphere flies at its own velocity and bounces off the
-/// walls of the box, one frame every 1/30 s.
+/// walls of the box.
 pub fn bounce(n: usize, seed: u64) -> Scene {
     let mut scene = random(n, seed);
     // Another stream than the positions' (which use `seed`).
@@ -305,12 +305,11 @@ pub fn bounce(n: usize, seed: u64) -> Scene {
     let velocities = (0..n)
         .map(|_| Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5))
         .collect();
-    scene.motion = Some(super::Motion {
+    scene.motion = Some(super::Motion::Bounce(super::Bounce {
         velocities,
         lo: Vec3::new(-1.5, -1.0, -1.5),
         hi: Vec3::new(1.5, 1.0, 1.5),
-        frame_time: 1.0 / 30.0,
-    });
+    }));
     scene
 }
 
@@ -339,16 +338,18 @@ mod tests {
     #[test]
     fn bouncing_spheres_move_and_stay_in_their_box() {
         let scene = bounce(200, 3);
-        let later = scene.at_frame(1000);
+        let later = scene.at_time(33.3).unwrap();
         assert_ne!(scene.spheres, later.spheres);
-        let motion = scene.motion.as_ref().unwrap();
+        let Some(super::super::Motion::Bounce(motion)) = &scene.motion else {
+            panic!("bounce moves its spheres")
+        };
         for s in &later.spheres {
             assert!(
                 s.center.cmpge(motion.lo - 1e-4).all() && s.center.cmple(motion.hi + 1e-4).all(),
                 "{s:?}"
             );
         }
-        assert_eq!(scene.at_frame(0).spheres, scene.spheres);
+        assert_eq!(scene.at_time(0.0).unwrap().spheres, scene.spheres);
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! Every table denies unknown keys, and every error names the file and, where the element has one,
 //! its line: `scene.toml:12: sphere 3: radius must be finite and at least 1e-12 (got -1)`.
 
+use super::animation::ClipChoice;
 use super::model::{DEFAULT_CREASE_DEGREES, MeshAs, Normals, Placement, SphereCount, add_mesh};
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, unit_vector};
 use crate::choice::Choice;
@@ -102,6 +103,18 @@ struct MeshDef {
     material: Option<String>,
     normals: Option<String>,
     crease: Option<f32>,
+    /// glTF only: the clip that plays, by index or name.
+    animation: Option<AnimationDef>,
+    /// glTF only: the clip's time, in seconds, at the scene's time 0.
+    time: Option<f32>,
+}
+
+/// `animation = 2` or `animation = "Walk"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum AnimationDef {
+    Index(i64),
+    Name(String),
 }
 
 /// `spheres = 20000` or `spheres = "vertices"`.
@@ -344,9 +357,23 @@ fn placement(
         Some(name) => Normals::from_name(name)
             .ok_or_else(|| fail(format!("normals must be one of {} (got \"{name}\")", Normals::names())))?,
     };
+    if (def.animation.is_some() || def.time.is_some()) && !super::gltf::is_gltf_path(Path::new(&def.file)) {
+        return Err(fail("animation and time apply to glTF files (.gltf, .glb)".into()));
+    }
+    let animation = match &def.animation {
+        None => None,
+        Some(AnimationDef::Index(i)) => {
+            Some(ClipChoice::Index(usize::try_from(*i).map_err(|_| {
+                fail(format!("animation must be a name or an index from 0 (got {i})"))
+            })?))
+        }
+        Some(AnimationDef::Name(name)) => Some(ClipChoice::Name(name.clone())),
+    };
     let placement = Placement {
         as_,
         spheres,
+        animation,
+        time: def.time.unwrap_or(0.0),
         normals,
         crease_degrees: def.crease.unwrap_or(DEFAULT_CREASE_DEGREES),
         radius: def.radius,

@@ -4,16 +4,19 @@
 //! between them. `records::PackedScene` turns it into the flat records that the GPU shader and the CPU
 //! reference read.
 
+pub mod animation;
 pub mod builtin;
 pub mod file;
 pub mod gltf;
 pub mod model;
+pub mod motion;
 pub mod texture;
 
+pub use motion::{Bounce, Motion, Moved};
 pub use texture::{Texture, Wrap};
 
 use crate::error::{Element, InputError};
-use glam::{Vec2, Vec3};
+use glam::{Quat, Vec2, Vec3};
 use std::path::Path;
 
 /// A pinhole camera. The ray convention is documented in `docs/scene-format.md` and implemented in
@@ -140,37 +143,25 @@ pub struct Scene {
     pub planes: Vec<Plane>,
     /// The images materials are textured with.
     pub textures: Vec<Texture>,
-    /// How the spheres move from frame to frame; `None` for a still scene.
+    /// What moves, and how, as time passes; `None` for a still scene.
     pub motion: Option<Motion>,
 }
 
-/// Spheres that fly at constant velocities and bounce off the walls of a box.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Motion {
-    /// One per sphere, in units per second.
-    pub velocities: Vec<Vec3>,
-    /// The box the spheres' centres stay in.
-    pub lo: Vec3,
-    pub hi: Vec3,
-    /// Seconds per frame.
-    pub frame_time: f32,
+/// A similarity transform: rotate, scale uniformly, translate; what a placement does to a file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Similarity {
+    pub rotation: Quat,
+    pub scale: f32,
+    pub translation: Vec3,
 }
 
-impl Scene {
-    /// The scene at frame `frame` (frame 0 is the scene as loaded).
-    pub fn at_frame(&self, frame: u32) -> Scene {
-        let mut scene = self.clone();
-        if let Some(motion) = &self.motion {
-            let t = frame as f32 * motion.frame_time;
-            let span = motion.hi - motion.lo;
-            for (sphere, v) in scene.spheres.iter_mut().zip(&motion.velocities) {
-                // Position on a triangle wave: moving on, reflected at each wall.
-                let travelled = (sphere.center - motion.lo + *v * t).rem_euclid(2.0 * span);
-                let folded = Vec3::select(travelled.cmpgt(span), 2.0 * span - travelled, travelled);
-                sphere.center = motion.lo + folded;
-            }
-        }
-        scene
+impl Similarity {
+    pub fn point(&self, p: Vec3) -> Vec3 {
+        self.rotation * p * self.scale + self.translation
+    }
+
+    pub fn direction(&self, v: Vec3) -> Vec3 {
+        self.rotation * v
     }
 }
 

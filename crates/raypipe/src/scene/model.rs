@@ -1,13 +1,15 @@
 //! Meshes in scenes: a model placed (normalized, scaled, moved) and added as triangles or as spheres
 //! on its surface; and the scene `raypipe render MODEL` gets, which frames one model.
 
-use super::gltf::{GltfLight, GltfScene, Similarity};
-use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, Triangle};
+use super::animation::ClipChoice;
+use super::gltf::{GltfLight, GltfScene};
+use super::{Camera, Checker, Light, Material, Motion, Plane, RenderSettings, Scene, Similarity, Sphere, Triangle};
 use crate::bvh::aabb::Aabb;
 use crate::error::InputError;
 use crate::mesh::{self, Mesh};
 use glam::Vec3;
 use std::path::Path;
+use std::sync::Arc;
 
 /// What a mesh becomes in a scene.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -88,6 +90,10 @@ pub struct Placement {
     pub normals: Normals,
     /// For smooth normals: faces further apart than this many degrees do not blend.
     pub crease_degrees: f32,
+    /// For a glTF with animations: the clip that plays (the first by default).
+    pub animation: Option<ClipChoice>,
+    /// For a glTF with animations: the clip's time at the scene's time 0, in seconds.
+    pub time: f32,
 }
 
 impl Default for Placement {
@@ -104,6 +110,8 @@ impl Default for Placement {
             material: 0,
             normals: Normals::Auto,
             crease_degrees: DEFAULT_CREASE_DEGREES,
+            animation: None,
+            time: 0.0,
         }
     }
 }
@@ -119,6 +127,9 @@ impl Placement {
         }
         if !self.rotate.is_finite() {
             return fail("rotate must be finite".into());
+        }
+        if !self.time.is_finite() {
+            return fail("time must be finite".into());
         }
         match self.spheres {
             SphereCount::Sampled(0) => return fail("spheres must be at least 1".into()),
@@ -209,19 +220,52 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
 
 /// Adds a glTF to `scene`, placed after the file's own node transforms: its triangles with its
 /// materials and textures, or spheres on its surface. Returns the placement's transform, which the
-/// file's camera and lights take too.
+/// file's camera and lights take too. A file with animations is posed at the placement's time of
+/// its clip, and its moving triangles join the scene's motion (spheres stand still).
 pub fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) -> Result<Similarity, InputError> {
+    let clip = match &gltf.rig {
+        Some(rig) => rig.clip(placement.animation.as_ref()).map_err(InputError::new)?,
+        None if placement.animation.is_some() => {
+            return Err(InputError::new("an animation is chosen, and the file has none"));
+        }
+        None => None,
+    };
+    let posed;
+    let gltf = match clip {
+        Some(clip) if (clip, placement.time) != (0, 0.0) => {
+            posed = gltf.posed(Some(clip), placement.time);
+            &posed
+        }
+        _ => gltf,
+    };
     let place = gltf.similarity(placement);
     match placement.as_ {
-        MeshAs::Triangles => gltf.add_triangles(scene, placement, &place)?,
-        MeshAs::Spheres => add_mesh(scene, gltf.mesh(), placement)?,
+        MeshAs::Triangles => {
+            let starts = gltf.add_triangles(scene, placement, &place)?;
+            if let Some(animated) = clip.and_then(|clip| gltf.animated(clip, placement.time, &place, &starts)) {
+                let animated = Arc::new(animated);
+                match &mut scene.motion {
+                    None => scene.motion = Some(Motion::Animations(vec![animated])),
+                    Some(Motion::Animations(list)) => list.push(animated),
+                    Some(Motion::Bounce(_)) => {
+                        return Err(InputError::new("a scene of bouncing spheres takes no animated file"));
+                    }
+                }
+            }
+        }
+        MeshAs::Spheres => {
+            if clip.is_some() {
+                log::info!("the animation is not played: spheres stand where the pose puts them");
+            }
+            add_mesh(scene, gltf.mesh(), placement)?
+        }
     }
     Ok(place)
 }
 
 /// What a caller says of a model file it renders alone: triangles or spheres, how many spheres, a
 /// rotation.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ModelOptions {
     pub as_: Option<MeshAs>,
     pub spheres: Option<usize>,
@@ -230,6 +274,8 @@ pub struct ModelOptions {
     pub normals: Option<Normals>,
     /// Degrees, as [`Placement::crease_degrees`].
     pub crease: Option<f32>,
+    /// For a glTF: the animation that plays, as [`Placement::animation`].
+    pub animation: Option<ClipChoice>,
 }
 
 impl ModelOptions {
@@ -252,6 +298,7 @@ impl ModelOptions {
             rotate: self.rotate.unwrap_or(Vec3::ZERO),
             normals: self.normals.unwrap_or_default(),
             crease_degrees: self.crease.unwrap_or(DEFAULT_CREASE_DEGREES),
+            animation: self.animation.clone(),
             ..Placement::default()
         })
     }

@@ -7,25 +7,33 @@ use pollster::block_on;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::build::depth_bound;
-use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{GpuContext, RecordKind, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 
-/// `count` frames with the BVH rebuilt on the GPU before each, in the frame's submission.
-fn gpu_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32) -> Vec<Frame> {
-    let first = PackedScene::new(scene).unwrap();
-    let rebuild = block_on(SceneRebuild::new(ctx, &first, accel, MortonBits::Bits30)).unwrap();
+/// Frame `k`'s time, as `render --frames` places it at its default 30 frames per second.
+fn time_of(frame: u32) -> f32 {
+    (frame as f64 / 30.0) as f32
+}
+
+/// `count` frames with the BVH rebuilt on the GPU before each, in the frame's submission; each
+/// frame rewrites only the records that moved, as `render --frames` and the viewer do.
+pub fn gpu_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32) -> Vec<Frame> {
+    let mut packed = PackedScene::new(scene).unwrap();
+    let rebuild = block_on(SceneRebuild::new(ctx, &packed, accel, MortonBits::Bits30)).unwrap();
     let options = RendererOptions {
         accel,
         ..Default::default()
     };
-    let mut renderer = block_on(Renderer::with_rebuild(ctx, &first, &rebuild, options)).unwrap();
+    let mut renderer = block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options)).unwrap();
+    let motion = scene.motion.as_ref().expect("a moving scene");
     (0..count)
         .map(|frame| {
-            let moved = PackedScene::new(&scene.at_frame(frame)).unwrap();
-            rebuild.write_spheres(&moved.spheres);
+            let moved = packed.apply(&motion.moved(scene, time_of(frame)).unwrap());
+            rebuild.write_moved(&packed, moved);
+            renderer.write_records(&packed, RecordKind::moved(moved)).unwrap();
             block_on(renderer.read_frame_after(|encoder| rebuild.encode(encoder)))
                 .unwrap()
                 .frame
@@ -38,7 +46,7 @@ fn gpu_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32) -> Vec<
 fn rewritten_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, memory: MemoryMode, count: u32) -> Vec<Frame> {
     let mut builder = LbvhBuilder::<u64>::new();
     let mut packed_at = |frame: u32| {
-        let mut packed = PackedScene::new(&scene.at_frame(frame)).unwrap();
+        let mut packed = PackedScene::new(&scene.at_time(time_of(frame)).unwrap()).unwrap();
         builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
         packed.set_bvh(builder.to_bvh());
         packed
@@ -60,11 +68,11 @@ fn rewritten_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, memory: Memor
 }
 
 /// The same frames on the CPU, one reusable builder rebuilding the BVH before each.
-fn cpu_frames(scene: &Scene, accel: Accel, count: u32) -> Vec<Frame> {
+pub fn cpu_frames(scene: &Scene, accel: Accel, count: u32) -> Vec<Frame> {
     let mut builder = LbvhBuilder::<u64>::new();
     (0..count)
         .map(|frame| {
-            let mut packed = PackedScene::new(&scene.at_frame(frame)).unwrap();
+            let mut packed = PackedScene::new(&scene.at_time(time_of(frame)).unwrap()).unwrap();
             builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
             packed.set_bvh(builder.to_bvh());
             render_cpu(&packed, accel)
@@ -94,12 +102,11 @@ fn gpu_rebuilt_frames_with_triangles_match_the_cpu(ctx: &GpuContext) {
     let velocities = (0..scene.spheres.len())
         .map(|i| glam::Vec3::new((i % 7) as f32 - 3.0, (i % 5) as f32 - 2.0, (i % 3) as f32 - 1.0))
         .collect();
-    scene.motion = Some(raypipe::scene::Motion {
+    scene.motion = Some(raypipe::scene::Motion::Bounce(raypipe::scene::Bounce {
         velocities,
         lo: glam::Vec3::new(-2.0, -0.5, -1.0),
         hi: glam::Vec3::new(2.0, 1.0, 2.5),
-        frame_time: 1.0 / 30.0,
-    });
+    }));
     let on_gpu = gpu_frames(ctx, &scene, Accel::Threaded, 3);
     let on_cpu = cpu_frames(&scene, Accel::Threaded, 3);
     assert_ne!(on_cpu[0], on_cpu[2], "the spheres move");

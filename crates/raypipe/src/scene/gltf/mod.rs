@@ -6,17 +6,22 @@
 //! says is checked before it is used: references, every accessor against its buffer view and
 //! buffer, counts before allocating, the node graph for cycles and shared children, and numbers for
 //! NaN. Errors are one line naming the element (`mesh 3 primitive 0: accessor 7: ...`); what is
-//! read but not rendered (points, lines, skins, morph targets, unused textures) is reported as one
-//! notice each.
+//! read but not rendered (points, lines, unused textures) is reported as one notice each.
+//!
+//! Skins, morph targets and animations are read into a [`Rig`] ([`animation`]); the primitives are
+//! then posed at the first animation's start (or, without one, at rest with skins and weights
+//! applied), and a scene that places the file plays the clip it chooses.
 
+mod animation;
 mod data;
 mod material;
 
 pub use data::Files;
 pub use material::whitted;
 
+use super::animation::{Animated, CornerNormals, Instance, PlacedInstance, RestPrimitive, Rig};
 use super::model::{Normals, Placement};
-use super::{Camera, Light, Material, Scene, Texture, Triangle};
+use super::{Camera, Light, Material, Scene, Similarity, Texture, Triangle};
 use crate::error::InputError;
 use crate::mesh::Mesh;
 use data::{read_floats, read_indices};
@@ -26,7 +31,7 @@ use gltf::json::accessor::Type;
 use gltf::mesh::Mode;
 use std::collections::HashMap;
 use std::path::Path;
-use std::rc::Rc;
+use std::sync::Arc;
 
 /// The extensions read. KHR_mesh_quantization only widens the accessor types, which every
 /// attribute reader takes.
@@ -78,6 +83,9 @@ pub struct GltfScene {
     /// The first perspective camera met in the node hierarchy.
     pub camera: Option<Camera>,
     pub lights: Vec<GltfLight>,
+    /// Where the file has skins, morph targets or animations: what moves, with one instance per
+    /// primitive.
+    pub rig: Option<Arc<Rig>>,
 }
 
 /// Reads a `.gltf` or `.glb` file; its external files are read from its folder. Every error names
@@ -156,13 +164,15 @@ fn parse_document(bytes: &[u8], files: Files, notices: &mut Vec<String>) -> Resu
         materials,
         meshes: HashMap::new(),
         primitives: Vec::new(),
+        instances: Vec::new(),
         triangles: 0,
         skipped_modes: 0,
         camera: None,
         lights: Vec::new(),
         notices,
     };
-    for (node, world) in walk_nodes(&document, reader.notices)? {
+    let (walk, parents) = walk_nodes(&document, reader.notices)?;
+    for (node, world) in walk {
         reader.node(&node, world)?;
     }
     if reader.skipped_modes > 0 {
@@ -174,13 +184,28 @@ fn parse_document(bytes: &[u8], files: Files, notices: &mut Vec<String>) -> Resu
     if reader.primitives.is_empty() {
         return Err("the scene has no triangles".into());
     }
+    let moves = !root.skins.is_empty()
+        || !root.animations.is_empty()
+        || reader.instances.iter().any(|i| !i.rest.targets.is_empty());
+    let rig = if moves {
+        let mut rig = animation::read_rig(root, &buffers, &parents, reader.notices)?;
+        rig.instances = reader.instances;
+        Some(Arc::new(rig))
+    } else {
+        None
+    };
     let materials = reader.materials;
-    Ok(GltfScene {
+    let scene = GltfScene {
         primitives: reader.primitives,
         materials: materials.materials,
         textures: materials.textures,
         camera: reader.camera,
         lights: reader.lights,
+        rig,
+    };
+    Ok(match &scene.rig {
+        Some(rig) => scene.posed((!rig.clips.is_empty()).then_some(0), 0.0),
+        None => scene,
     })
 }
 
@@ -235,10 +260,12 @@ fn validate(root: &json::Root) -> Result<(), String> {
 
 /// Each node of the default scene (or, without scenes, of every root) with its world matrix, parents
 /// before children. A node with two parents, a cycle, or a NaN in a transform is an error.
+/// Also returns every node's parent.
+#[allow(clippy::type_complexity)]
 fn walk_nodes<'a>(
     document: &'a gltf::Document,
     notices: &mut Vec<String>,
-) -> Result<Vec<(gltf::Node<'a>, Mat4)>, String> {
+) -> Result<(Vec<(gltf::Node<'a>, Mat4)>, Vec<Option<usize>>), String> {
     let nodes: Vec<gltf::Node> = document.nodes().collect();
     let count = nodes.len();
     let mut parent: Vec<Option<usize>> = vec![None; count];
@@ -304,7 +331,7 @@ fn walk_nodes<'a>(
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
         out.push((node, world));
     }
-    Ok(out)
+    Ok((out, parent))
 }
 
 /// A node's matrix, or its translation, rotation and scale composed (T * R * S).
@@ -338,19 +365,23 @@ fn local_matrix(node: &gltf::Node) -> Result<Mat4, String> {
 
 /// A mesh primitive in its mesh's own space, read once however many nodes use the mesh.
 struct LocalPrimitive {
-    positions: Vec<Vec3>,
-    normals: Option<Vec<Vec3>>,
+    /// Positions, normals, and what deforms them.
+    rest: Arc<RestPrimitive>,
     uvs: Option<Vec<Vec2>>,
     triangles: Vec<[u32; 3]>,
     material: u32,
+    /// The highest joint index its vertices name, where it has JOINTS_0.
+    max_joint: Option<u16>,
 }
 
 struct SceneReader<'a> {
     root: &'a json::Root,
     buffers: &'a [Vec<u8>],
     materials: material::Materials,
-    meshes: HashMap<usize, Rc<Vec<LocalPrimitive>>>,
+    meshes: HashMap<usize, Arc<Vec<LocalPrimitive>>>,
     primitives: Vec<Primitive>,
+    /// One per primitive: its node and skin, for the rig.
+    instances: Vec<Instance>,
     /// Triangles placed so far, against the most a render takes.
     triangles: usize,
     skipped_modes: usize,
@@ -362,11 +393,26 @@ struct SceneReader<'a> {
 impl SceneReader<'_> {
     fn node(&mut self, node: &gltf::Node, world: Mat4) -> Result<(), String> {
         if let Some(mesh) = node.mesh() {
-            if node.skin().is_some() {
-                self.note_once("skins are not applied: skinned meshes are drawn in their rest pose");
-            }
             let local = self.mesh(&mesh)?;
-            self.place(&local, world, node.index())?;
+            let skin = node.skin().map(|s| s.index());
+            if let Some(skin) = skin {
+                let joints = self.root.skins[skin].joints.len();
+                for (p, primitive) in local.iter().enumerate() {
+                    let what = format!("node {}: mesh {} primitive {p}", node.index(), mesh.index());
+                    match primitive.max_joint {
+                        None => {
+                            return Err(format!(
+                                "{what}: skinned by skin {skin}, without JOINTS_0 and WEIGHTS_0"
+                            ));
+                        }
+                        Some(j) if j as usize >= joints => {
+                            return Err(format!("{what}: names joint {j}, and skin {skin} has {joints}"));
+                        }
+                        Some(_) => {}
+                    }
+                }
+            }
+            self.place(&local, world, node.index(), skin)?;
         }
         if let Some(camera) = node.camera()
             && self.camera.is_none()
@@ -429,30 +475,36 @@ impl SceneReader<'_> {
         }
     }
 
-    fn mesh(&mut self, mesh: &gltf::Mesh) -> Result<Rc<Vec<LocalPrimitive>>, String> {
+    fn mesh(&mut self, mesh: &gltf::Mesh) -> Result<Arc<Vec<LocalPrimitive>>, String> {
         if let Some(local) = self.meshes.get(&mesh.index()) {
             return Ok(local.clone());
         }
         let mut local = Vec::new();
         for primitive in mesh.primitives() {
             let what = format!("mesh {} primitive {}", mesh.index(), primitive.index());
-            if let Some(read) = self.primitive(&primitive).map_err(|e| format!("{what}: {e}"))? {
+            let weights = mesh.weights().unwrap_or(&[]);
+            if let Some(read) = self
+                .primitive(&primitive, mesh.index(), weights)
+                .map_err(|e| format!("{what}: {e}"))?
+            {
                 local.push(read);
             }
         }
-        let local = Rc::new(local);
+        let local = Arc::new(local);
         self.meshes.insert(mesh.index(), local.clone());
         Ok(local)
     }
 
-    fn primitive(&mut self, primitive: &gltf::Primitive) -> Result<Option<LocalPrimitive>, String> {
+    fn primitive(
+        &mut self,
+        primitive: &gltf::Primitive,
+        mesh: usize,
+        mesh_weights: &[f32],
+    ) -> Result<Option<LocalPrimitive>, String> {
         let mode = primitive.mode();
         if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
             self.skipped_modes += 1;
             return Ok(None);
-        }
-        if primitive.morph_targets().next().is_some() {
-            self.note_once("morph targets are not applied: meshes are drawn with their base shape");
         }
         let attribute = |semantic: gltf::Semantic| primitive.get(&semantic).map(|a| a.index());
         let position = attribute(gltf::Semantic::Positions).ok_or("no POSITION attribute")?;
@@ -477,12 +529,47 @@ impl SceneReader<'_> {
         };
         let triangles = assemble(mode, &indices);
         let material = self.materials.index_of(primitive.material().index());
+        let json = &self.root.meshes[mesh].primitives[primitive.index()];
+        let targets = animation::read_targets(self.root, self.buffers, json, vertex_count)?;
+        if !mesh_weights.is_empty() && mesh_weights.len() != targets.len() {
+            return Err(format!(
+                "{} mesh weights for {} morph targets",
+                mesh_weights.len(),
+                targets.len()
+            ));
+        }
+        if !mesh_weights.iter().all(|w| w.is_finite()) {
+            return Err("mesh weights must be finite".into());
+        }
+        let mut weights = mesh_weights.to_vec();
+        weights.resize(targets.len(), 0.0);
+        let sets: Vec<(usize, usize)> = (0..2)
+            .map_while(|n| {
+                Some((
+                    attribute(gltf::Semantic::Joints(n))?,
+                    attribute(gltf::Semantic::Weights(n))?,
+                ))
+            })
+            .collect();
+        let influences = if sets.is_empty() {
+            Vec::new()
+        } else {
+            let max_joints = crate::scene::animation::MAX_JOINTS;
+            animation::read_influences(self.root, self.buffers, &sets, vertex_count, max_joints, self.notices)?
+        };
+        let max_joint = influences.iter().flat_map(|i| i.joints).max();
         Ok(Some(LocalPrimitive {
-            positions,
-            normals,
+            rest: Arc::new(RestPrimitive {
+                positions,
+                normals,
+                influences,
+                targets,
+                weights,
+            }),
             uvs,
             triangles,
             material,
+            max_joint,
         }))
     }
 
@@ -516,7 +603,7 @@ impl SceneReader<'_> {
 
     /// Adds a mesh's primitives at `world`: positions by the matrix, normals by its inverse
     /// transpose, and the winding turned where the matrix mirrors.
-    fn place(&mut self, local: &[LocalPrimitive], world: Mat4, node: usize) -> Result<(), String> {
+    fn place(&mut self, local: &[LocalPrimitive], world: Mat4, node: usize, skin: Option<usize>) -> Result<(), String> {
         let linear = Mat3::from_mat4(world);
         let determinant = linear.determinant();
         let normal_matrix = (determinant != 0.0).then(|| linear.inverse().transpose());
@@ -528,8 +615,9 @@ impl SceneReader<'_> {
                     crate::scene::MAX_RECORDS
                 ));
             }
-            let positions = primitive.positions.iter().map(|&p| world.transform_point3(p)).collect();
-            let normals = match (&primitive.normals, normal_matrix) {
+            let rest = &primitive.rest;
+            let positions = rest.positions.iter().map(|&p| world.transform_point3(p)).collect();
+            let normals = match (&rest.normals, normal_matrix) {
                 (Some(normals), Some(m)) => Some(normals.iter().map(|&n| m * n).collect()),
                 _ => None,
             };
@@ -544,6 +632,12 @@ impl SceneReader<'_> {
                 uvs: primitive.uvs.clone(),
                 triangles,
                 material: primitive.material,
+            });
+            self.instances.push(Instance {
+                node,
+                skin,
+                rest: rest.clone(),
+                mirrored: determinant < 0.0,
             });
         }
         Ok(())
@@ -567,25 +661,20 @@ fn assemble(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
     }
 }
 
-/// A similarity transform: rotate, scale uniformly, translate; what a placement does to a file.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Similarity {
-    pub rotation: Quat,
-    pub scale: f32,
-    pub translation: Vec3,
-}
-
-impl Similarity {
-    pub fn point(&self, p: Vec3) -> Vec3 {
-        self.rotation * p * self.scale + self.translation
-    }
-
-    pub fn direction(&self, v: Vec3) -> Vec3 {
-        self.rotation * v
-    }
-}
-
 impl GltfScene {
+    /// The scene with its primitives posed at time `t` of `clip` (at rest for `None`): morphed,
+    /// skinned, carried by their animated nodes. A still file is returned as it is.
+    pub fn posed(&self, clip: Option<usize>, t: f32) -> GltfScene {
+        let mut scene = self.clone();
+        if let Some(rig) = &self.rig {
+            let pose = rig.pose(clip, t);
+            for (primitive, instance) in scene.primitives.iter_mut().zip(&rig.instances) {
+                (primitive.positions, primitive.normals) = rig.deform(instance, &pose);
+            }
+        }
+        scene
+    }
+
     /// Every primitive's positions as one mesh (for spheres on the surface, and bounds).
     pub fn mesh(&self) -> Mesh {
         let mut mesh = Mesh::default();
@@ -622,13 +711,14 @@ impl GltfScene {
 
     /// Adds the scene's triangles, placed, to `scene`, with its materials and textures after the
     /// scene's own. The file's vertex normals are used where `normals` is Auto and it has them;
-    /// other triangles get smooth (or, for Flat, no) normals as model files do.
+    /// other triangles get smooth (or, for Flat, no) normals as model files do. Returns, per
+    /// primitive, where its triangles start in `scene` and where its normals come from.
     pub fn add_triangles(
         &self,
         scene: &mut Scene,
         placement: &Placement,
         place: &Similarity,
-    ) -> Result<(), InputError> {
+    ) -> Result<Vec<(usize, CornerNormals)>, InputError> {
         if scene.triangles.len() + self.mesh_triangle_count() > crate::scene::MAX_RECORDS {
             return Err(InputError::new(format!(
                 "more than the {} triangles a render takes",
@@ -642,7 +732,14 @@ impl GltfScene {
             ..*m
         }));
         scene.textures.extend(self.textures.iter().cloned());
+        let mut starts = Vec::with_capacity(self.primitives.len());
         for primitive in &self.primitives {
+            let corner_normals_from = match (placement.normals, &primitive.normals) {
+                (Normals::Flat, _) => CornerNormals::Flat,
+                (Normals::Auto, Some(_)) => CornerNormals::File,
+                (Normals::Smooth, _) | (Normals::Auto, None) => CornerNormals::Smooth(placement.crease_degrees),
+            };
+            starts.push((scene.triangles.len(), corner_normals_from));
             let positions: Vec<Vec3> = primitive.positions.iter().map(|&p| place.point(p)).collect();
             let corner_normals: Option<Vec<[Vec3; 3]>> = match (placement.normals, &primitive.normals) {
                 (Normals::Flat, _) => None,
@@ -671,7 +768,36 @@ impl GltfScene {
                 });
             }
         }
-        Ok(())
+        Ok(starts)
+    }
+
+    /// The moving part of this scene (posed at `offset` of `clip`), placed as `add_triangles`
+    /// placed it (`starts` is what it returned), or `None` where the clip moves none of it.
+    pub fn animated(
+        &self,
+        clip: usize,
+        offset: f32,
+        place: &Similarity,
+        starts: &[(usize, CornerNormals)],
+    ) -> Option<Animated> {
+        let rig = self.rig.as_ref()?;
+        let moving = rig.moving_instances(clip);
+        let placed: Vec<PlacedInstance> = (0..self.primitives.len())
+            .filter(|&i| moving[i])
+            .map(|i| PlacedInstance {
+                instance: i,
+                first_triangle: starts[i].0,
+                triangles: self.primitives[i].triangles.clone(),
+                normals: starts[i].1,
+            })
+            .collect();
+        (!placed.is_empty()).then(|| Animated {
+            rig: rig.clone(),
+            clip,
+            offset,
+            place: *place,
+            placed,
+        })
     }
 
     fn mesh_triangle_count(&self) -> usize {

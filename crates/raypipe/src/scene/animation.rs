@@ -1,0 +1,566 @@
+//! Animated geometry, independent of the file it came from: a node hierarchy whose translations,
+//! rotations, scales and morph weights follow keyframe clips, and mesh primitives posed by it:
+//! morphed (rest positions plus weighted target offsets), then skinned (each vertex by up to eight
+//! joints' matrices) or carried by their node. [`super::gltf`] reads these from a glTF file; a
+//! scene in motion holds them as [`Animated`] and poses its triangles at any time.
+//!
+//! Evaluation follows the glTF 2.0 specification: times before a sampler's first key take its
+//! first value and after its last its last; LINEAR rotations are spherical; CUBICSPLINE is the
+//! cubic Hermite spline of the keys' tangents; rotations are normalized after interpolation.
+
+use super::Similarity;
+use crate::mesh::Mesh;
+use glam::{Mat3, Mat4, Quat, Vec3};
+use std::sync::Arc;
+
+/// Most joints a skin may have. Characters use tens to a few hundred; the bound keeps a hostile
+/// file from making every vertex's skinning read an unbounded table.
+pub const MAX_JOINTS: usize = 4096;
+/// Joint influences a vertex may have: JOINTS_0 and JOINTS_1, four each.
+pub const MAX_INFLUENCES: usize = 8;
+
+/// How a sampler fills in between its keys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    /// The previous key's value until the next key.
+    Step,
+    /// Straight lines between keys (great arcs for rotations).
+    Linear,
+    /// A cubic Hermite spline through the keys, with an in- and an out-tangent at each.
+    CubicSpline,
+}
+
+/// The keyframes of one animated property.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sampler {
+    /// Key times in seconds, finite and strictly increasing (at least one).
+    pub times: Vec<f32>,
+    /// `width` floats per key; CUBICSPLINE keys hold an in-tangent, the value and an out-tangent,
+    /// `3 * width` floats.
+    pub values: Vec<f32>,
+    pub width: usize,
+    pub interpolation: Interpolation,
+}
+
+impl Sampler {
+    /// Checks the invariants [`Sampler::sample`] relies on; the error names what is wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.times.is_empty() {
+            return Err("no keys".into());
+        }
+        if let Some(k) = self.times.iter().position(|t| !t.is_finite()) {
+            return Err(format!("key time {k} is not finite"));
+        }
+        if let Some(k) = self.times.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(format!(
+                "key times must increase: key {} at {} s follows {} s",
+                k + 1,
+                self.times[k + 1],
+                self.times[k]
+            ));
+        }
+        let per_key = self.width
+            * if self.interpolation == Interpolation::CubicSpline {
+                3
+            } else {
+                1
+            };
+        if self.values.len() != self.times.len() * per_key {
+            return Err(format!(
+                "{} output values for {} keys of {per_key}",
+                self.values.len(),
+                self.times.len()
+            ));
+        }
+        if let Some(v) = self.values.iter().position(|v| !v.is_finite()) {
+            return Err(format!("output value {v} is not finite"));
+        }
+        Ok(())
+    }
+
+    /// The time of the last key: where the property stops changing.
+    pub fn end(&self) -> f32 {
+        self.times.last().copied().unwrap_or(0.0)
+    }
+
+    /// The value at `t` into `out` (`width` floats); a rotation (`width` 4) is interpolated on the
+    /// sphere where LINEAR and normalized.
+    pub fn sample(&self, t: f32, rotation: bool, out: &mut [f32]) {
+        let w = self.width;
+        let cubic = self.interpolation == Interpolation::CubicSpline;
+        // A key's value: the middle third of a cubic key.
+        let value = |k: usize| {
+            let start = if cubic { (3 * k + 1) * w } else { k * w };
+            &self.values[start..start + w]
+        };
+        let last = self.times.len() - 1;
+        // The key at or before t, clamped to the first and last.
+        let next = self.times.partition_point(|&key| key <= t);
+        if next == 0 || next > last {
+            out.copy_from_slice(value(if next == 0 { 0 } else { last }));
+        } else {
+            let k = next - 1;
+            let span = self.times[k + 1] - self.times[k];
+            let s = (t - self.times[k]) / span;
+            match self.interpolation {
+                Interpolation::Step => out.copy_from_slice(value(k)),
+                Interpolation::Linear if rotation => {
+                    let a = Quat::from_slice(value(k));
+                    let b = Quat::from_slice(value(k + 1));
+                    slerp(a, b, s).write_to_slice(out);
+                }
+                Interpolation::Linear => {
+                    for ((o, a), b) in out.iter_mut().zip(value(k)).zip(value(k + 1)) {
+                        *o = a + (b - a) * s;
+                    }
+                }
+                Interpolation::CubicSpline => {
+                    let out_tangent = &self.values[(3 * k + 2) * w..(3 * k + 3) * w];
+                    let in_tangent = &self.values[3 * (k + 1) * w..(3 * (k + 1) + 1) * w];
+                    let (s2, s3) = (s * s, s * s * s);
+                    let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+                    let h10 = s3 - 2.0 * s2 + s;
+                    let h01 = -2.0 * s3 + 3.0 * s2;
+                    let h11 = s3 - s2;
+                    for c in 0..w {
+                        out[c] = h00 * value(k)[c]
+                            + h10 * span * out_tangent[c]
+                            + h01 * value(k + 1)[c]
+                            + h11 * span * in_tangent[c];
+                    }
+                }
+            }
+        }
+        if rotation {
+            let q = Quat::from_slice(out);
+            let length = q.length();
+            let q = if length > 0.0 { q / length } else { Quat::IDENTITY };
+            q.write_to_slice(out);
+        }
+    }
+}
+
+/// Spherical interpolation along the shorter arc, as the glTF specification writes it; nearly
+/// equal rotations are interpolated linearly (normalized by the caller).
+fn slerp(a: Quat, b: Quat, s: f32) -> Quat {
+    let mut dot = a.dot(b);
+    let b = if dot < 0.0 {
+        dot = -dot;
+        -b
+    } else {
+        b
+    };
+    if dot > 0.9995 {
+        return a + (b - a) * s;
+    }
+    let angle = dot.acos();
+    let sin = angle.sin();
+    a * (((1.0 - s) * angle).sin() / sin) + b * ((s * angle).sin() / sin)
+}
+
+/// What a channel animates on its node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Path {
+    Translation,
+    Rotation,
+    Scale,
+    /// The morph target weights of the node's mesh.
+    Weights,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel {
+    pub node: usize,
+    pub path: Path,
+    pub sampler: Sampler,
+}
+
+/// One animation of a file: channels that play together.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clip {
+    /// The file's name for it, where it has one.
+    pub name: Option<String>,
+    pub channels: Vec<Channel>,
+}
+
+impl Clip {
+    /// Seconds from 0 to the last key of any channel.
+    pub fn duration(&self) -> f32 {
+        self.channels.iter().map(|c| c.sampler.end()).fold(0.0, f32::max)
+    }
+}
+
+/// A node's own transform: a matrix (which no channel may animate), or translation, rotation and
+/// scale, composed T * R * S.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Transform {
+    Matrix(Mat4),
+    Decomposed {
+        translation: Vec3,
+        rotation: Quat,
+        scale: Vec3,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Node {
+    pub parent: Option<usize>,
+    pub rest: Transform,
+    /// Morph weights the node gives its mesh, where it overrides the mesh's.
+    pub weights: Option<Vec<f32>>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skin {
+    /// The joints' nodes.
+    pub joints: Vec<usize>,
+    /// Per joint: from the mesh's space to the joint's, at bind time.
+    pub inverse_binds: Vec<Mat4>,
+}
+
+/// Offsets a morph target adds to its primitive's vertices, scaled by its weight.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MorphTarget {
+    pub positions: Option<Vec<Vec3>>,
+    pub normals: Option<Vec<Vec3>>,
+}
+
+/// Up to eight joints (indices into the skin's list) and their weights, summing to one.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Influences {
+    pub joints: [u16; MAX_INFLUENCES],
+    pub weights: [f32; MAX_INFLUENCES],
+}
+
+/// A mesh primitive as the file stores it, in its mesh's space, with what deforms it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RestPrimitive {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    /// Per vertex, for a skinned mesh; empty otherwise.
+    pub influences: Vec<Influences>,
+    pub targets: Vec<MorphTarget>,
+    /// The mesh's morph weights, one per target.
+    pub weights: Vec<f32>,
+}
+
+/// A primitive placed by a node: the node carries it, or its skin's joints do.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    pub node: usize,
+    pub skin: Option<usize>,
+    pub rest: Arc<RestPrimitive>,
+    /// Whether the node's world transform mirrors: the triangles' winding was turned at load.
+    pub mirrored: bool,
+}
+
+/// Everything that moves in a file: its nodes, skins and clips, and its primitives, one
+/// [`Instance`] per placed primitive in the order the file's scene lists them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Rig {
+    pub nodes: Vec<Node>,
+    /// Every node, parents before children.
+    pub order: Vec<usize>,
+    pub skins: Vec<Skin>,
+    pub clips: Vec<Clip>,
+    pub instances: Vec<Instance>,
+}
+
+/// A clip by its place in the file or its name (`--animation`, a scene file's `animation`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ClipChoice {
+    Index(usize),
+    Name(String),
+}
+
+impl ClipChoice {
+    /// A number is an index; anything else a name.
+    pub fn parse(text: &str) -> Self {
+        match text.parse() {
+            Ok(index) => ClipChoice::Index(index),
+            Err(_) => ClipChoice::Name(text.to_string()),
+        }
+    }
+}
+
+/// The nodes at one time: world matrices and morph weights.
+pub struct Pose {
+    pub world: Vec<Mat4>,
+    /// Per node, the weights its channels set (empty where none does).
+    pub weights: Vec<Vec<f32>>,
+}
+
+impl Rig {
+    /// The clip `choice` names (the first where it names none), or `None` where the file has no
+    /// animation; the error lists what it has.
+    pub fn clip(&self, choice: Option<&ClipChoice>) -> Result<Option<usize>, String> {
+        let names = || {
+            let listed: Vec<String> = self
+                .clips
+                .iter()
+                .enumerate()
+                .map(|(i, c)| format!("{i} ({})", c.name.as_deref().unwrap_or("unnamed")))
+                .collect();
+            if listed.is_empty() {
+                "none".to_string()
+            } else {
+                listed.join(", ")
+            }
+        };
+        match choice {
+            None => Ok((!self.clips.is_empty()).then_some(0)),
+            Some(ClipChoice::Index(i)) if *i < self.clips.len() => Ok(Some(*i)),
+            Some(ClipChoice::Name(name)) => match self.clips.iter().position(|c| c.name.as_deref() == Some(name)) {
+                Some(i) => Ok(Some(i)),
+                None => Err(format!("no animation named {name:?}; the file has: {}", names())),
+            },
+            Some(ClipChoice::Index(i)) => Err(format!("no animation {i}; the file has: {}", names())),
+        }
+    }
+
+    /// The nodes at time `t` of `clip` (`None`: at rest).
+    pub fn pose(&self, clip: Option<usize>, t: f32) -> Pose {
+        let mut locals: Vec<(Vec3, Quat, Vec3, Option<Mat4>)> = self
+            .nodes
+            .iter()
+            .map(|n| match n.rest {
+                Transform::Matrix(m) => (Vec3::ZERO, Quat::IDENTITY, Vec3::ONE, Some(m)),
+                Transform::Decomposed {
+                    translation,
+                    rotation,
+                    scale,
+                } => (translation, rotation, scale, None),
+            })
+            .collect();
+        let mut weights = vec![Vec::new(); self.nodes.len()];
+        let mut buffer = [0.0f32; 4];
+        for channel in clip.map_or(&[][..], |c| &self.clips[c].channels) {
+            let local = &mut locals[channel.node];
+            match channel.path {
+                Path::Translation => {
+                    channel.sampler.sample(t, false, &mut buffer[..3]);
+                    local.0 = Vec3::from_slice(&buffer);
+                }
+                Path::Rotation => {
+                    channel.sampler.sample(t, true, &mut buffer);
+                    local.1 = Quat::from_slice(&buffer);
+                }
+                Path::Scale => {
+                    channel.sampler.sample(t, false, &mut buffer[..3]);
+                    local.2 = Vec3::from_slice(&buffer);
+                }
+                Path::Weights => {
+                    let mut values = vec![0.0; channel.sampler.width];
+                    channel.sampler.sample(t, false, &mut values);
+                    weights[channel.node] = values;
+                }
+            }
+        }
+        let mut world = vec![Mat4::IDENTITY; self.nodes.len()];
+        for &n in &self.order {
+            let (translation, rotation, scale, matrix) = locals[n];
+            let local = matrix.unwrap_or_else(|| Mat4::from_scale_rotation_translation(scale, rotation, translation));
+            world[n] = match self.nodes[n].parent {
+                Some(parent) => world[parent] * local,
+                None => local,
+            };
+        }
+        Pose { world, weights }
+    }
+
+    /// Which instances `clip` moves: those whose node, a joint of their skin, or an ancestor of
+    /// either is animated.
+    pub fn moving_instances(&self, clip: usize) -> Vec<bool> {
+        let mut moving = vec![false; self.nodes.len()];
+        let mut morphing = vec![false; self.nodes.len()];
+        for channel in &self.clips[clip].channels {
+            match channel.path {
+                Path::Weights => morphing[channel.node] = true,
+                _ => moving[channel.node] = true,
+            }
+        }
+        for &n in &self.order {
+            if let Some(parent) = self.nodes[n].parent {
+                moving[n] |= moving[parent];
+            }
+        }
+        self.instances
+            .iter()
+            .map(|instance| {
+                morphing[instance.node]
+                    || match instance.skin {
+                        Some(skin) => self.skins[skin].joints.iter().any(|&j| moving[j]),
+                        None => moving[instance.node],
+                    }
+            })
+            .collect()
+    }
+
+    /// An instance's vertices (and normals, where it has them) in world space at `pose`: morphed,
+    /// then skinned or carried by their node.
+    pub fn deform(&self, instance: &Instance, pose: &Pose) -> (Vec<Vec3>, Option<Vec<Vec3>>) {
+        let rest = &*instance.rest;
+        let node_weights = &pose.weights[instance.node];
+        let weights: &[f32] = if !node_weights.is_empty() {
+            node_weights
+        } else {
+            self.nodes[instance.node].weights.as_deref().unwrap_or(&rest.weights)
+        };
+        let mut positions = rest.positions.clone();
+        let mut normals = rest.normals.clone();
+        for (target, &w) in rest.targets.iter().zip(weights) {
+            if w == 0.0 {
+                continue;
+            }
+            if let Some(offsets) = &target.positions {
+                for (p, d) in positions.iter_mut().zip(offsets) {
+                    *p += *d * w;
+                }
+            }
+            if let (Some(normals), Some(offsets)) = (&mut normals, &target.normals) {
+                for (n, d) in normals.iter_mut().zip(offsets) {
+                    *n += *d * w;
+                }
+            }
+        }
+        match instance.skin {
+            Some(skin) => {
+                let skin = &self.skins[skin];
+                let joints: Vec<Mat4> = skin
+                    .joints
+                    .iter()
+                    .zip(&skin.inverse_binds)
+                    .map(|(&joint, inverse_bind)| pose.world[joint] * *inverse_bind)
+                    .collect();
+                for (v, influences) in rest.influences.iter().enumerate() {
+                    let mut matrix = Mat4::ZERO;
+                    for (&joint, &weight) in influences.joints.iter().zip(&influences.weights) {
+                        if weight != 0.0 {
+                            matrix += joints[joint as usize] * weight;
+                        }
+                    }
+                    positions[v] = matrix.transform_point3(positions[v]);
+                    if let Some(normals) = &mut normals {
+                        normals[v] = normal_matrix(&matrix) * normals[v];
+                    }
+                }
+            }
+            None => {
+                let world = pose.world[instance.node];
+                let to_world = normal_matrix(&world);
+                for p in &mut positions {
+                    *p = world.transform_point3(*p);
+                }
+                for n in normals.iter_mut().flatten() {
+                    *n = to_world * *n;
+                }
+            }
+        }
+        for n in normals.iter_mut().flatten() {
+            *n = n.normalize_or_zero();
+        }
+        (positions, normals)
+    }
+}
+
+/// The matrix that carries normals through `m`: the inverse transpose of its linear part (the
+/// identity where it collapses space).
+fn normal_matrix(m: &Mat4) -> Mat3 {
+    let linear = Mat3::from_mat4(*m);
+    if linear.determinant() == 0.0 {
+        Mat3::IDENTITY
+    } else {
+        linear.inverse().transpose()
+    }
+}
+
+/// Where a moving primitive's shading normals come from, frame after frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CornerNormals {
+    /// The file's, deformed with the vertices.
+    File,
+    /// Smooth normals of the deformed surface, blended across edges sharper than no crease of
+    /// this many degrees.
+    Smooth(f32),
+    /// None: flat shading.
+    Flat,
+}
+
+/// An instance whose triangles a scene holds, from `first_triangle` on, in the order of
+/// `triangles`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlacedInstance {
+    pub instance: usize,
+    pub first_triangle: usize,
+    /// Vertex indices, winding as placed.
+    pub triangles: Vec<[u32; 3]>,
+    pub normals: CornerNormals,
+}
+
+/// One clip of a rig playing in a scene: the instances it moves, placed as the scene placed the
+/// file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Animated {
+    pub rig: Arc<Rig>,
+    pub clip: usize,
+    /// Added to the scene's time: where in the clip the scene's time 0 falls.
+    pub offset: f32,
+    pub place: Similarity,
+    pub placed: Vec<PlacedInstance>,
+}
+
+/// New corners (and corner normals, where the triangles have them) for a run of a scene's
+/// triangles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovedTriangles {
+    pub first: usize,
+    pub vertices: Vec<[Vec3; 3]>,
+    pub normals: Option<Vec<[Vec3; 3]>>,
+}
+
+impl Animated {
+    pub fn duration(&self) -> f32 {
+        self.rig.clips[self.clip].duration()
+    }
+
+    /// The moving triangles at scene time `t`.
+    pub fn moved(&self, t: f32) -> Vec<MovedTriangles> {
+        let pose = self.rig.pose(Some(self.clip), t + self.offset);
+        self.placed
+            .iter()
+            .map(|placed| {
+                let (positions, normals) = self.rig.deform(&self.rig.instances[placed.instance], &pose);
+                let positions: Vec<Vec3> = positions.into_iter().map(|p| self.place.point(p)).collect();
+                let vertices = placed
+                    .triangles
+                    .iter()
+                    .map(|t| t.map(|i| positions[i as usize]))
+                    .collect();
+                let normals = match (placed.normals, normals) {
+                    (CornerNormals::File, Some(normals)) => Some(
+                        placed
+                            .triangles
+                            .iter()
+                            .map(|t| t.map(|i| self.place.direction(normals[i as usize])))
+                            .collect(),
+                    ),
+                    (CornerNormals::Smooth(crease), _) => {
+                        let mesh = Mesh {
+                            positions,
+                            normals: None,
+                            triangles: placed.triangles.clone(),
+                        };
+                        Some(mesh.smooth_normals(crease))
+                    }
+                    // A placement gives File only to primitives with normals of their own.
+                    (CornerNormals::File, None) | (CornerNormals::Flat, _) => None,
+                };
+                MovedTriangles {
+                    first: placed.first_triangle,
+                    vertices,
+                    normals,
+                }
+            })
+            .collect()
+    }
+}

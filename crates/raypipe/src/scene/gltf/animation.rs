@@ -1,0 +1,330 @@
+//! What moves in a glTF file, read into a [`Rig`]: the nodes' rest transforms and hierarchy,
+//! skins, the animations' channels and samplers, and each vertex's joints and weights and morph
+//! targets. Every reference, count and number is checked here, so that posing cannot fail.
+
+use super::data::read_floats;
+use crate::scene::animation::{
+    Channel, Clip, Influences, Interpolation, MAX_INFLUENCES, MAX_JOINTS, MorphTarget, Node, Path, Rig, Sampler, Skin,
+    Transform,
+};
+use glam::{Mat4, Quat, Vec3};
+use gltf::json;
+use gltf::json::accessor::Type;
+use gltf::json::validation::Checked;
+
+/// How far a vertex's weights may sum from one before they are normalized with a notice.
+const WEIGHT_SUM_SLACK: f32 = 2e-3;
+
+/// The nodes (every one, with its parent), skins and animations of a validated document.
+/// `parents` comes from the hierarchy walk, which refused cycles and shared children.
+pub fn read_rig(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    parents: &[Option<usize>],
+    notices: &mut Vec<String>,
+) -> Result<Rig, String> {
+    let nodes = root
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(n, node)| {
+            let rest = match node.matrix {
+                Some(m) => Transform::Matrix(Mat4::from_cols_array(&m)),
+                None => Transform::Decomposed {
+                    translation: node.translation.map_or(Vec3::ZERO, Vec3::from),
+                    rotation: node
+                        .rotation
+                        .map_or(Quat::IDENTITY, |r| Quat::from_array(r.0).normalize()),
+                    scale: node.scale.map_or(Vec3::ONE, Vec3::from),
+                },
+            };
+            Node {
+                parent: parents[n],
+                rest,
+                weights: node.weights.clone(),
+            }
+        })
+        .collect::<Vec<_>>();
+    for (n, node) in nodes.iter().enumerate() {
+        if let Some(weights) = &node.weights
+            && !weights.iter().all(|w| w.is_finite())
+        {
+            return Err(format!("node {n}: weights must be finite"));
+        }
+    }
+    let order = parents_first(parents);
+    let skins = root
+        .skins
+        .iter()
+        .enumerate()
+        .map(|(s, skin)| read_skin(root, buffers, skin).map_err(|e| format!("skin {s}: {e}")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let clips = root
+        .animations
+        .iter()
+        .enumerate()
+        .map(|(a, animation)| {
+            read_clip(root, buffers, animation, &nodes, notices).map_err(|e| format!("animation {a}: {e}"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Rig {
+        nodes,
+        order,
+        skins,
+        clips,
+        instances: Vec::new(),
+    })
+}
+
+/// Every node, each after its parent.
+fn parents_first(parents: &[Option<usize>]) -> Vec<usize> {
+    let mut children = vec![Vec::new(); parents.len()];
+    for (n, parent) in parents.iter().enumerate() {
+        if let Some(p) = parent {
+            children[*p].push(n);
+        }
+    }
+    let mut order = Vec::with_capacity(parents.len());
+    let mut stack: Vec<usize> = (0..parents.len()).filter(|&n| parents[n].is_none()).rev().collect();
+    while let Some(n) = stack.pop() {
+        order.push(n);
+        stack.extend(children[n].iter().rev());
+    }
+    order
+}
+
+fn read_skin(root: &json::Root, buffers: &[Vec<u8>], skin: &json::Skin) -> Result<Skin, String> {
+    let joints: Vec<usize> = skin.joints.iter().map(|j| j.value()).collect();
+    if joints.is_empty() {
+        return Err("no joints".into());
+    }
+    if joints.len() > MAX_JOINTS {
+        return Err(format!(
+            "{} joints, more than the {MAX_JOINTS} a skin may have",
+            joints.len()
+        ));
+    }
+    let inverse_binds = match &skin.inverse_bind_matrices {
+        None => vec![Mat4::IDENTITY; joints.len()],
+        Some(accessor) => {
+            let floats = read_floats(root, buffers, accessor.value(), &[Type::Mat4])?;
+            if floats.len() / 16 < joints.len() {
+                return Err(format!(
+                    "accessor {}: {} inverse bind matrices for {} joints",
+                    accessor.value(),
+                    floats.len() / 16,
+                    joints.len()
+                ));
+            }
+            if !floats.iter().all(|f| f.is_finite()) {
+                return Err(format!(
+                    "accessor {}: inverse bind matrices must be finite",
+                    accessor.value()
+                ));
+            }
+            floats
+                .chunks_exact(16)
+                .take(joints.len())
+                .map(Mat4::from_cols_slice)
+                .collect()
+        }
+    };
+    Ok(Skin { joints, inverse_binds })
+}
+
+fn read_clip(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    animation: &json::Animation,
+    nodes: &[Node],
+    notices: &mut Vec<String>,
+) -> Result<Clip, String> {
+    let mut channels = Vec::new();
+    for (c, channel) in animation.channels.iter().enumerate() {
+        let what = format!("channel {c}");
+        let node = channel.target.node.value();
+        let path = match channel.target.path {
+            Checked::Valid(json::animation::Property::Translation) => Path::Translation,
+            Checked::Valid(json::animation::Property::Rotation) => Path::Rotation,
+            Checked::Valid(json::animation::Property::Scale) => Path::Scale,
+            Checked::Valid(json::animation::Property::MorphTargetWeights) => Path::Weights,
+            Checked::Invalid => return Err(format!("{what}: unknown target path")),
+        };
+        if path != Path::Weights && matches!(nodes[node].rest, Transform::Matrix(_)) {
+            return Err(format!(
+                "{what}: animates node {node}, whose transform is a matrix (only translation, rotation and scale may be animated)"
+            ));
+        }
+        let sampler = animation
+            .samplers
+            .get(channel.sampler.value())
+            .ok_or_else(|| format!("{what}: sampler {} does not exist", channel.sampler.value()))?;
+        let width = match path {
+            Path::Translation | Path::Scale => 3,
+            Path::Rotation => 4,
+            Path::Weights => morph_target_count(root, node)
+                .ok_or_else(|| format!("{what}: animates the weights of node {node}, which has no morph targets"))?,
+        };
+        let sampler = read_sampler(root, buffers, sampler, path, width).map_err(|e| format!("{what}: {e}"))?;
+        channels.push(Channel { node, path, sampler });
+    }
+    if channels.is_empty() {
+        notices.push(format!(
+            "animation {}: no channels, so nothing moves",
+            animation.name.as_deref().unwrap_or("(unnamed)")
+        ));
+    }
+    Ok(Clip {
+        name: animation.name.clone(),
+        channels,
+    })
+}
+
+/// The morph targets of the mesh on `node` (every primitive of a mesh has as many).
+fn morph_target_count(root: &json::Root, node: usize) -> Option<usize> {
+    let mesh = &root.meshes[root.nodes[node].mesh?.value()];
+    let count = mesh.primitives.first()?.targets.as_ref().map_or(0, |t| t.len());
+    (count > 0).then_some(count)
+}
+
+fn read_sampler(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    sampler: &json::animation::Sampler,
+    path: Path,
+    width: usize,
+) -> Result<Sampler, String> {
+    let interpolation = match sampler.interpolation {
+        Checked::Valid(json::animation::Interpolation::Step) => Interpolation::Step,
+        Checked::Valid(json::animation::Interpolation::Linear) => Interpolation::Linear,
+        Checked::Valid(json::animation::Interpolation::CubicSpline) => Interpolation::CubicSpline,
+        Checked::Invalid => return Err("unknown interpolation".into()),
+    };
+    let times = read_floats(root, buffers, sampler.input.value(), &[Type::Scalar])?;
+    let output_type = match path {
+        Path::Translation | Path::Scale => Type::Vec3,
+        Path::Rotation => Type::Vec4,
+        Path::Weights => Type::Scalar,
+    };
+    let values = read_floats(root, buffers, sampler.output.value(), &[output_type])?;
+    let read = Sampler {
+        times,
+        values,
+        width,
+        interpolation,
+    };
+    read.validate().map_err(|e| {
+        format!(
+            "sampler of input accessor {} and output accessor {}: {e}",
+            sampler.input.value(),
+            sampler.output.value()
+        )
+    })?;
+    Ok(read)
+}
+
+/// A primitive's joints and weights (JOINTS_n and WEIGHTS_n, n = 0 and 1), for `vertex_count`
+/// vertices: joint indices within `joint_count`, weights normalized where they do not sum to one.
+pub fn read_influences(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    sets: &[(usize, usize)],
+    vertex_count: usize,
+    joint_count: usize,
+    notices: &mut Vec<String>,
+) -> Result<Vec<Influences>, String> {
+    let mut influences = vec![Influences::default(); vertex_count];
+    for (set, &(joints_accessor, weights_accessor)) in sets.iter().enumerate().take(MAX_INFLUENCES / 4) {
+        let joints = read_floats(root, buffers, joints_accessor, &[Type::Vec4])?;
+        let weights = read_floats(root, buffers, weights_accessor, &[Type::Vec4])?;
+        for (accessor, values) in [(joints_accessor, &joints), (weights_accessor, &weights)] {
+            if values.len() != vertex_count * 4 {
+                return Err(format!(
+                    "accessor {accessor}: {} elements where POSITION has {vertex_count}",
+                    values.len() / 4
+                ));
+            }
+        }
+        for v in 0..vertex_count {
+            for c in 0..4 {
+                let (joint, weight) = (joints[v * 4 + c], weights[v * 4 + c]);
+                if !(weight.is_finite() && weight >= 0.0) {
+                    return Err(format!(
+                        "accessor {weights_accessor}: weight {} of vertex {v} must be finite and not negative",
+                        c
+                    ));
+                }
+                if !(joint >= 0.0 && (joint as usize) < joint_count && joint.fract() == 0.0) {
+                    return Err(format!(
+                        "accessor {joints_accessor}: vertex {v} names joint {joint}, and the skin has {joint_count}"
+                    ));
+                }
+                let slot = set * 4 + c;
+                influences[v].joints[slot] = joint as u16;
+                influences[v].weights[slot] = weight;
+            }
+        }
+    }
+    let mut normalized = 0;
+    for (v, influence) in influences.iter_mut().enumerate() {
+        let sum: f32 = influence.weights.iter().sum();
+        if sum <= 0.0 {
+            return Err(format!("vertex {v}: its joint weights are all zero"));
+        }
+        if (sum - 1.0).abs() > WEIGHT_SUM_SLACK {
+            normalized += 1;
+        }
+        for w in &mut influence.weights {
+            *w /= sum;
+        }
+    }
+    if normalized > 0 {
+        notices.push(format!(
+            "{normalized} vertices have joint weights that do not sum to one: normalized"
+        ));
+    }
+    Ok(influences)
+}
+
+/// A primitive's morph targets: position and normal offsets, as many as its vertices.
+pub fn read_targets(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    primitive: &json::mesh::Primitive,
+    vertex_count: usize,
+) -> Result<Vec<MorphTarget>, String> {
+    let Some(targets) = &primitive.targets else {
+        return Ok(Vec::new());
+    };
+    let offsets = |accessor: Option<&json::Index<json::Accessor>>, t: usize, what: &str| {
+        accessor
+            .map(|index| {
+                let floats = read_floats(root, buffers, index.value(), &[Type::Vec3])?;
+                if floats.len() != vertex_count * 3 {
+                    return Err(format!(
+                        "morph target {t}: accessor {}: {} {what} offsets where POSITION has {vertex_count}",
+                        index.value(),
+                        floats.len() / 3
+                    ));
+                }
+                if !floats.iter().all(|f| f.is_finite()) {
+                    return Err(format!(
+                        "morph target {t}: accessor {}: {what} offsets must be finite",
+                        index.value()
+                    ));
+                }
+                Ok(floats.chunks_exact(3).map(Vec3::from_slice).collect())
+            })
+            .transpose()
+    };
+    targets
+        .iter()
+        .enumerate()
+        .map(|(t, target)| {
+            Ok(MorphTarget {
+                positions: offsets(target.positions.as_ref(), t, "position")?,
+                normals: offsets(target.normals.as_ref(), t, "normal")?,
+            })
+        })
+        .collect()
+}
