@@ -446,3 +446,90 @@ fn view_without_a_display_is_one_line() {
         .unwrap();
     assert_clean_error(&output, &["no display"]);
 }
+
+/// The frames of `spec` in `ranges` (each an A..B of --frames), written as frame_%03d.png into one
+/// folder per call; returns that folder's files by name.
+fn sequence(spec: &str, dir_name: &str, ranges: &[&str]) -> Vec<(String, Vec<u8>)> {
+    let dir = test_dir(dir_name);
+    let pattern = dir.join("frame_%03d.png");
+    for range in ranges {
+        let out = raypipe(&[
+            "render",
+            spec,
+            "--device",
+            "cpu",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--frames",
+            range,
+            "--time",
+            "0.2",
+            "-q",
+            "-o",
+            pattern.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| {
+            let path = e.unwrap().path();
+            (
+                path.file_name().unwrap().to_string_lossy().to_string(),
+                std::fs::read(&path).unwrap(),
+            )
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// A sequence split into two runs (as a batch scheduler splits it) writes the files of one whole
+/// run, byte for byte; frames differ as the scene moves.
+#[test]
+fn a_split_sequence_equals_one_run_byte_for_byte() {
+    let mut specs = vec!["bounce:40".to_string()];
+    if let Some(models) = common::harness::models_dir() {
+        specs.push(models.join("gltf/RiggedSimple.gltf").to_string_lossy().to_string());
+    }
+    for (k, spec) in specs.iter().enumerate() {
+        let whole = sequence(spec, &format!("sequence-whole-{k}"), &["0..10"]);
+        let split = sequence(spec, &format!("sequence-split-{k}"), &["0..4", "4..10"]);
+        assert_eq!(whole.len(), 10, "{spec}");
+        assert_eq!(whole, split, "{spec}");
+        assert_ne!(whole[0].1, whole[9].1, "{spec}: the scene moves");
+        assert_eq!(whole[3].0, "frame_003.png");
+    }
+}
+
+#[test]
+fn time_and_frames_need_a_moving_scene_and_good_ranges() {
+    let out = raypipe(&["render", "whitted", "--device", "cpu", "--time", "1", "-o", "/dev/null"]);
+    assert_clean_error(&out, &["--time and --loop apply to moving scenes"]);
+    for bad in ["5..5", "x", "3..1"] {
+        let out = raypipe(&[
+            "render",
+            "bounce:10",
+            "--device",
+            "cpu",
+            "--frames",
+            bad,
+            "-o",
+            "/dev/null",
+        ]);
+        assert_eq!(out.status.code(), Some(2), "--frames {bad}");
+    }
+    let out = raypipe(&[
+        "render",
+        "bounce:10",
+        "--device",
+        "cpu",
+        "--fps",
+        "0",
+        "-o",
+        "/dev/null",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -636,6 +636,8 @@ fn generated_files_pass_the_khronos_validator() {
         ("materials", glass_and_lamp()),
         ("textured", textured_quad(2.0, [10497, 33071])),
         ("framed", common::gltf_file::framed_textured_quad(2.0, [33648, 10497])),
+        ("skinned", common::gltf_file::skinned_cylinder(6).0),
+        ("morphing", common::gltf_file::morphing_quad(0.5)),
     ];
     for (stem, builder) in &builders {
         for packing in [Packing::DataUris, Packing::ExternalFiles, Packing::Glb] {

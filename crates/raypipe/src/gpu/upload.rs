@@ -166,6 +166,8 @@ pub fn upload(
                 } else {
                     (limits.max_storage_buffer_binding_size, wgpu::BufferUsages::STORAGE)
                 };
+                // Moving scenes rewrite their records in place (`SceneResources::write`).
+                let usage = usage | wgpu::BufferUsages::COPY_DST;
                 if bytes.len() as u64 > limit {
                     return Err(GpuError::TooBig {
                         memory,

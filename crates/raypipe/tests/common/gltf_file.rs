@@ -21,6 +21,8 @@ pub struct GltfBuilder {
     pub images: Vec<Vec<u8>>,
     pub cameras: Vec<Value>,
     pub lights: Vec<Value>,
+    pub skins: Vec<Value>,
+    pub animations: Vec<Value>,
     /// The default scene's root nodes.
     pub roots: Vec<usize>,
     pub extensions_used: Vec<&'static str>,
@@ -66,6 +68,45 @@ impl GltfBuilder {
             "type": type_, "min": min, "max": max
         }));
         self.accessors.len() - 1
+    }
+
+    /// An accessor of u16 VEC4 elements (JOINTS_0).
+    pub fn joints(&mut self, joints: &[[u16; 4]]) -> usize {
+        let bytes: Vec<u8> = joints.as_flattened().iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5123, "count": joints.len(), "type": "VEC4"
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// An accessor of column-major MAT4 elements (inverse bind matrices).
+    pub fn matrices(&mut self, matrices: &[[f32; 16]]) -> usize {
+        let bytes: Vec<u8> = matrices.as_flattened().iter().flat_map(|v| v.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5126, "count": matrices.len(), "type": "MAT4"
+        }));
+        self.accessors.len() - 1
+    }
+
+    /// An animation of one channel: `node`'s `path` keyed at `times` to `values` (`width` floats
+    /// a key, three times that for CUBICSPLINE), interpolated as `interpolation` says.
+    pub fn animate(
+        &mut self,
+        node: usize,
+        path: &str,
+        interpolation: &str,
+        times: &[f32],
+        values: &[f32],
+        width: usize,
+    ) {
+        let input = self.floats(times, 1);
+        let output = self.floats(values, width);
+        self.animations.push(json!({
+            "channels": [{ "sampler": 0, "target": { "node": node, "path": path } }],
+            "samplers": [{ "input": input, "output": output, "interpolation": interpolation }]
+        }));
     }
 
     pub fn indices(&mut self, indices: &[u16]) -> usize {
@@ -180,6 +221,8 @@ impl GltfBuilder {
             ("textures", &self.textures),
             ("samplers", &self.samplers),
             ("cameras", &self.cameras),
+            ("skins", &self.skins),
+            ("animations", &self.animations),
         ] {
             if !list.is_empty() {
                 document[key] = json!(list);
@@ -292,5 +335,103 @@ pub fn framed_textured_quad(uv_scale: f32, wrap: [u32; 2]) -> GltfBuilder {
     b.cameras = vec![json!({ "type": "perspective", "perspective": { "yfov": fov, "znear": 0.01 } })];
     let camera = b.node(json!({ "camera": 0, "translation": [0.5, 0.5, 1.0] }));
     b.roots.push(camera);
+    b
+}
+
+/// The skinned cylinder's joint 1: its height, where the cylinder bends.
+pub const BEND_HEIGHT: f32 = 1.0;
+
+/// The skinned cylinder's vertices per ring: enough that its smooth normals stay near its faces'
+/// (a coarser one puts the shadow terminator where the GPU's and CPU's rounding disagree).
+const CYLINDER_SIDES: usize = 24;
+
+/// A cylinder of radius 0.25 from y = 0 to 2 along +y, `rings` rings of 24 vertices, skinned to two
+/// joints: joint 0 at the origin, joint 1 (its child) at y = 1. A vertex's weight on joint 1 is
+/// its height's smoothstep from 0.5 to 1.5. Joint 1 turns from 0 to 90 degrees about z between
+/// t = 0 and 1 (LINEAR). Returns the builder, the rest positions and each vertex's weight on
+/// joint 1.
+pub fn skinned_cylinder(rings: usize) -> (GltfBuilder, Vec<[f32; 3]>, Vec<f32>) {
+    let mut b = GltfBuilder::default();
+    let mut positions = Vec::new();
+    let mut weights = Vec::new();
+    for ring in 0..rings {
+        let y = 2.0 * ring as f32 / (rings - 1) as f32;
+        let x = ((y - 0.5) / 1.0).clamp(0.0, 1.0);
+        let w = x * x * (3.0 - 2.0 * x);
+        for k in 0..CYLINDER_SIDES {
+            let a = k as f32 * std::f32::consts::TAU / CYLINDER_SIDES as f32;
+            positions.push([0.25 * a.cos(), y, 0.25 * a.sin()]);
+            weights.push(w);
+        }
+    }
+    let mut indices = Vec::new();
+    for ring in 0..rings - 1 {
+        for k in 0..CYLINDER_SIDES {
+            let n = CYLINDER_SIDES;
+            let (a, b2) = ((ring * n + k) as u16, (ring * n + (k + 1) % n) as u16);
+            let (c, d) = (a + n as u16, b2 + n as u16);
+            indices.extend_from_slice(&[a, c, b2, b2, c, d]);
+        }
+    }
+    let position = b.floats(positions.as_flattened(), 3);
+    let index = b.indices(&indices);
+    // A joint is named only where it weighs something (the validator warns of the others).
+    let (joint_list, weight_values): (Vec<[u16; 4]>, Vec<[f32; 4]>) = weights
+        .iter()
+        .map(|&w| match w {
+            0.0 => ([0, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]),
+            1.0 => ([1, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]),
+            w => ([0, 1, 0, 0], [1.0 - w, w, 0.0, 0.0]),
+        })
+        .unzip();
+    let joints = b.joints(&joint_list);
+    let weight = b.floats(weight_values.as_flattened(), 4);
+    for (accessor, target) in [(position, 34962), (joints, 34962), (weight, 34962), (index, 34963)] {
+        let view = b.accessors[accessor]["bufferView"].as_u64().unwrap() as usize;
+        b.buffer_views[view]["target"] = json!(target);
+    }
+    b.meshes.push(json!({ "primitives": [{
+        "attributes": { "POSITION": position, "JOINTS_0": joints, "WEIGHTS_0": weight },
+        "indices": index
+    }]}));
+    let mesh_node = b.node(json!({ "mesh": 0, "skin": 0 }));
+    let root = b.node(json!({ "children": [2] }));
+    let bend = b.node(json!({ "translation": [0.0, BEND_HEIGHT, 0.0] }));
+    let identity = [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    ];
+    let mut lowered = identity;
+    lowered[13] = -BEND_HEIGHT;
+    let inverse_binds = b.matrices(&[identity, lowered]);
+    b.skins
+        .push(json!({ "joints": [root, bend], "inverseBindMatrices": inverse_binds }));
+    b.roots = vec![mesh_node, root];
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    b.animate(
+        bend,
+        "rotation",
+        "LINEAR",
+        &[0.0, 1.0],
+        &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, half, half],
+        4,
+    );
+    (b, positions, weights)
+}
+
+/// A unit quad in z = 0 with one morph target that lifts every vertex by `lift` in z; its weight
+/// goes from 0 to 1 between t = 0 and 1 (LINEAR).
+pub fn morphing_quad(lift: f32) -> GltfBuilder {
+    let mut b = GltfBuilder::default();
+    let (positions, _, indices) = quad(1.0);
+    let position = b.floats(positions.as_flattened(), 3);
+    let offsets = b.floats(&[0.0, 0.0, lift].repeat(4), 3);
+    let index = b.indices(&indices);
+    b.meshes.push(json!({
+        "primitives": [{ "attributes": { "POSITION": position }, "indices": index, "targets": [{ "POSITION": offsets }] }],
+        "weights": [0.0]
+    }));
+    let node = b.node(json!({ "mesh": 0 }));
+    b.roots = vec![node];
+    b.animate(node, "weights", "LINEAR", &[0.0, 1.0], &[0.0, 1.0], 1);
     b
 }

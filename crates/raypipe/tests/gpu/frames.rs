@@ -9,9 +9,12 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::build::depth_bound;
 use raypipe::gpu::{GpuContext, RecordKind, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
+use raypipe::modes::Pipeline;
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
+use raypipe::scene::gltf::{Files, parse};
+use raypipe::scene::model::{ModelOptions, gltf_scene};
 
 /// Frame `k`'s time, as `render --frames` places it at its default 30 frames per second.
 fn time_of(frame: u32) -> f32 {
@@ -131,8 +134,59 @@ fn rewritten_texture_frames_match_the_gpu_rebuild(ctx: &GpuContext) {
     }
 }
 
+/// A skinned cylinder bending (a glTF clip): its triangles and normals rewritten in place and the
+/// BVH rebuilt on the GPU every frame give the CPU's frames.
+fn gpu_rebuilt_animated_frames_match_the_cpu(ctx: &GpuContext) {
+    let (builder, _, _) = gltf_file::skinned_cylinder(12);
+    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
+    let mut scene = gltf_scene(&file, "cylinder.gltf", &ModelOptions::default()).unwrap();
+    scene.settings.width = 48;
+    scene.settings.height = 40;
+    for accel in [Accel::Threaded, Accel::Stackless] {
+        let on_gpu = gpu_frames(ctx, &scene, accel, 4);
+        let on_cpu = cpu_frames(&scene, accel, 4);
+        assert_ne!(on_cpu[0], on_cpu[3], "the cylinder bends");
+        for (k, (g, c)) in on_gpu.iter().zip(&on_cpu).enumerate() {
+            assert_frames_match(&format!("frames-animated-{accel:?}-{k}"), g, c);
+        }
+        let rewritten = rewritten_frames(ctx, &scene, accel, MemoryMode::Texture, 4);
+        for (k, (r, c)) in rewritten.iter().zip(&on_cpu).enumerate() {
+            assert_frames_match(&format!("frames-animated-texture-{accel:?}-{k}"), r, c);
+        }
+    }
+}
+
+/// One posed frame of the cylinder, in every memory mode and pipeline, against the CPU.
+fn a_posed_frame_matches_the_cpu_in_every_mode(ctx: &GpuContext) {
+    let (builder, _, _) = gltf_file::skinned_cylinder(12);
+    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
+    let scene = gltf_scene(&file, "cylinder.gltf", &ModelOptions::default()).unwrap();
+    let mut posed = scene.at_time(0.6).unwrap();
+    posed.settings.width = 48;
+    posed.settings.height = 40;
+    let mut packed = PackedScene::new(&posed).unwrap();
+    packed.build_bvh(MortonBits::Bits30);
+    let cpu = render_cpu(&packed, Accel::Threaded);
+    for memory in ctx.memory_modes() {
+        for pipeline in [Pipeline::Fragment, Pipeline::Compute] {
+            let options = RendererOptions {
+                memory,
+                pipeline,
+                accel: Accel::Threaded,
+                ..Default::default()
+            };
+            let gpu = block_on(crate::common::renderer(ctx, &packed, options).read_frame())
+                .unwrap()
+                .frame;
+            assert_frames_match(&format!("posed-{memory:?}-{pipeline:?}"), &gpu, &cpu);
+        }
+    }
+}
+
 pub fn tests() -> Vec<Test> {
     crate::tests![
+        gpu gpu_rebuilt_animated_frames_match_the_cpu,
+        gpu a_posed_frame_matches_the_cpu_in_every_mode,
         gpu gpu_rebuilt_frames_match_the_cpu,
         gpu gpu_rebuilt_frames_with_triangles_match_the_cpu,
         gpu rewritten_texture_frames_match_the_gpu_rebuild,

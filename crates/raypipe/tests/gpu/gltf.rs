@@ -230,8 +230,8 @@ fn glass_and_mirror_match_their_toml_twin(ctx: &GpuContext) {
     assert!(lit > gltf_gpu.color.len() / 4, "the image is dark");
 }
 
-/// The shared glTF samples (a texture, node animation, skins; drawn at rest), on the GPU in
-/// storage and texture memory against the CPU.
+/// The shared glTF samples (a texture, node animation, skins), posed 40 % into their animation,
+/// on the GPU in storage and texture memory against the CPU.
 fn gltf_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path) {
     for name in [
         "BoxTextured",
@@ -241,7 +241,9 @@ fn gltf_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path) {
         "AnimatedTriangle",
     ] {
         let path = models.join("gltf").join(format!("{name}.gltf"));
-        let mut scene = Scene::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{e}"));
+        let loaded = Scene::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{e}"));
+        let time = loaded.motion.as_ref().and_then(|m| m.duration()).unwrap_or(0.0) * 0.4;
+        let mut scene = loaded.at_time(time).unwrap();
         scene.settings.width = 64;
         scene.settings.height = 48;
         let mut packed = PackedScene::new(&scene).unwrap();
