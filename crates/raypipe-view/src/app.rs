@@ -157,7 +157,7 @@ impl Viewer {
             self.options.samples,
         ))
         .map_err(|e| ViewError::Scene(e.to_string()))?;
-        player.seek(self.options.time);
+        player.start_at(self.options.time);
         if self.options.script.is_some() {
             player.clock.step = Some(SCRIPT_STEP);
         }

@@ -29,6 +29,8 @@ pub struct Clock {
     /// A fixed step per frame instead of the wall clock (scripted runs: the same frames every
     /// time).
     pub step: Option<f32>,
+    /// Where a scene's motion starts when it opens (`--time`, the page's `time`).
+    pub start: f32,
 }
 
 impl Default for Clock {
@@ -37,6 +39,7 @@ impl Default for Clock {
             time: 0.0,
             speed: 1.0,
             step: None,
+            start: 0.0,
         }
     }
 }
@@ -136,6 +139,12 @@ impl Player {
     /// Seconds the motion lasts before it starts again; `None` for still scenes and endless motion.
     pub fn duration(&self) -> Option<f32> {
         self.scene.motion.as_ref().and_then(|m| m.duration())
+    }
+
+    /// Starts this scene and every scene opened later at `t` seconds.
+    pub fn start_at(&mut self, t: f32) {
+        self.clock.start = t;
+        self.seek(t);
     }
 
     /// Puts the motion at `t` seconds (wrapped into its duration); the next frame poses it there.
@@ -257,6 +266,7 @@ impl Player {
                     self.scene = scene;
                     self.name = name;
                     self.clock.time = 0.0;
+                    self.seek(self.clock.start);
                 }
             }
             Err(why) => {

@@ -192,7 +192,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         .await
         .map_err(|why| format!("{}: {why}", params.scene))?;
     player.message = (!errors.is_empty()).then(|| errors.join("; "));
-    player.seek(params.time);
+    player.start_at(params.time);
     player.clock.speed = params.speed;
     let now = Instant::now();
     Ok(Page {
