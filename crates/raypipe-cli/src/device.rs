@@ -9,11 +9,10 @@ use raypipe::bvh::BuildTimings;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::{self, Count};
-use raypipe::gpu::{Backend, GpuContext, RecordKind, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
-use raypipe::records::packed::MovedRecords;
 use raypipe::scene::Scene;
 use std::time::{Duration, Instant};
 
@@ -231,9 +230,7 @@ pub fn render_frames(
                 if index > 0 {
                     let moved = packed.apply(&motion.moved(scene, t)?);
                     rebuild.write_moved(&packed, moved);
-                    if moved == MovedRecords::Triangles {
-                        renderer.write_records(&packed, &[RecordKind::TriangleNormals])?;
-                    }
+                    renderer.write_moved(&packed, moved)?;
                 }
                 let start = Instant::now();
                 let timed = block_on(renderer.render_samples(options.samples, |encoder| {

@@ -13,7 +13,6 @@ use raypipe::gpu::build::depth_bound;
 use raypipe::gpu::{Display, DisplayView, GpuContext, GpuError, RecordKind, Renderer, RendererOptions, SceneRebuild};
 use raypipe::modes::{Accel, Count, MemoryMode};
 use raypipe::records::PackedScene;
-use raypipe::records::packed::MovedRecords;
 use raypipe::scene::{Camera, Scene};
 
 /// Why a tracer could not be made or moved.
@@ -148,10 +147,7 @@ impl Tracer {
         self.renderer.restart();
         if let Some(rebuild) = &self.rebuild {
             rebuild.write_moved(packed, moved);
-            // Triangles' normals are the renderer's own.
-            if moved == MovedRecords::Triangles {
-                self.renderer.write_records(packed, &[RecordKind::TriangleNormals])?;
-            }
+            self.renderer.write_moved(packed, moved)?;
             return Ok(None);
         }
         let Some(builder) = &mut self.cpu_rebuild else {

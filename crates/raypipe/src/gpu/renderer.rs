@@ -20,6 +20,7 @@ use crate::error::MissingBvh;
 use crate::image::Frame;
 use crate::modes::Count;
 use crate::modes::{Accel, MemoryMode, Pipeline};
+use crate::records::packed::MovedRecords;
 use crate::records::{GpuCamera, GpuGlobals, PackedScene};
 use crate::scene::Camera;
 use wgpu::util::DeviceExt;
@@ -208,6 +209,13 @@ impl Renderer {
     /// deeper than the renderer's stack.
     pub fn write_scene(&mut self, scene: &PackedScene) -> Result<(), GpuError> {
         self.write_records(scene, &RecordKind::ALL)
+    }
+
+    /// The records a motion moved (`scene` as [`PackedScene::apply`] left it): those this renderer
+    /// holds, such as triangles' normals; the ones it reads from a [`SceneRebuild`] are that
+    /// rebuild's to write ([`SceneRebuild::write_moved`]). The samples start again.
+    pub fn write_moved(&mut self, scene: &PackedScene, moved: MovedRecords) -> Result<(), GpuError> {
+        self.write_records(scene, RecordKind::moved(moved))
     }
 
     /// [`Renderer::write_scene`] for the arrays of `kinds` only: what a motion moved, and the BVH

@@ -202,6 +202,43 @@ pub enum Transform {
     },
 }
 
+impl Transform {
+    /// Finite numbers and a rotation of about unit length (it is normalized when composed); the
+    /// error says what is off.
+    pub fn check(&self) -> Result<(), String> {
+        match *self {
+            Transform::Matrix(m) if !m.is_finite() => Err("matrix must be finite".into()),
+            Transform::Matrix(_) => Ok(()),
+            Transform::Decomposed {
+                translation,
+                rotation,
+                scale,
+            } => {
+                if !(translation.is_finite() && rotation.is_finite() && scale.is_finite()) {
+                    return Err("translation, rotation and scale must be finite".into());
+                }
+                let length = rotation.length();
+                if !(length > 0.5 && length < 2.0) {
+                    return Err(format!("rotation must be a unit quaternion (length {length})"));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The matrix, or T * R * S with the rotation normalized.
+    pub fn matrix(&self) -> Mat4 {
+        match *self {
+            Transform::Matrix(m) => m,
+            Transform::Decomposed {
+                translation,
+                rotation,
+                scale,
+            } => Mat4::from_scale_rotation_translation(scale, rotation.normalize(), translation),
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Node {
     pub parent: Option<usize>,
@@ -250,8 +287,6 @@ pub struct Instance {
     pub node: usize,
     pub skin: Option<usize>,
     pub rest: Arc<RestPrimitive>,
-    /// Whether the node's world transform mirrors: the triangles' winding was turned at load.
-    pub mirrored: bool,
 }
 
 /// Everything that moves in a file: its nodes, skins and clips, and its primitives, one
@@ -320,46 +355,44 @@ impl Rig {
 
     /// The nodes at time `t` of `clip` (`None`: at rest).
     pub fn pose(&self, clip: Option<usize>, t: f32) -> Pose {
-        let mut locals: Vec<(Vec3, Quat, Vec3, Option<Mat4>)> = self
-            .nodes
-            .iter()
-            .map(|n| match n.rest {
-                Transform::Matrix(m) => (Vec3::ZERO, Quat::IDENTITY, Vec3::ONE, Some(m)),
-                Transform::Decomposed {
-                    translation,
-                    rotation,
-                    scale,
-                } => (translation, rotation, scale, None),
-            })
-            .collect();
+        let mut locals: Vec<Transform> = self.nodes.iter().map(|n| n.rest).collect();
         let mut weights = vec![Vec::new(); self.nodes.len()];
         let mut buffer = [0.0f32; 4];
         for channel in clip.map_or(&[][..], |c| &self.clips[c].channels) {
-            let local = &mut locals[channel.node];
+            if channel.path == Path::Weights {
+                let mut values = vec![0.0; channel.sampler.width];
+                channel.sampler.sample(t, false, &mut values);
+                weights[channel.node] = values;
+                continue;
+            }
+            // Reading refuses channels on a node whose transform is a matrix.
+            let Transform::Decomposed {
+                translation,
+                rotation,
+                scale,
+            } = &mut locals[channel.node]
+            else {
+                continue;
+            };
             match channel.path {
                 Path::Translation => {
                     channel.sampler.sample(t, false, &mut buffer[..3]);
-                    local.0 = Vec3::from_slice(&buffer);
+                    *translation = Vec3::from_slice(&buffer);
                 }
                 Path::Rotation => {
                     channel.sampler.sample(t, true, &mut buffer);
-                    local.1 = Quat::from_slice(&buffer);
+                    *rotation = Quat::from_slice(&buffer);
                 }
                 Path::Scale => {
                     channel.sampler.sample(t, false, &mut buffer[..3]);
-                    local.2 = Vec3::from_slice(&buffer);
+                    *scale = Vec3::from_slice(&buffer);
                 }
-                Path::Weights => {
-                    let mut values = vec![0.0; channel.sampler.width];
-                    channel.sampler.sample(t, false, &mut values);
-                    weights[channel.node] = values;
-                }
+                Path::Weights => unreachable!("handled above"),
             }
         }
         let mut world = vec![Mat4::IDENTITY; self.nodes.len()];
         for &n in &self.order {
-            let (translation, rotation, scale, matrix) = locals[n];
-            let local = matrix.unwrap_or_else(|| Mat4::from_scale_rotation_translation(scale, rotation, translation));
+            let local = locals[n].matrix();
             world[n] = match self.nodes[n].parent {
                 Some(parent) => world[parent] * local,
                 None => local,
@@ -486,6 +519,37 @@ pub enum CornerNormals {
     Flat,
 }
 
+impl CornerNormals {
+    /// The shading normals at each of `triangles`' corners: the file's `normals` (per vertex,
+    /// before placing) turned by `place`, smooth ones of the placed `positions`, or none.
+    pub fn corners(
+        self,
+        triangles: &[[u32; 3]],
+        positions: &[Vec3],
+        normals: Option<&[Vec3]>,
+        place: &Similarity,
+    ) -> Option<Vec<[Vec3; 3]>> {
+        match (self, normals) {
+            (CornerNormals::File, Some(normals)) => Some(
+                triangles
+                    .iter()
+                    .map(|t| t.map(|i| place.direction(normals[i as usize])))
+                    .collect(),
+            ),
+            (CornerNormals::Smooth(crease), _) => {
+                let mesh = Mesh {
+                    positions: positions.to_vec(),
+                    normals: None,
+                    triangles: triangles.to_vec(),
+                };
+                Some(mesh.smooth_normals(crease))
+            }
+            // A placement gives File only to primitives with normals of their own.
+            (CornerNormals::File, None) | (CornerNormals::Flat, _) => None,
+        }
+    }
+}
+
 /// An instance whose triangles a scene holds, from `first_triangle` on, in the order of
 /// `triangles`.
 #[derive(Clone, Debug, PartialEq)]
@@ -536,25 +600,9 @@ impl Animated {
                     .iter()
                     .map(|t| t.map(|i| positions[i as usize]))
                     .collect();
-                let normals = match (placed.normals, normals) {
-                    (CornerNormals::File, Some(normals)) => Some(
-                        placed
-                            .triangles
-                            .iter()
-                            .map(|t| t.map(|i| self.place.direction(normals[i as usize])))
-                            .collect(),
-                    ),
-                    (CornerNormals::Smooth(crease), _) => {
-                        let mesh = Mesh {
-                            positions,
-                            normals: None,
-                            triangles: placed.triangles.clone(),
-                        };
-                        Some(mesh.smooth_normals(crease))
-                    }
-                    // A placement gives File only to primitives with normals of their own.
-                    (CornerNormals::File, None) | (CornerNormals::Flat, _) => None,
-                };
+                let normals = placed
+                    .normals
+                    .corners(&placed.triangles, &positions, normals.as_deref(), &self.place);
                 MovedTriangles {
                     first: placed.first_triangle,
                     vertices,

@@ -7,7 +7,7 @@ use pollster::block_on;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::build::depth_bound;
-use raypipe::gpu::{GpuContext, RecordKind, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::modes::Pipeline;
 use raypipe::modes::{Accel, MemoryMode};
@@ -36,7 +36,7 @@ pub fn gpu_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32) -> 
         .map(|frame| {
             let moved = packed.apply(&motion.moved(scene, time_of(frame)).unwrap());
             rebuild.write_moved(&packed, moved);
-            renderer.write_records(&packed, RecordKind::moved(moved)).unwrap();
+            renderer.write_moved(&packed, moved).unwrap();
             block_on(renderer.read_frame_after(|encoder| rebuild.encode(encoder)))
                 .unwrap()
                 .frame

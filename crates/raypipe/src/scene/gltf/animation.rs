@@ -28,16 +28,7 @@ pub fn read_rig(
         .iter()
         .enumerate()
         .map(|(n, node)| {
-            let rest = match node.matrix {
-                Some(m) => Transform::Matrix(Mat4::from_cols_array(&m)),
-                None => Transform::Decomposed {
-                    translation: node.translation.map_or(Vec3::ZERO, Vec3::from),
-                    rotation: node
-                        .rotation
-                        .map_or(Quat::IDENTITY, |r| Quat::from_array(r.0).normalize()),
-                    scale: node.scale.map_or(Vec3::ONE, Vec3::from),
-                },
-            };
+            let rest = rest_transform(node);
             Node {
                 parent: parents[n],
                 rest,
@@ -74,6 +65,19 @@ pub fn read_rig(
         clips,
         instances: Vec::new(),
     })
+}
+
+/// A node's own transform as the file writes it: its matrix, or its translation, rotation and
+/// scale (each defaulting to the identity's). Unchecked: see [`Transform::check`].
+pub fn rest_transform(node: &json::Node) -> Transform {
+    match node.matrix {
+        Some(m) => Transform::Matrix(Mat4::from_cols_array(&m)),
+        None => Transform::Decomposed {
+            translation: node.translation.map_or(Vec3::ZERO, Vec3::from),
+            rotation: node.rotation.map_or(Quat::IDENTITY, |r| Quat::from_array(r.0)),
+            scale: node.scale.map_or(Vec3::ONE, Vec3::from),
+        },
+    }
 }
 
 /// Every node, each after its parent.
@@ -224,13 +228,13 @@ fn read_sampler(
 }
 
 /// A primitive's joints and weights (JOINTS_n and WEIGHTS_n, n = 0 and 1), for `vertex_count`
-/// vertices: joint indices within `joint_count`, weights normalized where they do not sum to one.
+/// vertices: joint indices below the most a skin may have (the skin that uses the mesh checks its
+/// own count), weights normalized where they do not sum to one.
 pub fn read_influences(
     root: &json::Root,
     buffers: &[Vec<u8>],
     sets: &[(usize, usize)],
     vertex_count: usize,
-    joint_count: usize,
     notices: &mut Vec<String>,
 ) -> Result<Vec<Influences>, String> {
     let mut influences = vec![Influences::default(); vertex_count];
@@ -254,9 +258,9 @@ pub fn read_influences(
                         c
                     ));
                 }
-                if !(joint >= 0.0 && (joint as usize) < joint_count && joint.fract() == 0.0) {
+                if !(joint >= 0.0 && (joint as usize) < MAX_JOINTS && joint.fract() == 0.0) {
                     return Err(format!(
-                        "accessor {joints_accessor}: vertex {v} names joint {joint}, and the skin has {joint_count}"
+                        "accessor {joints_accessor}: vertex {v} names joint {joint}, and a skin has at most {MAX_JOINTS}"
                     ));
                 }
                 let slot = set * 4 + c;

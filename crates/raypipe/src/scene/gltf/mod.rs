@@ -25,12 +25,13 @@ use super::{Camera, Light, Material, Scene, Similarity, Texture, Triangle};
 use crate::error::InputError;
 use crate::mesh::Mesh;
 use data::{read_floats, read_indices};
-use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::json;
 use gltf::json::accessor::Type;
 use gltf::mesh::Mode;
 use std::collections::HashMap;
 use std::path::Path;
+use std::rc::Rc;
 use std::sync::Arc;
 
 /// The extensions read. KHR_mesh_quantization only widens the accessor types, which every
@@ -258,14 +259,13 @@ fn validate(root: &json::Root) -> Result<(), String> {
     first.map_or(Ok(()), Err)
 }
 
+/// The scene's nodes with their world matrices, and every node's parent.
+type NodeWalk<'a> = (Vec<(gltf::Node<'a>, Mat4)>, Vec<Option<usize>>);
+
 /// Each node of the default scene (or, without scenes, of every root) with its world matrix, parents
 /// before children. A node with two parents, a cycle, or a NaN in a transform is an error.
 /// Also returns every node's parent.
-#[allow(clippy::type_complexity)]
-fn walk_nodes<'a>(
-    document: &'a gltf::Document,
-    notices: &mut Vec<String>,
-) -> Result<(Vec<(gltf::Node<'a>, Mat4)>, Vec<Option<usize>>), String> {
+fn walk_nodes<'a>(document: &'a gltf::Document, notices: &mut Vec<String>) -> Result<NodeWalk<'a>, String> {
     let nodes: Vec<gltf::Node> = document.nodes().collect();
     let count = nodes.len();
     let mut parent: Vec<Option<usize>> = vec![None; count];
@@ -323,7 +323,7 @@ fn walk_nodes<'a>(
     let mut out = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
     while let Some((node, parent_world)) = stack.pop() {
-        let world = parent_world * local_matrix(&node)?;
+        let world = parent_world * local_matrix(document.as_json(), node.index())?;
         if !world.is_finite() {
             return Err(format!("node {}: its world transform is not finite", node.index()));
         }
@@ -334,33 +334,11 @@ fn walk_nodes<'a>(
     Ok((out, parent))
 }
 
-/// A node's matrix, or its translation, rotation and scale composed (T * R * S).
-fn local_matrix(node: &gltf::Node) -> Result<Mat4, String> {
-    let what = format!("node {}", node.index());
-    match node.transform() {
-        gltf::scene::Transform::Matrix { matrix } => {
-            let m = Mat4::from_cols_array_2d(&matrix);
-            if !m.is_finite() {
-                return Err(format!("{what}: matrix must be finite"));
-            }
-            Ok(m)
-        }
-        gltf::scene::Transform::Decomposed {
-            translation,
-            rotation,
-            scale,
-        } => {
-            let (t, r, s) = (Vec3::from(translation), Quat::from_array(rotation), Vec3::from(scale));
-            if !(t.is_finite() && r.is_finite() && s.is_finite()) {
-                return Err(format!("{what}: translation, rotation and scale must be finite"));
-            }
-            let length = r.length();
-            if !(length > 0.5 && length < 2.0) {
-                return Err(format!("{what}: rotation must be a unit quaternion (length {length})"));
-            }
-            Ok(Mat4::from_scale_rotation_translation(s, r.normalize(), t))
-        }
-    }
+/// A node's matrix, or its translation, rotation and scale composed (T * R * S), checked.
+fn local_matrix(root: &json::Root, node: usize) -> Result<Mat4, String> {
+    let transform = animation::rest_transform(&root.nodes[node]);
+    transform.check().map_err(|e| format!("node {node}: {e}"))?;
+    Ok(transform.matrix())
 }
 
 /// A mesh primitive in its mesh's own space, read once however many nodes use the mesh.
@@ -378,7 +356,7 @@ struct SceneReader<'a> {
     root: &'a json::Root,
     buffers: &'a [Vec<u8>],
     materials: material::Materials,
-    meshes: HashMap<usize, Arc<Vec<LocalPrimitive>>>,
+    meshes: HashMap<usize, Rc<Vec<LocalPrimitive>>>,
     primitives: Vec<Primitive>,
     /// One per primitive: its node and skin, for the rig.
     instances: Vec<Instance>,
@@ -475,7 +453,7 @@ impl SceneReader<'_> {
         }
     }
 
-    fn mesh(&mut self, mesh: &gltf::Mesh) -> Result<Arc<Vec<LocalPrimitive>>, String> {
+    fn mesh(&mut self, mesh: &gltf::Mesh) -> Result<Rc<Vec<LocalPrimitive>>, String> {
         if let Some(local) = self.meshes.get(&mesh.index()) {
             return Ok(local.clone());
         }
@@ -490,7 +468,7 @@ impl SceneReader<'_> {
                 local.push(read);
             }
         }
-        let local = Arc::new(local);
+        let local = Rc::new(local);
         self.meshes.insert(mesh.index(), local.clone());
         Ok(local)
     }
@@ -554,8 +532,7 @@ impl SceneReader<'_> {
         let influences = if sets.is_empty() {
             Vec::new()
         } else {
-            let max_joints = crate::scene::animation::MAX_JOINTS;
-            animation::read_influences(self.root, self.buffers, &sets, vertex_count, max_joints, self.notices)?
+            animation::read_influences(self.root, self.buffers, &sets, vertex_count, self.notices)?
         };
         let max_joint = influences.iter().flat_map(|i| i.joints).max();
         Ok(Some(LocalPrimitive {
@@ -637,7 +614,6 @@ impl SceneReader<'_> {
                 node,
                 skin,
                 rest: rest.clone(),
-                mirrored: determinant < 0.0,
             });
         }
         Ok(())
@@ -734,31 +710,15 @@ impl GltfScene {
         scene.textures.extend(self.textures.iter().cloned());
         let mut starts = Vec::with_capacity(self.primitives.len());
         for primitive in &self.primitives {
-            let corner_normals_from = match (placement.normals, &primitive.normals) {
+            let normals_from = match (placement.normals, &primitive.normals) {
                 (Normals::Flat, _) => CornerNormals::Flat,
                 (Normals::Auto, Some(_)) => CornerNormals::File,
                 (Normals::Smooth, _) | (Normals::Auto, None) => CornerNormals::Smooth(placement.crease_degrees),
             };
-            starts.push((scene.triangles.len(), corner_normals_from));
+            starts.push((scene.triangles.len(), normals_from));
             let positions: Vec<Vec3> = primitive.positions.iter().map(|&p| place.point(p)).collect();
-            let corner_normals: Option<Vec<[Vec3; 3]>> = match (placement.normals, &primitive.normals) {
-                (Normals::Flat, _) => None,
-                (Normals::Auto, Some(file)) => Some(
-                    primitive
-                        .triangles
-                        .iter()
-                        .map(|t| t.map(|i| place.direction(file[i as usize])))
-                        .collect(),
-                ),
-                (Normals::Smooth, _) | (Normals::Auto, None) => {
-                    let mesh = Mesh {
-                        positions: positions.clone(),
-                        normals: None,
-                        triangles: primitive.triangles.clone(),
-                    };
-                    Some(mesh.smooth_normals(placement.crease_degrees))
-                }
-            };
+            let corner_normals =
+                normals_from.corners(&primitive.triangles, &positions, primitive.normals.as_deref(), place);
             for (f, t) in primitive.triangles.iter().enumerate() {
                 scene.triangles.push(Triangle {
                     vertices: t.map(|i| positions[i as usize]),
