@@ -142,7 +142,7 @@ fn options(pipeline: Pipeline, memory: MemoryMode, accel: Accel) -> RendererOpti
 
 /// The scene of one bench point, at the given size, packed with a CPU-built BVH: a built-in family
 /// at `count` spheres, or a model with `count` spheres on its surface or as its triangles.
-fn scene(family: &str, as_: MeshAs, count: usize, width: u32, height: u32) -> anyhow::Result<PackedScene> {
+fn scene(family: &str, as_: MeshAs, count: usize, width: u32, height: u32) -> anyhow::Result<(Scene, PackedScene)> {
     let mut scene = if is_model_file(Path::new(family)) {
         let options = ModelOptions {
             as_: Some(as_),
@@ -161,7 +161,7 @@ fn scene(family: &str, as_: MeshAs, count: usize, width: u32, height: u32) -> an
     scene.settings.height = height;
     let mut packed = PackedScene::new(&scene)?;
     packed.build_bvh(MortonBits::Bits30);
-    Ok(packed)
+    Ok((scene, packed))
 }
 
 /// Brute force's image of a count's scene at a small size: what every mode must reproduce before it
@@ -174,7 +174,7 @@ struct Reference {
 impl Reference {
     /// At 64x48, or the bench's size where that is smaller.
     fn new(ctx: &GpuContext, family: &str, as_: MeshAs, count: usize, size: (u32, u32)) -> anyhow::Result<Self> {
-        let scene = scene(family, as_, count, size.0.min(64), size.1.min(48))?;
+        let (_, scene) = scene(family, as_, count, size.0.min(64), size.1.min(48))?;
         let mut renderer = block_on(Renderer::new(
             ctx,
             &scene,
@@ -233,7 +233,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     let mut rows = Vec::new();
     let mut refused = Vec::new();
     for &count in &counts {
-        let packed = scene(&args.scene, as_, count, args.width, args.height)?;
+        let (loaded, packed) = scene(&args.scene, as_, count, args.width, args.height)?;
         let count = packed.primitive_count();
         // One rebuild per walk, which writes the count's primitives into its own buffers (the stack
         // and threaded walks also lay out its tree), shared by the walk's pipelines and memories.
@@ -241,6 +241,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
             if args.rebuild && accel.uses_bvh() {
                 Ok(Some(block_on(SceneRebuild::new(
                     &ctx,
+                    &loaded,
                     &packed,
                     accel,
                     MortonBits::Bits30,

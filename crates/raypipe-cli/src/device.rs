@@ -223,21 +223,22 @@ pub fn render_frames(
             );
             outcome.device = ctx.describe();
             bar.set_message("(compiling the BVH build and the tracer)");
-            let rebuild = block_on(SceneRebuild::new(&ctx, &packed, options.accel, MortonBits::Bits30))?;
+            let rebuild = block_on(SceneRebuild::new(
+                &ctx,
+                scene,
+                &packed,
+                options.accel,
+                MortonBits::Bits30,
+            ))?;
             let mut renderer = build_renderer(&ctx, &packed, Some(&rebuild), options)?;
             bar.set_message("");
-            for (index, &(frame, t)) in times.iter().enumerate() {
-                if index > 0 {
-                    let moved = packed.apply(&motion.moved(scene, t)?);
-                    rebuild.write_moved(&packed, moved);
+            for &(frame, t) in times {
+                // The first frame too: a skinning pass starts at the scene's time 0.
+                if let Some(moved) = rebuild.move_to(scene, &mut packed, t)? {
                     renderer.write_moved(&packed, moved)?;
                 }
                 let start = Instant::now();
-                let timed = block_on(renderer.render_samples(options.samples, |encoder| {
-                    if options.accel.uses_bvh() {
-                        rebuild.encode(encoder);
-                    }
-                }))?;
+                let timed = block_on(renderer.render_samples(options.samples, |encoder| rebuild.encode(encoder)))?;
                 let wall = start.elapsed().as_secs_f64() * 1e3;
                 if options.accel.uses_bvh() {
                     outcome.builds.push(block_on(rebuild.read_timings())?);

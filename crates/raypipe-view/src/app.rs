@@ -258,7 +258,7 @@ impl Viewer {
         let player = &mut gpu.player;
         if player.tracer.renderer.samples() == 0 {
             let mut encoder = gpu.ctx.device.create_command_encoder(&Default::default());
-            player.tracer.encode(&mut encoder, player.modes.accel);
+            player.tracer.encode(&mut encoder);
             gpu.ctx.queue.submit([encoder.finish()]);
         }
         let frame = block_on(player.tracer.renderer.read_back()).map_err(|e| e.to_string())?;

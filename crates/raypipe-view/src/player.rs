@@ -190,7 +190,7 @@ impl Player {
         trace: bool,
     ) {
         if trace {
-            self.tracer.encode(encoder, self.modes.accel);
+            self.tracer.encode(encoder);
         }
         self.tracer
             .show(display, encoder, target, self.modes.view, &self.camera.camera);

@@ -95,7 +95,7 @@ impl Tracer {
             });
         }
         if scene.motion.is_some() {
-            let rebuild = SceneRebuild::new(ctx, &packed, modes.accel, MortonBits::Bits30).await?;
+            let rebuild = SceneRebuild::new(ctx, &scene, &packed, modes.accel, MortonBits::Bits30).await?;
             let renderer = Renderer::with_rebuild(ctx, &packed, &rebuild, options).await?;
             return Ok(Self {
                 renderer,
@@ -123,11 +123,10 @@ impl Tracer {
         })
     }
 
-    /// Records the next sample per pixel; the first after a restart rebuilds the BVH on the GPU
-    /// first, where the scene moves and the walk uses one.
-    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, accel: Accel) {
+    /// Records the next sample per pixel; where the scene moves on the GPU, the first after a
+    /// restart poses it (skinning) and rebuilds its BVH first.
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
         if let Some(rebuild) = &self.rebuild
-            && accel.uses_bvh()
             && self.renderer.samples() == 0
         {
             rebuild.encode(encoder);
@@ -142,14 +141,15 @@ impl Tracer {
         let (Some(motion), Some(packed)) = (&scene.motion, &mut self.moving) else {
             return Ok(None);
         };
-        let moved = packed.apply(&motion.moved(scene, t)?);
         self.time = Some(t);
         self.renderer.restart();
         if let Some(rebuild) = &self.rebuild {
-            rebuild.write_moved(packed, moved);
-            self.renderer.write_moved(packed, moved)?;
+            if let Some(moved) = rebuild.move_to(scene, packed, t)? {
+                self.renderer.write_moved(packed, moved)?;
+            }
             return Ok(None);
         }
+        let moved = packed.apply(&motion.moved(scene, t)?);
         let Some(builder) = &mut self.cpu_rebuild else {
             return Ok(None);
         };

@@ -35,6 +35,7 @@ fn host_layouts() -> Vec<&'static StructLayout> {
         raypipe::gpu::build::LAYOUTS,
         raypipe::gpu::threaded::LAYOUTS,
         raypipe::gpu::display::LAYOUTS,
+        raypipe::gpu::deform::LAYOUTS,
     ]
     .into_iter()
     .flatten()
@@ -47,7 +48,13 @@ fn every_host_struct_matches_its_wgsl_twin() {
     let mut seen = Vec::new();
     let types = parse(&raypipe::gpu::shader::records_source());
     let display = parse(&raypipe::gpu::display::shader_source());
-    for (_, ty) in types.types.iter().chain(display.types.iter()) {
+    let deform = parse(&raypipe::gpu::deform::shader_source());
+    for (_, ty) in types
+        .types
+        .iter()
+        .chain(display.types.iter())
+        .chain(deform.types.iter())
+    {
         let (Some(name), naga::TypeInner::Struct { members, span }) = (&ty.name, &ty.inner) else {
             continue;
         };
@@ -117,10 +124,11 @@ fn every_shader_variant_validates() {
 }
 
 #[test]
-fn the_build_layout_and_display_shaders_validate() {
+fn the_build_layout_skinning_and_display_shaders_validate() {
     let mut sources = vec![
         ("threaded layout".to_string(), raypipe::gpu::threaded::shader_source()),
         ("display".to_string(), raypipe::gpu::display::shader_source()),
+        ("skinning".to_string(), raypipe::gpu::deform::shader_source()),
     ];
     for bits in [MortonBits::Bits30, MortonBits::Bits63] {
         for variant in build_variants() {

@@ -696,6 +696,7 @@ impl GpuLbvhBuilder {
             nodes: self.buffers.nodes.clone(),
             threaded_nodes: None,
             bvh_frame: None,
+            triangle_normals: None,
         }
     }
 

@@ -1,10 +1,11 @@
 //! The GPU side: a context (adapter and device, for a surface or none), the renderer that traces
 //! into its targets in the fragment shader, the display pass that shows them, the per-frame LBVH
-//! rebuild in compute passes, and readback for the callers that need pixels.
+//! rebuild in compute passes (with skinning and morphing before it), and readback for the callers that need pixels.
 
 pub mod build;
 pub mod compute;
 pub mod context;
+pub mod deform;
 pub mod display;
 mod error;
 pub mod readback;

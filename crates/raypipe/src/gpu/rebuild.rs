@@ -2,38 +2,87 @@
 //! compute passes and, for the stack and threaded walks, the threaded layout of its tree, recorded
 //! into the same encoder as the frame so that no round trip to the host separates build and trace.
 //!
-//! `render --frames`, `bench --rebuild` and a live viewer use it the same way: write the moved
-//! primitives, [`SceneRebuild::encode`], then [`super::Renderer::encode`] (or `read_frame_after`).
+//! A skinned or morphing glTF scene is posed before the build in the same encoder
+//! ([`GpuDeform`]): the host writes a few matrices a frame, and no vertex crosses to the GPU.
+//!
+//! `render --frames`, `bench --rebuild` and a live viewer use it the same way:
+//! [`SceneRebuild::move_to`] a time, [`SceneRebuild::encode`], then [`super::Renderer::encode`]
+//! (or `read_frame_after`).
 
 use super::build::{GpuLbvhBuilder, depth_bound};
+use super::deform::GpuDeform;
 use super::threaded::GpuThreadedLayout;
 use super::upload::SharedBuffers;
 use super::{GpuContext, GpuError};
 use crate::bvh::BuildTimings;
 use crate::bvh::morton::MortonBits;
+use crate::error::InputError;
 use crate::modes::Accel;
 use crate::records::packed::MovedRecords;
 use crate::records::{GpuSphere, PackedScene};
+use crate::scene::Scene;
 
 pub struct SceneRebuild {
     builder: GpuLbvhBuilder,
     /// For the walks that read the 16-byte depth-first nodes.
     layout: Option<GpuThreadedLayout>,
+    /// Skinning and morphing, for a scene whose motion is glTF animation.
+    deform: Option<GpuDeform>,
+    /// Whether the walk reads a BVH: brute force moves the primitives but builds nothing.
+    builds: bool,
 }
 
 impl SceneRebuild {
-    /// Kernels and buffers for `scene`'s primitives, which are written here; they may move
-    /// ([`SceneRebuild::write_moved`]).
-    pub async fn new(ctx: &GpuContext, scene: &PackedScene, accel: Accel, bits: MortonBits) -> Result<Self, GpuError> {
-        let mut builder = GpuLbvhBuilder::new(ctx, bits, scene.spheres.len(), scene.triangles.len()).await?;
-        builder.write_scene(scene).await?;
+    /// Kernels and buffers for `packed`'s primitives, which are written here, and where `scene`
+    /// moves by glTF animation, the skinning pass that poses them. They may move
+    /// ([`SceneRebuild::move_to`]).
+    pub async fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        packed: &PackedScene,
+        accel: Accel,
+        bits: MortonBits,
+    ) -> Result<Self, GpuError> {
+        let mut builder = GpuLbvhBuilder::new(ctx, bits, packed.spheres.len(), packed.triangles.len()).await?;
+        builder.write_scene(packed).await?;
         let layout = match accel {
             Accel::Stack | Accel::Threaded => {
-                Some(GpuThreadedLayout::new(ctx, &builder.buffers().nodes, scene.primitive_count()).await?)
+                Some(GpuThreadedLayout::new(ctx, &builder.buffers().nodes, packed.primitive_count()).await?)
             }
             Accel::Brute | Accel::Stackless => None,
         };
-        Ok(Self { builder, layout })
+        let deform = match &scene.motion {
+            Some(motion) => GpuDeform::new(ctx, motion, &builder.buffers().triangles, &packed.triangle_normals).await?,
+            None => None,
+        };
+        Ok(Self {
+            builder,
+            layout,
+            deform,
+            builds: accel.uses_bvh(),
+        })
+    }
+
+    /// Moves the primitives to `t` seconds of `scene`'s motion (`scene` as loaded) for the next
+    /// [`SceneRebuild::encode`]. Skinning on the GPU needs only the frame's matrices; other motion
+    /// moves `packed`'s records on the CPU and writes them here, and the records returned are those
+    /// a renderer must rewrite ([`super::Renderer::write_moved`]).
+    pub fn move_to(&self, scene: &Scene, packed: &mut PackedScene, t: f32) -> Result<Option<MovedRecords>, InputError> {
+        if let Some(deform) = &self.deform {
+            deform.write_pose(t)?;
+            return Ok(None);
+        }
+        let Some(motion) = &scene.motion else {
+            return Ok(None);
+        };
+        let moved = packed.apply(&motion.moved(scene, t)?);
+        self.write_moved(packed, moved);
+        Ok(Some(moved))
+    }
+
+    /// The skinning pass, where the scene has one.
+    pub fn deform(&self) -> Option<&GpuDeform> {
+        self.deform.as_ref()
     }
 
     /// New sphere positions for the next build (as many as the scene had).
@@ -51,9 +100,15 @@ impl SceneRebuild {
         }
     }
 
-    /// Records the build (and the threaded layout) of the primitives as they will be when the
-    /// encoder reaches it.
+    /// Records the skinning pass, where there is one, and the build (and the threaded layout) of
+    /// the primitives as they will be when the encoder reaches it.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(deform) = &self.deform {
+            deform.encode(encoder);
+        }
+        if !self.builds {
+            return;
+        }
         self.builder.encode(encoder, super::build::Codes::Computed);
         if let Some(layout) = &self.layout {
             layout.encode(encoder);
@@ -70,6 +125,7 @@ impl SceneRebuild {
         SharedBuffers {
             threaded_nodes: self.layout.as_ref().map(|l| l.threaded.clone()),
             bvh_frame: self.layout.as_ref().map(|l| l.frame.clone()),
+            triangle_normals: self.deform.as_ref().map(|d| d.triangle_normals.clone()),
             ..self.builder.shared_buffers()
         }
     }
@@ -81,6 +137,9 @@ impl SceneRebuild {
     /// GPU time of each phase of the last rebuild submitted and finished (zeros without timestamp
     /// queries); the threaded layout counts under `links`.
     pub async fn read_timings(&self) -> Result<BuildTimings, GpuError> {
+        if !self.builds {
+            return Ok(BuildTimings::default());
+        }
         let mut timings = self.builder.read_timings().await?;
         if let Some(layout) = &self.layout {
             timings.links += layout.read_ms(self.builder.context()).await?.unwrap_or(0.0);

@@ -23,6 +23,8 @@ pub struct SharedBuffers {
     pub threaded_nodes: Option<wgpu::Buffer>,
     /// The threaded nodes' frame, a `GpuBvhFrame` the renderer copies into its globals.
     pub bvh_frame: Option<wgpu::Buffer>,
+    /// Where skinning on the GPU rewrites the triangles' shading normals.
+    pub triangle_normals: Option<wgpu::Buffer>,
 }
 
 /// The scene's arrays on the GPU, ready to bind.
@@ -147,6 +149,7 @@ pub fn upload(
             (Some(shared), RecordKind::Triangle) => Some(shared.triangles.clone()),
             (Some(shared), RecordKind::Node) => Some(shared.nodes.clone()),
             (Some(shared), RecordKind::ThreadedNode) => shared.threaded_nodes.clone(),
+            (Some(shared), RecordKind::TriangleNormals) => shared.triangle_normals.clone(),
             _ => None,
         };
         let (ty, resource) = match memory {

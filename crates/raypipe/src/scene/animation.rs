@@ -429,16 +429,34 @@ impl Rig {
             .collect()
     }
 
+    /// The morph weights that `pose` gives `instance`: its node's animated ones, else the node's
+    /// own, else its mesh's.
+    fn morph_weights<'a>(&'a self, instance: &'a Instance, pose: &'a Pose) -> &'a [f32] {
+        let animated = &pose.weights[instance.node];
+        if !animated.is_empty() {
+            animated
+        } else {
+            self.nodes[instance.node]
+                .weights
+                .as_deref()
+                .unwrap_or(&instance.rest.weights)
+        }
+    }
+
+    /// Per joint of `skin`, the matrix from the mesh's space at bind time to the world at `pose`.
+    fn joint_matrices(&self, skin: &Skin, pose: &Pose) -> Vec<Mat4> {
+        skin.joints
+            .iter()
+            .zip(&skin.inverse_binds)
+            .map(|(&joint, inverse_bind)| pose.world[joint] * *inverse_bind)
+            .collect()
+    }
+
     /// An instance's vertices (and normals, where it has them) in world space at `pose`: morphed,
     /// then skinned or carried by their node.
     pub fn deform(&self, instance: &Instance, pose: &Pose) -> (Vec<Vec3>, Option<Vec<Vec3>>) {
         let rest = &*instance.rest;
-        let node_weights = &pose.weights[instance.node];
-        let weights: &[f32] = if !node_weights.is_empty() {
-            node_weights
-        } else {
-            self.nodes[instance.node].weights.as_deref().unwrap_or(&rest.weights)
-        };
+        let weights = self.morph_weights(instance, pose);
         let mut positions = rest.positions.clone();
         let mut normals = rest.normals.clone();
         for (target, &w) in rest.targets.iter().zip(weights) {
@@ -458,13 +476,7 @@ impl Rig {
         }
         match instance.skin {
             Some(skin) => {
-                let skin = &self.skins[skin];
-                let joints: Vec<Mat4> = skin
-                    .joints
-                    .iter()
-                    .zip(&skin.inverse_binds)
-                    .map(|(&joint, inverse_bind)| pose.world[joint] * *inverse_bind)
-                    .collect();
+                let joints = self.joint_matrices(&self.skins[skin], pose);
                 for (v, influences) in rest.influences.iter().enumerate() {
                     let mut matrix = Mat4::ZERO;
                     for (&joint, &weight) in influences.joints.iter().zip(&influences.weights) {
@@ -573,6 +585,16 @@ pub struct Animated {
     pub placed: Vec<PlacedInstance>,
 }
 
+/// What moves one placed instance at a time, for a deformation that runs elsewhere (the GPU's
+/// skinning pass): the matrices that carry its morphed vertices into the scene, placement
+/// included (one per joint of its skin, or its node's one), and its morph weights (one per
+/// target).
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstancePose {
+    pub matrices: Vec<Mat4>,
+    pub weights: Vec<f32>,
+}
+
 /// New corners (and corner normals, where the triangles have them) for a run of a scene's
 /// triangles.
 #[derive(Clone, Debug, PartialEq)]
@@ -585,6 +607,31 @@ pub struct MovedTriangles {
 impl Animated {
     pub fn duration(&self) -> f32 {
         self.rig.clips[self.clip].duration()
+    }
+
+    /// Each placed instance's matrices and morph weights at scene time `t`: what
+    /// [`Animated::moved`] applies, for a deformation that runs elsewhere. A skinned vertex is the
+    /// weighted sum of its joints' matrices applied to it; the placement, a similarity, commutes
+    /// with that sum (the weights sum to one) and is folded into every matrix.
+    pub fn instance_poses(&self, t: f32) -> Vec<InstancePose> {
+        let pose = self.rig.pose(Some(self.clip), t + self.offset);
+        let place = self.place.matrix();
+        self.placed
+            .iter()
+            .map(|placed| {
+                let instance = &self.rig.instances[placed.instance];
+                let matrices = match instance.skin {
+                    Some(skin) => self.rig.joint_matrices(&self.rig.skins[skin], &pose),
+                    None => vec![pose.world[instance.node]],
+                };
+                let mut weights = self.rig.morph_weights(instance, &pose).to_vec();
+                weights.resize(instance.rest.targets.len(), 0.0);
+                InstancePose {
+                    matrices: matrices.into_iter().map(|m| place * m).collect(),
+                    weights,
+                }
+            })
+            .collect()
     }
 
     /// The moving triangles at scene time `t`.

@@ -163,6 +163,11 @@ impl Similarity {
     pub fn direction(&self, v: Vec3) -> Vec3 {
         self.rotation * v
     }
+
+    /// As a matrix: `point` is its `transform_point3`.
+    pub fn matrix(&self) -> glam::Mat4 {
+        glam::Mat4::from_scale_rotation_translation(Vec3::splat(self.scale), self.rotation, self.translation)
+    }
 }
 
 impl Default for Camera {
