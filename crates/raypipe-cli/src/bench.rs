@@ -28,44 +28,56 @@ pub struct BenchArgs {
     /// A built-in family whose size takes the count (random, sphere, torus or bounce), or a model file
     /// (.ply, .obj, .off, .gltf, .glb) with that many spheres on its surface.
     #[arg(default_value = "random")]
-    scene: String,
+    pub(crate) scene: String,
     #[arg(long, value_delimiter = ',', default_values_t = [1000, 2000, 5000, 10000, 20000])]
-    counts: Vec<usize>,
+    pub(crate) counts: Vec<usize>,
     /// With a model file: time spheres on its surface, one point per count (the default), or its
     /// triangles, one point (--counts unused).
     #[arg(long = "as", value_parser = choice::<MeshAs>())]
-    as_: Option<MeshAs>,
+    pub(crate) as_: Option<MeshAs>,
     #[arg(long, value_parser = choice::<Accel>(), value_delimiter = ',', default_values_t = Accel::ALL.to_vec())]
-    accel: Vec<Accel>,
+    pub(crate) accel: Vec<Accel>,
     #[arg(long, value_parser = choice::<MemoryMode>(), value_delimiter = ',', default_values_t = [MemoryMode::Storage])]
-    memory: Vec<MemoryMode>,
+    pub(crate) memory: Vec<MemoryMode>,
     /// The stages that trace, each timed at every point: the fragment shader of a full-screen
     /// triangle (the paper's) and a compute kernel.
     #[arg(long, value_parser = choice::<Pipeline>(), value_delimiter = ',', default_values_t = Pipeline::ALL.to_vec())]
-    pipeline: Vec<Pipeline>,
+    pub(crate) pipeline: Vec<Pipeline>,
     #[arg(long, default_value_t = 256)]
-    width: u32,
+    pub(crate) width: u32,
     #[arg(long, default_value_t = 256)]
-    height: u32,
+    pub(crate) height: u32,
     /// Timed frames per point, after the warm-up frames.
     #[arg(long, default_value_t = 10)]
-    frames: usize,
+    pub(crate) frames: usize,
     #[arg(long, default_value_t = 2)]
-    warmup: usize,
+    pub(crate) warmup: usize,
     /// Samples per pixel of every timed frame (as `render --spp`); times and rays cover them all.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SPP as i64))]
-    spp: u32,
+    pub(crate) spp: u32,
     /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately.
     #[arg(long)]
-    rebuild: bool,
+    pub(crate) rebuild: bool,
     #[arg(long, value_parser = choice::<Backend>())]
-    backend: Option<Backend>,
+    pub(crate) backend: Option<Backend>,
     /// Where results.csv, results.json and the plot fps.png (and fps.svg) go.
     #[arg(long, default_value = "bench-results")]
-    out: PathBuf,
+    pub(crate) out: PathBuf,
     /// Also print the JSON array to stdout.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
+    /// Time a moving scene (an animated glTF, or bounce:N) frame by frame, split into clip
+    /// evaluation, skinning, BVH build, upload and trace, per memory mode, pipeline and walk
+    /// (results in motion.csv and motion.json; --counts unused).
+    #[arg(long)]
+    pub(crate) motion: bool,
+    /// With --motion: also refit a tree built at the first frame, and time its trace against the
+    /// fresh build's frame by frame (storage memory; refit.csv).
+    #[arg(long, requires = "motion")]
+    pub(crate) refit: bool,
+    /// With --motion: frames per second of the clip's time (frame k at k / fps).
+    #[arg(long, default_value_t = 30.0)]
+    pub(crate) fps: f32,
 }
 
 #[derive(Serialize, Clone)]
@@ -199,6 +211,9 @@ impl Reference {
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
+    if args.motion {
+        return crate::bench_motion::run(&args);
+    }
     let ctx = block_on(GpuContext::require(args.backend))?;
     let clock = if ctx.timestamps { "gpu timestamps" } else { "wall clock" };
     if !ctx.timestamps {

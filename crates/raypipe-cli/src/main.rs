@@ -3,6 +3,7 @@
 
 mod args;
 mod bench;
+mod bench_motion;
 mod bvh;
 mod cli;
 mod device;

@@ -414,6 +414,7 @@ struct Kernels {
     sort_pass: wgpu::ComputePipeline,
     split_prefixes: wgpu::ComputePipeline,
     merge: wgpu::ComputePipeline,
+    refit: wgpu::ComputePipeline,
 }
 
 /// A GPU LBVH builder: kernels compiled once, buffers kept from build to build while the
@@ -426,6 +427,7 @@ pub struct GpuLbvhBuilder {
     layout: wgpu::BindGroupLayout,
     buffers: Buffers,
     timer: Option<PassTimestamps>,
+    refit_timer: Option<PassTimestamps>,
 }
 
 /// The buffers of a build over `count` primitives.
@@ -483,6 +485,7 @@ impl GpuLbvhBuilder {
                 sort_pass: kernel(variant.ranking.entry_point()),
                 split_prefixes: kernel("split_prefixes"),
                 merge: kernel("merge"),
+                refit: kernel("refit"),
             };
             let buffers = Buffers::new(ctx, &layout, bits, variant, spheres, triangles)?;
             Ok(Self {
@@ -495,6 +498,7 @@ impl GpuLbvhBuilder {
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "build phases", PHASES as u32)),
+                refit_timer: ctx.timestamps.then(|| PassTimestamps::new(&ctx.device, "refit", 1)),
             })
         })
         .await
@@ -648,6 +652,40 @@ impl GpuLbvhBuilder {
         );
         if let Some(timer) = &self.timer {
             timer.resolve(encoder);
+        }
+    }
+
+    /// Records a refit of the last tree built: its boxes recomputed bottom-up over the primitives as
+    /// they are now, its topology and links kept. Cheaper than a build; the tree degrades as the
+    /// primitives move away from where it was built.
+    pub fn encode_refit(&self, encoder: &mut wgpu::CommandEncoder) {
+        let n = self.buffers.count();
+        if n == 0 {
+            return;
+        }
+        if n > 1 {
+            let words = self.variant.sibling_boxes.words_per_split() * (n as u64 - 1);
+            encoder.clear_buffer(&self.buffers.climb, 0, Some(words * 4));
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("refit"),
+            timestamp_writes: self.refit_timer.as_ref().map(|t| t.compute_writes(0)),
+        });
+        let (x, y) = grid(n.div_ceil(self.variant.merge_run()).div_ceil(GROUP));
+        pass.set_pipeline(&self.kernels.refit);
+        pass.set_bind_group(0, &self.buffers.bind_groups[0], &[0]);
+        pass.dispatch_workgroups(x, y, 1);
+        drop(pass);
+        if let Some(timer) = &self.refit_timer {
+            timer.resolve(encoder);
+        }
+    }
+
+    /// GPU time of the last refit submitted and finished, where the adapter has timestamps.
+    pub async fn read_refit_ms(&self) -> Result<Option<f64>, GpuError> {
+        match &self.refit_timer {
+            Some(timer) => Ok(Some(timer.read_ms(&self.ctx).await?[0])),
+            None => Ok(None),
         }
     }
 

@@ -115,6 +115,22 @@ impl SceneRebuild {
         }
     }
 
+    /// Like [`SceneRebuild::encode`], refitting the last tree built instead of building anew:
+    /// the skinning pass, the boxes recomputed bottom-up over the moved primitives, and the
+    /// threaded layout of the refitted tree.
+    pub fn encode_refit(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(deform) = &self.deform {
+            deform.encode(encoder);
+        }
+        if !self.builds {
+            return;
+        }
+        self.builder.encode_refit(encoder);
+        if let Some(layout) = &self.layout {
+            layout.encode(encoder);
+        }
+    }
+
     /// A bound on the depth of every tree this rebuild can make: the walk's stack size.
     pub fn depth_bound(&self) -> u32 {
         depth_bound(self.builder.count(), self.builder.bits())
@@ -132,6 +148,26 @@ impl SceneRebuild {
 
     pub fn builder(&self) -> &GpuLbvhBuilder {
         &self.builder
+    }
+
+    /// GPU time of the last skinning pass and of the last refit (with its threaded layout), where
+    /// they ran and the adapter has timestamps.
+    pub async fn read_skinning_ms(&self) -> Result<Option<f64>, GpuError> {
+        match &self.deform {
+            Some(deform) => deform.read_ms().await,
+            None => Ok(None),
+        }
+    }
+
+    pub async fn read_refit_ms(&self) -> Result<Option<f64>, GpuError> {
+        let Some(refit) = self.builder.read_refit_ms().await? else {
+            return Ok(None);
+        };
+        let layout = match &self.layout {
+            Some(layout) => layout.read_ms(self.builder.context()).await?.unwrap_or(0.0),
+            None => 0.0,
+        };
+        Ok(Some(refit + layout))
     }
 
     /// GPU time of each phase of the last rebuild submitted and finished (zeros without timestamp

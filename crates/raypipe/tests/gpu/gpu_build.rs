@@ -224,8 +224,55 @@ fn spheres_and_triangles_build_alike(ctx: &GpuContext) {
     own.validate(&boxes).unwrap();
 }
 
+/// The boxes a refit of `tree` over `boxes` must give: each leaf its primitive's, each internal
+/// node the union of its children's, the links untouched.
+fn refitted(tree: &[GpuNode], boxes: &[Aabb]) -> Vec<GpuNode> {
+    let mut out = tree.to_vec();
+    fn refit(out: &mut [GpuNode], boxes: &[Aabb], node: usize) -> Aabb {
+        let b = if out[node].is_leaf() {
+            boxes[out[node].left as usize]
+        } else {
+            let (left, right) = (out[node].left as usize, out[node].right as usize);
+            refit(out, boxes, left).union(refit(out, boxes, right))
+        };
+        (out[node].min, out[node].max) = (b.min.to_array(), b.max.to_array());
+        b
+    }
+    if !out.is_empty() {
+        refit(&mut out, boxes, 0);
+    }
+    out
+}
+
+/// A tree built over spheres, refitted after they move, in every variant of the kernels: the
+/// links are the build's and every box is its children's union, to the bit.
+fn a_refit_keeps_the_tree_and_fits_its_boxes(ctx: &GpuContext) {
+    for variant in BuildVariant::variants(ctx) {
+        let mut builder = block_on(GpuLbvhBuilder::with_variant(ctx, MortonBits::Bits30, 0, 0, variant)).unwrap();
+        for (n, seed) in [(1, 3), (2, 4), (20_000, 5)] {
+            let before = random_spheres(n, seed, n);
+            block_on(builder.resize(n, 0)).unwrap();
+            builder.write_spheres(&before);
+            block_on(builder.build(Codes::Computed)).unwrap();
+            let tree = block_on(builder.read_nodes()).unwrap();
+            let after = random_spheres(n, seed + 100, n);
+            builder.write_spheres(&after);
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            builder.encode_refit(&mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+            let refit = block_on(builder.read_nodes()).unwrap();
+            assert!(
+                refit == refitted(&tree, &boxes(&after)),
+                "{variant:?}, {n} spheres: the refit differs from the CPU's"
+            );
+            assert!(n < 2 || refit != tree, "{n} spheres: the refit moved no box");
+        }
+    }
+}
+
 pub fn tests() -> Vec<Test> {
     crate::tests![
+        gpu a_refit_keeps_the_tree_and_fits_its_boxes,
         gpu same_codes_give_identical_nodes,
         gpu every_build_variant_gives_identical_nodes,
         gpu same_codes_give_identical_nodes_with_duplicate_centroids,

@@ -373,3 +373,45 @@ fn merge(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
         nodes[right].parent = node;
     }
 }
+
+// The tree's boxes anew over primitives that moved, its topology kept (a refit): every leaf takes
+// its primitive's box and climbs by the parent links; at each node the first child to arrive
+// leaves its box and stops, the second makes the node's box from both and climbs on. Boxes pass as
+// in `merge` (`sibling_box`): through atomic words, or on llvmpipe through the nodes. The node's
+// split number is its index among the internal nodes, so its children's slots are `box_slot`'s.
+@compute @workgroup_size(GROUP)
+fn refit(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+         @builtin(local_invocation_index) lid: u32) {
+    let n = params.count;
+    let leaf_base = n - 1u;
+    let run_start = (flat_group(wid, groups) * GROUP + lid) * MERGE_RUN;
+    let run_end = min(run_start + MERGE_RUN, n);
+    for (var leaf = run_start; leaf < run_end; leaf++) {
+        var node = leaf_base + leaf;
+        var bounds = primitive_box(nodes[node].left);
+        loop {
+            nodes[node].min = bounds.lo;
+            nodes[node].max = bounds.hi;
+            let parent = nodes[node].parent;
+            if (parent == NONE) {
+                break;
+            }
+            let is_right = nodes[parent].right == node;
+            if (!SIBLING_BOXES_IN_NODES) {
+                store_box(box_slot(parent, is_right), bounds.lo, bounds.hi);
+            }
+            if (atomicAdd(&climb[parent], 1u) == 0u) {
+                break;
+            }
+            var sibling: Box;
+            if (SIBLING_BOXES_IN_NODES) {
+                let other = select(nodes[parent].right, nodes[parent].left, is_right);
+                sibling = Box(nodes[other].min, nodes[other].max);
+            } else {
+                sibling = load_box(box_slot(parent, !is_right));
+            }
+            bounds = Box(min(bounds.lo, sibling.lo), max(bounds.hi, sibling.hi));
+            node = parent;
+        }
+    }
+}

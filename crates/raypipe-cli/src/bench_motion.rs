@@ -1,0 +1,507 @@
+//! `raypipe bench FILE --motion`: the frame of a moving scene (a glTF animation, or `bounce`) split
+//! into its parts, per memory mode, pipeline and walk: evaluating the clip, skinning (the GPU's
+//! compute pass in storage memory, the CPU elsewhere), building the BVH (on the GPU in storage
+//! memory, on the CPU elsewhere), writing what moved (the CPU path), and tracing. With `--refit`,
+//! each storage point also keeps a second tree that is only refitted after the first frame, and
+//! times its trace against the fresh build's at the same pose, frame by frame.
+
+use crate::bench::BenchArgs;
+use crate::cli::median;
+use anyhow::Context;
+use pollster::block_on;
+use raypipe::Choice;
+use raypipe::bvh::lbvh::LbvhBuilder;
+use raypipe::bvh::morton::MortonBits;
+use raypipe::cpu;
+use raypipe::gpu::build::depth_bound;
+use raypipe::gpu::{GpuContext, RecordKind, Renderer, RendererOptions, SceneRebuild};
+use raypipe::image::Frame;
+use raypipe::image::diff::{Tolerance, compare};
+use raypipe::modes::{Accel, MemoryMode};
+use raypipe::records::PackedScene;
+use raypipe::scene::model::{MeshAs, ModelOptions, is_model_file};
+use raypipe::scene::{Motion, Scene};
+use serde::Serialize;
+use std::io::Write;
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::Instant;
+
+const BITS: MortonBits = MortonBits::Bits30;
+
+/// One point: the medians of its timed frames.
+#[derive(Serialize, Clone)]
+struct MotionRow {
+    scene: String,
+    triangles: usize,
+    spheres: usize,
+    pipeline: String,
+    accel: String,
+    memory: String,
+    width: u32,
+    height: u32,
+    spp: u32,
+    frames: usize,
+    /// Where the primitives are moved and the BVH built: "gpu" (storage memory) or "cpu".
+    moved_on: String,
+    /// Evaluating the clip at the frame's time: node transforms, joint matrices, morph weights (CPU).
+    eval_ms: f64,
+    /// Posing the vertices: the GPU's skinning pass, or the CPU's skinning and repacking.
+    skin_ms: f64,
+    /// The BVH build: its GPU passes (and the threaded layout), or the CPU builder.
+    build_ms: f64,
+    /// Writing the moved records and nodes to the GPU (the CPU path; 0 on the GPU path).
+    upload_ms: f64,
+    trace_ms: f64,
+    /// eval + skin + build + upload + trace.
+    frame_ms: f64,
+    /// (skin + build) / frame: the share of the frame that moving the scene costs.
+    motion_share: f64,
+    /// With --refit: the refit (and layout) time, and the refitted tree's trace time over the
+    /// fresh tree's at the last frame.
+    refit_ms: Option<f64>,
+    refit_trace_ratio_last: Option<f64>,
+    /// The first timed frame at which refitting (refit + trace of the refitted tree) costs more
+    /// than rebuilding (build + trace of the fresh tree); none if refitting wins throughout.
+    refit_loses_from_frame: Option<usize>,
+    clock: String,
+    adapter: String,
+    backend: String,
+}
+
+/// One frame of a refit comparison.
+#[derive(Serialize, Clone)]
+struct RefitFrame {
+    pipeline: String,
+    accel: String,
+    /// Frames since the refitted tree was built.
+    frame: usize,
+    time: f32,
+    build_ms: f64,
+    refit_ms: f64,
+    trace_rebuilt_ms: f64,
+    trace_refitted_ms: f64,
+}
+
+/// What one frame cost, in milliseconds.
+#[derive(Clone, Copy, Default)]
+struct FrameTimes {
+    eval: f64,
+    skin: f64,
+    build: f64,
+    upload: f64,
+    trace: f64,
+}
+
+fn elapsed_ms(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+/// Evaluating the clips alone (on the CPU), timed: the part of moving the scene both paths share.
+fn evaluate(motion: &Motion, t: f32) -> f64 {
+    let start = Instant::now();
+    if let Motion::Animations(animations) = motion {
+        for animated in animations {
+            std::hint::black_box(animated.instance_poses(t));
+        }
+    }
+    elapsed_ms(start)
+}
+
+fn load(args: &BenchArgs) -> anyhow::Result<Scene> {
+    let mut scene = if is_model_file(Path::new(&args.scene)) {
+        let options = ModelOptions {
+            as_: Some(MeshAs::Triangles),
+            ..Default::default()
+        };
+        Scene::load_with(&args.scene, &options)?
+    } else {
+        Scene::load(&args.scene)?
+    };
+    anyhow::ensure!(
+        scene.motion.is_some(),
+        "{}: the scene does not move (--motion times an animated glTF or bounce:N)",
+        args.scene
+    );
+    scene.settings.width = args.width;
+    scene.settings.height = args.height;
+    Ok(scene)
+}
+
+pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
+    let ctx = block_on(GpuContext::require(args.backend))?;
+    let clock = if ctx.timestamps { "gpu timestamps" } else { "wall clock" };
+    anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
+    anyhow::ensure!(
+        args.fps.is_finite() && args.fps > 0.0,
+        "--fps must be a positive number"
+    );
+    let scene = load(args)?;
+    let motion = scene.motion.as_ref().expect("checked in load");
+    let times: Vec<f32> = (0..args.warmup + args.frames)
+        .map(|k| motion.looped(k as f32 / args.fps))
+        .collect();
+    // Every point's first timed frame is checked against the CPU's image of that time.
+    let check_time = times[args.warmup];
+    let reference = {
+        let mut packed = PackedScene::new(&scene.at_time(check_time)?)?;
+        packed.build_bvh(BITS);
+        cpu::render(&packed, Accel::Threaded)?
+    };
+    std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
+    let bar = crate::device::progress_bar(
+        true,
+        (args.pipeline.len() * args.accel.len() * args.memory.len()) as u64,
+        "{spinner} bench --motion {bar:40} {pos}/{len} {msg}, {elapsed}",
+    );
+    let name = Path::new(&args.scene)
+        .file_name()
+        .map_or(args.scene.clone(), |n| n.to_string_lossy().into_owned());
+    let mut rows = Vec::new();
+    let mut refit_frames = Vec::new();
+    let mut refused = Vec::new();
+    for &memory in &args.memory {
+        for &pipeline in &args.pipeline {
+            for &accel in &args.accel {
+                let point = format!("{} {} {}", pipeline.name(), accel.name(), memory.name());
+                bar.set_message(point.clone());
+                let options = RendererOptions {
+                    pipeline,
+                    memory,
+                    accel,
+                    ..Default::default()
+                };
+                let timed = if memory == MemoryMode::Storage {
+                    gpu_point(&ctx, &scene, options, args, &times)
+                } else {
+                    cpu_point(&ctx, &scene, options, args, &times)
+                };
+                let point_result = timed.and_then(|(frames, first, refits)| {
+                    let color = compare(&first.display(), &reference.display())?;
+                    Tolerance::COLOR
+                        .check(&color)
+                        .map_err(|e| anyhow::anyhow!("its image at {check_time} s differs from the CPU's: {e}"))?;
+                    Ok((frames, refits))
+                });
+                let (frames, refits) = match point_result {
+                    Ok(done) => done,
+                    Err(e) => {
+                        refused.push(format!("{point}: {}", crate::cli::message(&e)));
+                        bar.inc(1);
+                        continue;
+                    }
+                };
+                let part = |f: fn(&FrameTimes) -> f64| median(frames.iter().map(f));
+                let (eval, skin, build, upload, trace) = (
+                    part(|f| f.eval),
+                    part(|f| f.skin),
+                    part(|f| f.build),
+                    part(|f| f.upload),
+                    part(|f| f.trace),
+                );
+                let frame_ms = eval + skin + build + upload + trace;
+                let (refit_ms, refit_trace_ratio_last, refit_loses_from_frame) = summarize_refits(&refits);
+                rows.push(MotionRow {
+                    scene: name.clone(),
+                    triangles: scene.triangles.len(),
+                    spheres: scene.spheres.len(),
+                    pipeline: pipeline.name().into(),
+                    accel: accel.name().into(),
+                    memory: memory.name().into(),
+                    width: args.width,
+                    height: args.height,
+                    spp: args.spp,
+                    frames: args.frames,
+                    moved_on: if memory == MemoryMode::Storage { "gpu" } else { "cpu" }.into(),
+                    eval_ms: eval,
+                    skin_ms: skin,
+                    build_ms: build,
+                    upload_ms: upload,
+                    trace_ms: trace,
+                    frame_ms,
+                    motion_share: (skin + build) / frame_ms,
+                    refit_ms,
+                    refit_trace_ratio_last,
+                    refit_loses_from_frame,
+                    clock: clock.into(),
+                    adapter: ctx.info.name.clone(),
+                    backend: format!("{:?}", ctx.info.backend),
+                });
+                refit_frames.extend(refits.into_iter().map(|r| RefitFrame {
+                    pipeline: pipeline.name().into(),
+                    accel: accel.name().into(),
+                    ..r
+                }));
+                // After every point: a run cut short keeps what it measured.
+                write_results(&args.out, &rows, &refit_frames)?;
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    let json = write_results(&args.out, &rows, &refit_frames)?;
+    for line in &refused {
+        eprintln!("refused: {line}");
+    }
+    if args.json {
+        crate::say!("{json}");
+        return Ok(ExitCode::SUCCESS);
+    }
+    crate::say!(
+        "adapter: {} ({clock}), {name}: {} triangles, {}x{}, {} frames at {} fps",
+        ctx.describe(),
+        scene.triangles.len(),
+        args.width,
+        args.height,
+        args.frames,
+        args.fps
+    );
+    crate::say!(
+        "{:>9} {:>10} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>6}",
+        "pipeline",
+        "accel",
+        "memory",
+        "eval",
+        "skin",
+        "build",
+        "upload",
+        "trace",
+        "frame",
+        "moving",
+        "refit",
+        "ratio"
+    );
+    for r in &rows {
+        crate::say!(
+            "{:>9} {:>10} {:>8} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>6.1}% {:>8} {:>6}",
+            r.pipeline,
+            r.accel,
+            r.memory,
+            r.eval_ms,
+            r.skin_ms,
+            r.build_ms,
+            r.upload_ms,
+            r.trace_ms,
+            r.frame_ms,
+            100.0 * r.motion_share,
+            r.refit_ms.map(|m| format!("{m:.3}")).unwrap_or_default(),
+            r.refit_trace_ratio_last.map(|m| format!("{m:.2}")).unwrap_or_default(),
+        );
+    }
+    crate::say!("results: {}/motion.csv, motion.json", args.out.display());
+    Ok(if rows.is_empty() {
+        ExitCode::from(2)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+/// The refit time (median), the trace ratio at the last frame, and the first frame from which
+/// refitting costs more than rebuilding.
+fn summarize_refits(refits: &[RefitFrame]) -> (Option<f64>, Option<f64>, Option<usize>) {
+    let Some(last) = refits.last() else {
+        return (None, None, None);
+    };
+    let loses = refits
+        .iter()
+        .find(|r| r.refit_ms + r.trace_refitted_ms > r.build_ms + r.trace_rebuilt_ms)
+        .map(|r| r.frame);
+    (
+        Some(median(refits.iter().map(|r| r.refit_ms))),
+        Some(last.trace_refitted_ms / last.trace_rebuilt_ms),
+        loses,
+    )
+}
+
+/// Storage memory: the primitives posed (skinned) and the BVH rebuilt on the GPU, in the frame's
+/// submission. Returns the timed frames, the first timed frame's image and, with --refit, the
+/// refit comparison.
+fn gpu_point(
+    ctx: &GpuContext,
+    scene: &Scene,
+    options: RendererOptions,
+    args: &BenchArgs,
+    times: &[f32],
+) -> anyhow::Result<(Vec<FrameTimes>, Frame, Vec<RefitFrame>)> {
+    let motion = scene.motion.as_ref().expect("a moving scene");
+    let mut packed = PackedScene::new(scene)?;
+    let rebuild = block_on(SceneRebuild::new(ctx, scene, &packed, options.accel, BITS))?;
+    let mut renderer = block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options))?;
+    // A second tree, built once and then only refitted, with a renderer of its own.
+    let refitting = match args.refit && options.accel.uses_bvh() {
+        true => {
+            let mut own = PackedScene::new(scene)?;
+            let rebuild = block_on(SceneRebuild::new(ctx, scene, &own, options.accel, BITS))?;
+            let renderer = block_on(Renderer::with_rebuild(ctx, &own, &rebuild, options))?;
+            rebuild.move_to(scene, &mut own, times[0])?;
+            Some((own, rebuild, renderer))
+        }
+        false => None,
+    };
+    let mut refitting = refitting;
+    let mut frames = Vec::new();
+    let mut refits = Vec::new();
+    let mut first = None;
+    for (k, &t) in times.iter().enumerate() {
+        let eval = evaluate(motion, t);
+        let start = Instant::now();
+        let moved = rebuild.move_to(scene, &mut packed, t)?;
+        let mut upload = 0.0;
+        if let Some(moved) = moved {
+            renderer.write_moved(&packed, moved)?;
+            // Bounce moves its spheres on the CPU: that is its "skinning", with the write.
+            upload = elapsed_ms(start);
+        }
+        let traced = block_on(renderer.render_samples(args.spp, |encoder| rebuild.encode(encoder)))?;
+        let build = block_on(rebuild.read_timings())?.total();
+        let skin = block_on(rebuild.read_skinning_ms())?.unwrap_or(0.0);
+        let trace = traced.gpu_ms.unwrap_or(0.0);
+        if let Some((own, refit_rebuild, refit_renderer)) = &mut refitting {
+            if let Some(moved) = refit_rebuild.move_to(scene, own, t)? {
+                refit_renderer.write_moved(own, moved)?;
+            }
+            let refitted = block_on(refit_renderer.render_samples(args.spp, |encoder| {
+                if k == 0 {
+                    refit_rebuild.encode(encoder);
+                } else {
+                    refit_rebuild.encode_refit(encoder);
+                }
+            }))?;
+            if k >= args.warmup {
+                refits.push(RefitFrame {
+                    pipeline: String::new(),
+                    accel: String::new(),
+                    frame: k,
+                    time: t,
+                    build_ms: build,
+                    refit_ms: block_on(refit_rebuild.read_refit_ms())?.unwrap_or(0.0),
+                    trace_rebuilt_ms: trace,
+                    trace_refitted_ms: refitted.gpu_ms.unwrap_or(0.0),
+                });
+            }
+        }
+        if k >= args.warmup {
+            first.get_or_insert(traced.frame);
+            frames.push(FrameTimes {
+                eval,
+                skin: skin + upload,
+                build,
+                upload: 0.0,
+                trace,
+            });
+        }
+    }
+    Ok((frames, first.expect("at least one timed frame"), refits))
+}
+
+/// Uniform or texture memory (WebGL2's route): the primitives posed and the BVH built on the CPU,
+/// then the moved records and the nodes rewritten, as the viewer and the page do.
+fn cpu_point(
+    ctx: &GpuContext,
+    scene: &Scene,
+    options: RendererOptions,
+    args: &BenchArgs,
+    times: &[f32],
+) -> anyhow::Result<(Vec<FrameTimes>, Frame, Vec<RefitFrame>)> {
+    let motion = scene.motion.as_ref().expect("a moving scene");
+    let mut packed = PackedScene::new(scene)?;
+    let mut builder = LbvhBuilder::<u64>::new();
+    if options.accel.uses_bvh() {
+        builder.build(&packed.primitive_boxes(), BITS);
+        packed.set_bvh(builder.to_bvh());
+    }
+    let bound = depth_bound(packed.primitive_count(), BITS);
+    let mut renderer = block_on(Renderer::with_depth_bound(ctx, &packed, options, bound))?;
+    let mut frames = Vec::new();
+    let mut first = None;
+    for (k, &t) in times.iter().enumerate() {
+        let eval = evaluate(motion, t);
+        let start = Instant::now();
+        let moved = packed.apply(&motion.moved(scene, t)?);
+        // `moved` evaluates the clips again before it skins.
+        let skin = (elapsed_ms(start) - eval).max(0.0);
+        let mut build = 0.0;
+        let mut kinds = RecordKind::moved(moved).to_vec();
+        if options.accel.uses_bvh() {
+            let start = Instant::now();
+            builder.build(&packed.primitive_boxes(), BITS);
+            packed.set_bvh(builder.to_bvh());
+            build = elapsed_ms(start);
+            kinds.extend([RecordKind::Node, RecordKind::ThreadedNode]);
+        }
+        let start = Instant::now();
+        renderer.write_records(&packed, &kinds)?;
+        let upload = elapsed_ms(start);
+        let traced = block_on(renderer.render_samples(args.spp, |_| {}))?;
+        if k >= args.warmup {
+            first.get_or_insert(traced.frame);
+            frames.push(FrameTimes {
+                eval,
+                skin,
+                build,
+                upload,
+                trace: traced.gpu_ms.unwrap_or(0.0),
+            });
+        }
+    }
+    Ok((frames, first.expect("at least one timed frame"), Vec::new()))
+}
+
+/// motion.csv, motion.json and, with refits, refit.csv in `out`; returns the JSON.
+fn write_results(out: &Path, rows: &[MotionRow], refits: &[RefitFrame]) -> anyhow::Result<String> {
+    let path = out.join("motion.csv");
+    let mut file = std::fs::File::create(&path).with_context(|| format!("{}: cannot write", path.display()))?;
+    writeln!(
+        file,
+        "scene,triangles,spheres,pipeline,accel,memory,width,height,spp,frames,moved_on,eval_ms,skin_ms,build_ms,upload_ms,trace_ms,frame_ms,motion_share,refit_ms,refit_trace_ratio_last,refit_loses_from_frame,clock,adapter,backend"
+    )?;
+    let optional = |v: Option<f64>| v.map(|v| format!("{v:.4}")).unwrap_or_default();
+    for r in rows {
+        writeln!(
+            file,
+            "{},{},{},{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},\"{}\",{}",
+            r.scene,
+            r.triangles,
+            r.spheres,
+            r.pipeline,
+            r.accel,
+            r.memory,
+            r.width,
+            r.height,
+            r.spp,
+            r.frames,
+            r.moved_on,
+            r.eval_ms,
+            r.skin_ms,
+            r.build_ms,
+            r.upload_ms,
+            r.trace_ms,
+            r.frame_ms,
+            r.motion_share,
+            optional(r.refit_ms),
+            optional(r.refit_trace_ratio_last),
+            r.refit_loses_from_frame.map(|f| f.to_string()).unwrap_or_default(),
+            r.clock,
+            r.adapter.replace('"', "'"),
+            r.backend
+        )?;
+    }
+    if !refits.is_empty() {
+        let path = out.join("refit.csv");
+        let mut file = std::fs::File::create(&path).with_context(|| format!("{}: cannot write", path.display()))?;
+        writeln!(
+            file,
+            "pipeline,accel,frame,time,build_ms,refit_ms,trace_rebuilt_ms,trace_refitted_ms"
+        )?;
+        for r in refits {
+            writeln!(
+                file,
+                "{},{},{},{},{:.4},{:.4},{:.4},{:.4}",
+                r.pipeline, r.accel, r.frame, r.time, r.build_ms, r.refit_ms, r.trace_rebuilt_ms, r.trace_refitted_ms
+            )?;
+        }
+    }
+    let json = serde_json::to_string_pretty(&serde_json::json!({ "points": rows, "refit": refits }))?;
+    std::fs::write(out.join("motion.json"), &json).with_context(|| format!("{}: cannot write", out.display()))?;
+    Ok(json)
+}
