@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
 # Measures one GPU in one command: Figure 4 (frames per second against sphere count) at 1920x1080
 # and 256x256 for every mode and both pipelines, the Bunny as 20K spheres and as its 69K triangles
-# at 1920x1080 with the BVH rebuilt every frame, and the GPU and CPU LBVH builds from 100K to 16M
-# primitives with 30- and 63-bit Morton codes.
+# at 1920x1080 with the BVH rebuilt every frame, the GPU and CPU LBVH builds from 100K to 16M
+# primitives with 30- and 63-bit Morton codes, and an animated skinned mesh of 10K to 1M triangles
+# (scripts/skinned-mesh.py) posed, rebuilt and refitted every frame at 640x360.
 #
-#   scripts/gpu-bench.sh OUT_DIR            # on a real GPU: at most 8 minutes
+#   scripts/gpu-bench.sh OUT_DIR            # on a real GPU: at most 9 minutes
 #   scripts/gpu-bench.sh --quick OUT_DIR    # the same steps at small sizes (CI runs it on lavapipe)
 #
 # Writes under OUT_DIR: info.txt (`raypipe info`), a folder per benchmark with results.csv,
-# results.json, fps.png and fps.svg, builds.jsonl and builds.csv, summary.md (each performance
+# results.json, fps.png and fps.svg (motion.csv, motion.json and refit.csv for the animated
+# mesh), builds.jsonl and builds.csv, summary.md (each performance
 # target judged where the run measured it, the pipelines and the builds side by side:
 # scripts/gpu-bench-summary.py), and log.txt with each step's command, time and outcome. Each step
 # has a time limit; a step that fails or runs out of time is logged, the others still run (a
@@ -71,9 +73,11 @@ if [[ $quick -eq 1 ]]; then
   bunny_spheres=2000
   build_counts=(10000 100000)
   build_runs=2
+  motion_counts=(3000)
+  motion_frames=(--frames 2 --warmup 1 --width 64 --height 36)
   # Seconds for: Figure 4's BVH modes and its brute force (each size), the Bunny's spheres and its
-  # triangles, one build, and one build of the largest count.
-  limits=(300 300 300 300 120 120)
+  # triangles, one build, one build of the largest count, and one animated mesh.
+  limits=(300 300 300 300 120 120 300)
 else
   sizes=(1920x1080 256x256)
   brute_counts=1000,2000,5000,10000,20000
@@ -83,8 +87,10 @@ else
   bunny_spheres=20000
   build_counts=(100000 1000000 4000000 16000000)
   build_runs=5
-  # As above; at most 2 x (90 + 25) + 2 x 25 + 12 x 8 + 4 x 25 = 476 seconds in all.
-  limits=(90 25 25 25 8 25)
+  motion_counts=(10000 100000 1000000)
+  motion_frames=(--frames 30 --warmup 3 --width 640 --height 360)
+  # As above; at most 2 x (90 + 25) + 2 x 25 + 12 x 8 + 4 x 25 + 3 x 20 = 536 seconds in all.
+  limits=(90 25 25 25 8 25 20)
 fi
 
 "$raypipe" info > "$out/info.txt" 2>&1 || { cat "$out/info.txt"; exit 2; }
@@ -141,6 +147,20 @@ with open(sys.argv[2], "w", newline="") as f:
                      + [round(r["mprims_per_s"], 2)])
 print(f"builds.csv: {len(rows)} builds")
 EOF
+# The animated mesh: each frame evaluated, skinned and rebuilt on the GPU, and a second tree refitted.
+for n in "${motion_counts[@]}"; do
+  mesh=$out/skinned-$n.glb
+  if python3 "$(dirname "$0")/skinned-mesh.py" --triangles "$n" -o "$mesh" >> "$log" 2>&1; then
+    step "animated skinned mesh, $n triangles, skinned and rebuilt every frame" "${limits[6]}" \
+      "$raypipe" bench "$mesh" --motion --refit --memory storage --accel threaded --pipeline fragment,compute \
+      "${motion_frames[@]}" --out "$out/motion-$n"
+    rm -f "$mesh"
+  else
+    echo "== animated skinned mesh, $n triangles: scripts/skinned-mesh.py failed (see above)" | tee -a "$log"
+    failed=1
+  fi
+done
+
 python3 "$(dirname "$0")/gpu-bench-summary.py" "$out" || failed=1
 
 echo "results in $out (log.txt lists every step)"

@@ -367,6 +367,13 @@ fn gpu_point(
                     refit_rebuild.encode_refit(encoder);
                 }
             }))?;
+            if k == args.warmup {
+                // The refitted tree must give the fresh one's image.
+                let color = compare(&refitted.frame.display(), &traced.frame.display())?;
+                Tolerance::COLOR
+                    .check(&color)
+                    .map_err(|e| anyhow::anyhow!("the refitted tree's image differs from the rebuilt one's: {e}"))?;
+            }
             if k >= args.warmup {
                 refits.push(RefitFrame {
                     pipeline: String::new(),

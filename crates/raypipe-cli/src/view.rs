@@ -31,6 +31,9 @@ pub struct ViewArgs {
     /// With --frames: after the first frame, open these files as if dropped on the window.
     #[arg(long)]
     drop: Vec<PathBuf>,
+    /// Start with a moving scene's motion paused (at --time), as Space pauses it.
+    #[arg(long)]
+    paused: bool,
     /// Present without waiting for the display's refresh.
     #[arg(long)]
     no_vsync: bool,
@@ -107,7 +110,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             memory: args.scene.memory,
             depth: scene.settings.max_depth,
             view,
-            paused: false,
+            paused: args.paused,
             vsync: !args.no_vsync,
         },
         time: match args.scene.time {

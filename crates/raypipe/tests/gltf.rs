@@ -602,6 +602,49 @@ fn images_without_a_source_or_a_type() {
     assert_eq!(file.textures.len(), 1);
 }
 
+/// scripts/skinned-mesh.py's animated tube of at least `triangles` triangles (the benchmarks'
+/// content), written into `dir`.
+fn skinned_mesh(dir: &std::path::Path, triangles: usize) -> std::path::PathBuf {
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/skinned-mesh.py");
+    let path = dir.join(format!("skinned-mesh-{triangles}.glb"));
+    let made = std::process::Command::new("python3")
+        .arg(&script)
+        .args(["--triangles", &triangles.to_string(), "-o"])
+        .arg(&path)
+        .output()
+        .expect("python3 runs scripts/skinned-mesh.py");
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    path
+}
+
+/// The benchmarks' skinned mesh loads with the triangles asked for, and its clip moves every ring
+/// but the root's: the chain bends.
+#[test]
+fn the_generated_skinned_mesh_loads_and_bends() {
+    let dir = test_dir("skinned-mesh");
+    let path = skinned_mesh(&dir, 5000);
+    let scene = Scene::load(path.to_str().unwrap()).unwrap();
+    assert!(
+        (5000..5200).contains(&scene.triangles.len()),
+        "{}",
+        scene.triangles.len()
+    );
+    let motion = scene.motion.as_ref().expect("the clip plays");
+    assert_eq!(motion.duration(), Some(2.0));
+    let later = scene.at_time(0.5).unwrap();
+    let moved = scene
+        .triangles
+        .iter()
+        .zip(&later.triangles)
+        .filter(|(a, b)| a.vertices != b.vertices)
+        .count();
+    assert!(
+        moved > scene.triangles.len() / 2,
+        "{moved} of {} moved",
+        scene.triangles.len()
+    );
+}
+
 /// Every file these tests generate passes the Khronos glTF-Validator (npm gltf-validator, run by
 /// web/validate-gltf.mjs), so that they test glTF and not a dialect of raypipe's own. Skipped,
 /// with a message, where Node.js or the package (`npm ci --prefix web`) is missing, unless
@@ -644,6 +687,7 @@ fn generated_files_pass_the_khronos_validator() {
             files.push(builder.write(&dir, &format!("{stem}-{packing:?}"), packing));
         }
     }
+    files.push(skinned_mesh(&dir, 2000));
     let output = std::process::Command::new("node")
         .arg(&script)
         .args(&files)

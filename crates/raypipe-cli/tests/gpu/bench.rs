@@ -118,8 +118,79 @@ fn bench_times_a_models_triangles_with_build_phases(_: &GpuContext) {
     assert_eq!(csv.lines().count(), 5, "{csv}");
 }
 
+/// `bench --motion --refit` on a skinned mesh from scripts/skinned-mesh.py: every point split into
+/// its parts, skinning and the build on the GPU in storage memory and on the CPU in texture
+/// memory, and a refit row per timed frame where a tree is refitted.
+fn bench_splits_an_animated_frame_and_compares_refits(_: &GpuContext) {
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-motion");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    let mesh = out.join("skinned.glb");
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scripts/skinned-mesh.py");
+    let made = Command::new("python3")
+        .arg(script)
+        .args(["--triangles", "3000", "-o"])
+        .arg(&mesh)
+        .output()
+        .expect("python3 runs scripts/skinned-mesh.py");
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    let output = Command::new(env!("CARGO_BIN_EXE_raypipe"))
+        .arg("bench")
+        .arg(&mesh)
+        .args([
+            "--motion",
+            "--refit",
+            "--memory",
+            "storage,texture",
+            "--accel",
+            "threaded,brute",
+        ])
+        .args([
+            "--width", "48", "--height", "32", "--frames", "2", "--warmup", "1", "--json", "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let points = report["points"].as_array().unwrap();
+    assert_eq!(points.len(), 8, "two memories, two pipelines, two walks: {report}");
+    for point in points {
+        let ms = |key: &str| {
+            point[key]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{key} missing from {point}"))
+        };
+        let on_gpu = point["memory"] == "storage";
+        assert_eq!(point["moved_on"], if on_gpu { "gpu" } else { "cpu" }, "{point}");
+        assert!(point["triangles"].as_u64().unwrap() >= 3000, "{point}");
+        assert!(
+            ms("skin_ms") > 0.0 && ms("trace_ms") > 0.0 && ms("eval_ms") >= 0.0,
+            "{point}"
+        );
+        let builds = point["accel"] == "threaded";
+        assert_eq!(ms("build_ms") > 0.0, builds, "{point}");
+        let total = ms("eval_ms") + ms("skin_ms") + ms("build_ms") + ms("upload_ms") + ms("trace_ms");
+        assert!((ms("frame_ms") - total).abs() < 1e-6 * total.max(1.0), "{point}");
+        assert_eq!(point["refit_ms"].is_number(), on_gpu && builds, "{point}");
+    }
+    let refits = report["refit"].as_array().unwrap();
+    assert_eq!(refits.len(), 4, "two pipelines, two timed frames: {report}");
+    for refit in refits {
+        assert!(refit["frame"].as_u64().unwrap() >= 1, "{refit}");
+        assert!(refit["refit_ms"].as_f64().unwrap() > 0.0, "{refit}");
+    }
+    let csv = std::fs::read_to_string(out.join("motion.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 9, "{csv}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("refit.csv")).unwrap().lines().count(),
+        5
+    );
+}
+
 pub fn tests() -> Vec<Test> {
     crate::tests![
+        gpu bench_splits_an_animated_frame_and_compares_refits,
         gpu bench_reports_every_point_with_the_documented_keys,
         gpu bench_times_a_models_triangles_with_build_phases,
     ]

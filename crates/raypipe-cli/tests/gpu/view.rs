@@ -166,6 +166,29 @@ fn orbit_and_motion_change_the_frames(_: &GpuContext) {
     matches(&later, &again).unwrap();
 }
 
+/// An animated sample (the shared RiggedSimple) plays in the window: its frames change; held at a
+/// time (`--paused`) they are `render --time` of that time, in storage memory (skinned on the GPU)
+/// and in texture memory (on the CPU).
+fn an_animated_sample_plays_and_holds_its_time(_: &GpuContext) {
+    let Some(models) = crate::common::harness::models_dir() else {
+        let required = std::env::var("RAYPIPE_REQUIRE_MODELS").as_deref() == Ok("1");
+        assert!(!required, "../shared/models is missing");
+        eprintln!("skipped: ../shared/models is missing");
+        return;
+    };
+    let dir = test_dir("view-animated");
+    let scene = models.join("gltf/RiggedSimple.gltf");
+    let scene = scene.to_str().unwrap();
+    let first = viewed(&dir, scene, &[], 1);
+    let later = viewed(&dir, scene, &[], 12);
+    assert!(matches(&first, &later).is_err(), "RiggedSimple did not move");
+    let render = rendered(&dir, scene, &["--time", "1.25"]);
+    for memory in ["storage", "texture"] {
+        let held = viewed(&dir, scene, &["--time", "1.25", "--paused", "--memory", memory], 4);
+        matches(&held, &render).unwrap_or_else(|e| panic!("RiggedSimple held at 1.25 s in {memory} memory: {e}"));
+    }
+}
+
 fn a_mode_that_cannot_serve_the_scene_is_one_line(_: &GpuContext) {
     let output = in_xvfb(&["view", "sphere-8k", "--memory", "uniform", "--frames", "1"]);
     let stderr = String::from_utf8_lossy(&output.stderr);
@@ -359,6 +382,7 @@ pub fn tests() -> Vec<Test> {
         gpu_window still_frames_gather_render_spp,
         gpu_window the_window_shows_the_frame,
         gpu_window orbit_and_motion_change_the_frames,
+        gpu_window an_animated_sample_plays_and_holds_its_time,
         gpu_window a_mode_that_cannot_serve_the_scene_is_one_line,
         gpu_window synthetic_input_switches_and_orbits,
         gpu_window the_window_survives_hiding_resizing_and_closes_cleanly,

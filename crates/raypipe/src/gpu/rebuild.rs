@@ -117,7 +117,7 @@ impl SceneRebuild {
 
     /// Like [`SceneRebuild::encode`], refitting the last tree built instead of building anew:
     /// the skinning pass, the boxes recomputed bottom-up over the moved primitives, and the
-    /// threaded layout of the refitted tree.
+    /// refitted boxes written into the threaded layout, whose order stands.
     pub fn encode_refit(&self, encoder: &mut wgpu::CommandEncoder) {
         if let Some(deform) = &self.deform {
             deform.encode(encoder);
@@ -127,7 +127,7 @@ impl SceneRebuild {
         }
         self.builder.encode_refit(encoder);
         if let Some(layout) = &self.layout {
-            layout.encode(encoder);
+            layout.encode_boxes(encoder);
         }
     }
 

@@ -114,6 +114,16 @@ impl GpuThreadedLayout {
 
     /// Records the layout of the nodes as they will be when the encoder reaches it.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
+        self.encode_kernels(encoder, &[&self.order, &self.nodes]);
+    }
+
+    /// Records the layout of a tree whose topology is the last one laid out's (a refit): its
+    /// depth-first order stands, only the nodes' boxes are written anew.
+    pub fn encode_boxes(&self, encoder: &mut wgpu::CommandEncoder) {
+        self.encode_kernels(encoder, &[&self.nodes]);
+    }
+
+    fn encode_kernels(&self, encoder: &mut wgpu::CommandEncoder, kernels: &[&wgpu::ComputePipeline]) {
         if self.node_count == 0 {
             return;
         }
@@ -123,7 +133,7 @@ impl GpuThreadedLayout {
             timestamp_writes: self.timer.as_ref().map(|t| t.compute_writes(0)),
         });
         pass.set_bind_group(0, &self.bind_group, &[]);
-        for kernel in [&self.order, &self.nodes] {
+        for kernel in kernels {
             pass.set_pipeline(kernel);
             pass.dispatch_workgroups(x, y, 1);
         }

@@ -124,6 +124,14 @@ fn carry_normal(m: mat4x4<f32>, n: vec3<f32>) -> vec3<f32> {
     return cofactor * n * sign(det);
 }
 
+// `sum` plus joint `joint`'s matrix times its weight `w` (nothing read where `w` is 0).
+fn add_influence(sum: mat4x4<f32>, matrix_first: u32, joint: u32, w: f32) -> mat4x4<f32> {
+    if (w == 0.0) {
+        return sum;
+    }
+    return sum + frame_matrix(matrix_first + joint) * w;
+}
+
 @compute @workgroup_size(GROUP)
 fn deform_vertices(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                    @builtin(local_invocation_index) lid: u32) {
@@ -144,20 +152,23 @@ fn deform_vertices(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroup
             normal += offset.normal.xyz * w;
         }
     }
-    var m = frame_matrix(instance.matrix_first);
+    var m: mat4x4<f32>;
     if (instance.skinned != 0u) {
-        let influence = influences[v];
-        m = mat4x4<f32>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-        for (var k = 0u; k < 8u; k++) {
-            var w = influence.weights_low[k % 4u];
-            if (k >= 4u) {
-                w = influence.weights_high[k % 4u];
-            }
-            if (w != 0.0) {
-                let joint = (influence.joints[k / 2u] >> (16u * (k % 2u))) & 0xffffu;
-                m += frame_matrix(instance.matrix_first + joint) * w;
-            }
-        }
+        // Written out influence by influence: CPU adapters spill vectors indexed by a variable.
+        let joints = influences[v].joints;
+        let low = influences[v].weights_low;
+        let high = influences[v].weights_high;
+        let first = instance.matrix_first;
+        m = add_influence(mat4x4<f32>(), first, joints.x & 0xffffu, low.x);
+        m = add_influence(m, first, joints.x >> 16u, low.y);
+        m = add_influence(m, first, joints.y & 0xffffu, low.z);
+        m = add_influence(m, first, joints.y >> 16u, low.w);
+        m = add_influence(m, first, joints.z & 0xffffu, high.x);
+        m = add_influence(m, first, joints.z >> 16u, high.y);
+        m = add_influence(m, first, joints.w & 0xffffu, high.z);
+        m = add_influence(m, first, joints.w >> 16u, high.w);
+    } else {
+        m = frame_matrix(instance.matrix_first);
     }
     posed[v].position = vec4<f32>((m * vec4<f32>(position, 1.0)).xyz, 0.0);
     posed[v].normal = vec4<f32>(normalize_or_zero(carry_normal(m, normal)), 0.0);
