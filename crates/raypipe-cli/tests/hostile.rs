@@ -180,6 +180,32 @@ fn outputs_that_cannot_be_written_fail_before_the_render() {
     ]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     assert!(!std::fs::metadata("/dev/null").unwrap().is_file());
+    // Writes into `dir` that succeed (a PNG, an EXR, two frames) and one that fails (over a folder):
+    // each probes the folder and writes beside its target first; none may leave that behind.
+    let folder = dir.join("a-folder");
+    std::fs::create_dir_all(folder.join("inside")).unwrap();
+    for (output, frames) in [("ok.png", None), ("ok.exr", None), ("f_%02d.png", Some("2"))] {
+        let target = dir.join(output);
+        let mut args = vec![
+            "render",
+            "bounce:20",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--device",
+            "cpu",
+        ];
+        if let Some(frames) = frames {
+            args.extend(["--frames", frames]);
+        }
+        args.extend(["-o", path_str(&target)]);
+        let output = raypipe(&args);
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    }
+    assert!(dir.join("ok.png").is_file() && dir.join("ok.exr").is_file() && dir.join("f_01.png").is_file());
+    let over_folder = raypipe(&["render", "whitted", "--device", "cpu", "-o", path_str(&folder)]);
+    assert_eq!(over_folder.status.code(), Some(2));
     let leftovers: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .filter_map(|e| e.ok())
