@@ -133,3 +133,24 @@ pub fn median(values: impl IntoIterator<Item = f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frame past the adapter's largest allocation says how big a frame fits and the way out.
+    #[test]
+    fn a_frame_too_large_says_what_fits_and_the_way_out() {
+        let message = gpu_message(&GpuError::FrameTooLarge {
+            width: 512,
+            height: 512,
+            bytes: 4 << 20,
+            max: 1 << 20,
+            max_pixels: 65536,
+        });
+        assert_eq!(
+            message,
+            "image 512x512 needs 4 MiB per frame target, the adapter allocates at most 1 MiB; render at most 65536 pixels on the GPU, or use --device cpu"
+        );
+    }
+}
