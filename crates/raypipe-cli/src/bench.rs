@@ -114,6 +114,8 @@ struct BuildPhases {
     hierarchy: f64,
     bounds: f64,
     links: f64,
+    /// The 16-byte depth-first layout of the stack and threaded walks.
+    layout: f64,
 }
 
 impl BuildPhases {
@@ -125,16 +127,17 @@ impl BuildPhases {
             hierarchy: phase(|b| b.hierarchy),
             bounds: phase(|b| b.bounds),
             links: phase(|b| b.links),
+            layout: phase(|b| b.layout),
         })
     }
 
     fn csv(phases: Option<Self>) -> String {
         match phases {
             Some(p) => format!(
-                "{:.4},{:.4},{:.4},{:.4},{:.4}",
-                p.morton, p.sort, p.hierarchy, p.bounds, p.links
+                "{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
+                p.morton, p.sort, p.hierarchy, p.bounds, p.links, p.layout
             ),
-            None => ",,,,".into(),
+            None => ",,,,,".into(),
         }
     }
 }
@@ -410,7 +413,7 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
     let mut file = std::fs::File::create(path).with_context(|| format!("{}: cannot write", path.display()))?;
     writeln!(
         file,
-        "count,pipeline,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,build_morton_ms,build_sort_ms,build_hierarchy_ms,build_bounds_ms,build_links_ms,clock,adapter,backend"
+        "count,pipeline,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,build_morton_ms,build_sort_ms,build_hierarchy_ms,build_bounds_ms,build_links_ms,build_layout_ms,clock,adapter,backend"
     )?;
     for r in rows {
         writeln!(

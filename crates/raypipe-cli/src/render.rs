@@ -462,14 +462,13 @@ fn render_sequence(
         let steady = if frames > 1 { 1 } else { 0 };
         if !outcome.builds.is_empty() {
             let b = &outcome.builds[steady..];
-            // The GPU's merges write the bounds and links with the hierarchy; what `links` holds
-            // is the 16-byte layout of the stack and threaded walks.
+            // The GPU's merges write the bounds and links with the hierarchy.
             crate::say!(
                 "BVH build per frame (median): morton {:.3} ms, sort {:.3} ms, hierarchy with bounds and links {:.3} ms, 16-byte layout {:.3} ms, total {:.3} ms",
                 median(b.iter().map(|t| t.morton)),
                 median(b.iter().map(|t| t.sort)),
-                median(b.iter().map(|t| t.hierarchy + t.bounds)),
-                median(b.iter().map(|t| t.links)),
+                median(b.iter().map(|t| t.hierarchy + t.bounds + t.links)),
+                median(b.iter().map(|t| t.layout)),
                 median(b.iter().map(|t| t.total())),
             );
         }

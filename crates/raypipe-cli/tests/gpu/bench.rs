@@ -71,7 +71,7 @@ fn bench_reports_every_point_with_the_documented_keys(_: &GpuContext) {
 
 /// A model's triangles are one point whose count is the mesh's; with --rebuild every row has the
 /// build's phases; the results are written as each point finishes.
-fn bench_times_a_models_triangles_with_build_phases(_: &GpuContext) {
+fn bench_times_a_models_triangles_with_build_phases(ctx: &GpuContext) {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-triangles");
     std::fs::create_dir_all(&dir).unwrap();
     // An octahedron: eight triangles.
@@ -108,13 +108,19 @@ fn bench_times_a_models_triangles_with_build_phases(_: &GpuContext) {
         if row["accel"] == "brute" {
             assert!(phases.is_null(), "brute force builds nothing: {row}");
         } else {
-            for phase in ["morton", "sort", "hierarchy", "bounds", "links"] {
+            for phase in ["morton", "sort", "hierarchy", "bounds", "links", "layout"] {
                 assert!(phases[phase].as_f64().is_some_and(|ms| ms >= 0.0), "{phase} in {row}");
             }
+            // The threaded walk's 16-byte layout is timed as its own phase.
+            assert_eq!(phases["layout"].as_f64().unwrap() > 0.0, ctx.timestamps, "{row}");
         }
     }
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     assert!(csv.lines().next().unwrap().contains("build_sort_ms"), "{csv}");
+    assert!(
+        csv.lines().next().unwrap().contains("build_links_ms,build_layout_ms,"),
+        "{csv}"
+    );
     assert_eq!(csv.lines().count(), 5, "{csv}");
 }
 

@@ -35,14 +35,16 @@ pub struct BuildTimings {
     pub hierarchy: f64,
     pub bounds: f64,
     /// Zero where the links are written with the bounds, as the CPU's climb after Karras's searches
-    /// writes them; their time is then in `bounds`. A per-frame GPU rebuild for the stack and
-    /// threaded walks adds its layout of the tree (`gpu::threaded`) here.
+    /// writes them; their time is then in `bounds`.
     pub links: f64,
+    /// The tree laid out again as the stack and threaded walks read it (16-byte nodes in depth-first
+    /// order, `gpu::threaded`), where a per-frame GPU rebuild does that; zero elsewhere.
+    pub layout: f64,
 }
 
 impl BuildTimings {
     pub fn total(&self) -> f64 {
-        self.morton + self.sort + self.hierarchy + self.bounds + self.links
+        self.morton + self.sort + self.hierarchy + self.bounds + self.links + self.layout
     }
 }
 

@@ -171,14 +171,14 @@ impl SceneRebuild {
     }
 
     /// GPU time of each phase of the last rebuild submitted and finished (zeros without timestamp
-    /// queries); the threaded layout counts under `links`.
+    /// queries), the threaded layout's among them.
     pub async fn read_timings(&self) -> Result<BuildTimings, GpuError> {
         if !self.builds {
             return Ok(BuildTimings::default());
         }
         let mut timings = self.builder.read_timings().await?;
         if let Some(layout) = &self.layout {
-            timings.links += layout.read_ms(self.builder.context()).await?.unwrap_or(0.0);
+            timings.layout = layout.read_ms(self.builder.context()).await?.unwrap_or(0.0);
         }
         Ok(timings)
     }
