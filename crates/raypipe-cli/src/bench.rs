@@ -2,8 +2,8 @@
 //! paper's Figure 4), with every mode's image checked against brute force's before it is timed.
 
 use crate::args::choice;
-use crate::cli::median;
 use crate::plot::{Series, write_fps_plot};
+use crate::report::median;
 use anyhow::{Context, bail};
 use clap::Args;
 use pollster::block_on;
@@ -53,7 +53,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 2)]
     pub(crate) warmup: usize,
     /// Samples per pixel of every timed frame (as `render --spp`); times and rays cover them all.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SPP as i64))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::scene_args::MAX_SPP as i64))]
     pub(crate) spp: u32,
     /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately.
     #[arg(long)]
@@ -289,7 +289,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                         .expect("made above")
                         .check(&ctx, pipeline, accel, memory);
                     if let Err(e) = checked {
-                        refused.push(format!("{point}: {}", crate::cli::message(&e)));
+                        refused.push(format!("{point}: {}", crate::report::message(&e)));
                         bar.inc(1);
                         continue;
                     }
@@ -306,7 +306,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 let mut renderer = match renderer {
                     Ok(r) => r,
                     Err(e) => {
-                        refused.push(format!("{point}: {}", crate::cli::message(&e.into())));
+                        refused.push(format!("{point}: {}", crate::report::message(&e.into())));
                         bar.inc(1);
                         continue;
                     }

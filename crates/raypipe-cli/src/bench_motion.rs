@@ -6,7 +6,7 @@
 //! times its trace against the fresh build's at the same pose, frame by frame.
 
 use crate::bench::BenchArgs;
-use crate::cli::median;
+use crate::report::median;
 use anyhow::Context;
 use pollster::block_on;
 use raypipe::Choice;
@@ -186,7 +186,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
                 let (frames, refits) = match point_result {
                     Ok(done) => done,
                     Err(e) => {
-                        refused.push(format!("{point}: {}", crate::cli::message(&e)));
+                        refused.push(format!("{point}: {}", crate::report::message(&e)));
                         bar.inc(1);
                         continue;
                     }

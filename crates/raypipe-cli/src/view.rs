@@ -2,7 +2,7 @@
 //! flags; this side loads dropped files and writes screenshots.
 
 use crate::io;
-use crate::render::{Aov, SceneArgs, aov_image, load_scene};
+use crate::scene_args::{Aov, SceneArgs, aov_image, load_scene};
 use clap::Args;
 use raypipe::gpu::DisplayView;
 use raypipe::image::Frame;
@@ -39,7 +39,7 @@ pub struct ViewArgs {
     no_vsync: bool,
     /// Samples per pixel a still frame gathers, one per frame, before tracing stops (progressive
     /// anti-aliasing); 1 shows `render`'s image.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SPP as i64))]
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=crate::scene_args::MAX_SPP as i64))]
     spp: u32,
 }
 
@@ -51,7 +51,7 @@ struct CliHost {
 impl Host for CliHost {
     fn load(&self, path: &Path) -> Result<Scene, String> {
         let spec = path.to_string_lossy();
-        load_scene(&spec, &ModelOptions::default()).map_err(|e| crate::cli::message(&e))
+        load_scene(&spec, &ModelOptions::default()).map_err(|e| crate::report::message(&e))
     }
 
     fn save(&self, frame: &Frame, view: DisplayView, path: &Path) -> Result<(), String> {
@@ -62,7 +62,7 @@ impl Host for CliHost {
             DisplayView::Cost => Aov::Cost,
         };
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        io::write(&aov_image(aov, is_exr, frame), path).map_err(|e| crate::cli::message(&e))
+        io::write(&aov_image(aov, is_exr, frame), path).map_err(|e| crate::report::message(&e))
     }
 
     fn screenshot_path(&self, view: DisplayView) -> PathBuf {

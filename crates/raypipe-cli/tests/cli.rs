@@ -3,11 +3,9 @@
 
 mod common;
 // The binary's own image reader, to read back what it wrote.
-#[path = "../src/io.rs"]
-#[allow(dead_code)]
-mod io;
 use common::models::{self, test_dir};
 use common::{assert_clean_error, raypipe};
+use raypipe_cli::io;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 

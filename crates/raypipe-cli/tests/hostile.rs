@@ -3,11 +3,9 @@
 //! output. Each ends in exit 0 with a whole file, or exit 2 with one short line; never a panic.
 
 mod common;
-#[path = "../src/io.rs"]
-#[allow(dead_code)]
-mod io;
 use common::models::test_dir;
 use common::{assert_clean_error, raypipe, raypipe_on_a_terminal};
+use raypipe_cli::io;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 

@@ -5,9 +5,7 @@
 mod common;
 
 // The binary's own image reader, to read back what it wrote.
-#[path = "../../src/io.rs"]
-#[allow(dead_code)]
-mod io;
+use raypipe_cli::io;
 
 mod bench;
 mod bvh;

@@ -1,0 +1,171 @@
+//! What names a scene and how it is traced, shared by `render`, `view` and `bench`: the scene's
+//! flags (`SceneArgs`), loading it, and the image an AOV makes of a frame.
+
+use crate::args::choice;
+use anyhow::bail;
+use clap::{Args, ValueEnum};
+use raypipe::gpu::Backend;
+use raypipe::image::{FloatImage, Frame, heatmap};
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::scene::Scene;
+use raypipe::scene::animation::ClipChoice;
+use raypipe::scene::model::is_model_file;
+use raypipe::scene::model::{MeshAs, ModelOptions, Normals};
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum Aov {
+    /// Shaded colour: PNG (sRGB) or EXR (linear).
+    #[default]
+    Color,
+    /// Distance from the eye to the first hit, channel `Z` of a float EXR; +inf where nothing is hit.
+    Depth,
+    /// First-hit shading normals, mapped from [-1, 1] to [0, 1].
+    Normal,
+    /// A heat map of each primary ray's cost: BVH nodes tested (box tests of internal nodes, sphere
+    /// tests of leaves; spheres tested for brute force), with a colour-scale legend. PNG only.
+    Cost,
+}
+
+/// What names the scene and how it is traced: the flags `render` and `view` share.
+#[derive(Args)]
+pub struct SceneArgs {
+    /// A built-in scene (whitted, sphere-8k, torus-5k, sphere:N, torus:N, random:N[:SEED],
+    /// bounce:N[:SEED]), a TOML scene file, a model file (.ply, .obj, .off) to frame and render, or a glTF
+    /// scene (.gltf, .glb) with its camera and lights.
+    #[arg(default_value = "whitted", value_name = "SCENE")]
+    pub spec: String,
+    /// With a model file: render its triangles, or spheres on its surface.
+    #[arg(long = "as", value_parser = choice::<MeshAs>())]
+    pub as_: Option<MeshAs>,
+    /// With a model file: this many spheres, sampled uniformly by area (implies --as spheres).
+    /// Without it, --as spheres puts one sphere on every vertex.
+    #[arg(long)]
+    pub spheres: Option<usize>,
+    /// With a model file: rotate it first by these Euler angles in degrees, about x, then y, then z
+    /// (say --rotate=-90,0,0 to stand up a model whose up axis is z).
+    #[arg(long, value_parser = parse_angles, allow_hyphen_values = true)]
+    pub rotate: Option<glam::Vec3>,
+    /// With a model file's triangles: shade with the file's vertex normals where it has them, else
+    /// smooth ones (auto); with each face's own normal (flat); or with smooth normals computed from
+    /// the faces (smooth).
+    #[arg(long, value_parser = choice::<Normals>())]
+    pub normals: Option<Normals>,
+    /// With smooth normals: faces meeting at more than this many degrees keep a sharp edge
+    /// (default 60).
+    #[arg(long, value_name = "DEGREES")]
+    pub crease: Option<f32>,
+    #[arg(long)]
+    pub width: Option<u32>,
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Maximum bounces after the primary ray (default 5, or the scene's; at most 32).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=raypipe::scene::MAX_DEPTH_LIMIT as i64))]
+    pub depth: Option<u32>,
+    #[arg(long, value_parser = choice::<Backend>())]
+    pub backend: Option<Backend>,
+    /// The stage that traces on the GPU: the fragment shader of a full-screen triangle (the paper's
+    /// route), or a compute kernel. The images are the same.
+    #[arg(long, value_parser = choice::<Pipeline>(), default_value_t)]
+    pub pipeline: Pipeline,
+    #[arg(long, value_parser = choice::<MemoryMode>(), default_value_t)]
+    pub memory: MemoryMode,
+    #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
+    pub accel: Accel,
+    #[arg(long, value_enum, default_value_t)]
+    pub aov: Aov,
+    /// With a glTF that has animations: the one that plays, by name or index (default the first).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub animation: Option<String>,
+    /// For a moving scene (an animated glTF, bounce:N): its time in seconds (with --frames, the
+    /// first frame's). Past the end of an animation it holds its last pose, unless --loop.
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    pub time: Option<f32>,
+    /// With --time and --frames: an animation starts again at its end.
+    #[arg(long = "loop")]
+    pub looping: bool,
+}
+
+impl SceneArgs {
+    /// The motion time `t` seconds asks for: checked, and wrapped where --loop says.
+    pub fn scene_time(&self, scene: &Scene, t: f32) -> anyhow::Result<f32> {
+        anyhow::ensure!(t.is_finite(), "--time must be a finite number of seconds");
+        Ok(match &scene.motion {
+            Some(motion) if self.looping => motion.looped(t),
+            _ => t,
+        })
+    }
+    /// The scene, with the size and depth the flags give.
+    pub fn load(&self) -> anyhow::Result<Scene> {
+        let model = ModelOptions {
+            as_: self.as_,
+            spheres: self.spheres,
+            rotate: self.rotate,
+            normals: self.normals,
+            crease: self.crease,
+            animation: self.animation.as_deref().map(ClipChoice::parse),
+        };
+        let mut scene = load_scene(&self.spec, &model)?;
+        if scene.motion.is_none() && (self.time.is_some() || self.looping) {
+            bail!(
+                "{}: --time and --loop apply to moving scenes (an animated glTF, bounce:N)",
+                self.spec
+            );
+        }
+        // Legal but probably not meant: said once, here, rather than per packed frame.
+        if scene.spheres.is_empty() && scene.triangles.is_empty() && scene.planes.is_empty() {
+            log::warn!(
+                "{}: the scene holds nothing to hit: the image is its background",
+                self.spec
+            );
+        } else if scene.lights.is_empty() {
+            log::warn!(
+                "{}: the scene has no lights: only its ambient term shades it",
+                self.spec
+            );
+        }
+        let settings = &mut scene.settings;
+        settings.width = self.width.unwrap_or(settings.width);
+        settings.height = self.height.unwrap_or(settings.height);
+        settings.max_depth = self.depth.unwrap_or(settings.max_depth);
+        Ok(scene)
+    }
+}
+
+/// The most samples per pixel `--spp` takes: far past where an 8-bit image stops changing.
+pub const MAX_SPP: u32 = 65_536;
+
+/// Loads a scene the way every subcommand names one; the model options are flags of model files.
+pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
+    if !model.is_default() && !is_model_file(std::path::Path::new(spec)) {
+        bail!(
+            "scene '{spec}': --as, --spheres, --rotate, --normals, --crease and --animation apply to model files ({})",
+            raypipe::scene::model::model_extension_list()
+        );
+    }
+    if model.as_ == Some(MeshAs::Triangles) && model.spheres.is_some() {
+        bail!("{spec}: --spheres needs --as spheres");
+    }
+    Ok(Scene::load_with(spec, model)?)
+}
+
+/// `X,Y,Z` in degrees.
+pub fn parse_angles(text: &str) -> Result<glam::Vec3, String> {
+    let angles: Vec<f32> = text
+        .split(',')
+        .map(|a| a.trim().parse::<f32>().map_err(|_| format!("'{a}' is not a number")))
+        .collect::<Result<_, _>>()?;
+    match angles[..] {
+        [x, y, z] if angles.iter().all(|a| a.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err("expected three finite angles in degrees, as in -90,0,0".into()),
+    }
+}
+
+pub fn aov_image(aov: Aov, is_exr: bool, frame: &Frame) -> FloatImage {
+    match (aov, is_exr) {
+        (Aov::Color, false) => frame.display(),
+        (Aov::Color, true) => frame.radiance(),
+        (Aov::Depth, _) => frame.depth(),
+        (Aov::Normal, _) => frame.normals(),
+        (Aov::Cost, _) => heatmap::heatmap(&frame.counts(), frame.width, frame.height),
+    }
+}
