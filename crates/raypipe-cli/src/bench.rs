@@ -1,6 +1,8 @@
 //! `raypipe bench`: frames per second against primitive count, per acceleration and memory mode (the
 //! paper's Figure 4), with every mode's image checked against brute force's before it is timed.
 
+mod motion;
+
 use crate::args::choice;
 use crate::plot::{Series, write_fps_plot};
 use crate::report::median;
@@ -215,7 +217,7 @@ impl Reference {
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     if args.motion {
-        return crate::bench_motion::run(&args);
+        return motion::run(&args);
     }
     let ctx = block_on(GpuContext::require(args.backend))?;
     let clock = if ctx.timestamps { "gpu timestamps" } else { "wall clock" };

@@ -9,7 +9,6 @@
 
 pub mod args;
 pub mod bench;
-mod bench_motion;
 pub mod bvh;
 pub mod cli;
 pub mod device;

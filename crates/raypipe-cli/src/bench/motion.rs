@@ -5,7 +5,7 @@
 //! each storage point also keeps a second tree that is only refitted after the first frame, and
 //! times its trace against the fresh build's at the same pose, frame by frame.
 
-use crate::bench::BenchArgs;
+use super::BenchArgs;
 use crate::report::median;
 use anyhow::Context;
 use pollster::block_on;
