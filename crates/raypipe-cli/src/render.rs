@@ -3,11 +3,11 @@
 use crate::device::{DeviceChoice, RenderOptions, render, render_frames};
 use crate::io;
 use crate::report::median;
-use crate::scene_args::{Aov, MAX_SPP, SceneArgs, aov_image};
+use crate::scene_args::{MAX_SPP, SceneArgs, aov_image};
 use anyhow::bail;
 use clap::Args;
 use raypipe::bvh::morton::MortonBits;
-use raypipe::cpu::Count;
+use raypipe::modes::Aov;
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use std::io::IsTerminal;
@@ -153,11 +153,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         memory: args.scene.memory,
         accel: args.scene.accel,
         progress: std::io::stderr().is_terminal(),
-        count: if args.scene.aov == Aov::Cost {
-            Count::Cost
-        } else {
-            Count::Rays
-        },
+        count: args.scene.aov.count(),
         warm_up: args.stats,
         samples: args.spp,
     };

@@ -3,28 +3,14 @@
 
 use crate::args::choice;
 use anyhow::bail;
-use clap::{Args, ValueEnum};
+use clap::Args;
 use raypipe::gpu::Backend;
 use raypipe::image::{FloatImage, Frame, heatmap};
-use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Aov, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
 use raypipe::scene::animation::ClipChoice;
 use raypipe::scene::model::is_model_file;
 use raypipe::scene::model::{MeshAs, ModelOptions, Normals};
-
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum Aov {
-    /// Shaded colour: PNG (sRGB) or EXR (linear).
-    #[default]
-    Color,
-    /// Distance from the eye to the first hit, channel `Z` of a float EXR; +inf where nothing is hit.
-    Depth,
-    /// First-hit shading normals, mapped from [-1, 1] to [0, 1].
-    Normal,
-    /// A heat map of each primary ray's cost: BVH nodes tested (box tests of internal nodes, sphere
-    /// tests of leaves; spheres tested for brute force), with a colour-scale legend. PNG only.
-    Cost,
-}
 
 /// What names the scene and how it is traced: the flags `render` and `view` share.
 #[derive(Args)]
@@ -71,7 +57,10 @@ pub struct SceneArgs {
     pub memory: MemoryMode,
     #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
     pub accel: Accel,
-    #[arg(long, value_enum, default_value_t)]
+    /// What the image shows: color (PNG in sRGB, EXR linear), depth (channel Z of a float EXR, +inf
+    /// where nothing is hit), normal (first-hit normals mapped to [0, 1]), cost (a heat map of the
+    /// BVH nodes each primary ray tested, with a legend; PNG only).
+    #[arg(long, value_parser = choice::<Aov>(), default_value_t)]
     pub aov: Aov,
     /// With a glTF that has animations: the one that plays, by name or index (default the first).
     #[arg(long, value_name = "NAME|INDEX")]

@@ -2,10 +2,10 @@
 //! flags; this side loads dropped files and writes screenshots.
 
 use crate::io;
-use crate::scene_args::{Aov, SceneArgs, aov_image, load_scene};
+use crate::scene_args::{SceneArgs, aov_image, load_scene};
 use clap::Args;
-use raypipe::gpu::DisplayView;
 use raypipe::image::Frame;
+use raypipe::modes::Aov;
 use raypipe::scene::Scene;
 use raypipe::scene::model::ModelOptions;
 use raypipe_view::{Host, Modes, Script, ViewerOptions};
@@ -54,22 +54,16 @@ impl Host for CliHost {
         load_scene(&spec, &ModelOptions::default()).map_err(|e| crate::report::message(&e))
     }
 
-    fn save(&self, frame: &Frame, view: DisplayView, path: &Path) -> Result<(), String> {
-        let aov = match view {
-            DisplayView::Color => Aov::Color,
-            DisplayView::Depth => Aov::Depth,
-            DisplayView::Normal => Aov::Normal,
-            DisplayView::Cost => Aov::Cost,
-        };
+    fn save(&self, frame: &Frame, view: Aov, path: &Path) -> Result<(), String> {
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        io::write(&aov_image(aov, is_exr, frame), path).map_err(|e| crate::report::message(&e))
+        io::write(&aov_image(view, is_exr, frame), path).map_err(|e| crate::report::message(&e))
     }
 
-    fn screenshot_path(&self, view: DisplayView) -> PathBuf {
+    fn screenshot_path(&self, view: Aov) -> PathBuf {
         let n = self.shots.get() + 1;
         self.shots.set(n);
         // Depth is a float image, as `render --aov depth` writes it.
-        let extension = if view == DisplayView::Depth { "exr" } else { "png" };
+        let extension = if view == Aov::Depth { "exr" } else { "png" };
         PathBuf::from(format!("raypipe-{n:03}.{extension}"))
     }
 }
@@ -96,12 +90,6 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
     let scene = args.scene.load()?;
     // Checked here, so that a bad size or depth is one line before any window opens.
     raypipe::records::PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene.spec))?;
-    let view = match args.scene.aov {
-        Aov::Color => DisplayView::Color,
-        Aov::Depth => DisplayView::Depth,
-        Aov::Normal => DisplayView::Normal,
-        Aov::Cost => DisplayView::Cost,
-    };
     let options = ViewerOptions {
         name: args.scene.spec.clone(),
         modes: Modes {
@@ -109,7 +97,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             accel: args.scene.accel,
             memory: args.scene.memory,
             depth: scene.settings.max_depth,
-            view,
+            view: args.scene.aov,
             paused: args.paused,
             vsync: !args.no_vsync,
         },

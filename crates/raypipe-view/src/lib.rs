@@ -20,8 +20,9 @@ pub use camera::CameraControl;
 pub use player::{Clock, Player, TracerRequest, surface_config};
 pub use tracer::{TraceError, Tracer, next_texture, present_format};
 
-use raypipe::gpu::{Backend, DisplayView, GpuContext, GpuError};
+use raypipe::gpu::{Backend, GpuContext, GpuError};
 use raypipe::image::Frame;
+use raypipe::modes::Aov;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -35,7 +36,7 @@ pub struct Modes {
     pub memory: MemoryMode,
     /// Bounces after the primary ray.
     pub depth: u32,
-    pub view: DisplayView,
+    pub view: Aov,
     /// Whether moving scenes stand still (at the time they reached).
     pub paused: bool,
     /// Whether presentation waits for the display's refresh.
@@ -105,7 +106,7 @@ impl Modes {
     pub fn needs_new_tracer(&self, current: &Modes) -> bool {
         (self.pipeline, self.accel, self.memory, self.depth)
             != (current.pipeline, current.accel, current.memory, current.depth)
-            || (self.view == DisplayView::Cost) != (current.view == DisplayView::Cost)
+            || (self.view == Aov::Cost) != (current.view == Aov::Cost)
     }
 
     /// Whether the device can trace with these modes at all; the error is one line.
@@ -154,9 +155,9 @@ pub trait Host {
     /// Loads a dropped file as a scene; the error is one line.
     fn load(&self, path: &Path) -> Result<Scene, String>;
     /// Saves a frame (the linear frame, as read back) to `path`, as `raypipe render` writes files.
-    fn save(&self, frame: &Frame, view: DisplayView, path: &Path) -> Result<(), String>;
+    fn save(&self, frame: &Frame, view: Aov, path: &Path) -> Result<(), String>;
     /// Where `P` saves its next screenshot of `view`.
-    fn screenshot_path(&self, view: DisplayView) -> PathBuf;
+    fn screenshot_path(&self, view: Aov) -> PathBuf;
 }
 
 #[derive(Debug, thiserror::Error)]

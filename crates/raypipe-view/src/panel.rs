@@ -2,7 +2,7 @@
 
 use crate::Modes;
 use raypipe::Choice;
-use raypipe::gpu::DisplayView;
+use raypipe::modes::Aov;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 
 /// What the panel shows.
@@ -77,7 +77,7 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout, playback: Opt
             choose::<Pipeline>(ui, "pipeline", &mut asked.pipeline);
             choose::<Accel>(ui, "acceleration", &mut asked.accel);
             choose::<MemoryMode>(ui, "memory", &mut asked.memory);
-            choose::<DisplayView>(ui, "view", &mut asked.view);
+            choose::<Aov>(ui, "view", &mut asked.view);
             ui.add(egui::Slider::new(&mut asked.depth, 0..=raypipe::scene::MAX_DEPTH_LIMIT).text("depth"));
             if let Some(playback) = playback {
                 ui.checkbox(&mut asked.paused, "pause motion");

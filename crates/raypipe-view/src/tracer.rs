@@ -10,8 +10,9 @@ use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::error::InputError;
 use raypipe::gpu::build::depth_bound;
-use raypipe::gpu::{Display, DisplayView, GpuContext, GpuError, RecordKind, Renderer, RendererOptions, SceneRebuild};
-use raypipe::modes::{Accel, Count, MemoryMode};
+use raypipe::gpu::{Display, GpuContext, GpuError, RecordKind, Renderer, RendererOptions, SceneRebuild};
+use raypipe::modes::Aov;
+use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
 
@@ -68,11 +69,7 @@ impl Tracer {
             pipeline: modes.pipeline,
             memory: modes.memory,
             accel: modes.accel,
-            count: if modes.view == raypipe::gpu::DisplayView::Cost {
-                Count::Cost
-            } else {
-                Count::Rays
-            },
+            count: modes.view.count(),
         };
         let primitives = packed.primitive_count();
         if scene.motion.is_some() && modes.memory != MemoryMode::Storage {
@@ -173,7 +170,7 @@ impl Tracer {
         display: &Display,
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
-        view: DisplayView,
+        view: Aov,
         camera: &Camera,
     ) {
         let depth_far = DEPTH_FAR * (camera.eye - camera.target).length();

@@ -3,8 +3,8 @@
 //! tested natively.
 
 use raypipe::Choice;
-use raypipe::gpu::DisplayView;
 use raypipe::impl_choice;
+use raypipe::modes::Aov;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::scene::MAX_DEPTH_LIMIT;
 
@@ -51,7 +51,7 @@ pub enum Setting {
     Memory(MemoryMode),
     Pipeline(Pipeline),
     Depth(u32),
-    View(DisplayView),
+    View(Aov),
     Paused(bool),
     /// Seconds into the motion.
     Time(f32),
@@ -129,7 +129,7 @@ pub struct StartParams {
     pub pipeline: Pipeline,
     /// `None`: the scene's own.
     pub depth: Option<u32>,
-    pub view: DisplayView,
+    pub view: Aov,
     pub paused: bool,
     /// Where a moving scene's motion starts, in seconds.
     pub time: f32,
@@ -150,7 +150,7 @@ impl Default for StartParams {
             memory: None,
             pipeline: Pipeline::Fragment,
             depth: None,
-            view: DisplayView::Color,
+            view: Aov::Color,
             paused: false,
             time: 0.0,
             speed: 1.0,
@@ -207,7 +207,7 @@ pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
         ("accel", names::<Accel>()),
         ("memory", names::<MemoryMode>()),
         ("pipeline", names::<Pipeline>()),
-        ("aov", names::<DisplayView>()),
+        ("aov", names::<Aov>()),
     ]
 }
 
@@ -248,7 +248,7 @@ mod tests {
                 memory: Some(MemoryMode::Texture),
                 pipeline: Pipeline::Fragment,
                 depth: Some(3),
-                view: DisplayView::Normal,
+                view: Aov::Normal,
                 paused: false,
                 time: 1.5,
                 speed: 0.5,
@@ -307,7 +307,7 @@ mod tests {
         for &memory in MemoryMode::ALL {
             assert_eq!(Setting::parse("memory", memory.name()), Ok(Setting::Memory(memory)));
         }
-        for &view in DisplayView::ALL {
+        for &view in Aov::ALL {
             assert_eq!(Setting::parse("aov", view.name()), Ok(Setting::View(view)));
         }
         for &backend in WebBackend::ALL {

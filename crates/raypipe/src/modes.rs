@@ -106,7 +106,44 @@ impl_choice!(
     ]
 );
 
-/// What a pixel's fourth colour channel holds.
+/// What a render shows or writes of a frame: the `--aov` of `render`, the view of the window and
+/// the page. All but `Cost` come from one trace; `Cost` traces with the cost count instead of rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Aov {
+    /// Shaded colour: sRGB in PNG files and on screen, linear in EXR files.
+    #[default]
+    Color,
+    /// Distance from the eye to the first hit (+inf where nothing is hit): channel `Z` of a float
+    /// EXR; on screen, white near the eye fading to black.
+    Depth,
+    /// First-hit shading normals, mapped from [-1, 1] to [0, 1].
+    Normal,
+    /// Each primary ray's cost (BVH nodes tested: box tests of internal nodes, primitive tests of
+    /// leaves; primitives tested for brute force) as a heat map with a legend. PNG only.
+    Cost,
+}
+
+impl_choice!(
+    Aov,
+    [
+        (Color, "color", "shaded colour"),
+        (Depth, "depth", "distance to the first hit"),
+        (Normal, "normal", "first-hit normals"),
+        (Cost, "cost", "BVH nodes each primary ray tested, as a heat map"),
+    ]
+);
+
+impl Aov {
+    /// What the trace counts in a pixel's fourth channel for this view.
+    pub fn count(self) -> Count {
+        match self {
+            Aov::Cost => Count::Cost,
+            Aov::Color | Aov::Depth | Aov::Normal => Count::Rays,
+        }
+    }
+}
+
+/// What a pixel's fourth colour channel holds ([`Aov::count`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Count {
     /// The rays traced for the pixel (primary, shadow, secondary).

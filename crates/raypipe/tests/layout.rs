@@ -258,7 +258,7 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
     build.push(one("DIGITS", (1u32 << raypipe::gpu::build::DIGIT_BITS) as f64));
     let mut threaded = records;
     threaded.push(one("GROUP", raypipe::gpu::threaded::GROUP as f64));
-    let mut display: Vec<_> = raypipe::gpu::DisplayView::ALL
+    let mut display: Vec<_> = raypipe::modes::Aov::ALL
         .iter()
         .map(|&v| one(&format!("DISPLAY_{}", v.name().to_uppercase()), v as u32 as f64))
         .collect();

@@ -5,35 +5,11 @@
 use super::GpuContext;
 use super::renderer::{FrameTargets, target_entry};
 use crate::Choice;
-use crate::impl_choice;
+use crate::modes::Aov;
 use crate::records::StructLayout;
 use crate::struct_layout;
 
 const DISPLAY: &str = include_str!("shaders/display.wgsl");
-
-/// What the display pass shows of a frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum DisplayView {
-    /// Shaded colour, clamped and sRGB-encoded as PNG files hold it.
-    #[default]
-    Color,
-    /// First-hit distance, white near the eye fading to black at `depth_far`.
-    Depth,
-    /// First-hit normals mapped from [-1, 1] to [0, 1].
-    Normal,
-    /// The colour target's count (a cost render's nodes tested) on the heat map's scale.
-    Cost,
-}
-
-impl_choice!(
-    DisplayView,
-    [
-        (Color, "color", "shaded colour"),
-        (Depth, "depth", "distance to the first hit"),
-        (Normal, "normal", "first-hit normals"),
-        (Cost, "cost", "BVH nodes each primary ray tested, as a heat map"),
-    ]
-);
 
 /// The pass's parameters (`DisplayParams` in display.wgsl).
 #[repr(C)]
@@ -62,7 +38,7 @@ pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
 pub fn shader_source() -> String {
     use std::fmt::Write;
     let mut out = String::from("// Generated: src/gpu/display.rs.\n");
-    for &view in DisplayView::ALL {
+    for &view in Aov::ALL {
         writeln!(
             out,
             "const DISPLAY_{}: u32 = {}u;",
@@ -177,7 +153,7 @@ impl Display {
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameTargets,
         view: &wgpu::TextureView,
-        shown: DisplayView,
+        shown: Aov,
         depth_far: f32,
         cost_max: f32,
     ) {

@@ -17,7 +17,7 @@ pub mod timing;
 pub mod upload;
 
 pub use context::{Backend, GpuContext};
-pub use display::{Display, DisplayView};
+pub use display::Display;
 pub use error::{Capacity, GpuError};
 pub use rebuild::SceneRebuild;
 pub use renderer::{Renderer, RendererOptions, TimedFrame};

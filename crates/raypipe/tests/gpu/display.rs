@@ -7,10 +7,11 @@ use pollster::block_on;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::Count;
 use raypipe::gpu::readback::TextureReadback;
-use raypipe::gpu::{Display, DisplayView, GpuContext, Renderer, RendererOptions};
+use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions};
 use raypipe::image::heatmap::color_scale;
 use raypipe::image::{FloatImage, Frame};
 use raypipe::modes::Accel;
+use raypipe::modes::Aov;
 
 /// The frame `renderer` traces with `samples` samples per pixel, and the display pass's 8-bit image
 /// of it in `format`.
@@ -18,7 +19,7 @@ fn displayed(
     renderer: &mut Renderer,
     samples: u32,
     format: wgpu::TextureFormat,
-    view: DisplayView,
+    view: Aov,
     cost_max: f32,
 ) -> (Frame, Vec<u8>) {
     let frame = block_on(renderer.render_samples(samples, |_| {})).unwrap().frame;
@@ -103,9 +104,9 @@ fn scene_renderer(ctx: &GpuContext, count: Count) -> Renderer {
 fn color_and_normals_match_the_files(ctx: &GpuContext) {
     let mut renderer = scene_renderer(ctx, Count::Rays);
     for format in [wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::Rgba8UnormSrgb] {
-        let (frame, rgba) = displayed(&mut renderer, 1, format, DisplayView::Color, 1.0);
+        let (frame, rgba) = displayed(&mut renderer, 1, format, Aov::Color, 1.0);
         assert_close(&format!("colour into {format:?}"), &rgba, &frame.display(), 1);
-        let (frame, rgba) = displayed(&mut renderer, 1, format, DisplayView::Normal, 1.0);
+        let (frame, rgba) = displayed(&mut renderer, 1, format, Aov::Normal, 1.0);
         assert_close(&format!("normals into {format:?}"), &rgba, &frame.normals(), 1);
     }
 }
@@ -114,10 +115,10 @@ fn color_and_normals_match_the_files(ctx: &GpuContext) {
 fn accumulated_samples_show_their_mean(ctx: &GpuContext) {
     let mut renderer = scene_renderer(ctx, Count::Rays);
     let format = wgpu::TextureFormat::Rgba8Unorm;
-    let (frame, rgba) = displayed(&mut renderer, 5, format, DisplayView::Color, 1.0);
+    let (frame, rgba) = displayed(&mut renderer, 5, format, Aov::Color, 1.0);
     assert_eq!(renderer.samples(), 5);
     assert_close("five samples", &rgba, &frame.display(), 1);
-    let (single, _) = displayed(&mut renderer, 1, format, DisplayView::Color, 1.0);
+    let (single, _) = displayed(&mut renderer, 1, format, Aov::Color, 1.0);
     assert_ne!(
         frame.color, single.color,
         "five jittered samples must differ from the centre's one"
@@ -126,13 +127,7 @@ fn accumulated_samples_show_their_mean(ctx: &GpuContext) {
 
 fn cost_view_uses_the_heat_map_scale(ctx: &GpuContext) {
     let mut renderer = scene_renderer(ctx, Count::Cost);
-    let (frame, rgba) = displayed(
-        &mut renderer,
-        1,
-        wgpu::TextureFormat::Rgba8Unorm,
-        DisplayView::Cost,
-        40.0,
-    );
+    let (frame, rgba) = displayed(&mut renderer, 1, wgpu::TextureFormat::Rgba8Unorm, Aov::Cost, 40.0);
     let data = frame
         .counts()
         .iter()
@@ -150,13 +145,7 @@ fn cost_view_uses_the_heat_map_scale(ctx: &GpuContext) {
 /// The check above must fail when the picture is off: one pixel two steps brighter.
 fn a_displayed_image_two_steps_off_fails(ctx: &GpuContext) {
     let mut renderer = scene_renderer(ctx, Count::Rays);
-    let (frame, mut rgba) = displayed(
-        &mut renderer,
-        1,
-        wgpu::TextureFormat::Rgba8Unorm,
-        DisplayView::Color,
-        1.0,
-    );
+    let (frame, mut rgba) = displayed(&mut renderer, 1, wgpu::TextureFormat::Rgba8Unorm, Aov::Color, 1.0);
     let pixel = rgba.chunks(4).position(|p| p[0] < 250).expect("a pixel short of white") * 4;
     assert!(worst_difference(&rgba, &frame.display()).0 <= 1);
     rgba[pixel] += 2;
