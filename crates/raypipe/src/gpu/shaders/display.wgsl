@@ -18,7 +18,7 @@ struct DisplayParams {
     _pad2: u32,
 }
 
-// DISPLAY_COLOR, DISPLAY_DEPTH, DISPLAY_NORMAL and DISPLAY_COST (DisplayView's numbers) and
+// DISPLAY_COLOR, DISPLAY_DEPTH, DISPLAY_NORMAL and DISPLAY_COST (modes::Aov's numbers) and
 // HEAT_STOPS (heatmap.rs's STOPS) come from the preamble (src/gpu/display.rs).
 
 @group(0) @binding(0) var<uniform> params: DisplayParams;
