@@ -13,8 +13,8 @@ fn render(args: &[&str]) -> std::process::Output {
 
 /// The refusals every adapter makes: an image wider than its largest texture, a scene too big for
 /// uniform memory. (A frame target past the largest buffer, which few adapters reach below their
-/// texture size, is refused on every adapter by lowered limits in raypipe's GPU tests; its
-/// message is checked in cli.rs.)
+/// texture size, is refused under lowered limits in a unit test of the renderer's size
+/// check; its message is checked in report.rs.)
 fn limits_are_one_line_that_names_the_scene_and_a_way_out(ctx: &GpuContext) {
     let side = ctx.limits().max_texture_dimension_2d;
     let too_wide = (side + 1).to_string();

@@ -127,13 +127,6 @@ impl GpuContext {
     /// Opens a device on `adapter` with every limit it offers (large scenes need its real buffer and
     /// texture limits) and timestamp queries where it has them.
     pub async fn open(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
-        let limits = adapter.limits();
-        Self::open_with_limits(adapter, limits).await
-    }
-
-    /// [`GpuContext::open`] with `limits` (within the adapter's): to see what a smaller device, or
-    /// WebGPU's defaults, would refuse.
-    pub async fn open_with_limits(adapter: wgpu::Adapter, limits: wgpu::Limits) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         if let Some(warning) = driver_warning(&info) {
             log::warn!("{warning}");
@@ -150,7 +143,7 @@ impl GpuContext {
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("raypipe"),
                 required_features,
-                required_limits: limits,
+                required_limits: adapter.limits(),
                 ..Default::default()
             })
             .await

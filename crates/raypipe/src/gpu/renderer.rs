@@ -259,7 +259,7 @@ impl Renderer {
         bvh_depth: u32,
     ) -> Result<Self, GpuError> {
         let (width, height) = (scene.width(), scene.height());
-        check_size(ctx, width, height)?;
+        check_frame_size(&ctx.limits(), width, height)?;
         let RendererOptions {
             pipeline,
             memory,
@@ -365,7 +365,7 @@ impl Renderer {
         if (width, height) == self.size() {
             return Ok(());
         }
-        check_size(&self.ctx, width, height)?;
+        check_frame_size(&self.ctx.limits(), width, height)?;
         self.accumulation = Accumulation::new(
             &self.ctx.device,
             &self.previous_layout,
@@ -554,8 +554,10 @@ impl Renderer {
 
 /// Found before anything is allocated: past the adapter's limits wgpu would fail later, with its own
 /// words, after the other targets took their memory.
-fn check_size(ctx: &GpuContext, width: u32, height: u32) -> Result<(), GpuError> {
-    let limits = ctx.limits();
+/// Whether a renderer of `width` x `height` fits a device of `limits`: within its largest texture,
+/// and each frame target's read-back buffer within its largest buffer. Checked before anything is
+/// allocated.
+pub fn check_frame_size(limits: &wgpu::Limits, width: u32, height: u32) -> Result<(), GpuError> {
     let max = limits.max_texture_dimension_2d;
     if width == 0 || height == 0 || width > max || height > max {
         return Err(GpuError::ImageTooLarge { width, height, max });
@@ -735,4 +737,35 @@ fn build_pipeline(
         usage: wgpu::BufferUsages::VERTEX,
     });
     (TracePipeline::Fragment { pipeline, vertices }, bind_group)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frame target past the largest buffer is refused with its figures whatever the adapter:
+    /// under a 1 MiB buffer limit, 512x512 (4 MiB a target) is refused and 128x128 passes.
+    #[test]
+    fn a_frame_past_the_largest_buffer_is_refused() {
+        let limits = wgpu::Limits {
+            max_buffer_size: 1 << 20,
+            ..wgpu::Limits::default()
+        };
+        match check_frame_size(&limits, 512, 512) {
+            Err(GpuError::FrameTooLarge {
+                width: 512,
+                height: 512,
+                bytes,
+                max,
+                max_pixels,
+            }) => assert_eq!((bytes, max, max_pixels), (4 << 20, 1 << 20, 65536)),
+            other => panic!("512x512 under a 1 MiB buffer limit: {other:?}"),
+        }
+        check_frame_size(&limits, 128, 128).unwrap();
+        let side = limits.max_texture_dimension_2d;
+        assert!(matches!(
+            check_frame_size(&limits, side + 1, 8),
+            Err(GpuError::ImageTooLarge { .. })
+        ));
+    }
 }

@@ -6,15 +6,13 @@
 
 use crate::common::harness::Test;
 use crate::common::*;
-use pollster::block_on;
 use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
-use raypipe::gpu::{GpuContext, GpuError, Renderer, RendererOptions};
+use raypipe::gpu::GpuContext;
 use raypipe::image::Frame;
 use raypipe::image::diff::Tolerance;
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
-use raypipe::scene::builtin;
 use raypipe::scene::{MAX_COORDINATE, MIN_RADIUS, Scene};
 
 fn base() -> Scene {
@@ -144,41 +142,8 @@ fn beyond_the_range_is_refused() {
     assert!(too_small.contains("at least 1e-12"), "{too_small}");
 }
 
-/// An image whose frame target is past the device's largest buffer is refused before anything is
-/// allocated, with its figures, on every adapter: the device is opened with its largest buffer
-/// lowered to 1 MiB, where 512x512 needs 4 MiB a target and 128x128 a quarter of one.
-fn a_frame_past_the_largest_buffer_is_refused(ctx: &GpuContext) {
-    let limits = wgpu::Limits {
-        max_buffer_size: 1 << 20,
-        ..ctx.adapter.limits()
-    };
-    let small = block_on(GpuContext::open_with_limits(ctx.adapter.clone(), limits)).unwrap();
-    let mut scene = builtin::whitted();
-    (scene.settings.width, scene.settings.height) = (512, 512);
-    let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(MortonBits::Bits30);
-    match block_on(Renderer::new(&small, &packed, RendererOptions::default())) {
-        Err(GpuError::FrameTooLarge {
-            width: 512,
-            height: 512,
-            bytes,
-            max,
-            max_pixels,
-        }) => {
-            assert_eq!((bytes, max, max_pixels), (4 << 20, 1 << 20, 65536));
-        }
-        Err(other) => panic!("refused for another reason: {other}"),
-        Ok(_) => panic!("a 512x512 frame was not refused with a 1 MiB buffer limit"),
-    }
-    (scene.settings.width, scene.settings.height) = (128, 128);
-    let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(MortonBits::Bits30);
-    block_on(Renderer::new(&small, &packed, RendererOptions::default())).unwrap();
-}
-
 pub fn tests() -> Vec<Test> {
     crate::tests![
-        gpu a_frame_past_the_largest_buffer_is_refused,
         plain cpu_renders_alike_at_every_accepted_scale,
         gpu gpu_renders_alike_at_every_accepted_scale,
         plain beyond_the_range_is_refused,
