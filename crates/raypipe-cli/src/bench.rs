@@ -313,28 +313,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                         continue;
                     }
                 };
-                let mut times = Vec::new();
-                let mut builds = Vec::new();
-                let mut rays = 0;
-                let total = args.warmup + args.frames;
-                for frame in 0..total {
-                    bar.set_message(format!("{point}: frame {} of {total}", frame + 1));
-                    let start = std::time::Instant::now();
-                    let timed = block_on(renderer.render_samples(args.spp, |encoder| {
-                        if let Some(rebuild) = &rebuild {
-                            rebuild.encode(encoder);
-                        }
-                    }))?;
-                    let wall = start.elapsed().as_secs_f64() * 1e3;
-                    if frame >= args.warmup {
-                        times.push(timed.gpu_ms.unwrap_or(wall));
-                        rays = timed.frame.rays();
-                        if let Some(rebuild) = &rebuild {
-                            // The 16-byte layout of the tree, for the walks that read it, is part of the rebuild.
-                            builds.push(block_on(rebuild.read_timings())?);
-                        }
-                    }
-                }
+                let (mut times, builds, rays) = time_frames(&args, &mut renderer, rebuild.as_ref(), |frame, total| {
+                    bar.set_message(format!("{point}: frame {frame} of {total}"))
+                })?;
                 times.sort_by(f64::total_cmp);
                 let ms = median(times.iter().copied());
                 rows.push(Row {
@@ -372,35 +353,74 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     if args.json {
         crate::say!("{json}");
     } else {
-        crate::say!("adapter: {} ({clock}), {}x{}", ctx.describe(), args.width, args.height);
-        crate::say!(
-            "{:>8} {:>9} {:>10} {:>8} {:>10} {:>10} {:>10}",
-            "count",
-            "pipeline",
-            "accel",
-            "memory",
-            "ms",
-            "fps",
-            "Mrays/s"
-        );
-        for r in &rows {
-            crate::say!(
-                "{:>8} {:>9} {:>10} {:>8} {:>10.3} {:>10.2} {:>10.2}",
-                r.count,
-                r.pipeline,
-                r.accel,
-                r.memory,
-                r.ms_median,
-                r.fps,
-                r.mrays_per_s
-            );
-        }
-        crate::say!(
-            "results: {}/results.csv, results.json, fps.png, fps.svg",
-            args.out.display()
-        );
+        print_table(&args, &ctx, clock, &rows)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The points as a table on standard output, under the adapter and the size.
+fn print_table(args: &BenchArgs, ctx: &GpuContext, clock: &str, rows: &[Row]) -> anyhow::Result<()> {
+    crate::say!("adapter: {} ({clock}), {}x{}", ctx.describe(), args.width, args.height);
+    crate::say!(
+        "{:>8} {:>9} {:>10} {:>8} {:>10} {:>10} {:>10}",
+        "count",
+        "pipeline",
+        "accel",
+        "memory",
+        "ms",
+        "fps",
+        "Mrays/s"
+    );
+    for r in rows {
+        crate::say!(
+            "{:>8} {:>9} {:>10} {:>8} {:>10.3} {:>10.2} {:>10.2}",
+            r.count,
+            r.pipeline,
+            r.accel,
+            r.memory,
+            r.ms_median,
+            r.fps,
+            r.mrays_per_s
+        );
+    }
+    crate::say!(
+        "results: {}/results.csv, results.json, fps.png, fps.svg",
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// Times `args.frames` frames after `args.warmup` warm-up frames, the rebuild (where there is one)
+/// recorded before each: the frames' times (GPU timestamps, else the wall clock), their builds'
+/// phases, and the rays of the last. `progress` hears of each frame as it starts (1-based).
+fn time_frames(
+    args: &BenchArgs,
+    renderer: &mut Renderer,
+    rebuild: Option<&SceneRebuild>,
+    progress: impl Fn(usize, usize),
+) -> anyhow::Result<(Vec<f64>, Vec<BuildTimings>, u64)> {
+    let mut times = Vec::new();
+    let mut builds = Vec::new();
+    let mut rays = 0;
+    let total = args.warmup + args.frames;
+    for frame in 0..total {
+        progress(frame + 1, total);
+        let start = std::time::Instant::now();
+        let timed = block_on(renderer.render_samples(args.spp, |encoder| {
+            if let Some(rebuild) = rebuild {
+                rebuild.encode(encoder);
+            }
+        }))?;
+        let wall = start.elapsed().as_secs_f64() * 1e3;
+        if frame >= args.warmup {
+            times.push(timed.gpu_ms.unwrap_or(wall));
+            rays = timed.frame.rays();
+            if let Some(rebuild) = rebuild {
+                builds.push(block_on(rebuild.read_timings())?);
+            }
+        }
+    }
+    Ok((times, builds, rays))
 }
 
 /// results.csv and results.json in `out`; returns the JSON.
