@@ -227,11 +227,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
                     adapter: ctx.info.name.clone(),
                     backend: format!("{:?}", ctx.info.backend),
                 });
-                refit_frames.extend(refits.into_iter().map(|r| RefitFrame {
-                    pipeline: pipeline.name().into(),
-                    accel: accel.name().into(),
-                    ..r
-                }));
+                refit_frames.extend(refits);
                 // After every point: a run cut short keeps what it measured.
                 write_results(&args.out, &rows, &refit_frames)?;
                 bar.inc(1);
@@ -328,17 +324,14 @@ fn gpu_point(
     let rebuild = block_on(SceneRebuild::new(ctx, scene, &packed, options.accel, BITS))?;
     let mut renderer = block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options))?;
     // A second tree, built once and then only refitted, with a renderer of its own.
-    let refitting = match args.refit && options.accel.uses_bvh() {
-        true => {
-            let mut own = PackedScene::new(scene)?;
-            let rebuild = block_on(SceneRebuild::new(ctx, scene, &own, options.accel, BITS))?;
-            let renderer = block_on(Renderer::with_rebuild(ctx, &own, &rebuild, options))?;
-            rebuild.move_to(scene, &mut own, times[0])?;
-            Some((own, rebuild, renderer))
-        }
-        false => None,
+    let mut refitting = if args.refit && options.accel.uses_bvh() {
+        let own = PackedScene::new(scene)?;
+        let rebuild = block_on(SceneRebuild::new(ctx, scene, &own, options.accel, BITS))?;
+        let renderer = block_on(Renderer::with_rebuild(ctx, &own, &rebuild, options))?;
+        Some((own, rebuild, renderer))
+    } else {
+        None
     };
-    let mut refitting = refitting;
     let mut frames = Vec::new();
     let mut refits = Vec::new();
     let mut first = None;
@@ -376,8 +369,8 @@ fn gpu_point(
             }
             if k >= args.warmup {
                 refits.push(RefitFrame {
-                    pipeline: String::new(),
-                    accel: String::new(),
+                    pipeline: options.pipeline.name().into(),
+                    accel: options.accel.name().into(),
                     frame: k,
                     time: t,
                     build_ms: build,

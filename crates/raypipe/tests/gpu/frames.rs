@@ -145,12 +145,18 @@ fn rewritten_texture_frames_match_the_gpu_rebuild(ctx: &GpuContext) {
     }
 }
 
+/// The test support's two-bone cylinder of 12 rings as a scene, loaded from its glTF: its second
+/// joint bends 90 degrees over its one-second clip.
+fn bending_cylinder() -> Scene {
+    let (builder, _, _) = gltf_file::skinned_cylinder(12);
+    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
+    gltf_scene(&file, "cylinder.gltf", &ModelOptions::default()).unwrap()
+}
+
 /// A skinned cylinder bending (a glTF clip): its triangles and normals rewritten in place and the
 /// BVH rebuilt on the GPU every frame give the CPU's frames.
 fn gpu_rebuilt_animated_frames_match_the_cpu(ctx: &GpuContext) {
-    let (builder, _, _) = gltf_file::skinned_cylinder(12);
-    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
-    let mut scene = gltf_scene(&file, "cylinder.gltf", &ModelOptions::default()).unwrap();
+    let mut scene = bending_cylinder();
     scene.settings.width = 48;
     scene.settings.height = 40;
     for accel in [Accel::Threaded, Accel::Stackless] {
@@ -170,9 +176,7 @@ fn gpu_rebuilt_animated_frames_match_the_cpu(ctx: &GpuContext) {
 /// The bending cylinder's tree built at the first frame and only refitted after, for the walks
 /// of either layout: the CPU's frames, whose trees are built anew.
 fn gpu_refitted_animated_frames_match_the_cpu(ctx: &GpuContext) {
-    let (builder, _, _) = gltf_file::skinned_cylinder(12);
-    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
-    let mut scene = gltf_scene(&file, "cylinder.gltf", &ModelOptions::default()).unwrap();
+    let mut scene = bending_cylinder();
     scene.settings.width = 48;
     scene.settings.height = 40;
     for accel in [Accel::Threaded, Accel::Stackless] {
@@ -186,10 +190,7 @@ fn gpu_refitted_animated_frames_match_the_cpu(ctx: &GpuContext) {
 
 /// One posed frame of the cylinder, in every memory mode and pipeline, against the CPU.
 fn a_posed_frame_matches_the_cpu_in_every_mode(ctx: &GpuContext) {
-    let (builder, _, _) = gltf_file::skinned_cylinder(12);
-    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
-    let scene = gltf_scene(&file, "cylinder.gltf", &ModelOptions::default()).unwrap();
-    let mut posed = scene.at_time(0.6).unwrap();
+    let mut posed = bending_cylinder().at_time(0.6).unwrap();
     posed.settings.width = 48;
     posed.settings.height = 40;
     let mut packed = PackedScene::new(&posed).unwrap();
@@ -264,10 +265,7 @@ fn assert_skinned_like_the_cpu(ctx: &GpuContext, what: &str, scene: &Scene, time
 /// GPU at and between keys and past the end, against the CPU's vertices.
 fn gpu_skinning_and_morphing_match_the_cpu(ctx: &GpuContext) {
     let times = [0.0, 0.3, 0.5, 1.0, 1.7];
-    let (builder, _, _) = gltf_file::skinned_cylinder(12);
-    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
-    let cylinder = gltf_scene(&file, "cylinder.gltf", &ModelOptions::default()).unwrap();
-    assert_skinned_like_the_cpu(ctx, "cylinder", &cylinder, &times);
+    assert_skinned_like_the_cpu(ctx, "cylinder", &bending_cylinder(), &times);
     let file = parse(&gltf_file::morphing_quad(0.5).gltf(), Files::None, &mut Vec::new()).unwrap();
     let quad = gltf_scene(&file, "quad.gltf", &ModelOptions::default()).unwrap();
     assert_skinned_like_the_cpu(ctx, "morphing quad", &quad, &times);
