@@ -7,12 +7,11 @@
 // with its samples gathered is only shown again); the frames per second are those of N frames
 // presented after the first two (which pay for compiling the tracer), by the page's clock. Prints
 // one JSON line per backend. The screenshot is the WebGPU page's, whole, with 16 samples gathered.
-import { chromium } from "playwright-core";
 import fs from "node:fs";
-import http from "node:http";
 import path from "node:path";
 import { fileURLToPath } from "node:url";
 import { parseArgs } from "node:util";
+import { launch, serve } from "./harness.mjs";
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..");
 const { values: options } = parseArgs({
@@ -27,23 +26,9 @@ const { values: options } = parseArgs({
   },
 });
 
-const FLAGS = [
-  "--no-sandbox", "--disable-quic", "--no-first-run", "--disable-background-networking",
-  "--disable-component-update", "--disable-sync", "--enable-unsafe-webgpu", "--enable-unsafe-swiftshader",
-  "--use-angle=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
-];
-const TYPES = { ".html": "text/html", ".js": "text/javascript", ".css": "text/css", ".wasm": "application/wasm" };
-
-const server = http.createServer((request, response) => {
-  const name = new URL(request.url, "http://x").pathname;
-  const file = path.join(options.site, name === "/" ? "index.html" : name);
-  if (!file.startsWith(options.site) || !fs.existsSync(file)) return response.writeHead(404).end();
-  response.writeHead(200, { "content-type": TYPES[path.extname(file)] ?? "application/octet-stream" });
-  fs.createReadStream(file).pipe(response);
-});
-await new Promise((resolve) => server.listen(0, "127.0.0.1", resolve));
-const origin = `http://127.0.0.1:${server.address().port}`;
-const browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium", args: FLAGS });
+const server = await serve({ "/": options.site });
+const origin = server.origin;
+const browser = await launch();
 const wasmBytes = fs.statSync(path.join(options.site, "raypipe_web_bg.wasm")).size;
 
 for (const backend of ["webgpu", "webgl2"]) {

@@ -11,10 +11,9 @@ import { test, before, after, describe } from "node:test";
 import assert from "node:assert/strict";
 import { execFileSync, spawnSync } from "node:child_process";
 import fs from "node:fs";
-import http from "node:http";
 import path from "node:path";
 import { fileURLToPath } from "node:url";
-import { chromium } from "playwright-core";
+import { launch, serve } from "../harness.mjs";
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "../..");
 const site = process.env.RAYPIPE_WEB_DIR ?? path.join(root, "target/web");
@@ -24,14 +23,6 @@ const references = path.join(output, "references");
 
 // SwiftShader compiles the tracer on two cores: minutes, not seconds, for a new pipeline.
 const COMPILE_MS = 240_000;
-
-const FLAGS = [
-  "--no-sandbox", "--disable-quic", "--no-first-run", "--disable-background-networking",
-  "--disable-component-update", "--disable-sync", "--enable-unsafe-webgpu", "--enable-unsafe-swiftshader",
-  "--use-angle=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
-];
-
-const TYPES = { ".html": "text/html", ".js": "text/javascript", ".css": "text/css", ".wasm": "application/wasm" };
 
 let server;
 let origin;
@@ -44,19 +35,9 @@ before(async () => {
   // References and screenshots of an earlier run (or build) must not satisfy this one.
   fs.rmSync(output, { recursive: true, force: true });
   fs.mkdirSync(references, { recursive: true });
-  server = http.createServer((request, response) => {
-    const name = decodeURIComponent(new URL(request.url, "http://x").pathname);
-    const file = path.join(site, name === "/" ? "index.html" : name);
-    if (!file.startsWith(site) || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
-      response.writeHead(404).end();
-      return;
-    }
-    response.writeHead(200, { "content-type": TYPES[path.extname(file)] ?? "application/octet-stream" });
-    fs.createReadStream(file).pipe(response);
-  });
-  await new Promise((resolve) => server.listen(0, "127.0.0.1", resolve));
-  origin = `http://127.0.0.1:${server.address().port}`;
-  browser = await chromium.launch({ executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium", args: FLAGS });
+  server = await serve({ "/": site });
+  origin = server.origin;
+  browser = await launch();
 });
 
 after(async () => {

@@ -1,0 +1,178 @@
+// three-mesh-bvh's shader BVH on WebGL2, set up as its own examples do (a MeshBVH with the default
+// options packed into data textures by MeshBVHUniformStruct, bvhIntersectFirstHit from a full-screen
+// quad), tracing the workload of raypipe's page at depth 1: a primary ray per pixel and, where it
+// hits and the interpolated normal faces the light, one shadow ray.
+//
+//   peer/index.html?model=URL&width=W&height=H
+//
+// The model is web/peer/scene.mjs's GLB (its camera, its one point light). A frame is traced on
+// every animation frame; `window.peerStatus` publishes the frames' times by the page's clock
+// (requestAnimationFrame's timestamps), and `window.peerCount()` traces once more into a target
+// read back on the CPU: `{ hits, shadowRays }`.
+import * as THREE from "three";
+import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { FullScreenQuad } from "three/addons/postprocessing/Pass.js";
+import { BVHShaderGLSL, FloatVertexAttributeTexture, MeshBVH, MeshBVHUniformStruct } from "three-mesh-bvh";
+
+const status = { frames: 0, times: [], error: null, triangles: 0, renderer: null };
+window.peerStatus = status;
+
+const fragmentShader = /* glsl */ `
+  precision highp isampler2D;
+  precision highp usampler2D;
+  ${BVHShaderGLSL.common_functions}
+  ${BVHShaderGLSL.bvh_struct_definitions}
+  ${BVHShaderGLSL.bvh_ray_functions}
+
+  uniform BVH bvh;
+  uniform sampler2D normalAttribute;
+  uniform mat4 cameraWorldMatrix;
+  uniform mat4 invProjectionMatrix;
+  uniform vec2 resolution;
+  uniform vec3 lightPosition;
+  uniform vec3 lightColor;
+  uniform vec3 albedo;
+  uniform vec3 background;
+  uniform float ambient;
+  uniform float rayBias;
+
+  void main() {
+    vec3 origin, direction;
+    ndcToCameraRay(gl_FragCoord.xy / resolution * 2.0 - 1.0, cameraWorldMatrix, invProjectionMatrix, origin, direction);
+    direction = normalize(direction);
+
+    uvec4 faceIndices;
+    vec3 faceNormal, barycoord;
+    float side, dist;
+    if (!bvhIntersectFirstHit(bvh, origin, direction, faceIndices, faceNormal, barycoord, side, dist)) {
+      #if COUNTING
+        gl_FragColor = vec4(0.0);
+      #else
+        gl_FragColor = vec4(background, 1.0);
+      #endif
+      return;
+    }
+    vec3 position = origin + direction * dist;
+    vec3 normal = faceNormal * (dot(faceNormal, direction) > 0.0 ? -1.0 : 1.0);
+    vec3 shading = normalize(textureSampleBarycoord(normalAttribute, barycoord, faceIndices.xyz).xyz);
+    if (dot(shading, normal) < 0.0) shading = -shading;
+
+    vec3 toLight = lightPosition - position;
+    float lightDistance = length(toLight);
+    vec3 l = toLight / lightDistance;
+    float nDotL = dot(shading, l);
+    bool lit = nDotL > 0.0;
+    vec3 color = ambient * albedo;
+    if (lit) {
+      uvec4 shadowFace;
+      vec3 shadowNormal, shadowBary;
+      float shadowSide, shadowDist;
+      bool blocked = bvhIntersectFirstHit(bvh, position + normal * rayBias, l, shadowFace, shadowNormal, shadowBary,
+        shadowSide, shadowDist) && shadowDist > 0.0 && shadowDist < lightDistance;
+      if (!blocked) color += lightColor * albedo * nDotL;
+    }
+    #if COUNTING
+      gl_FragColor = vec4(1.0, lit ? 1.0 : 0.0, 0.0, 1.0);
+    #else
+      gl_FragColor = vec4(pow(clamp(color, 0.0, 1.0), vec3(1.0 / 2.2)), 1.0);
+    #endif
+  }
+`;
+
+const vertexShader = /* glsl */ `
+  varying vec2 vUv;
+  void main() {
+    vUv = uv;
+    gl_Position = vec4(position, 1.0);
+  }
+`;
+
+async function main() {
+  const query = new URLSearchParams(window.location.search);
+  const width = Number(query.get("width") ?? 320);
+  const height = Number(query.get("height") ?? 240);
+  const model = query.get("model");
+  if (!model) throw new Error("peer: give ?model=URL");
+
+  const gltf = await new GLTFLoader().loadAsync(new URL(model, window.location.href).href);
+  gltf.scene.updateMatrixWorld(true);
+  let mesh = null;
+  let light = null;
+  gltf.scene.traverse((o) => {
+    if (o.isMesh && !mesh) mesh = o;
+    if (o.isPointLight && !light) light = o;
+  });
+  const camera = gltf.cameras[0];
+  if (!mesh || !light || !camera) throw new Error(`${model}: needs a mesh, a point light and a camera`);
+  const geometry = mesh.geometry.clone().applyMatrix4(mesh.matrixWorld);
+  camera.aspect = width / height;
+  camera.updateProjectionMatrix();
+  camera.updateMatrixWorld(true);
+
+  const built = performance.now();
+  const bvh = new MeshBVH(geometry);
+  status.buildMs = performance.now() - built;
+  status.triangles = geometry.index.count / 3;
+  const bvhStruct = new MeshBVHUniformStruct();
+  bvhStruct.updateFrom(bvh);
+  const normals = new FloatVertexAttributeTexture();
+  normals.updateFrom(geometry.attributes.normal);
+  geometry.computeBoundingSphere();
+
+  const canvas = document.getElementById("frame");
+  const renderer = new THREE.WebGLRenderer({ canvas, antialias: false });
+  // A shader that does not compile is the benchmark's failure, not a black frame.
+  renderer.debug.onShaderError = (gl, program, vertex, fragment) => {
+    status.error = `the peer's shader: ${gl.getShaderInfoLog(fragment) || gl.getProgramInfoLog(program)}`;
+  };
+  renderer.setPixelRatio(1);
+  renderer.setSize(width, height);
+  status.renderer = renderer.getContext().getParameter(renderer.getContext().VERSION);
+
+  const uniforms = {
+    bvh: { value: bvhStruct },
+    normalAttribute: { value: normals },
+    cameraWorldMatrix: { value: camera.matrixWorld },
+    invProjectionMatrix: { value: camera.projectionMatrixInverse },
+    resolution: { value: new THREE.Vector2(width, height) },
+    lightPosition: { value: light.getWorldPosition(new THREE.Vector3()) },
+    lightColor: { value: light.color.clone().multiplyScalar(light.intensity) },
+    albedo: { value: new THREE.Color(0.7, 0.7, 0.7) },
+    background: { value: new THREE.Color(0.2, 0.2, 0.3) },
+    ambient: { value: 0.1 },
+    rayBias: { value: geometry.boundingSphere.radius * 1e-4 },
+  };
+  const material = (counting) =>
+    new THREE.ShaderMaterial({ defines: { COUNTING: counting ? 1 : 0 }, uniforms, vertexShader, fragmentShader });
+  const quad = new FullScreenQuad(material(false));
+  const counter = new FullScreenQuad(material(true));
+
+  window.peerCount = () => {
+    const target = new THREE.WebGLRenderTarget(width, height);
+    renderer.setRenderTarget(target);
+    counter.render(renderer);
+    const pixels = new Uint8Array(width * height * 4);
+    renderer.readRenderTargetPixels(target, 0, 0, width, height, pixels);
+    renderer.setRenderTarget(null);
+    target.dispose();
+    let hits = 0;
+    let shadowRays = 0;
+    for (let i = 0; i < pixels.length; i += 4) {
+      hits += pixels[i] > 127;
+      shadowRays += pixels[i + 1] > 127;
+    }
+    return { hits, shadowRays };
+  };
+
+  const frame = (time) => {
+    quad.render(renderer);
+    status.frames += 1;
+    status.times.push(time);
+    requestAnimationFrame(frame);
+  };
+  requestAnimationFrame(frame);
+}
+
+main().catch((error) => {
+  status.error = String(error?.message ?? error);
+});

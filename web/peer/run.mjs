@@ -1,0 +1,197 @@
+// raypipe's page against three-mesh-bvh (its GLSL walk, web/peer/peer.js) in the same headless
+// Chromium, on the same scene and workload: a model framed by a pinhole camera, one point light, no
+// floor, a primary ray per pixel and a shadow ray per hit whose normal faces the light.
+//
+//   node web/peer/run.mjs [--model FILE.ply] [--width 320] [--height 240] [--frames 20]
+//                         [--backends webgl2,webgpu] [--accel threaded] [--json OUT.json]
+//
+// Needs the page built (scripts/build-web.sh target/web), the native binary (target/release/raypipe,
+// which counts raypipe's rays) and `npm ci --prefix web` (three, three-mesh-bvh, pngjs).
+//
+// Before any time is printed both images are checked: the hit counts (raypipe's from its normal view,
+// the peer's from a counting pass) and the shadow-ray counts (raypipe's from `raypipe render
+// --stats`, the peer's from the counting pass) must agree within 1 %, or the run fails (exit 1).
+// Times: the median interval between the page's frames by its own clock (requestAnimationFrame's
+// timestamps) over --frames frames after warm-up; rays per frame are pixels plus shadow rays.
+import { execFileSync } from "node:child_process";
+import fs from "node:fs";
+import os from "node:os";
+import path from "node:path";
+import { fileURLToPath } from "node:url";
+import { parseArgs } from "node:util";
+import { PNG } from "pngjs";
+import { launch, serve } from "../harness.mjs";
+import { readTriangles, sceneGlb } from "./scene.mjs";
+
+const web = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..");
+const root = path.resolve(web, "..");
+const { values: options } = parseArgs({
+  options: {
+    model: { type: "string", default: path.join(root, "../shared/models/bunny.ply") },
+    width: { type: "string", default: "320" },
+    height: { type: "string", default: "240" },
+    frames: { type: "string", default: "20" },
+    backends: { type: "string", default: "webgl2,webgpu" },
+    accel: { type: "string", default: "threaded" },
+    json: { type: "string" },
+    site: { type: "string", default: path.join(root, "target/web") },
+    raypipe: { type: "string", default: process.env.RAYPIPE_BIN ?? path.join(root, "target/release/raypipe") },
+    // The benchmark's own test: turn the peer's camera by this many degrees, so that validation must fail.
+    "skew-peer": { type: "string", default: "0" },
+  },
+});
+
+/// Frames before timing starts: the first pays for compiling, the next for settling.
+const WARM_UP = 3;
+/// The most that hit and shadow-ray counts may differ, relative.
+const AGREE = 0.01;
+const TIMEOUT_MS = 600_000;
+
+const width = Number(options.width);
+const height = Number(options.height);
+const frames = Number(options.frames);
+if (!(width > 0 && height > 0 && frames >= 20)) fail("--width and --height must be positive, --frames at least 20");
+const backends = options.backends.split(",");
+for (const b of backends) if (!["webgl2", "webgpu"].includes(b)) fail(`--backends: unknown ${b} (webgl2, webgpu)`);
+
+function fail(line) {
+  console.error(`peer benchmark: ${line}`);
+  process.exit(1);
+}
+
+// One scene for both tracers; the peer's may be turned (--skew-peer) to prove validation bites.
+const scratch = fs.mkdtempSync(path.join(os.tmpdir(), "raypipe-peer-"));
+const triangles = readTriangles(options.model);
+const sceneFile = path.join(scratch, "scene.glb");
+fs.writeFileSync(sceneFile, sceneGlb(triangles, width, height));
+fs.writeFileSync(path.join(scratch, "peer.glb"), sceneGlb(triangles, width, height, Number(options["skew-peer"])));
+const pixels = width * height;
+const version = (name) => JSON.parse(fs.readFileSync(path.join(web, "node_modules", name, "package.json"), "utf8")).version;
+const peerName = `three-mesh-bvh ${version("three-mesh-bvh")} (three ${version("three")})`;
+
+// raypipe's rays for this scene, counted by the native tracer (the page's image equals it; web/tests).
+const stats = execFileSync(options.raypipe, [
+  "render", sceneFile, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "--depth", "1",
+  "--accel", options.accel, "--stats", "-o", path.join(scratch, "reference.png"),
+], { encoding: "utf8", stdio: ["ignore", "pipe", "pipe"] });
+const nativeRays = Number(/(\d+) rays/.exec(stats)?.[1]);
+if (!Number.isFinite(nativeRays)) fail(`no ray count in raypipe render --stats: ${stats}`);
+
+const server = await serve({ "/": options.site, "/peer/": path.join(web, "peer"), "/scene/": scratch, "/node_modules/": path.join(web, "node_modules") });
+const browser = await launch();
+const results = [];
+try {
+  const peer = await measurePeer();
+  for (const backend of backends) {
+    const raypipe = await measureRaypipe(backend);
+    validate(raypipe, peer);
+    results.push({ ...raypipe, peer_ms: peer.ms, ratio: peer.ms / raypipe.ms * (raypipe.rays / peer.rays) });
+  }
+  report(peer);
+} catch (error) {
+  process.exitCode = 1;
+  console.error(`peer benchmark: ${error.message}`);
+} finally {
+  await browser.close();
+  server.close();
+  fs.rmSync(scratch, { recursive: true, force: true });
+}
+
+/// The median of the intervals between successive timestamps.
+function medianInterval(times) {
+  const intervals = times.slice(1).map((t, i) => t - times[i]).sort((a, b) => a - b);
+  return intervals[Math.floor(intervals.length / 2)];
+}
+
+async function newPage() {
+  const page = await browser.newPage({ viewport: { width: Math.max(1280, width + 400), height: Math.max(800, height + 300) }, deviceScaleFactor: 1 });
+  page.errors = [];
+  page.on("pageerror", (error) => page.errors.push(error.message));
+  return page;
+}
+
+async function measurePeer() {
+  const page = await newPage();
+  await page.goto(`${server.origin}/peer/index.html?model=/scene/peer.glb&width=${width}&height=${height}`);
+  await page.waitForFunction((n) => window.peerStatus?.error || window.peerStatus?.frames >= n, WARM_UP + frames + 1, { timeout: TIMEOUT_MS, polling: 50 });
+  const status = await page.evaluate(() => window.peerStatus);
+  if (status.error) throw new Error(`peer: ${status.error} ${page.errors}`);
+  const ms = medianInterval(status.times.slice(WARM_UP, WARM_UP + frames + 1));
+  const counts = await page.evaluate(() => window.peerCount());
+  await page.close();
+  return { tracer: peerName, backend: "webgl2", memory: "texture", ms, rays: pixels + counts.shadowRays, ...counts, adapter: status.renderer, buildMs: status.buildMs };
+}
+
+async function measureRaypipe(backend) {
+  const page = await newPage();
+  // Every animation frame's timestamp with the page's frame count then: a frame's time is the
+  // interval to the next frame that traced.
+  await page.addInitScript(() => {
+    window.frameLog = [];
+    const watch = (time) => {
+      const frames = window.raypipeStatus?.frames;
+      const last = window.frameLog.at(-1);
+      if (frames != null && (!last || last[1] !== frames)) window.frameLog.push([time, frames]);
+      requestAnimationFrame(watch);
+    };
+    requestAnimationFrame(watch);
+  });
+  const memory = backend === "webgl2" ? "texture" : "storage";
+  const query = `model=/scene/scene.glb&backend=${backend}&memory=${memory}&accel=${options.accel}&depth=1` +
+    `&width=${width}&height=${height}&spp=4096`;
+  await page.goto(`${server.origin}/index.html?${query}`);
+  const until = (condition, arg) => page.waitForFunction(condition, arg, { timeout: TIMEOUT_MS, polling: 50 });
+  await until(() => window.raypipeStatus?.error || (window.raypipeStatus?.primitives > 0 && !window.raypipeStatus.busy));
+  const opened = await page.evaluate(() => ({ ...window.raypipeStatus }));
+  if (opened.error) throw new Error(`raypipe ${backend}: ${opened.error}`);
+  const start = opened.frames;
+  await until((n) => window.raypipeStatus.error || window.raypipeStatus.frames >= n, start + WARM_UP + frames + 1);
+  const log = await page.evaluate(() => window.frameLog);
+  const status = await page.evaluate(() => ({ ...window.raypipeStatus }));
+  if (status.error) throw new Error(`raypipe ${backend}: ${status.error}`);
+  // Only consecutive frames: an interval that spans two frames (a missed observation) is left out.
+  const timed = log.filter(([, n]) => n > start + WARM_UP && n <= start + WARM_UP + frames + 1);
+  const intervals = timed.slice(1).flatMap(([t, n], i) => (n === timed[i][1] + 1 ? [t - timed[i][0]] : []));
+  if (intervals.length < frames / 2) throw new Error(`raypipe ${backend}: only ${intervals.length} frames observed`);
+  intervals.sort((a, b) => a - b);
+  const ms = intervals[Math.floor(intervals.length / 2)];
+
+  // Hits: the pixels the normal view does not leave black.
+  await page.evaluate(() => window.raypipeViewer.set("aov", "normal"));
+  await until((n) => window.raypipeStatus.aov === "normal" && window.raypipeStatus.frames >= n, status.frames + 2);
+  const png = PNG.sync.read(await page.locator("#frame").screenshot());
+  if (png.width !== width || png.height !== height) throw new Error(`raypipe ${backend}: canvas is ${png.width}x${png.height}`);
+  let hits = 0;
+  for (let i = 0; i < png.data.length; i += 4) hits += png.data[i] + png.data[i + 1] + png.data[i + 2] > 0;
+  await page.close();
+  return {
+    tracer: "raypipe", backend, memory: status.memory, accel: status.accel, ms, rays: nativeRays,
+    hits, shadowRays: nativeRays - pixels, adapter: status.adapter,
+  };
+}
+
+/// Both images must show the same model the same way before any time means anything.
+function validate(raypipe, peer) {
+  for (const key of ["hits", "shadowRays"]) {
+    const [a, b] = [raypipe[key], peer[key]];
+    if (Math.abs(a - b) > AGREE * Math.max(a, b, 1)) {
+      throw new Error(`the images differ: raypipe (${raypipe.backend}) ${key} ${a}, three-mesh-bvh ${b} ` +
+        `(more than ${AGREE * 100} % apart); no time is printed`);
+    }
+  }
+}
+
+function report(peer) {
+  const mrays = (r) => (r.rays / r.ms / 1e3).toFixed(3);
+  console.log(`scene: ${path.basename(options.model)}, ${triangles.indices.length / 3} triangles, ${width}x${height}, ` +
+    `1 light, depth 1, median of ${frames} frames after ${WARM_UP}`);
+  console.log(`${peerName} webgl2 texture: ${peer.ms.toFixed(1)} ms per frame, ` +
+    `${peer.rays} rays (${peer.hits} hits), ${mrays(peer)} Mrays/s`);
+  for (const r of results) {
+    console.log(`raypipe ${r.backend} ${r.memory} ${r.accel}: ${r.ms.toFixed(1)} ms per frame, ${r.rays} rays ` +
+      `(${r.hits} hits), ${mrays(r)} Mrays/s; rays per second ${r.ratio.toFixed(2)}x three-mesh-bvh's`);
+  }
+  if (options.json) {
+    fs.writeFileSync(options.json, JSON.stringify({ width, height, frames, model: path.basename(options.model), peer, raypipe: results }, null, 2));
+  }
+}
