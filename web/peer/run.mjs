@@ -12,7 +12,8 @@
 // the peer's from a counting pass) and the shadow-ray counts (raypipe's from `raypipe render
 // --stats`, the peer's from the counting pass) must agree within 1 %, or the run fails (exit 1).
 // Times: the median interval between the page's frames by its own clock (requestAnimationFrame's
-// timestamps) over --frames frames after warm-up; rays per frame are pixels plus shadow rays.
+// timestamps) over --frames frames after warm-up, and the mean over them; rays per frame are pixels
+// plus shadow rays, and the ratio is of rays per second.
 import { execFileSync } from "node:child_process";
 import fs from "node:fs";
 import os from "node:os";
@@ -85,7 +86,7 @@ try {
   for (const backend of backends) {
     const raypipe = await measureRaypipe(backend);
     validate(raypipe, peer);
-    results.push({ ...raypipe, peer_ms: peer.ms, ratio: peer.ms / raypipe.ms * (raypipe.rays / peer.rays) });
+    results.push({ ...raypipe, ratio: rate(raypipe, "ms") / rate(peer, "ms"), meanRatio: rate(raypipe, "meanMs") / rate(peer, "meanMs") });
   }
   report(peer);
 } catch (error) {
@@ -97,10 +98,12 @@ try {
   fs.rmSync(scratch, { recursive: true, force: true });
 }
 
-/// The median of the intervals between successive timestamps.
-function medianInterval(times) {
-  const intervals = times.slice(1).map((t, i) => t - times[i]).sort((a, b) => a - b);
-  return intervals[Math.floor(intervals.length / 2)];
+/// A page's frame time from the intervals between its frames: the median, and the mean over the whole
+/// run (`span` ms for `count` frames), which pipelined frames (an interval of 17 ms after one of 117)
+/// disturb less.
+function frameTimes(intervals, span, count) {
+  const sorted = [...intervals].sort((a, b) => a - b);
+  return { ms: sorted[Math.floor(sorted.length / 2)], meanMs: span / count };
 }
 
 async function newPage() {
@@ -116,10 +119,11 @@ async function measurePeer() {
   await page.waitForFunction((n) => window.peerStatus?.error || window.peerStatus?.frames >= n, WARM_UP + frames + 1, { timeout: TIMEOUT_MS, polling: 50 });
   const status = await page.evaluate(() => window.peerStatus);
   if (status.error) throw new Error(`peer: ${status.error} ${page.errors}`);
-  const ms = medianInterval(status.times.slice(WARM_UP, WARM_UP + frames + 1));
+  const times = status.times.slice(WARM_UP, WARM_UP + frames + 1);
+  const timing = frameTimes(times.slice(1).map((t, i) => t - times[i]), times.at(-1) - times[0], frames);
   const counts = await page.evaluate(() => window.peerCount());
   await page.close();
-  return { tracer: peerName, backend: "webgl2", memory: "texture", ms, rays: pixels + counts.shadowRays, ...counts, adapter: status.renderer, buildMs: status.buildMs };
+  return { tracer: peerName, backend: "webgl2", memory: "texture", ...timing, rays: pixels + counts.shadowRays, ...counts, adapter: status.renderer, buildMs: status.buildMs };
 }
 
 async function measureRaypipe(backend) {
@@ -153,8 +157,7 @@ async function measureRaypipe(backend) {
   const timed = log.filter(([, n]) => n > start + WARM_UP && n <= start + WARM_UP + frames + 1);
   const intervals = timed.slice(1).flatMap(([t, n], i) => (n === timed[i][1] + 1 ? [t - timed[i][0]] : []));
   if (intervals.length < frames / 2) throw new Error(`raypipe ${backend}: only ${intervals.length} frames observed`);
-  intervals.sort((a, b) => a - b);
-  const ms = intervals[Math.floor(intervals.length / 2)];
+  const timing = frameTimes(intervals, timed.at(-1)[0] - timed[0][0], timed.at(-1)[1] - timed[0][1]);
 
   // Hits: the pixels the normal view does not leave black.
   await page.evaluate(() => window.raypipeViewer.set("aov", "normal"));
@@ -165,7 +168,7 @@ async function measureRaypipe(backend) {
   for (let i = 0; i < png.data.length; i += 4) hits += png.data[i] + png.data[i + 1] + png.data[i + 2] > 0;
   await page.close();
   return {
-    tracer: "raypipe", backend, memory: status.memory, accel: status.accel, ms, rays: nativeRays,
+    tracer: "raypipe", backend, memory: status.memory, accel: status.accel, ...timing, rays: nativeRays,
     hits, shadowRays: nativeRays - pixels, adapter: status.adapter,
   };
 }
@@ -181,15 +184,22 @@ function validate(raypipe, peer) {
   }
 }
 
+/// Rays per millisecond by a frame time (`ms`, the median, or `meanMs`).
+function rate(result, time) {
+  return result.rays / result[time];
+}
+
 function report(peer) {
-  const mrays = (r) => (r.rays / r.ms / 1e3).toFixed(3);
+  const mrays = (r) => (rate(r, "ms") / 1e3).toFixed(3);
+  const mean = (r) => `mean ${r.meanMs.toFixed(1)} ms`;
   console.log(`scene: ${path.basename(options.model)}, ${triangles.indices.length / 3} triangles, ${width}x${height}, ` +
     `1 light, depth 1, median of ${frames} frames after ${WARM_UP}`);
   console.log(`${peerName} webgl2 texture: ${peer.ms.toFixed(1)} ms per frame, ` +
-    `${peer.rays} rays (${peer.hits} hits), ${mrays(peer)} Mrays/s`);
+    `${peer.rays} rays (${peer.hits} hits), ${mrays(peer)} Mrays/s (${mean(peer)})`);
   for (const r of results) {
     console.log(`raypipe ${r.backend} ${r.memory} ${r.accel}: ${r.ms.toFixed(1)} ms per frame, ${r.rays} rays ` +
-      `(${r.hits} hits), ${mrays(r)} Mrays/s; rays per second ${r.ratio.toFixed(2)}x three-mesh-bvh's`);
+      `(${r.hits} hits), ${mrays(r)} Mrays/s (${mean(r)}); rays per second ${r.ratio.toFixed(2)}x three-mesh-bvh's ` +
+      `(by the means ${r.meanRatio.toFixed(2)}x)`);
   }
   if (options.json) {
     fs.writeFileSync(options.json, JSON.stringify({ width, height, frames, model: path.basename(options.model), peer, raypipe: results }, null, 2));
