@@ -227,16 +227,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
             ctx.describe()
         );
     }
-    anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
-    anyhow::ensure!(
-        !args.rebuild || args.memory.iter().all(|&m| m == MemoryMode::Storage),
-        "--rebuild builds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
-    );
-    let as_ = args.as_.unwrap_or(MeshAs::Spheres);
-    anyhow::ensure!(
-        as_ == MeshAs::Spheres || is_model_file(Path::new(&args.scene)),
-        "--as triangles times a model file's triangles: name a .ply, .obj, .off, .gltf or .glb"
-    );
+    let as_ = check_args(&args)?;
     // A model's triangles are one point, whatever the counts.
     let counts = if as_ == MeshAs::Triangles {
         vec![0]
@@ -313,31 +304,16 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                         continue;
                     }
                 };
-                let (mut times, builds, rays) = time_frames(&args, &mut renderer, rebuild.as_ref(), |frame, total| {
+                let frames = time_frames(&args, &mut renderer, rebuild.as_ref(), |frame, total| {
                     bar.set_message(format!("{point}: frame {frame} of {total}"))
                 })?;
-                times.sort_by(f64::total_cmp);
-                let ms = median(times.iter().copied());
-                rows.push(Row {
-                    count,
-                    pipeline: name(&pipeline),
-                    accel: name(&accel),
-                    memory: name(&memory),
-                    width: args.width,
-                    height: args.height,
-                    spp: args.spp,
-                    frames: args.frames,
-                    ms_median: ms,
-                    ms_min: times[0],
-                    ms_max: times[times.len() - 1],
-                    fps: 1e3 / ms,
-                    mrays_per_s: rays as f64 / (ms * 1e3),
-                    build_ms_median: (!builds.is_empty()).then(|| median(builds.iter().map(BuildTimings::total))),
-                    build_phases_ms: BuildPhases::median_of(&builds),
-                    clock: clock.into(),
-                    adapter: ctx.info.name.clone(),
-                    backend: format!("{:?}", ctx.info.backend),
-                });
+                rows.push(Row::of_frames(
+                    &args,
+                    &ctx,
+                    clock,
+                    (count, pipeline, accel, memory),
+                    frames,
+                ));
                 // After every point: a run cut short keeps what it measured.
                 write_results(&args.out, &rows)?;
                 bar.inc(1);
@@ -356,6 +332,58 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         print_table(&args, &ctx, clock, &rows)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Refuses combinations that cannot run; says how a model file is measured.
+fn check_args(args: &BenchArgs) -> anyhow::Result<MeshAs> {
+    anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
+    anyhow::ensure!(
+        !args.rebuild || args.memory.iter().all(|&m| m == MemoryMode::Storage),
+        "--rebuild builds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
+    );
+    let as_ = args.as_.unwrap_or(MeshAs::Spheres);
+    anyhow::ensure!(
+        as_ == MeshAs::Spheres || is_model_file(Path::new(&args.scene)),
+        "--as triangles times a model file's triangles: name a .ply, .obj, .off, .gltf or .glb"
+    );
+    Ok(as_)
+}
+
+impl Row {
+    /// A point's row (its count, pipeline, walk and memory) from its timed frames (frame times,
+    /// builds, rays of one frame).
+    fn of_frames(
+        args: &BenchArgs,
+        ctx: &GpuContext,
+        clock: &str,
+        point: (usize, Pipeline, Accel, MemoryMode),
+        frames: (Vec<f64>, Vec<BuildTimings>, u64),
+    ) -> Row {
+        let (count, pipeline, accel, memory) = point;
+        let (mut times, builds, rays) = frames;
+        times.sort_by(f64::total_cmp);
+        let ms = median(times.iter().copied());
+        Row {
+            count,
+            pipeline: name(&pipeline),
+            accel: name(&accel),
+            memory: name(&memory),
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            frames: args.frames,
+            ms_median: ms,
+            ms_min: times[0],
+            ms_max: times[times.len() - 1],
+            fps: 1e3 / ms,
+            mrays_per_s: rays as f64 / (ms * 1e3),
+            build_ms_median: (!builds.is_empty()).then(|| median(builds.iter().map(BuildTimings::total))),
+            build_phases_ms: BuildPhases::median_of(&builds),
+            clock: clock.into(),
+            adapter: ctx.info.name.clone(),
+            backend: format!("{:?}", ctx.info.backend),
+        }
+    }
 }
 
 /// The points as a table on standard output, under the adapter and the size.

@@ -94,10 +94,6 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     let scene = Scene::load(&args.scene)?;
     let packed = PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene))?;
     let boxes = packed.primitive_boxes();
-    let runs = args.runs.max(1);
-    let mut device = format!("cpu ({} threads)", rayon::current_num_threads());
-    // The GPU build's kernels where adapters differ.
-    let mut gpu_variant = String::new();
     // The GPU finds the hierarchy by merges only.
     let hierarchy = match args.device {
         BuildDevice::Gpu => Hierarchy::Merges,
@@ -108,57 +104,15 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
         (Some(Hierarchy::Searches), _, BuildDevice::Gpu) => {
             anyhow::bail!("the GPU builder finds the hierarchy by merges only (--hierarchy merges)")
         }
+        (_, Builder::Sah, BuildDevice::Gpu) => anyhow::bail!("the binned SAH builder runs on the CPU only"),
         _ => {}
     }
-    // Where the merges find the hierarchy, its time holds the bounds and links too.
-    let fused = args.builder == Builder::Lbvh && hierarchy == Hierarchy::Merges;
-    let (bvh, mut runs) = match (args.builder, args.morton_bits) {
-        (Builder::Lbvh, bits) if args.device == BuildDevice::Gpu => {
-            let ctx = block_on(GpuContext::require(args.backend))?;
-            device = format!("gpu: {}", ctx.describe());
-            anyhow::ensure!(
-                ctx.timestamps,
-                "{device} has no timestamp queries to time the build with"
-            );
-            let mut builder = block_on(GpuLbvhBuilder::new(
-                &ctx,
-                bits,
-                packed.spheres.len(),
-                packed.triangles.len(),
-            ))?;
-            gpu_variant = format!("; {}", builder.variant().describe());
-            block_on(builder.write_scene(&packed))?;
-            block_on(builder.build(Codes::Computed))?;
-            let timings = (0..runs)
-                .map(|_| block_on(builder.build(Codes::Computed)))
-                .collect::<Result<Vec<_>, _>>()?;
-            let bvh = Bvh {
-                nodes: block_on(builder.read_nodes())?,
-                primitive_count: boxes.len(),
-            };
-            (bvh, timings)
-        }
-        (Builder::Sah, _) if args.device == BuildDevice::Gpu => {
-            anyhow::bail!("the binned SAH builder runs on the CPU only")
-        }
-        (Builder::Lbvh, MortonBits::Bits30) => time_lbvh::<u64>(&boxes, args.morton_bits, hierarchy, runs),
-        (Builder::Lbvh, MortonBits::Bits63) => time_lbvh::<u128>(&boxes, args.morton_bits, hierarchy, runs),
-        (Builder::Sah, _) => {
-            let mut bvh = None;
-            let timings = (0..runs)
-                .map(|_| {
-                    let start = Instant::now();
-                    bvh = Some(build_binned_sah(&boxes));
-                    // The SAH builder has no LBVH phases: its whole time counts as hierarchy.
-                    BuildTimings {
-                        hierarchy: start.elapsed().as_secs_f64() * 1e3,
-                        ..BuildTimings::default()
-                    }
-                })
-                .collect();
-            (bvh.expect("at least one run"), timings)
-        }
-    };
+    let Built {
+        bvh,
+        mut runs,
+        device,
+        gpu_variant,
+    } = build_timed(&args, &packed, &boxes, hierarchy)?;
     runs.sort_by(|a, b| a.total().total_cmp(&b.total()));
     let t = runs[runs.len() / 2];
     bvh.validate(&boxes)
@@ -196,8 +150,86 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
     };
     if args.json {
         crate::say!("{}", serde_json::to_string(&report)?);
-        return Ok(ExitCode::SUCCESS);
+    } else {
+        // Where the merges find the hierarchy, its time holds the bounds and links too.
+        let fused = args.builder == Builder::Lbvh && hierarchy == Hierarchy::Merges;
+        print_report(&report, fused, runs.len())?;
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A tree and the timings of its runs, with the device that built it.
+struct Built {
+    bvh: Bvh,
+    runs: Vec<BuildTimings>,
+    device: String,
+    /// The GPU build's kernels where adapters differ ("" on the CPU).
+    gpu_variant: String,
+}
+
+/// Builds the tree `--runs` times (the GPU once more first, to warm up) with the builder and device
+/// asked for.
+fn build_timed(args: &BvhArgs, packed: &PackedScene, boxes: &[Aabb], hierarchy: Hierarchy) -> anyhow::Result<Built> {
+    let runs = args.runs.max(1);
+    let cpu = |(bvh, runs)| Built {
+        bvh,
+        runs,
+        device: format!("cpu ({} threads)", rayon::current_num_threads()),
+        gpu_variant: String::new(),
+    };
+    Ok(match (args.builder, args.morton_bits) {
+        (Builder::Lbvh, bits) if args.device == BuildDevice::Gpu => {
+            let ctx = block_on(GpuContext::require(args.backend))?;
+            let device = format!("gpu: {}", ctx.describe());
+            anyhow::ensure!(
+                ctx.timestamps,
+                "{device} has no timestamp queries to time the build with"
+            );
+            let mut builder = block_on(GpuLbvhBuilder::new(
+                &ctx,
+                bits,
+                packed.spheres.len(),
+                packed.triangles.len(),
+            ))?;
+            let gpu_variant = format!("; {}", builder.variant().describe());
+            block_on(builder.write_scene(packed))?;
+            block_on(builder.build(Codes::Computed))?;
+            let timings = (0..runs)
+                .map(|_| block_on(builder.build(Codes::Computed)))
+                .collect::<Result<Vec<_>, _>>()?;
+            let bvh = Bvh {
+                nodes: block_on(builder.read_nodes())?,
+                primitive_count: boxes.len(),
+            };
+            Built {
+                bvh,
+                runs: timings,
+                device,
+                gpu_variant,
+            }
+        }
+        (Builder::Lbvh, MortonBits::Bits30) => cpu(time_lbvh::<u64>(boxes, args.morton_bits, hierarchy, runs)),
+        (Builder::Lbvh, MortonBits::Bits63) => cpu(time_lbvh::<u128>(boxes, args.morton_bits, hierarchy, runs)),
+        (Builder::Sah, _) => {
+            let mut bvh = None;
+            let timings = (0..runs)
+                .map(|_| {
+                    let start = Instant::now();
+                    bvh = Some(build_binned_sah(boxes));
+                    // The SAH builder has no LBVH phases: its whole time counts as hierarchy.
+                    BuildTimings {
+                        hierarchy: start.elapsed().as_secs_f64() * 1e3,
+                        ..BuildTimings::default()
+                    }
+                })
+                .collect();
+            cpu((bvh.expect("at least one run"), timings))
+        }
+    })
+}
+
+/// The report as lines for a reader.
+fn print_report(report: &Report, fused: bool, runs: usize) -> anyhow::Result<()> {
     let b = &report.build_ms;
     crate::say!("scene: {}, {} primitives", report.scene, report.primitives);
     crate::say!("builder: {}, device {}", report.builder, report.device);
@@ -219,13 +251,12 @@ pub fn run(args: BvhArgs) -> anyhow::Result<ExitCode> {
         format!("bounds {:.2} ms, links {:.2} ms", b.bounds, b.links)
     };
     crate::say!(
-        "build (median of {} runs): morton {:.2} ms, sort {:.2} ms, hierarchy {:.2} ms, {bounds_and_links}, total {:.2} ms, {:.1} Mprims/s",
-        runs.len(),
+        "build (median of {runs} runs): morton {:.2} ms, sort {:.2} ms, hierarchy {:.2} ms, {bounds_and_links}, total {:.2} ms, {:.1} Mprims/s",
         b.morton,
         b.sort,
         b.hierarchy,
         b.total,
         report.mprims_per_s
     );
-    Ok(ExitCode::SUCCESS)
+    Ok(())
 }

@@ -1,6 +1,6 @@
 //! `raypipe render`: a scene to PNG or EXR, one frame or a numbered sequence of a moving scene.
 
-use crate::device::{DeviceChoice, RenderOptions, render, render_frames};
+use crate::device::{DeviceChoice, RenderOptions, RenderOutcome, render, render_frames};
 use crate::io;
 use crate::report::median;
 use crate::scene_args::{MAX_SPP, SceneArgs, aov_image};
@@ -102,48 +102,7 @@ pub fn numbered(name: &str, frame: u32) -> Option<String> {
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
-    let output = args.output.clone().unwrap_or_else(|| match args.scene.aov {
-        Aov::Depth => "depth.exr".into(),
-        _ => "render.png".into(),
-    });
-    // A device or FIFO (-o /dev/null) has no extension to go by: it gets the AOV's own format.
-    let device = std::fs::metadata(&output).is_ok_and(|m| !m.is_file());
-    let is_exr =
-        output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) || device && args.scene.aov == Aov::Depth;
-    let is_png = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) || device && !is_exr;
-    if !(is_exr || is_png) {
-        bail!("{}: output must end in .png or .exr", output.display());
-    }
-    if args.scene.aov == Aov::Depth && !is_exr {
-        bail!(
-            "{}: --aov depth writes a float EXR; name the output *.exr",
-            output.display()
-        );
-    }
-    if args.scene.aov == Aov::Cost && is_exr {
-        bail!(
-            "{}: --aov cost writes a PNG heat map; name the output *.png",
-            output.display()
-        );
-    }
-
-    // A frame-number width beyond any frame count would only make a name too long to create.
-    if let Some(width) = number_width(&output.to_string_lossy())
-        && width > MAX_NUMBER_WIDTH
-    {
-        bail!(
-            "{}: a frame number {width} digits wide; at most {MAX_NUMBER_WIDTH}",
-            output.display()
-        );
-    }
-    // Found before the render, not after it.
-    match (numbered(&output.to_string_lossy(), 0), &args.frames) {
-        (Some(_), Some(frames)) => {
-            let first = numbered(&output.to_string_lossy(), frames.start).expect("a pattern");
-            io::check_writable(Path::new(&first))?
-        }
-        _ => io::check_writable(&output)?,
-    }
+    let (output, is_exr) = check_output(&args)?;
     let scene = args.scene.load()?;
     let start = args.scene.time.unwrap_or(0.0);
     let options = RenderOptions {
@@ -202,41 +161,95 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     }
 
     if args.stats {
-        let pixels = frame.width as u64 * frame.height as u64;
-        let rays = frame.rays();
-        crate::say!(
-            "scene: {}, {}x{}, {} spheres, {} triangles, {} planes, {} lights, depth {}",
-            args.scene.spec,
-            frame.width,
-            frame.height,
-            packed.spheres.len(),
-            packed.triangles.len(),
-            packed.planes.len(),
-            packed.lights.len(),
-            packed.max_depth
-        );
-        say_device(&args, &outcome.device)?;
-        if args.scene.aov == Aov::Cost {
-            let counts = frame.counts();
-            let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
-            let max = counts.iter().copied().max().unwrap_or(0);
-            crate::say!(
-                "cost per primary ray: mean {mean:.1}, max {max} nodes tested (spheres tested for brute force)"
-            );
-            return Ok(ExitCode::SUCCESS);
-        }
-        let (ms, clock) = match outcome.gpu_ms {
-            Some(ms) => (ms, "GPU timestamps"),
-            None => (outcome.wall_ms, "wall clock"),
-        };
-        crate::say!(
-            "render: {ms:.2} ms ({clock}; wall {:.2} ms), {rays} rays ({:.2} per pixel), {:.2} Mrays/s",
-            outcome.wall_ms,
-            rays as f64 / pixels as f64,
-            rays as f64 / (ms * 1e3)
-        );
+        say_stats(&args, &packed, &outcome)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The output file and whether it is an EXR, checked before anything renders: its format against
+/// the AOV, its frame-number pattern, and that it can be written.
+fn check_output(args: &RenderArgs) -> anyhow::Result<(PathBuf, bool)> {
+    let output = args.output.clone().unwrap_or_else(|| match args.scene.aov {
+        Aov::Depth => "depth.exr".into(),
+        _ => "render.png".into(),
+    });
+    // A device or FIFO (-o /dev/null) has no extension to go by: it gets the AOV's own format.
+    let device = std::fs::metadata(&output).is_ok_and(|m| !m.is_file());
+    let is_exr =
+        output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) || device && args.scene.aov == Aov::Depth;
+    let is_png = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) || device && !is_exr;
+    if !(is_exr || is_png) {
+        bail!("{}: output must end in .png or .exr", output.display());
+    }
+    if args.scene.aov == Aov::Depth && !is_exr {
+        bail!(
+            "{}: --aov depth writes a float EXR; name the output *.exr",
+            output.display()
+        );
+    }
+    if args.scene.aov == Aov::Cost && is_exr {
+        bail!(
+            "{}: --aov cost writes a PNG heat map; name the output *.png",
+            output.display()
+        );
+    }
+
+    // A frame-number width beyond any frame count would only make a name too long to create.
+    if let Some(width) = number_width(&output.to_string_lossy())
+        && width > MAX_NUMBER_WIDTH
+    {
+        bail!(
+            "{}: a frame number {width} digits wide; at most {MAX_NUMBER_WIDTH}",
+            output.display()
+        );
+    }
+    // Found before the render, not after it.
+    match (numbered(&output.to_string_lossy(), 0), &args.frames) {
+        (Some(_), Some(frames)) => {
+            let first = numbered(&output.to_string_lossy(), frames.start).expect("a pattern");
+            io::check_writable(Path::new(&first))?
+        }
+        _ => io::check_writable(&output)?,
+    }
+    Ok((output, is_exr))
+}
+
+/// `--stats`' lines: the scene, the device, and the render's time and rays (or, for a cost render,
+/// the nodes tested).
+fn say_stats(args: &RenderArgs, packed: &PackedScene, outcome: &RenderOutcome) -> anyhow::Result<()> {
+    let frame = &outcome.frame;
+    let pixels = frame.width as u64 * frame.height as u64;
+    let rays = frame.rays();
+    crate::say!(
+        "scene: {}, {}x{}, {} spheres, {} triangles, {} planes, {} lights, depth {}",
+        args.scene.spec,
+        frame.width,
+        frame.height,
+        packed.spheres.len(),
+        packed.triangles.len(),
+        packed.planes.len(),
+        packed.lights.len(),
+        packed.max_depth
+    );
+    say_device(args, &outcome.device)?;
+    if args.scene.aov == Aov::Cost {
+        let counts = frame.counts();
+        let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
+        let max = counts.iter().copied().max().unwrap_or(0);
+        crate::say!("cost per primary ray: mean {mean:.1}, max {max} nodes tested (spheres tested for brute force)");
+        return Ok(());
+    }
+    let (ms, clock) = match outcome.gpu_ms {
+        Some(ms) => (ms, "GPU timestamps"),
+        None => (outcome.wall_ms, "wall clock"),
+    };
+    crate::say!(
+        "render: {ms:.2} ms ({clock}; wall {:.2} ms), {rays} rays ({:.2} per pixel), {:.2} Mrays/s",
+        outcome.wall_ms,
+        rays as f64 / pixels as f64,
+        rays as f64 / (ms * 1e3)
+    );
+    Ok(())
 }
 
 /// `--stats`'s line on what traced.

@@ -4,7 +4,7 @@
 use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::build::{BuildVariant, SiblingBoxes, SortRanking};
-use raypipe::gpu::shader::{ShaderConfig, compose};
+use raypipe::gpu::shader::{SceneFeatures, ShaderConfig, compose};
 use raypipe::gpu::upload::{TEXELS_PER_ROW, record_arrays};
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::{LAYOUTS, PackedScene, StructLayout};
@@ -106,6 +106,7 @@ fn every_shader_variant_validates() {
                         arrays: &record_arrays(scene, accel),
                         texels_per_row: TEXELS_PER_ROW,
                         write_cost: max_depth == 0,
+                        features: SceneFeatures::ALL,
                     });
                     let module = parse(&source);
                     let flags = naga::valid::ValidationFlags::all();
@@ -182,6 +183,7 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
             arrays: &record_arrays(&scene, accel),
             texels_per_row: TEXELS_PER_ROW,
             write_cost: false,
+            features: SceneFeatures::ALL,
         });
         let count = storage_buffers(&source);
         assert!(
@@ -251,6 +253,7 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
         arrays: &record_arrays(&PackedScene::new(&builtin::whitted()).unwrap(), Accel::Threaded),
         texels_per_row: TEXELS_PER_ROW,
         write_cost: false,
+        features: SceneFeatures::ALL,
     });
     let mut build = records.clone();
     build.push(one("GROUP", raypipe::gpu::build::GROUP as f64));

@@ -243,10 +243,28 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         crate::say!("{json}");
         return Ok(ExitCode::SUCCESS);
     }
+    print_table(args, &ctx, clock, &name, scene.triangles.len(), &rows)?;
+    crate::say!("results: {}/motion.csv, motion.json", args.out.display());
+    Ok(if rows.is_empty() {
+        ExitCode::from(2)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+/// The points as a table on standard output, under the adapter, the scene and the size.
+fn print_table(
+    args: &BenchArgs,
+    ctx: &GpuContext,
+    clock: &str,
+    name: &str,
+    triangles: usize,
+    rows: &[MotionRow],
+) -> anyhow::Result<()> {
     crate::say!(
         "adapter: {} ({clock}), {name}: {} triangles, {}x{}, {} frames at {} fps",
         ctx.describe(),
-        scene.triangles.len(),
+        triangles,
         args.width,
         args.height,
         args.frames,
@@ -267,7 +285,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         "refit",
         "ratio"
     );
-    for r in &rows {
+    for r in rows {
         crate::say!(
             "{:>9} {:>10} {:>8} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>6.1}% {:>8} {:>6}",
             r.pipeline,
@@ -284,12 +302,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
             r.refit_trace_ratio_last.map(|m| format!("{m:.2}")).unwrap_or_default(),
         );
     }
-    crate::say!("results: {}/motion.csv, motion.json", args.out.display());
-    Ok(if rows.is_empty() {
-        ExitCode::from(2)
-    } else {
-        ExitCode::SUCCESS
-    })
+    Ok(())
 }
 
 /// The refit time (median), the trace ratio at the last frame, and the first frame from which

@@ -11,7 +11,7 @@
 
 use super::readback::TextureReadback;
 use super::rebuild::SceneRebuild;
-use super::shader::{RecordKind, ShaderConfig, compose};
+use super::shader::{RecordKind, SceneFeatures, ShaderConfig, compose};
 use super::threaded::encode_frame_copy;
 use super::timing::PassTimestamps;
 use super::upload::{SceneResources, SharedBuffers, upload};
@@ -284,6 +284,7 @@ impl Renderer {
                 arrays: &resources.arrays,
                 texels_per_row: resources.texels_per_row,
                 write_cost: count == Count::Cost,
+                features: SceneFeatures::of(scene),
             });
             let previous_layout = previous_sample_layout(&ctx.device, pipeline);
             let (trace_pipeline, bind_group) =

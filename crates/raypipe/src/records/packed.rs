@@ -10,7 +10,7 @@ use crate::bvh::morton::MortonBits;
 use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
 use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
-use crate::scene::{Camera, Moved, Scene};
+use crate::scene::{Camera, Moved, Plane, Scene, Sphere, Triangle};
 use glam::Vec3;
 
 /// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
@@ -122,80 +122,9 @@ impl PackedScene {
             // Set with the BVH.
             bvh_frame: GpuBvhFrame::default(),
         };
-        let spheres = scene
-            .spheres
-            .iter()
-            .map(|s| GpuSphere {
-                center: s.center.to_array(),
-                radius: s.radius,
-                material: s.material,
-                _pad: [0; 3],
-            })
-            .collect();
-        let mut triangle_normals = Vec::new();
-        let mut triangle_uvs = Vec::new();
-        let triangles = scene
-            .triangles
-            .iter()
-            .map(|t| {
-                let [v0, v1, v2] = t.vertices;
-                let normals = match t.normals {
-                    Some([n0, n1, n2]) => {
-                        triangle_normals.push(GpuTriangleNormals {
-                            n0: n0.to_array(),
-                            n1: n1.to_array(),
-                            n2: n2.to_array(),
-                            ..Default::default()
-                        });
-                        triangle_normals.len() as u32 - 1
-                    }
-                    None => NONE,
-                };
-                let uvs = match t.uvs {
-                    Some([a, b, c]) => {
-                        triangle_uvs.push(GpuTriangleUvs {
-                            uv01: [a.x, a.y, b.x, b.y],
-                            uv2: c.to_array(),
-                            _pad: [0.0; 2],
-                        });
-                        triangle_uvs.len() as u32 - 1
-                    }
-                    None => NONE,
-                };
-                GpuTriangle {
-                    v0: v0.to_array(),
-                    material: t.material,
-                    v1: v1.to_array(),
-                    normals,
-                    v2: v2.to_array(),
-                    uvs,
-                }
-            })
-            .collect();
-        let planes = scene
-            .planes
-            .iter()
-            .map(|p| {
-                // Any axis not parallel to the normal spans the plane with it.
-                let helper = if p.normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
-                let tangent = helper.cross(p.normal).normalize();
-                let bitangent = p.normal.cross(tangent);
-                let (checker_material, checker_size) = match p.checker {
-                    Some(checker) => (checker.material, checker.size),
-                    None => (p.material, 1.0),
-                };
-                GpuPlane {
-                    point: p.point.to_array(),
-                    material: p.material,
-                    normal: p.normal.to_array(),
-                    checker_material,
-                    tangent: tangent.to_array(),
-                    checker_size,
-                    bitangent: bitangent.to_array(),
-                    _pad: 0.0,
-                }
-            })
-            .collect();
+        let spheres = scene.spheres.iter().map(pack_sphere).collect();
+        let (triangles, triangle_normals, triangle_uvs) = pack_triangles(&scene.triangles);
+        let planes = scene.planes.iter().map(pack_plane).collect();
         let lights = scene
             .lights
             .iter()
@@ -206,40 +135,7 @@ impl PackedScene {
                 _pad1: 0.0,
             })
             .collect();
-        // Every texture's texels, one after another: where each starts.
-        let mut texture_pixels = Vec::new();
-        let texture_offsets: Vec<u32> = scene
-            .textures
-            .iter()
-            .map(|t| {
-                let offset = texture_pixels.len() as u32;
-                texture_pixels.extend_from_slice(&t.texels);
-                offset
-            })
-            .collect();
-        let materials = scene
-            .materials
-            .iter()
-            .map(|m| {
-                let texture = m
-                    .texture
-                    .map(|t| (texture_offsets[t as usize], &scene.textures[t as usize]));
-                GpuMaterial {
-                    color: m.color.to_array(),
-                    specular: m.specular,
-                    shininess: m.shininess,
-                    reflect: m.reflect,
-                    transmit: m.transmit,
-                    ior: m.ior,
-                    emission: m.emission.to_array(),
-                    texture_offset: texture.map_or(NONE, |(offset, _)| offset),
-                    texture_width: texture.map_or(0, |(_, t)| t.width),
-                    texture_height: texture.map_or(0, |(_, t)| t.height),
-                    texture_wrap: texture.map_or(0, |(_, t)| t.wrap[0].code() | t.wrap[1].code() << 8),
-                    _pad: 0,
-                }
-            })
-            .collect();
+        let (materials, texture_pixels) = pack_materials(scene);
         Ok(Self {
             globals,
             max_depth: s.max_depth,
@@ -250,7 +146,7 @@ impl PackedScene {
             planes,
             lights,
             materials,
-            texture_pixels: TexturePixels(texture_pixels),
+            texture_pixels,
             bvh: None,
         })
     }
@@ -327,4 +223,120 @@ impl PackedScene {
     pub fn height(&self) -> u32 {
         self.globals.camera.height()
     }
+}
+
+fn pack_sphere(s: &Sphere) -> GpuSphere {
+    GpuSphere {
+        center: s.center.to_array(),
+        radius: s.radius,
+        material: s.material,
+        _pad: [0; 3],
+    }
+}
+
+/// Triangles' records, with the vertex normals and texture coordinates of those that have them in
+/// their own records (a triangle links to its own, or holds NONE).
+fn pack_triangles(triangles: &[Triangle]) -> (Vec<GpuTriangle>, Vec<GpuTriangleNormals>, Vec<GpuTriangleUvs>) {
+    let mut triangle_normals = Vec::new();
+    let mut triangle_uvs = Vec::new();
+    let triangles = triangles
+        .iter()
+        .map(|t| {
+            let [v0, v1, v2] = t.vertices;
+            let normals = match t.normals {
+                Some([n0, n1, n2]) => {
+                    triangle_normals.push(GpuTriangleNormals {
+                        n0: n0.to_array(),
+                        n1: n1.to_array(),
+                        n2: n2.to_array(),
+                        ..Default::default()
+                    });
+                    triangle_normals.len() as u32 - 1
+                }
+                None => NONE,
+            };
+            let uvs = match t.uvs {
+                Some([a, b, c]) => {
+                    triangle_uvs.push(GpuTriangleUvs {
+                        uv01: [a.x, a.y, b.x, b.y],
+                        uv2: c.to_array(),
+                        _pad: [0.0; 2],
+                    });
+                    triangle_uvs.len() as u32 - 1
+                }
+                None => NONE,
+            };
+            GpuTriangle {
+                v0: v0.to_array(),
+                material: t.material,
+                v1: v1.to_array(),
+                normals,
+                v2: v2.to_array(),
+                uvs,
+            }
+        })
+        .collect();
+    (triangles, triangle_normals, triangle_uvs)
+}
+
+/// A plane with the axes its checker squares follow.
+fn pack_plane(p: &Plane) -> GpuPlane {
+    // Any axis not parallel to the normal spans the plane with it.
+    let helper = if p.normal.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let tangent = helper.cross(p.normal).normalize();
+    let bitangent = p.normal.cross(tangent);
+    let (checker_material, checker_size) = match p.checker {
+        Some(checker) => (checker.material, checker.size),
+        None => (p.material, 1.0),
+    };
+    GpuPlane {
+        point: p.point.to_array(),
+        material: p.material,
+        normal: p.normal.to_array(),
+        checker_material,
+        tangent: tangent.to_array(),
+        checker_size,
+        bitangent: bitangent.to_array(),
+        _pad: 0.0,
+    }
+}
+
+/// Materials' records, and every texture's texels one after another (each material says where its
+/// texture's start).
+fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, TexturePixels) {
+    // Every texture's texels, one after another: where each starts.
+    let mut texture_pixels = Vec::new();
+    let texture_offsets: Vec<u32> = scene
+        .textures
+        .iter()
+        .map(|t| {
+            let offset = texture_pixels.len() as u32;
+            texture_pixels.extend_from_slice(&t.texels);
+            offset
+        })
+        .collect();
+    let materials = scene
+        .materials
+        .iter()
+        .map(|m| {
+            let texture = m
+                .texture
+                .map(|t| (texture_offsets[t as usize], &scene.textures[t as usize]));
+            GpuMaterial {
+                color: m.color.to_array(),
+                specular: m.specular,
+                shininess: m.shininess,
+                reflect: m.reflect,
+                transmit: m.transmit,
+                ior: m.ior,
+                emission: m.emission.to_array(),
+                texture_offset: texture.map_or(NONE, |(offset, _)| offset),
+                texture_width: texture.map_or(0, |(_, t)| t.width),
+                texture_height: texture.map_or(0, |(_, t)| t.height),
+                texture_wrap: texture.map_or(0, |(_, t)| t.wrap[0].code() | t.wrap[1].code() << 8),
+                _pad: 0,
+            }
+        })
+        .collect();
+    (materials, TexturePixels(texture_pixels))
 }

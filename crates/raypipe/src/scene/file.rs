@@ -169,11 +169,10 @@ fn vec3(a: [f32; 3]) -> Vec3 {
     Vec3::from_array(a)
 }
 
-fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
-    let line = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
-    let mut scene = Scene::default();
-
-    if let Some(c) = def.camera {
+/// The camera, the render settings and the lights: what a scene file says outright, with nothing to
+/// resolve.
+fn set_view(scene: &mut Scene, def: &SceneDef) {
+    if let Some(c) = &def.camera {
         scene.camera = Camera {
             eye: vec3(c.eye),
             target: vec3(c.target),
@@ -181,7 +180,7 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
             fov_degrees: c.fov.unwrap_or(40.0),
         };
     }
-    if let Some(r) = def.render {
+    if let Some(r) = &def.render {
         let d = RenderSettings::default();
         scene.settings = RenderSettings {
             width: r.width.unwrap_or(d.width),
@@ -198,6 +197,13 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
             color: l.get_ref().color.map_or(Vec3::ONE, vec3),
         });
     }
+}
+
+fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
+    let line = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
+    let mut scene = Scene::default();
+
+    set_view(&mut scene, &def);
 
     let mut material_index: HashMap<&str, u32> = HashMap::new();
     let mut material_lines = Vec::new();

@@ -297,33 +297,7 @@ impl Scene {
     /// Checks every invariant the tracers rely on: finite numbers, positive radii, unit-length normals
     /// that exist, material indices in range, a camera that can see.
     pub fn validate(&self) -> Result<(), InputError> {
-        let c = &self.camera;
-        if !(finite_vec(c.eye) && finite_vec(c.target) && finite_vec(c.up)) {
-            return Err(InputError::of(Element::Camera, "eye, target and up must be finite"));
-        }
-        for (name, point) in [("eye", c.eye), ("target", c.target)] {
-            if !within_reach(point) {
-                return Err(InputError::of(Element::Camera, out_of_reach(name)));
-            }
-        }
-        let Some(forward) = unit_vector(c.target - c.eye) else {
-            return Err(InputError::of(Element::Camera, "eye and target must differ"));
-        };
-        let Some(up) = unit_vector(c.up) else {
-            return Err(InputError::of(Element::Camera, "up must not be zero"));
-        };
-        if forward.cross(up).length_squared() < 1e-12 {
-            return Err(InputError::of(
-                Element::Camera,
-                "up must not be parallel to the view direction",
-            ));
-        }
-        if !(c.fov_degrees > 0.0 && c.fov_degrees < 180.0) {
-            return Err(InputError::of(
-                Element::Camera,
-                format!("fov must be in (0, 180) degrees (got {})", c.fov_degrees),
-            ));
-        }
+        validate_camera(&self.camera)?;
         self.settings.validate()?;
         for (i, light) in self.lights.iter().enumerate() {
             if !(finite_vec(light.position) && finite_vec(light.color)) {
@@ -422,6 +396,37 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// A camera that frames something: finite, within reach, looking somewhere, with a sound field of view.
+fn validate_camera(c: &Camera) -> Result<(), InputError> {
+    if !(finite_vec(c.eye) && finite_vec(c.target) && finite_vec(c.up)) {
+        return Err(InputError::of(Element::Camera, "eye, target and up must be finite"));
+    }
+    for (name, point) in [("eye", c.eye), ("target", c.target)] {
+        if !within_reach(point) {
+            return Err(InputError::of(Element::Camera, out_of_reach(name)));
+        }
+    }
+    let Some(forward) = unit_vector(c.target - c.eye) else {
+        return Err(InputError::of(Element::Camera, "eye and target must differ"));
+    };
+    let Some(up) = unit_vector(c.up) else {
+        return Err(InputError::of(Element::Camera, "up must not be zero"));
+    };
+    if forward.cross(up).length_squared() < 1e-12 {
+        return Err(InputError::of(
+            Element::Camera,
+            "up must not be parallel to the view direction",
+        ));
+    }
+    if !(c.fov_degrees > 0.0 && c.fov_degrees < 180.0) {
+        return Err(InputError::of(
+            Element::Camera,
+            format!("fov must be in (0, 180) degrees (got {})", c.fov_degrees),
+        ));
+    }
+    Ok(())
 }
 
 /// The most records of one kind a render takes: indices up to 2^24 - 1 stay exact in the f32

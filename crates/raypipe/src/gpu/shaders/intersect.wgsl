@@ -136,8 +136,9 @@ fn primitive_count() -> u32 {
 }
 
 // Primitive `index` of the BVH's order: spheres, then triangles.
+// HAS_SPHERES and HAS_TRIANGLES (preamble) leave out the test of a kind the scene lacks.
 fn intersect_primitive(index: u32, ray: Ray, t_max: f32) -> f32 {
-    if (index < globals.scene.sphere_count) {
+    if (!HAS_TRIANGLES || (HAS_SPHERES && index < globals.scene.sphere_count)) {
         return intersect_sphere(load_sphere(index), ray, t_max);
     }
     return intersect_triangle(load_triangle(index - globals.scene.sphere_count), ray, t_max);
@@ -195,6 +196,9 @@ fn hit_primitive(index: u32, ray: Ray, hit: ptr<function, Hit>) -> bool {
 // Planes are unbounded, so they stay outside any acceleration structure and are always tested.
 fn closest_plane(ray: Ray, best: Hit) -> Hit {
     var hit = best;
+    if (!HAS_PLANES) {
+        return hit;
+    }
     for (var i = 0u; i < globals.scene.plane_count; i++) {
         let t = intersect_plane(load_plane(i), ray, hit.t);
         if (t < hit.t) {
@@ -205,6 +209,9 @@ fn closest_plane(ray: Ray, best: Hit) -> Hit {
 }
 
 fn any_plane(ray: Ray, t_max: f32) -> bool {
+    if (!HAS_PLANES) {
+        return false;
+    }
     for (var i = 0u; i < globals.scene.plane_count; i++) {
         if (intersect_plane(load_plane(i), ray, t_max) < t_max) {
             return true;

@@ -56,8 +56,8 @@ fn triangle_uv(triangle: Triangle, ray: Ray) -> vec2<f32> {
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let position = ray.origin + hit.t * ray.dir;
     let reach = max(max_abs(ray.origin), max_abs(position));
-    if (hit.kind == HIT_PRIMITIVE) {
-        if (hit.index < globals.scene.sphere_count) {
+    if (!HAS_PLANES || hit.kind == HIT_PRIMITIVE) {
+        if (!HAS_TRIANGLES || (HAS_SPHERES && hit.index < globals.scene.sphere_count)) {
             let sphere = load_sphere(hit.index);
             let normal = normalize(position - sphere.center);
             return Surface(position, normal, normal, sphere.material, reach, vec2<f32>(0.0), false);
@@ -65,7 +65,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         let triangle = load_triangle(hit.index - globals.scene.sphere_count);
         let normal = normalize_scaled(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
         let shading = triangle_shading(triangle, ray, normal);
-        if (triangle.uvs == NONE) {
+        if (!HAS_TEXTURES || triangle.uvs == NONE) {
             return Surface(position, normal, shading, triangle.material, reach, vec2<f32>(0.0), false);
         }
         return Surface(position, normal, shading, triangle.material, reach, triangle_uv(triangle, ray), true);
@@ -138,7 +138,7 @@ fn sample_texture(material: Material, uv: vec2<f32>) -> vec4<f32> {
 // The surface's material: its colour times its texture's at the hit, where it has both.
 fn surface_material(surface: Surface) -> Material {
     var material = load_material(surface.material);
-    if (material.texture_offset != NONE && surface.has_uv) {
+    if (HAS_TEXTURES && material.texture_offset != NONE && surface.has_uv) {
         material.color *= sample_texture(material, surface.uv).rgb;
     }
     return material;

@@ -100,7 +100,7 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
         let shading = select(-surface.shading, surface.shading, entering);
         let view = -ray.dir;
         result.color += task.weight * (direct_light(surface, normal, shading, view, material) + material.emission);
-        if (task.depth >= MAX_DEPTH) {
+        if (!HAS_SECONDARY_RAYS || task.depth >= MAX_DEPTH) {
             continue;
         }
 
