@@ -2,7 +2,7 @@
 // Chromium, on the same scene and workload: a model framed by a pinhole camera, one point light, no
 // floor, a primary ray per pixel and a shadow ray per hit whose normal faces the light.
 //
-//   node web/peer/run.mjs [--model FILE.ply] [--width 320] [--height 240] [--frames 20]
+//   node web/peer/run.mjs [--model FILE.ply] [--width 320] [--height 240] [--frames 20] [--rounds 3]
 //                         [--backends webgl2,webgpu] [--accel threaded] [--json OUT.json]
 //
 // Needs the page built (scripts/build-web.sh target/web), the native binary (target/release/raypipe,
@@ -13,7 +13,9 @@
 // --stats`, the peer's from the counting pass) must agree within 1 %, or the run fails (exit 1).
 // Times: the median interval between the page's frames by its own clock (requestAnimationFrame's
 // timestamps) over --frames frames after warm-up, and the mean over them; rays per frame are pixels
-// plus shadow rays, and the ratio is of rays per second.
+// plus shadow rays, and the ratio is of rays per second. Each of --rounds rounds loads every page
+// anew (the peer, then raypipe on each backend) and takes its ratios within itself; the report gives
+// the medians over the rounds, and each round's figures.
 import { execFileSync } from "node:child_process";
 import fs from "node:fs";
 import os from "node:os";
@@ -32,6 +34,7 @@ const { values: options } = parseArgs({
     width: { type: "string", default: "320" },
     height: { type: "string", default: "240" },
     frames: { type: "string", default: "20" },
+    rounds: { type: "string", default: "3" },
     backends: { type: "string", default: "webgl2,webgpu" },
     accel: { type: "string", default: "threaded" },
     json: { type: "string" },
@@ -51,7 +54,9 @@ const TIMEOUT_MS = 600_000;
 const width = Number(options.width);
 const height = Number(options.height);
 const frames = Number(options.frames);
-if (!(width > 0 && height > 0 && frames >= 20)) fail("--width and --height must be positive, --frames at least 20");
+if (!(width > 0 && height > 0 && frames >= 20 && Number(options.rounds) >= 1)) {
+  fail("--width and --height must be positive, --frames at least 20, --rounds at least 1");
+}
 const backends = options.backends.split(",");
 for (const b of backends) if (!["webgl2", "webgpu"].includes(b)) fail(`--backends: unknown ${b} (webgl2, webgpu)`);
 
@@ -80,15 +85,21 @@ if (!Number.isFinite(nativeRays)) fail(`no ray count in raypipe render --stats: 
 
 const server = await serve({ "/": options.site, "/peer/": path.join(web, "peer"), "/scene/": scratch, "/node_modules/": path.join(web, "node_modules") });
 const browser = await launch();
-const results = [];
+// Per round, each tracer's figures; the machine's speed drifts between rounds, so each round's
+// ratio is taken within it and the report gives their median.
+const rounds = [];
 try {
-  const peer = await measurePeer();
-  for (const backend of backends) {
-    const raypipe = await measureRaypipe(backend);
-    validate(raypipe, peer);
-    results.push({ ...raypipe, ratio: rate(raypipe, "ms") / rate(peer, "ms"), meanRatio: rate(raypipe, "meanMs") / rate(peer, "meanMs") });
+  for (let round = 0; round < Number(options.rounds); round++) {
+    const peer = await measurePeer();
+    const raypipe = [];
+    for (const backend of backends) {
+      const result = await measureRaypipe(backend);
+      validate(result, peer);
+      raypipe.push({ ...result, ratio: rate(result, "ms") / rate(peer, "ms"), meanRatio: rate(result, "meanMs") / rate(peer, "meanMs") });
+    }
+    rounds.push({ peer, raypipe });
   }
-  report(peer);
+  report();
 } catch (error) {
   process.exitCode = 1;
   console.error(`peer benchmark: ${error.message}`);
@@ -189,19 +200,32 @@ function rate(result, time) {
   return result.rays / result[time];
 }
 
-function report(peer) {
+/// The median of numbers.
+function median(values) {
+  const sorted = [...values].sort((a, b) => a - b);
+  return sorted[Math.floor(sorted.length / 2)];
+}
+
+function report() {
   const mrays = (r) => (rate(r, "ms") / 1e3).toFixed(3);
-  const mean = (r) => `mean ${r.meanMs.toFixed(1)} ms`;
+  const times = (list) => `${median(list.map((r) => r.ms)).toFixed(1)} ms per frame (rounds: ` +
+    `${list.map((r) => r.ms.toFixed(0)).join(", ")}; means ${list.map((r) => r.meanMs.toFixed(0)).join(", ")})`;
+  const peers = rounds.map((r) => r.peer);
+  const peer = peers[0];
   console.log(`scene: ${path.basename(options.model)}, ${triangles.indices.length / 3} triangles, ${width}x${height}, ` +
-    `1 light, depth 1, median of ${frames} frames after ${WARM_UP}`);
-  console.log(`${peerName} webgl2 texture: ${peer.ms.toFixed(1)} ms per frame, ` +
-    `${peer.rays} rays (${peer.hits} hits), ${mrays(peer)} Mrays/s (${mean(peer)})`);
-  for (const r of results) {
-    console.log(`raypipe ${r.backend} ${r.memory} ${r.accel}: ${r.ms.toFixed(1)} ms per frame, ${r.rays} rays ` +
-      `(${r.hits} hits), ${mrays(r)} Mrays/s (${mean(r)}); rays per second ${r.ratio.toFixed(2)}x three-mesh-bvh's ` +
-      `(by the means ${r.meanRatio.toFixed(2)}x)`);
-  }
+    `1 light, depth 1; each round the median of ${frames} frames after ${WARM_UP}; ${rounds.length} rounds`);
+  console.log(`${peerName} webgl2 texture: ${times(peers)}, ${peer.rays} rays (${peer.hits} hits), ` +
+    `${mrays({ ...peer, ms: median(peers.map((r) => r.ms)) })} Mrays/s`);
+  backends.forEach((backend, i) => {
+    const list = rounds.map((r) => r.raypipe[i]);
+    const r = list[0];
+    const ratios = list.map((x) => x.ratio);
+    console.log(`raypipe ${backend} ${r.memory} ${r.accel}: ${times(list)}, ${r.rays} rays (${r.hits} hits), ` +
+      `${mrays({ ...r, ms: median(list.map((x) => x.ms)) })} Mrays/s; rays per second ${median(ratios).toFixed(2)}x ` +
+      `three-mesh-bvh's (median of the rounds' ratios ${ratios.map((x) => x.toFixed(2)).join(", ")}; ` +
+      `by the means ${median(list.map((x) => x.meanRatio)).toFixed(2)}x)`);
+  });
   if (options.json) {
-    fs.writeFileSync(options.json, JSON.stringify({ width, height, frames, model: path.basename(options.model), peer, raypipe: results }, null, 2));
+    fs.writeFileSync(options.json, JSON.stringify({ width, height, frames, model: path.basename(options.model), peer: peerName, rounds }, null, 2));
   }
 }
