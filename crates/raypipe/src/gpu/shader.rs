@@ -106,10 +106,10 @@ pub fn texture_pixels_binding(arrays: &[RecordArray]) -> u32 {
 }
 
 /// What kinds of things a scene holds, written into the preamble as constants so that the shader
-/// leaves out the code for what the scene lacks. Software rasterizers pay for such code even where no
-/// pixel runs it: on SwiftShader (the browsers' fallback) a frame of the Bunny's triangles took about
-/// a tenth less once the sphere test left the leaf test. Motion never changes them (spheres stay
-/// spheres), so a renderer keeps its pipeline while its scene moves.
+/// leaves out the code for what the scene lacks. SwiftShader (the browsers' fallback) pays for such
+/// code even where no pixel runs it: a frame of the Bunny's triangles took about a fifth less
+/// (docs/BENCHMARKS.md). Motion never changes them (spheres stay spheres), so a renderer keeps its
+/// pipeline while its scene moves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SceneFeatures {
     pub spheres: bool,
