@@ -60,14 +60,26 @@ if (!(width > 0 && height > 0 && frames >= 20 && Number(options.rounds) >= 1)) {
 const backends = options.backends.split(",");
 for (const b of backends) if (!["webgl2", "webgpu"].includes(b)) fail(`--backends: unknown ${b} (webgl2, webgpu)`);
 
+/// One line and exit 1, with the scratch folder (if made) gone.
 function fail(line) {
   console.error(`peer benchmark: ${line}`);
+  if (scratch) fs.rmSync(scratch, { recursive: true, force: true });
   process.exit(1);
 }
 
+/// What `step` returns, or its error as one line.
+function attempt(what, step) {
+  try {
+    return step();
+  } catch (error) {
+    return fail(`${what}: ${String(error.stderr || error.message).trim().split("\n")[0]}`);
+  }
+}
+
 // One scene for both tracers; the peer's may be turned (--skew-peer) to prove validation bites.
-const scratch = fs.mkdtempSync(path.join(os.tmpdir(), "raypipe-peer-"));
-const triangles = readTriangles(options.model);
+let scratch = null;
+const triangles = attempt(options.model, () => readTriangles(options.model));
+scratch = fs.mkdtempSync(path.join(os.tmpdir(), "raypipe-peer-"));
 const sceneFile = path.join(scratch, "scene.glb");
 fs.writeFileSync(sceneFile, sceneGlb(triangles, width, height));
 fs.writeFileSync(path.join(scratch, "peer.glb"), sceneGlb(triangles, width, height, Number(options["skew-peer"])));
@@ -76,10 +88,10 @@ const version = (name) => JSON.parse(fs.readFileSync(path.join(web, "node_module
 const peerName = `three-mesh-bvh ${version("three-mesh-bvh")} (three ${version("three")})`;
 
 // raypipe's rays for this scene, counted by the native tracer (the page's image equals it; web/tests).
-const stats = execFileSync(options.raypipe, [
+const stats = attempt(options.raypipe, () => execFileSync(options.raypipe, [
   "render", sceneFile, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "--depth", "1",
   "--accel", options.accel, "--stats", "-o", path.join(scratch, "reference.png"),
-], { encoding: "utf8", stdio: ["ignore", "pipe", "pipe"] });
+], { encoding: "utf8", stdio: ["ignore", "pipe", "pipe"] }));
 const nativeRays = Number(/(\d+) rays/.exec(stats)?.[1]);
 if (!Number.isFinite(nativeRays)) fail(`no ray count in raypipe render --stats: ${stats}`);
 

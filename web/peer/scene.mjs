@@ -29,6 +29,9 @@ export function readTriangles(file) {
   } else {
     throw new Error(`${file}: the peer benchmark reads .ply and .obj`);
   }
+  if (!geometry.getAttribute("position")?.array.every(Number.isFinite)) {
+    throw new Error(`${file}: a vertex is missing or not a finite number`);
+  }
   if (!geometry.index) geometry.setIndex([...Array(geometry.getAttribute("position").count).keys()]);
   if (geometry.index.count === 0 || geometry.index.count % 3 !== 0) throw new Error(`${file}: no triangles`);
   geometry.computeVertexNormals();
