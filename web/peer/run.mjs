@@ -72,7 +72,8 @@ function attempt(what, step) {
   try {
     return step();
   } catch (error) {
-    return fail(`${what}: ${String(error.stderr || error.message).trim().split("\n")[0]}`);
+    const line = String(error.stderr || error.message).trim().split("\n")[0];
+    return fail(line.startsWith(what) ? line : `${what}: ${line}`);
   }
 }
 
