@@ -3,7 +3,8 @@
 // floor, a primary ray per pixel and a shadow ray per hit whose normal faces the light.
 //
 //   node web/peer/run.mjs [--model FILE.ply] [--width 320] [--height 240] [--frames 20] [--rounds 3]
-//                         [--backends webgl2,webgpu] [--accel threaded] [--json OUT.json]
+//                         [--backends webgl2,webgpu] [--accel threaded] [--webgpu-memory storage]
+//                         [--json OUT.json]
 //
 // Needs the page built (scripts/build-web.sh target/web), the native binary (target/release/raypipe,
 // which counts raypipe's rays) and `npm ci --prefix web` (three, three-mesh-bvh, pngjs).
@@ -37,6 +38,8 @@ const { values: options } = parseArgs({
     rounds: { type: "string", default: "3" },
     backends: { type: "string", default: "webgl2,webgpu" },
     accel: { type: "string", default: "threaded" },
+    // WebGL2 reads the scene from textures only; WebGPU from storage buffers (default) or textures.
+    "webgpu-memory": { type: "string", default: "storage" },
     json: { type: "string" },
     site: { type: "string", default: path.join(root, "target/web") },
     raypipe: { type: "string", default: process.env.RAYPIPE_BIN ?? path.join(root, "target/release/raypipe") },
@@ -59,6 +62,7 @@ if (!(width > 0 && height > 0 && frames >= 20 && Number(options.rounds) >= 1)) {
 }
 const backends = options.backends.split(",");
 for (const b of backends) if (!["webgl2", "webgpu"].includes(b)) fail(`--backends: unknown ${b} (webgl2, webgpu)`);
+if (!["storage", "texture"].includes(options["webgpu-memory"])) fail("--webgpu-memory: storage or texture");
 
 /// One line and exit 1, with the scratch folder (if made) gone.
 function fail(line) {
@@ -164,7 +168,7 @@ async function measureRaypipe(backend) {
     };
     requestAnimationFrame(watch);
   });
-  const memory = backend === "webgl2" ? "texture" : "storage";
+  const memory = backend === "webgl2" ? "texture" : options["webgpu-memory"];
   const query = `model=/scene/scene.glb&backend=${backend}&memory=${memory}&accel=${options.accel}&depth=1` +
     `&width=${width}&height=${height}&spp=4096`;
   await page.goto(`${server.origin}/index.html?${query}`);
