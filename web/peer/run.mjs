@@ -130,8 +130,7 @@ try {
 /// run (`span` ms for `count` frames), which pipelined frames (an interval of 17 ms after one of 117)
 /// disturb less.
 function frameTimes(intervals, span, count) {
-  const sorted = [...intervals].sort((a, b) => a - b);
-  return { ms: sorted[Math.floor(sorted.length / 2)], meanMs: span / count };
+  return { ms: median(intervals), meanMs: span / count };
 }
 
 async function newPage() {
