@@ -135,10 +135,15 @@ fn primitive_count() -> u32 {
     return globals.scene.sphere_count + globals.scene.triangle_count;
 }
 
-// Primitive `index` of the BVH's order: spheres, then triangles.
-// HAS_SPHERES and HAS_TRIANGLES (preamble) leave out the test of a kind the scene lacks.
+// Whether primitive `index` of the BVH's order (spheres, then triangles) is a sphere. HAS_SPHERES
+// and HAS_TRIANGLES (preamble) make it a constant where the scene holds one kind, so the code for
+// the other drops out.
+fn is_sphere(index: u32) -> bool {
+    return !HAS_TRIANGLES || (HAS_SPHERES && index < globals.scene.sphere_count);
+}
+
 fn intersect_primitive(index: u32, ray: Ray, t_max: f32) -> f32 {
-    if (!HAS_TRIANGLES || (HAS_SPHERES && index < globals.scene.sphere_count)) {
+    if (is_sphere(index)) {
         return intersect_sphere(load_sphere(index), ray, t_max);
     }
     return intersect_triangle(load_triangle(index - globals.scene.sphere_count), ray, t_max);

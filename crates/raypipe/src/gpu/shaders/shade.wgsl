@@ -57,7 +57,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let position = ray.origin + hit.t * ray.dir;
     let reach = max(max_abs(ray.origin), max_abs(position));
     if (!HAS_PLANES || hit.kind == HIT_PRIMITIVE) {
-        if (!HAS_TRIANGLES || (HAS_SPHERES && hit.index < globals.scene.sphere_count)) {
+        if (is_sphere(hit.index)) {
             let sphere = load_sphere(hit.index);
             let normal = normalize(position - sphere.center);
             return Surface(position, normal, normal, sphere.material, reach, vec2<f32>(0.0), false);
