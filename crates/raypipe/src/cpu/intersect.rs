@@ -3,7 +3,7 @@
 pub use crate::records::constants::NO_HIT;
 use crate::records::constants::{PARALLEL_EPSILON, TINY_DIRECTION};
 use crate::records::{GpuPlane, GpuSphere, GpuTriangle};
-use glam::Vec3;
+use glam::{Vec3, Vec3Swizzles};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
@@ -26,34 +26,47 @@ impl Ray {
 }
 
 /// The shear that takes a ray to the frame where it starts at the origin and runs along +z (Woop,
-/// Benthin and Wald 2013): `axes[2]` is the direction's dominant axis, `axes[0]` and `axes[1]` the
-/// other two (swapped where the ray points down that axis, which keeps the triangles' winding); `s`
-/// holds (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in those axes.
+/// Benthin and Wald 2013): the frame's z is the direction's dominant axis, its x and y the other two
+/// (swapped where the ray points down that axis, which keeps the triangles' winding); `s` holds
+/// (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in the frame's axes. As in the shader, the axes are
+/// choices between swizzles ([`shear_axes`]), which GPU compilers keep in registers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayShear {
-    pub axes: [usize; 3],
+    /// The frame's z is world x (`z_is_x`), world y (`z_is_y`), or world z.
+    pub z_is_x: bool,
+    pub z_is_y: bool,
+    /// The frame's x and y are the remaining axes in reverse cyclic order.
+    pub swap_xy: bool,
     pub s: Vec3,
+}
+
+/// `v`'s components in the frame's axis order: exact, a permutation.
+pub fn shear_axes(v: Vec3, shear: &RayShear) -> Vec3 {
+    let cyclic = if shear.z_is_x {
+        v.yzx()
+    } else if shear.z_is_y {
+        v.zxy()
+    } else {
+        v
+    };
+    if shear.swap_xy { cyclic.yxz() } else { cyclic }
 }
 
 pub fn ray_shear(dir: Vec3) -> RayShear {
     let a = dir.abs();
-    let kz = if a.x > a.y && a.x > a.z {
-        0
-    } else if a.y > a.z {
-        1
-    } else {
-        2
+    let mut shear = RayShear {
+        z_is_x: a.x > a.y && a.x > a.z,
+        z_is_y: false,
+        swap_xy: false,
+        s: Vec3::ZERO,
     };
-    let mut kx = (kz + 1) % 3;
-    let mut ky = (kx + 1) % 3;
-    if dir[kz] < 0.0 {
-        std::mem::swap(&mut kx, &mut ky);
-    }
-    let sz = 1.0 / dir[kz];
-    RayShear {
-        axes: [kx, ky, kz],
-        s: Vec3::new(dir[kx] * sz, dir[ky] * sz, sz),
-    }
+    shear.z_is_y = !shear.z_is_x && a.y > a.z;
+    // The swap leaves z where it is.
+    shear.swap_xy = shear_axes(dir, &shear).z < 0.0;
+    let d = shear_axes(dir, &shear);
+    let sz = 1.0 / d.z;
+    shear.s = Vec3::new(d.x * sz, d.y * sz, sz);
+    shear
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -131,11 +144,9 @@ pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
 /// A corner in the ray's sheared frame: xy where the ray passes through (0, 0), z scaled so that
 /// the hit's t comes out of the barycentric blend of the corners' z.
 pub fn sheared(corner: Vec3, ray: &Ray) -> Vec3 {
-    let p = corner - ray.origin;
-    let [kx, ky, kz] = ray.shear.axes;
+    let p = shear_axes(corner - ray.origin, &ray.shear);
     let s = ray.shear.s;
-    let z = p[kz];
-    Vec3::new(p[kx] - s.x * z, p[ky] - s.y * z, s.z * z)
+    Vec3::new(p.x - s.x * p.z, p.y - s.y * p.z, s.z * p.z)
 }
 
 /// p.x q.y - p.y q.x, with the pair taken in one fixed order: the triangle across an edge meets it

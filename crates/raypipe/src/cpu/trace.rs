@@ -10,12 +10,19 @@ use crate::records::constants::{MIN_WEIGHT, R2_STEP};
 use crate::records::{PackedBvh, PackedScene};
 use glam::{UVec2, Vec2, Vec3};
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct RayTask {
     origin: Vec3,
     dir: Vec3,
     weight: Vec3,
     depth: u32,
+}
+
+/// The rays a hit sends on; a weight that is not worth tracing means none.
+#[derive(Clone, Copy, Debug, Default)]
+struct Branches {
+    reflected: RayTask,
+    refracted: RayTask,
 }
 
 /// What one pixel's trace yields: the fragment shader's two outputs.
@@ -114,9 +121,79 @@ impl<'a> Tracer<'a> {
         any_plane(&self.scene.planes, ray, t_max) || self.accel_occluded(ray, t_max)
     }
 
+    /// Traces one ray of the tree (`trace_task`): adds its light to the pixel and says where it
+    /// branches.
+    fn trace_task(&mut self, task: &RayTask, result: &mut PixelTrace) -> Branches {
+        let mut branches = Branches::default();
+        let ray = Ray::new(task.origin, task.dir);
+        self.ray_count += 1;
+        let hit = self.closest_hit(&ray, T_FAR);
+        if task.depth == 0 {
+            result.cost = box_tests();
+        }
+        if hit.kind == HitKind::None {
+            result.color += task.weight * v3(self.scene.globals.scene.background);
+            return branches;
+        }
+        let surface = surface_at(self.scene, &ray, &hit);
+        if task.depth == 0 {
+            result.normal = surface.shading;
+            result.depth = Some(hit.t);
+        }
+        let material = surface_material(self.scene, &surface);
+        let entering = surface.normal.dot(ray.dir) < 0.0;
+        // The geometric normal picks the side new rays start on; the shading normal bends them.
+        let normal = if entering { surface.normal } else { -surface.normal };
+        let shading = if entering { surface.shading } else { -surface.shading };
+        let view = -ray.dir;
+        let scene = self.scene;
+        let light = direct_light(scene, &surface, normal, shading, view, &material, |ray, t_max| {
+            self.ray_count += 1;
+            self.occluded(ray, t_max)
+        });
+        result.color += task.weight * (light + v3(material.emission));
+        if task.depth >= self.scene.max_depth {
+            return branches;
+        }
+
+        // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
+        let mut reflect_share = material.reflect;
+        let mut transmit_share = material.transmit;
+        let mut refracted = Vec3::ZERO;
+        if transmit_share > 0.0 {
+            let eta = if entering { 1.0 / material.ior } else { material.ior };
+            let cos_i = view.dot(shading);
+            let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+            if k < 0.0 {
+                reflect_share += transmit_share;
+                transmit_share = 0.0;
+            } else {
+                let cos_t = k.sqrt();
+                refracted = (eta * ray.dir + (eta * cos_i - cos_t) * shading).normalize();
+                let fresnel = fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
+                reflect_share += transmit_share * fresnel;
+                transmit_share *= 1.0 - fresnel;
+            }
+        }
+        let depth = task.depth + 1;
+        branches.refracted = RayTask {
+            origin: offset_origin(&surface, -normal),
+            dir: refracted,
+            weight: task.weight * transmit_share,
+            depth,
+        };
+        branches.reflected = RayTask {
+            origin: offset_origin(&surface, normal),
+            dir: reflect(ray.dir, shading),
+            weight: task.weight * reflect_share,
+            depth,
+        };
+        branches
+    }
+
+    /// A reflected branch is traced next; its refracted sibling waits on the stack.
     pub fn trace_pixel(&mut self, primary: Ray) -> PixelTrace {
-        let max_depth = self.scene.max_depth;
-        let stack_size = max_depth as usize + 1;
+        let stack_size = self.scene.max_depth as usize + 1;
         let mut result = PixelTrace {
             color: Vec3::ZERO,
             normal: Vec3::ZERO,
@@ -125,81 +202,32 @@ impl<'a> Tracer<'a> {
             cost: 0,
         };
         reset_box_tests();
-        let mut stack = Vec::with_capacity(stack_size);
-        stack.push(RayTask {
+        let mut task = RayTask {
             origin: primary.origin,
             dir: primary.dir,
             weight: Vec3::ONE,
             depth: 0,
-        });
-        while let Some(task) = stack.pop() {
-            let ray = Ray::new(task.origin, task.dir);
-            self.ray_count += 1;
-            let hit = self.closest_hit(&ray, T_FAR);
-            if task.depth == 0 {
-                result.cost = box_tests();
-            }
-            if hit.kind == HitKind::None {
-                result.color += task.weight * v3(self.scene.globals.scene.background);
-                continue;
-            }
-            let surface = surface_at(self.scene, &ray, &hit);
-            if task.depth == 0 {
-                result.normal = surface.shading;
-                result.depth = Some(hit.t);
-            }
-            let material = surface_material(self.scene, &surface);
-            let entering = surface.normal.dot(ray.dir) < 0.0;
-            // The geometric normal picks the side new rays start on; the shading normal bends them.
-            let normal = if entering { surface.normal } else { -surface.normal };
-            let shading = if entering { surface.shading } else { -surface.shading };
-            let view = -ray.dir;
-            let scene = self.scene;
-            let light = direct_light(scene, &surface, normal, shading, view, &material, |ray, t_max| {
-                self.ray_count += 1;
-                self.occluded(ray, t_max)
-            });
-            result.color += task.weight * (light + v3(material.emission));
-            if task.depth >= max_depth {
-                continue;
-            }
-
-            // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
-            let mut reflect_share = material.reflect;
-            let mut transmit_share = material.transmit;
-            let mut refracted = Vec3::ZERO;
-            if transmit_share > 0.0 {
-                let eta = if entering { 1.0 / material.ior } else { material.ior };
-                let cos_i = view.dot(shading);
-                let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-                if k < 0.0 {
-                    reflect_share += transmit_share;
-                    transmit_share = 0.0;
-                } else {
-                    let cos_t = k.sqrt();
-                    refracted = (eta * ray.dir + (eta * cos_i - cos_t) * shading).normalize();
-                    let fresnel = fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
-                    reflect_share += transmit_share * fresnel;
-                    transmit_share *= 1.0 - fresnel;
+        };
+        let mut waiting = Vec::with_capacity(stack_size);
+        loop {
+            let branches = self.trace_task(&task, &mut result);
+            let reflects = worth_tracing(branches.reflected.weight);
+            if worth_tracing(branches.refracted.weight) {
+                if !reflects {
+                    task = branches.refracted;
+                    continue;
+                }
+                if waiting.len() < stack_size {
+                    waiting.push(branches.refracted);
                 }
             }
-            let transmit_weight = task.weight * transmit_share;
-            if worth_tracing(transmit_weight) && stack.len() < stack_size {
-                stack.push(RayTask {
-                    origin: offset_origin(&surface, -normal),
-                    dir: refracted,
-                    weight: transmit_weight,
-                    depth: task.depth + 1,
-                });
+            if reflects {
+                task = branches.reflected;
+                continue;
             }
-            let reflect_weight = task.weight * reflect_share;
-            if worth_tracing(reflect_weight) && stack.len() < stack_size {
-                stack.push(RayTask {
-                    origin: offset_origin(&surface, normal),
-                    dir: reflect(ray.dir, shading),
-                    weight: reflect_weight,
-                    depth: task.depth + 1,
-                });
+            match waiting.pop() {
+                Some(next) => task = next,
+                None => break,
             }
         }
         result.rays = self.ray_count;

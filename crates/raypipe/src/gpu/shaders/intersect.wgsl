@@ -1,31 +1,37 @@
 // Ray-primitive intersection. Mirrored by src/cpu/intersect.rs.
 
 // The shear that takes a ray to the frame where it starts at the origin and runs along +z (Woop,
-// Benthin and Wald 2013): axes.z is the direction's dominant axis, axes.x and axes.y the other two
+// Benthin and Wald 2013): the frame's z is the direction's dominant axis, its x and y the other two
 // (swapped where the ray points down that axis, which keeps the triangles' winding); s holds
-// (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in those axes.
+// (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in the frame's axes. The axes are kept as choices
+// between swizzles, not as indices: a vector indexed by a per-pixel value costs a trip through
+// memory on some compilers (SwiftShader's, under every browser without a GPU), in every corner of
+// every triangle test.
 struct RayShear {
-    axes: vec3<u32>,
+    // The frame's z is world x (z_is_x), world y (z_is_y), or world z.
+    z_is_x: bool,
+    z_is_y: bool,
+    // The frame's x and y are the remaining axes in reverse cyclic order.
+    swap_xy: bool,
     s: vec3<f32>,
+}
+
+// v's components in the frame's axis order: exact, a permutation.
+fn shear_axes(v: vec3<f32>, shear: RayShear) -> vec3<f32> {
+    let cyclic = select(select(v, v.zxy, shear.z_is_y), v.yzx, shear.z_is_x);
+    return select(cyclic, cyclic.yxz, shear.swap_xy);
 }
 
 fn ray_shear(dir: vec3<f32>) -> RayShear {
     let a = abs(dir);
-    var kz = 2u;
-    if (a.x > a.y && a.x > a.z) {
-        kz = 0u;
-    } else if (a.y > a.z) {
-        kz = 1u;
-    }
-    var kx = (kz + 1u) % 3u;
-    var ky = (kx + 1u) % 3u;
-    if (dir[kz] < 0.0) {
-        let k = kx;
-        kx = ky;
-        ky = k;
-    }
-    let sz = 1.0 / dir[kz];
-    return RayShear(vec3<u32>(kx, ky, kz), vec3<f32>(dir[kx] * sz, dir[ky] * sz, sz));
+    var shear = RayShear(a.x > a.y && a.x > a.z, false, false, vec3<f32>(0.0));
+    shear.z_is_y = !shear.z_is_x && a.y > a.z;
+    // The swap leaves z where it is.
+    shear.swap_xy = shear_axes(dir, shear).z < 0.0;
+    let d = shear_axes(dir, shear);
+    let sz = 1.0 / d.z;
+    shear.s = vec3<f32>(d.x * sz, d.y * sz, sz);
+    return shear;
 }
 
 struct Ray {
@@ -80,11 +86,9 @@ fn intersect_sphere(sphere: Sphere, ray: Ray, t_max: f32) -> f32 {
 // A corner in the ray's sheared frame: xy where the ray passes through (0, 0), z scaled so that the
 // hit's t comes out of the barycentric blend of the corners' z.
 fn sheared(corner: vec3<f32>, ray: Ray) -> vec3<f32> {
-    let p = corner - ray.origin;
-    let axes = ray.shear.axes;
+    let p = shear_axes(corner - ray.origin, ray.shear);
     let s = ray.shear.s;
-    let z = p[axes.z];
-    return vec3<f32>(p[axes.x] - s.x * z, p[axes.y] - s.y * z, s.z * z);
+    return vec3<f32>(p.x - s.x * p.z, p.y - s.y * p.z, s.z * p.z);
 }
 
 // p.x q.y - p.y q.x, with the pair taken in one fixed order: the triangle across an edge meets it

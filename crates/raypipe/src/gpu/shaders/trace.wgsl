@@ -1,6 +1,7 @@
-// The Whitted tracer, one pixel per fragment. Shaders cannot recurse, so the reflected and refracted
-// branches wait on an explicit stack of MAX_DEPTH + 1 entries (depth-first, at most one waiting
-// sibling per level). Mirrored by src/cpu/trace.rs.
+// The Whitted tracer, one pixel per fragment. Shaders cannot recurse, so the tree of rays is walked
+// depth-first by hand: a reflected branch is traced next, and its refracted sibling waits on an
+// explicit stack of RAY_STACK_SIZE = MAX_DEPTH + 1 entries (at most one waits per level). Mirrored
+// by src/cpu/trace.rs.
 
 // T_FAR, MIN_WEIGHT (the weight below which a branch cannot change an 8-bit pixel) and DEPTH_MISS
 // (the depth where the primary ray hits nothing; the host reads it as +inf) come from the preamble.
@@ -70,69 +71,99 @@ fn worth_tracing(weight: vec3<f32>) -> bool {
     return max(weight.x, max(weight.y, weight.z)) >= MIN_WEIGHT;
 }
 
+// The rays a hit sends on; a weight that is not worth_tracing means none.
+struct Branches {
+    reflected: RayTask,
+    refracted: RayTask,
+}
+
+// Traces one ray of the tree: adds its light to the pixel and says where it branches.
+fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
+    var branches = Branches(RayTask(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0u),
+                            RayTask(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0u));
+    let ray = make_ray(task.origin, task.dir);
+    ray_count += 1u;
+    let hit = closest_hit(ray, T_FAR);
+    if (task.depth == 0u) {
+        primary_cost = box_tests;
+    }
+    if (hit.kind == HIT_NONE) {
+        (*result).color += task.weight * globals.scene.background;
+        return branches;
+    }
+    let surface = surface_at(ray, hit);
+    if (task.depth == 0u) {
+        (*result).normal = surface.shading;
+        (*result).depth = hit.t;
+    }
+    let material = surface_material(surface);
+    let entering = dot(surface.normal, ray.dir) < 0.0;
+    // The geometric normal picks the side new rays start on; the shading normal bends them.
+    let normal = select(-surface.normal, surface.normal, entering);
+    let shading = select(-surface.shading, surface.shading, entering);
+    let view = -ray.dir;
+    (*result).color += task.weight * (direct_light(surface, normal, shading, view, material) + material.emission);
+    if (!HAS_SECONDARY_RAYS || task.depth >= MAX_DEPTH) {
+        return branches;
+    }
+
+    // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
+    var reflect_share = material.reflect;
+    var transmit_share = material.transmit;
+    var refracted = vec3<f32>(0.0);
+    if (transmit_share > 0.0) {
+        let eta = select(material.ior, 1.0 / material.ior, entering);
+        let cos_i = dot(view, shading);
+        let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+        if (k < 0.0) {
+            reflect_share += transmit_share;
+            transmit_share = 0.0;
+        } else {
+            let cos_t = sqrt(k);
+            refracted = normalize(eta * ray.dir + (eta * cos_i - cos_t) * shading);
+            let fresnel = fresnel_schlick(select(cos_t, cos_i, entering), material.ior);
+            reflect_share += transmit_share * fresnel;
+            transmit_share *= 1.0 - fresnel;
+        }
+    }
+    let depth = task.depth + 1u;
+    branches.refracted = RayTask(offset_origin(surface, -normal), refracted, task.weight * transmit_share, depth);
+    branches.reflected = RayTask(offset_origin(surface, normal), reflect(ray.dir, shading), task.weight * reflect_share, depth);
+    return branches;
+}
+
 fn trace_pixel(primary: Ray) -> PixelTrace {
     var result = PixelTrace(vec3<f32>(0.0), vec3<f32>(0.0), DEPTH_MISS);
-    var stack: array<RayTask, RAY_STACK_SIZE>;
-    stack[0] = RayTask(primary.origin, primary.dir, vec3<f32>(1.0), 0u);
-    var top = 1u;
-    while (top > 0u) {
-        top -= 1u;
-        let task = stack[top];
-        let ray = make_ray(task.origin, task.dir);
-        ray_count += 1u;
-        let hit = closest_hit(ray, T_FAR);
-        if (task.depth == 0u) {
-            primary_cost = box_tests;
+    // The ray being traced stays out of the stack, which a scene without mirrors or glass never
+    // touches.
+    var task = RayTask(primary.origin, primary.dir, vec3<f32>(1.0), 0u);
+    var waiting: array<RayTask, RAY_STACK_SIZE>;
+    var top = 0u;
+    loop {
+        let branches = trace_task(task, &result);
+        if (!HAS_SECONDARY_RAYS) {
+            break;
         }
-        if (hit.kind == HIT_NONE) {
-            result.color += task.weight * globals.scene.background;
-            continue;
-        }
-        let surface = surface_at(ray, hit);
-        if (task.depth == 0u) {
-            result.normal = surface.shading;
-            result.depth = hit.t;
-        }
-        let material = surface_material(surface);
-        let entering = dot(surface.normal, ray.dir) < 0.0;
-        // The geometric normal picks the side new rays start on; the shading normal bends them.
-        let normal = select(-surface.normal, surface.normal, entering);
-        let shading = select(-surface.shading, surface.shading, entering);
-        let view = -ray.dir;
-        result.color += task.weight * (direct_light(surface, normal, shading, view, material) + material.emission);
-        if (!HAS_SECONDARY_RAYS || task.depth >= MAX_DEPTH) {
-            continue;
-        }
-
-        // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
-        var reflect_share = material.reflect;
-        var transmit_share = material.transmit;
-        var refracted = vec3<f32>(0.0);
-        if (transmit_share > 0.0) {
-            let eta = select(material.ior, 1.0 / material.ior, entering);
-            let cos_i = dot(view, shading);
-            let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-            if (k < 0.0) {
-                reflect_share += transmit_share;
-                transmit_share = 0.0;
-            } else {
-                let cos_t = sqrt(k);
-                refracted = normalize(eta * ray.dir + (eta * cos_i - cos_t) * shading);
-                let fresnel = fresnel_schlick(select(cos_t, cos_i, entering), material.ior);
-                reflect_share += transmit_share * fresnel;
-                transmit_share *= 1.0 - fresnel;
+        let reflects = worth_tracing(branches.reflected.weight);
+        if (worth_tracing(branches.refracted.weight)) {
+            if (!reflects) {
+                task = branches.refracted;
+                continue;
+            }
+            if (top < RAY_STACK_SIZE) {
+                waiting[top] = branches.refracted;
+                top += 1u;
             }
         }
-        let transmit_weight = task.weight * transmit_share;
-        if (worth_tracing(transmit_weight) && top < RAY_STACK_SIZE) {
-            stack[top] = RayTask(offset_origin(surface, -normal), refracted, transmit_weight, task.depth + 1u);
-            top += 1u;
+        if (reflects) {
+            task = branches.reflected;
+            continue;
         }
-        let reflect_weight = task.weight * reflect_share;
-        if (worth_tracing(reflect_weight) && top < RAY_STACK_SIZE) {
-            stack[top] = RayTask(offset_origin(surface, normal), reflect(ray.dir, shading), reflect_weight, task.depth + 1u);
-            top += 1u;
+        if (top == 0u) {
+            break;
         }
+        top -= 1u;
+        task = waiting[top];
     }
     return result;
 }
