@@ -7,8 +7,8 @@
 
 use crate::bvh::layout::NONE;
 use crate::modes::{Accel, MemoryMode, Pipeline};
-use crate::records::constants;
 use crate::records::packed::{MovedRecords, PackedScene};
+use crate::records::{TexelFormat, constants};
 use std::fmt::Write;
 
 /// The side of the compute pipeline's square workgroups, in pixels (compute.wgsl's, from the
@@ -94,6 +94,7 @@ pub struct RecordArray {
     pub kind: RecordKind,
     pub wgsl_type: &'static str,
     pub texels: usize,
+    pub texel_format: TexelFormat,
     pub binding: u32,
     /// Records to declare in uniform mode (uniform arrays have a fixed length).
     pub capacity: usize,
@@ -207,7 +208,15 @@ pub fn compose(config: &ShaderConfig) -> String {
                 writeln!(w, "fn load_{name}(i: u32) -> {ty} {{ return {name}_records[i]; }}").unwrap();
             }
             MemoryMode::Texture => {
-                writeln!(w, "@group(0) @binding({binding}) var {name}_texels: texture_2d<f32>;").unwrap();
+                let sample = match array.texel_format {
+                    TexelFormat::Float => "f32",
+                    TexelFormat::Bits => "u32",
+                };
+                writeln!(
+                    w,
+                    "@group(0) @binding({binding}) var {name}_texels: texture_2d<{sample}>;"
+                )
+                .unwrap();
                 let loads: Vec<String> = (0..array.texels)
                     .map(|t| format!("textureLoad({name}_texels, texel_coord(base + {t}u), 0)"))
                     .collect();

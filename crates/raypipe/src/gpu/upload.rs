@@ -5,7 +5,7 @@ use super::{Capacity, GpuContext, GpuError};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
 use crate::modes::{Accel, MemoryMode};
-use crate::records::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene, TexturePixels};
+use crate::records::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene, TexelFormat, TexturePixels};
 use wgpu::util::DeviceExt;
 
 /// Texture rows are 2048 texels wide: the smallest maximum texture size WebGL2 guarantees.
@@ -102,7 +102,7 @@ impl SceneResources {
                 }
                 Resource::Texture(texture, _) => {
                     let mut texels = records.texel_data();
-                    texels.resize((texture.width() * texture.height()) as usize, [0.0; 4]);
+                    texels.resize((texture.width() * texture.height()) as usize, [0; 4]);
                     queue.write_texture(
                         texture.as_image_copy(),
                         bytemuck::cast_slice(&texels),
@@ -202,16 +202,17 @@ pub fn upload(
                 }
                 let mut texels = records.texel_data();
                 let rows = texture_rows(ctx, (name, records.len()), texels.len(), texels_per_row)?;
-                texels.resize(rows * texels_per_row as usize, [0.0; 4]);
+                texels.resize(rows * texels_per_row as usize, [0; 4]);
+                let format = records.texel_format();
                 let texture = texel_texture(
                     ctx,
                     name,
-                    wgpu::TextureFormat::Rgba32Float,
+                    texture_format(format),
                     (texels_per_row, rows as u32),
                     bytemuck::cast_slice(&texels),
                 );
                 let view = texture.create_view(&Default::default());
-                (texture_binding(), Resource::Texture(texture, view))
+                (texture_binding(format), Resource::Texture(texture, view))
             }
         };
         out.layout_entries.push(wgpu::BindGroupLayoutEntry {
@@ -226,7 +227,7 @@ pub fn upload(
     out.layout_entries.push(wgpu::BindGroupLayoutEntry {
         binding: texture_pixels_binding(&out.arrays),
         visibility: stage,
-        ty: texture_binding(),
+        ty: texture_binding(TexelFormat::Float),
         count: None,
     });
     Ok(out)
@@ -311,10 +312,21 @@ fn texel_texture(
     )
 }
 
-/// How the shader binds a texel texture: unfiltered floats, read with `textureLoad`.
-fn texture_binding() -> wgpu::BindingType {
+fn texture_format(format: TexelFormat) -> wgpu::TextureFormat {
+    match format {
+        TexelFormat::Float => wgpu::TextureFormat::Rgba32Float,
+        TexelFormat::Bits => wgpu::TextureFormat::Rgba32Uint,
+    }
+}
+
+/// How the shader binds a texel texture: unfiltered, read with `textureLoad`.
+fn texture_binding(format: TexelFormat) -> wgpu::BindingType {
+    let sample_type = match format {
+        TexelFormat::Float => wgpu::TextureSampleType::Float { filterable: false },
+        TexelFormat::Bits => wgpu::TextureSampleType::Uint,
+    };
     wgpu::BindingType::Texture {
-        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+        sample_type,
         view_dimension: wgpu::TextureViewDimension::D2,
         multisampled: false,
     }
@@ -361,6 +373,7 @@ fn record_array(index: usize, kind: RecordKind, records: &dyn RecordSlice) -> Re
         kind,
         wgsl_type: records.wgsl_type(),
         texels: records.texels(),
+        texel_format: records.texel_format(),
         binding: index as u32 + 1,
         capacity: records.len(),
     }
@@ -386,7 +399,9 @@ trait RecordSlice {
     fn record_size(&self) -> usize;
     fn len(&self) -> usize;
     fn bytes(&self) -> &[u8];
-    fn texel_data(&self) -> Vec<[f32; 4]>;
+    fn texel_format(&self) -> TexelFormat;
+    /// The records' texels, as the bits of `texel_format`'s values.
+    fn texel_data(&self) -> Vec<[u32; 4]>;
 }
 
 impl<T: GpuRecord> RecordSlice for Vec<T> {
@@ -405,7 +420,10 @@ impl<T: GpuRecord> RecordSlice for Vec<T> {
     fn bytes(&self) -> &[u8] {
         bytemuck::cast_slice(self)
     }
-    fn texel_data(&self) -> Vec<[f32; 4]> {
+    fn texel_format(&self) -> TexelFormat {
+        T::TEXEL_FORMAT
+    }
+    fn texel_data(&self) -> Vec<[u32; 4]> {
         let mut out = Vec::with_capacity(self.as_slice().len() * T::TEXELS);
         for record in self {
             record.push_texels(&mut out);

@@ -11,7 +11,7 @@ pub mod packed;
 pub mod texels;
 
 pub use packed::{PackedBvh, PackedScene};
-pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, TexturePixels};
+pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, TexelFormat, TexturePixels};
 
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::GpuNode;

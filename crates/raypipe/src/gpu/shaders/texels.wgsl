@@ -1,5 +1,6 @@
-// Decoders for the texture route: each record arrives as rgba32float texels, written on the host by
-// GpuRecord::push_texels (src/scene/packed.rs). Integer fields travel as exact float values.
+// Decoders for the texture route: each record arrives as texels written on the host by
+// GpuRecord::push_texels (src/records/texels.rs): rgba32float, with integer fields as exact float
+// values, or rgba32uint for records of integers only.
 
 fn texel_coord(index: u32) -> vec2<u32> {
     return vec2<u32>(index % TEXELS_PER_ROW, index / TEXELS_PER_ROW);
@@ -44,11 +45,7 @@ fn node_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> BvhNode {
     return BvhNode(t0.xyz, link_from_texel(t0.w), t1.xyz, link_from_texel(t1.w), link_from_texel(t2.x), link_from_texel(t2.y));
 }
 
-// Corners travel as exact floats; a leaf's link as -(primitive + 1).
-fn threaded_node_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> ThreadedNode {
-    let lo = vec3<u32>(t0.xyz);
-    let hi = vec3<u32>(t1.xyz);
-    let bounds = vec3<u32>(lo.x | (lo.y << 16u), lo.z | (hi.x << 16u), hi.y | (hi.z << 16u));
-    let link = select(u32(t0.w), LEAF_BIT | u32(-t0.w - 1.0), t0.w < 0.0);
-    return ThreadedNode(bounds, link);
+// Threaded nodes are integers only: one rgba32uint texel, the buffer's bytes.
+fn threaded_node_from_texels(t0: vec4<u32>) -> ThreadedNode {
+    return ThreadedNode(t0.xyz, t0.w);
 }
