@@ -57,8 +57,8 @@ pub enum MemoryMode {
     /// Storage buffers: up to the adapter's buffer limit.
     #[default]
     Storage,
-    /// rgba32float textures read with textureLoad: the route where fragment shaders have no storage
-    /// buffers (WebGL2).
+    /// Textures read with textureLoad (rgba32float; rgba32uint for the BVH's nodes): the route
+    /// where fragment shaders have no storage buffers (WebGL2).
     Texture,
 }
 
@@ -74,7 +74,7 @@ impl_choice!(
         (
             Texture,
             "texture",
-            "rgba32float textures read with textureLoad: the route where fragment shaders have no storage buffers (WebGL2)"
+            "textures read with textureLoad (rgba32float; rgba32uint for the BVH's nodes): the route where fragment shaders have no storage buffers (WebGL2)"
         ),
     ]
 );

@@ -2,8 +2,8 @@
 //! whether anything blocks a shadow ray.
 
 use super::intersect::{
-    Hit, HitKind, NO_HIT, Primitives, Ray, closer_primitive, count_box_tests, hit_primitive, intersect_box,
-    intersect_sphere, intersect_triangle, safe_inverse, v3,
+    Hit, HitKind, Primitives, Ray, closer_primitive, count_box_tests, hit_primitive, intersect_box, intersect_sphere,
+    intersect_triangle, safe_inverse, v3,
 };
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree};
@@ -85,23 +85,9 @@ pub fn traverse_stack(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, be
             let left = nodes[left_index as usize];
             let right_index = if left.is_leaf() { left_index + 1 } else { left.link };
             let right = nodes[right_index as usize];
-            // Leaf children: test their primitives now (no dearer than their boxes); box-test the others.
-            let mut t_left = NO_HIT;
-            if left.is_leaf() {
-                if hit_primitive(primitives, left.primitive(), ray, &mut hit) && shadow {
-                    return hit;
-                }
-            } else {
-                t_left = enter(&left, hit.t);
-            }
-            let mut t_right = NO_HIT;
-            if right.is_leaf() {
-                if hit_primitive(primitives, right.primitive(), ray, &mut hit) && shadow {
-                    return hit;
-                }
-            } else {
-                t_right = enter(&right, hit.t);
-            }
+            // Leaf children are box-tested too and visited as nodes: one primitive test per step.
+            let t_left = enter(&left, hit.t);
+            let t_right = enter(&right, hit.t);
             if t_left >= 0.0 && t_right >= 0.0 {
                 // Both: go to the nearer (left on a tie), the other waits.
                 assert!(

@@ -1,4 +1,5 @@
-//! Bringing the scene to the shader: uniform buffers, storage buffers, or rgba32float textures.
+//! Bringing the scene to the shader: uniform buffers, storage buffers, or textures (rgba32float, or
+//! rgba32uint for records of integers only).
 
 use super::shader::{RecordArray, RecordKind, texture_pixels_binding};
 use super::{Capacity, GpuContext, GpuError};

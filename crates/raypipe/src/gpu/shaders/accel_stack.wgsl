@@ -31,23 +31,10 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
             let left = load_threaded_node(left_index);
             let right_index = select(left.link, left_index + 1u, is_leaf(left));
             let right = load_threaded_node(right_index);
-            // Leaf children: test their primitives now (no dearer than their boxes); box-test the others.
-            var t_left = NO_HIT;
-            if (is_leaf(left)) {
-                if (hit_primitive(left.link & ~LEAF_BIT, ray, &hit) && shadow) {
-                    return hit;
-                }
-            } else {
-                t_left = intersect_box(quantized_min(left), quantized_max(left), origin, inv_dir, hit.t);
-            }
-            var t_right = NO_HIT;
-            if (is_leaf(right)) {
-                if (hit_primitive(right.link & ~LEAF_BIT, ray, &hit) && shadow) {
-                    return hit;
-                }
-            } else {
-                t_right = intersect_box(quantized_min(right), quantized_max(right), origin, inv_dir, hit.t);
-            }
+            // Leaf children are box-tested too and visited as nodes: one primitive test per step,
+            // where testing them here would put three in the loop, and SwiftShader runs them all.
+            let t_left = intersect_box(quantized_min(left), quantized_max(left), origin, inv_dir, hit.t);
+            let t_right = intersect_box(quantized_min(right), quantized_max(right), origin, inv_dir, hit.t);
             if (t_left >= 0.0 && t_right >= 0.0) {
                 // Both: go to the nearer (left on a tie), the other waits.
                 if (t_right < t_left) {
@@ -81,13 +68,13 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
             size -= 1u;
             if (stack_t[size] <= hit.t) {
                 index = stack[size];
-                node = load_threaded_node(index);
                 resumed = true;
             }
         }
         if (!resumed) {
             break;
         }
+        node = load_threaded_node(index);
     }
     return hit;
 }
