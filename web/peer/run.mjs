@@ -3,7 +3,7 @@
 // floor, a primary ray per pixel and a shadow ray per hit whose normal faces the light.
 //
 //   node web/peer/run.mjs [--model FILE.ply] [--width 320] [--height 240] [--frames 20] [--rounds 3]
-//                         [--backends webgl2,webgpu] [--accel threaded] [--webgpu-memory storage]
+//                         [--backends webgl2,webgpu] [--accel threaded,stack] [--webgpu-memory storage]
 //                         [--json OUT.json]
 //
 // Needs the page built (scripts/build-web.sh target/web), the native binary (target/release/raypipe,
@@ -37,7 +37,8 @@ const { values: options } = parseArgs({
     frames: { type: "string", default: "20" },
     rounds: { type: "string", default: "3" },
     backends: { type: "string", default: "webgl2,webgpu" },
-    accel: { type: "string", default: "threaded" },
+    // Each walk is timed on each backend.
+    accel: { type: "string", default: "threaded,stack" },
     // WebGL2 reads the scene from textures only; WebGPU from storage buffers (default) or textures.
     "webgpu-memory": { type: "string", default: "storage" },
     json: { type: "string" },
@@ -54,6 +55,8 @@ const WARM_UP = 3;
 const AGREE = 0.01;
 const TIMEOUT_MS = 600_000;
 
+// The scratch folder for the scenes and the reference image, once made; fail() removes it.
+let scratch = null;
 const width = Number(options.width);
 const height = Number(options.height);
 const frames = Number(options.frames);
@@ -63,6 +66,11 @@ if (!(width > 0 && height > 0 && frames >= 20 && Number(options.rounds) >= 1)) {
 const backends = options.backends.split(",");
 for (const b of backends) if (!["webgl2", "webgpu"].includes(b)) fail(`--backends: unknown ${b} (webgl2, webgpu)`);
 if (!["storage", "texture"].includes(options["webgpu-memory"])) fail("--webgpu-memory: storage or texture");
+const walks = options.accel.split(",");
+const WALKS = ["brute", "stack", "stackless", "threaded"];
+for (const a of walks) if (!WALKS.includes(a)) fail(`--accel: unknown ${a} (${WALKS.join(", ")})`);
+// What each round measures of raypipe's page, in this order.
+const configs = backends.flatMap((backend) => walks.map((accel) => ({ backend, accel })));
 
 /// One line and exit 1, with the scratch folder (if made) gone.
 function fail(line) {
@@ -82,7 +90,6 @@ function attempt(what, step) {
 }
 
 // One scene for both tracers; the peer's may be turned (--skew-peer) to prove validation bites.
-let scratch = null;
 const triangles = attempt(options.model, () => readTriangles(options.model));
 scratch = fs.mkdtempSync(path.join(os.tmpdir(), "raypipe-peer-"));
 const sceneFile = path.join(scratch, "scene.glb");
@@ -92,10 +99,11 @@ const pixels = width * height;
 const version = (name) => JSON.parse(fs.readFileSync(path.join(web, "node_modules", name, "package.json"), "utf8")).version;
 const peerName = `three-mesh-bvh ${version("three-mesh-bvh")} (three ${version("three")})`;
 
-// raypipe's rays for this scene, counted by the native tracer (the page's image equals it; web/tests).
+// raypipe's rays for this scene, counted by the native tracer (the page's image equals it; web/tests);
+// every walk traces the same rays.
 const stats = attempt(options.raypipe, () => execFileSync(options.raypipe, [
   "render", sceneFile, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "--depth", "1",
-  "--accel", options.accel, "--stats", "-o", path.join(scratch, "reference.png"),
+  "--accel", walks[0], "--stats", "-o", path.join(scratch, "reference.png"),
 ], { encoding: "utf8", stdio: ["ignore", "pipe", "pipe"] }));
 const nativeRays = Number(/(\d+) rays/.exec(stats)?.[1]);
 if (!Number.isFinite(nativeRays)) fail(`no ray count in raypipe render --stats: ${stats}`);
@@ -109,8 +117,8 @@ try {
   for (let round = 0; round < Number(options.rounds); round++) {
     const peer = await measurePeer();
     const raypipe = [];
-    for (const backend of backends) {
-      const result = await measureRaypipe(backend);
+    for (const { backend, accel } of configs) {
+      const result = await measureRaypipe(backend, accel);
       validate(result, peer);
       raypipe.push({ ...result, ratio: rate(result, "ms") / rate(peer, "ms"), meanRatio: rate(result, "meanMs") / rate(peer, "meanMs") });
     }
@@ -153,7 +161,8 @@ async function measurePeer() {
   return { tracer: peerName, backend: "webgl2", memory: "texture", ...timing, rays: pixels + counts.shadowRays, ...counts, adapter: status.renderer, buildMs: status.buildMs };
 }
 
-async function measureRaypipe(backend) {
+async function measureRaypipe(backend, accel) {
+  const name = `raypipe ${backend} ${accel}`;
   const page = await newPage();
   // Every animation frame's timestamp with the page's frame count then: a frame's time is the
   // interval to the next frame that traced.
@@ -168,29 +177,29 @@ async function measureRaypipe(backend) {
     requestAnimationFrame(watch);
   });
   const memory = backend === "webgl2" ? "texture" : options["webgpu-memory"];
-  const query = `model=/scene/scene.glb&backend=${backend}&memory=${memory}&accel=${options.accel}&depth=1` +
+  const query = `model=/scene/scene.glb&backend=${backend}&memory=${memory}&accel=${accel}&depth=1` +
     `&width=${width}&height=${height}&spp=4096`;
   await page.goto(`${server.origin}/index.html?${query}`);
   const until = (condition, arg) => page.waitForFunction(condition, arg, { timeout: TIMEOUT_MS, polling: 50 });
   await until(() => window.raypipeStatus?.error || (window.raypipeStatus?.primitives > 0 && !window.raypipeStatus.busy));
   const opened = await page.evaluate(() => ({ ...window.raypipeStatus }));
-  if (opened.error) throw new Error(`raypipe ${backend}: ${opened.error}`);
+  if (opened.error) throw new Error(`${name}: ${opened.error}`);
   const start = opened.frames;
   await until((n) => window.raypipeStatus.error || window.raypipeStatus.frames >= n, start + WARM_UP + frames + 1);
   const log = await page.evaluate(() => window.frameLog);
   const status = await page.evaluate(() => ({ ...window.raypipeStatus }));
-  if (status.error) throw new Error(`raypipe ${backend}: ${status.error}`);
+  if (status.error) throw new Error(`${name}: ${status.error}`);
   // Only consecutive frames: an interval that spans two frames (a missed observation) is left out.
   const timed = log.filter(([, n]) => n > start + WARM_UP && n <= start + WARM_UP + frames + 1);
   const intervals = timed.slice(1).flatMap(([t, n], i) => (n === timed[i][1] + 1 ? [t - timed[i][0]] : []));
-  if (intervals.length < frames / 2) throw new Error(`raypipe ${backend}: only ${intervals.length} frames observed`);
+  if (intervals.length < frames / 2) throw new Error(`${name}: only ${intervals.length} frames observed`);
   const timing = frameTimes(intervals, timed.at(-1)[0] - timed[0][0], timed.at(-1)[1] - timed[0][1]);
 
   // Hits: the pixels the normal view does not leave black.
   await page.evaluate(() => window.raypipeViewer.set("aov", "normal"));
   await until((n) => window.raypipeStatus.aov === "normal" && window.raypipeStatus.frames >= n, status.frames + 2);
   const png = PNG.sync.read(await page.locator("#frame").screenshot());
-  if (png.width !== width || png.height !== height) throw new Error(`raypipe ${backend}: canvas is ${png.width}x${png.height}`);
+  if (png.width !== width || png.height !== height) throw new Error(`${name}: canvas is ${png.width}x${png.height}`);
   let hits = 0;
   for (let i = 0; i < png.data.length; i += 4) hits += png.data[i] + png.data[i + 1] + png.data[i + 2] > 0;
   await page.close();
@@ -205,7 +214,7 @@ function validate(raypipe, peer) {
   for (const key of ["hits", "shadowRays"]) {
     const [a, b] = [raypipe[key], peer[key]];
     if (Math.abs(a - b) > AGREE * Math.max(a, b, 1)) {
-      throw new Error(`the images differ: raypipe (${raypipe.backend}) ${key} ${a}, three-mesh-bvh ${b} ` +
+      throw new Error(`the images differ: raypipe (${raypipe.backend}, ${raypipe.accel}) ${key} ${a}, three-mesh-bvh ${b} ` +
         `(more than ${AGREE * 100} % apart); no time is printed`);
     }
   }
@@ -232,7 +241,7 @@ function report() {
     `1 light, depth 1; each round the median of ${frames} frames after ${WARM_UP}; ${rounds.length} rounds`);
   console.log(`${peerName} webgl2 texture: ${times(peers)}, ${peer.rays} rays (${peer.hits} hits), ` +
     `${mrays({ ...peer, ms: median(peers.map((r) => r.ms)) })} Mrays/s`);
-  backends.forEach((backend, i) => {
+  configs.forEach(({ backend }, i) => {
     const list = rounds.map((r) => r.raypipe[i]);
     const r = list[0];
     const ratios = list.map((x) => x.ratio);

@@ -44,7 +44,7 @@ function benchmark(...extra) {
 test("the peer benchmark refuses to time images that differ (the peer's camera turned by 8 degrees)", { timeout: TIMEOUT_MS }, () => {
   const { status, output } = benchmark("--skew-peer", "8");
   assert.equal(status, 1, output);
-  assert.match(output, /the images differ: raypipe \(webgl2\) hits \d+, three-mesh-bvh \d+/);
+  assert.match(output, /the images differ: raypipe \(webgl2, threaded\) hits \d+, three-mesh-bvh \d+/);
   assert.doesNotMatch(output, /ms per frame/);
 });
 
@@ -52,5 +52,7 @@ test("the peer benchmark times both tracers where their images agree", { timeout
   const { status, output } = benchmark();
   assert.equal(status, 0, output);
   assert.match(output, /three-mesh-bvh [\d.]+ \(three [\d.]+\) webgl2 texture: [\d.]+ ms per frame/);
-  assert.match(output, /raypipe webgl2 texture threaded: [\d.]+ ms per frame .*, \d+ rays .*x three-mesh-bvh's/);
+  for (const walk of ["threaded", "stack"]) {
+    assert.match(output, new RegExp(`raypipe webgl2 texture ${walk}: [\\d.]+ ms per frame .*, \\d+ rays .*x three-mesh-bvh's`));
+  }
 });
