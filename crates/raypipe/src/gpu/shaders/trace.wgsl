@@ -79,8 +79,8 @@ struct Branches {
 
 // Traces one ray of the tree: adds its light to the pixel and says where it branches.
 fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
-    var branches = Branches(RayTask(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0u),
-                            RayTask(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0u));
+    // Zero weights: no branches.
+    var branches = Branches();
     let ray = make_ray(task.origin, task.dir);
     ray_count += 1u;
     let hit = closest_hit(ray, T_FAR);
