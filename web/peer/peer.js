@@ -5,17 +5,13 @@
 //
 //   peer/index.html?model=URL&width=W&height=H
 //
-// The model is web/peer/scene.mjs's GLB (its camera, its one point light). A frame is traced on
-// every animation frame; `window.peerStatus` publishes the frames' times by the page's clock
-// (requestAnimationFrame's timestamps), and `window.peerCount()` traces once more into a target
-// read back on the CPU: `{ hits, shadowRays }`.
+// The model is web/peer/scene.mjs's GLB (web/peer/load.js). A frame is traced on every animation
+// frame; `window.peerStatus` publishes the frames' times by the page's clock, and
+// `window.peerCount()` traces once more into a target read back on the CPU: `{ hits, shadowRays }`.
 import * as THREE from "three";
-import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { FullScreenQuad } from "three/addons/postprocessing/Pass.js";
 import { BVHShaderGLSL, FloatVertexAttributeTexture, MeshBVH, MeshBVHUniformStruct } from "three-mesh-bvh";
-
-const status = { frames: 0, times: [], error: null, triangles: 0, renderer: null };
-window.peerStatus = status;
+import { SHADING, everyFrame, fail, loadScene, status } from "./load.js";
 
 const fragmentShader = /* glsl */ `
   precision highp isampler2D;
@@ -88,36 +84,14 @@ const vertexShader = /* glsl */ `
 `;
 
 async function main() {
-  const query = new URLSearchParams(window.location.search);
-  const width = Number(query.get("width") ?? 320);
-  const height = Number(query.get("height") ?? 240);
-  const model = query.get("model");
-  if (!model) throw new Error("peer: give ?model=URL");
-
-  const gltf = await new GLTFLoader().loadAsync(new URL(model, window.location.href).href);
-  gltf.scene.updateMatrixWorld(true);
-  let mesh = null;
-  let light = null;
-  gltf.scene.traverse((o) => {
-    if (o.isMesh && !mesh) mesh = o;
-    if (o.isPointLight && !light) light = o;
-  });
-  const camera = gltf.cameras[0];
-  if (!mesh || !light || !camera) throw new Error(`${model}: needs a mesh, a point light and a camera`);
-  const geometry = mesh.geometry.clone().applyMatrix4(mesh.matrixWorld);
-  camera.aspect = width / height;
-  camera.updateProjectionMatrix();
-  camera.updateMatrixWorld(true);
-
+  const { width, height, geometry, camera, lightPosition, lightColor, rayBias } = await loadScene();
   const built = performance.now();
   const bvh = new MeshBVH(geometry);
   status.buildMs = performance.now() - built;
-  status.triangles = geometry.index.count / 3;
   const bvhStruct = new MeshBVHUniformStruct();
   bvhStruct.updateFrom(bvh);
   const normals = new FloatVertexAttributeTexture();
   normals.updateFrom(geometry.attributes.normal);
-  geometry.computeBoundingSphere();
 
   const canvas = document.getElementById("frame");
   const renderer = new THREE.WebGLRenderer({ canvas, antialias: false });
@@ -135,12 +109,12 @@ async function main() {
     cameraWorldMatrix: { value: camera.matrixWorld },
     invProjectionMatrix: { value: camera.projectionMatrixInverse },
     resolution: { value: new THREE.Vector2(width, height) },
-    lightPosition: { value: light.getWorldPosition(new THREE.Vector3()) },
-    lightColor: { value: light.color.clone().multiplyScalar(light.intensity) },
-    albedo: { value: new THREE.Color(0.7, 0.7, 0.7) },
-    background: { value: new THREE.Color(0.2, 0.2, 0.3) },
-    ambient: { value: 0.1 },
-    rayBias: { value: geometry.boundingSphere.radius * 1e-4 },
+    lightPosition: { value: lightPosition },
+    lightColor: { value: lightColor },
+    albedo: { value: SHADING.albedo },
+    background: { value: SHADING.background },
+    ambient: { value: SHADING.ambient },
+    rayBias: { value: rayBias },
   };
   const material = (counting) =>
     new THREE.ShaderMaterial({ defines: { COUNTING: counting ? 1 : 0 }, uniforms, vertexShader, fragmentShader });
@@ -164,15 +138,7 @@ async function main() {
     return { hits, shadowRays };
   };
 
-  const frame = (time) => {
-    quad.render(renderer);
-    status.frames += 1;
-    status.times.push(time);
-    requestAnimationFrame(frame);
-  };
-  requestAnimationFrame(frame);
+  everyFrame(() => quad.render(renderer));
 }
 
-main().catch((error) => {
-  status.error = String(error?.message ?? error);
-});
+main().catch(fail);

@@ -1,6 +1,8 @@
-// raypipe's page against three-mesh-bvh (its GLSL walk, web/peer/peer.js) in the same headless
-// Chromium, on the same scene and workload: a model framed by a pinhole camera, one point light, no
-// floor, a primary ray per pixel and a shadow ray per hit whose normal faces the light.
+// raypipe's page against three-mesh-bvh in the same headless Chromium, on each backend: on WebGL2
+// its GLSL walk from a full-screen quad (web/peer/peer.js), on WebGPU its `three-mesh-bvh/webgpu`
+// walk from a compute kernel (web/peer/webgpu.js). The same scene and workload everywhere: a model
+// framed by a pinhole camera, one point light, no floor, a primary ray per pixel and a shadow ray per
+// hit whose normal faces the light.
 //
 //   node web/peer/run.mjs [--model FILE.ply] [--width 320] [--height 240] [--frames 20] [--rounds 3]
 //                         [--backends webgl2,webgpu] [--accel threaded,stack] [--webgpu-memory storage]
@@ -9,14 +11,15 @@
 // Needs the page built (scripts/build-web.sh target/web), the native binary (target/release/raypipe,
 // which counts raypipe's rays) and `npm ci --prefix web` (three, three-mesh-bvh, pngjs).
 //
-// Before any time is printed both images are checked: the hit counts (raypipe's from its normal view,
-// the peer's from a counting pass) and the shadow-ray counts (raypipe's from `raypipe render
-// --stats`, the peer's from the counting pass) must agree within 1 %, or the run fails (exit 1).
+// Before any time is printed the images are checked: the hit counts (raypipe's from its normal view,
+// the peers' from a counting pass) and the shadow-ray counts (raypipe's from `raypipe render
+// --stats`, the peers' from the counting pass) must agree within 1 %, or the run fails (exit 1).
 // Times: the median interval between the page's frames by its own clock (requestAnimationFrame's
 // timestamps) over --frames frames after warm-up, and the mean over them; rays per frame are pixels
-// plus shadow rays, and the ratio is of rays per second. Each of --rounds rounds loads every page
-// anew (the peer, then raypipe on each backend) and takes its ratios within itself; the report gives
-// the medians over the rounds, and each round's figures.
+// plus shadow rays, and the ratio is of rays per second, against the peer on the same backend (and,
+// for raypipe on WebGPU, against raypipe on WebGL2 with the same walk). Each of --rounds rounds loads
+// every page anew (the peers, then raypipe on each backend) and takes its ratios within itself; the
+// report gives the medians over the rounds, and each round's figures.
 import { execFileSync } from "node:child_process";
 import fs from "node:fs";
 import os from "node:os";
@@ -115,14 +118,16 @@ const browser = await launch();
 const rounds = [];
 try {
   for (let round = 0; round < Number(options.rounds); round++) {
-    const peer = await measurePeer();
+    const peers = {};
+    for (const backend of backends) peers[backend] = await measurePeer(backend);
     const raypipe = [];
     for (const { backend, accel } of configs) {
       const result = await measureRaypipe(backend, accel);
+      const peer = peers[backend];
       validate(result, peer);
       raypipe.push({ ...result, ratio: rate(result, "ms") / rate(peer, "ms"), meanRatio: rate(result, "meanMs") / rate(peer, "meanMs") });
     }
-    rounds.push({ peer, raypipe });
+    rounds.push({ peers, raypipe });
   }
   report();
 } catch (error) {
@@ -148,17 +153,20 @@ async function newPage() {
   return page;
 }
 
-async function measurePeer() {
+/// The peer on `backend`: its WebGL2 page (textures) or its WebGPU page (storage buffers).
+async function measurePeer(backend) {
   const page = await newPage();
-  await page.goto(`${server.origin}/peer/index.html?model=/scene/peer.glb&width=${width}&height=${height}`);
+  const file = backend === "webgl2" ? "index.html" : "webgpu.html";
+  await page.goto(`${server.origin}/peer/${file}?model=/scene/peer.glb&width=${width}&height=${height}`);
   await page.waitForFunction((n) => window.peerStatus?.error || window.peerStatus?.frames >= n, WARM_UP + frames + 1, { timeout: TIMEOUT_MS, polling: 50 });
   const status = await page.evaluate(() => window.peerStatus);
-  if (status.error) throw new Error(`peer: ${status.error} ${page.errors}`);
+  if (status.error) throw new Error(`three-mesh-bvh on ${backend}: ${status.error} ${page.errors}`);
   const times = status.times.slice(WARM_UP, WARM_UP + frames + 1);
   const timing = frameTimes(times.slice(1).map((t, i) => t - times[i]), times.at(-1) - times[0], frames);
   const counts = await page.evaluate(() => window.peerCount());
   await page.close();
-  return { tracer: peerName, backend: "webgl2", memory: "texture", ...timing, rays: pixels + counts.shadowRays, ...counts, adapter: status.renderer, buildMs: status.buildMs };
+  const memory = backend === "webgl2" ? "texture" : "storage";
+  return { tracer: peerName, backend, memory, ...timing, rays: pixels + counts.shadowRays, ...counts, adapter: status.renderer, buildMs: status.buildMs };
 }
 
 async function measureRaypipe(backend, accel) {
@@ -214,7 +222,7 @@ function validate(raypipe, peer) {
   for (const key of ["hits", "shadowRays"]) {
     const [a, b] = [raypipe[key], peer[key]];
     if (Math.abs(a - b) > AGREE * Math.max(a, b, 1)) {
-      throw new Error(`the images differ: raypipe (${raypipe.backend}, ${raypipe.accel}) ${key} ${a}, three-mesh-bvh ${b} ` +
+      throw new Error(`the images differ: raypipe (${raypipe.backend}, ${raypipe.accel}) ${key} ${a}, three-mesh-bvh (${peer.backend}) ${b} ` +
         `(more than ${AGREE * 100} % apart); no time is printed`);
     }
   }
@@ -235,20 +243,28 @@ function report() {
   const mrays = (r) => (rate(r, "ms") / 1e3).toFixed(3);
   const times = (list) => `${median(list.map((r) => r.ms)).toFixed(1)} ms per frame (rounds: ` +
     `${list.map((r) => r.ms.toFixed(0)).join(", ")}; means ${list.map((r) => r.meanMs.toFixed(0)).join(", ")})`;
-  const peers = rounds.map((r) => r.peer);
-  const peer = peers[0];
+  const rounded = (list) => list.map((x) => x.toFixed(2)).join(", ");
   console.log(`scene: ${path.basename(options.model)}, ${triangles.indices.length / 3} triangles, ${width}x${height}, ` +
     `1 light, depth 1; each round the median of ${frames} frames after ${WARM_UP}; ${rounds.length} rounds`);
-  console.log(`${peerName} webgl2 texture: ${times(peers)}, ${peer.rays} rays (${peer.hits} hits), ` +
-    `${mrays({ ...peer, ms: median(peers.map((r) => r.ms)) })} Mrays/s`);
-  configs.forEach(({ backend }, i) => {
+  for (const backend of backends) {
+    const peers = rounds.map((r) => r.peers[backend]);
+    const peer = peers[0];
+    console.log(`${peerName} ${backend} ${peer.memory}: ${times(peers)}, ${peer.rays} rays (${peer.hits} hits), ` +
+      `${mrays({ ...peer, ms: median(peers.map((r) => r.ms)) })} Mrays/s`);
+  }
+  configs.forEach(({ backend, accel }, i) => {
     const list = rounds.map((r) => r.raypipe[i]);
     const r = list[0];
-    const ratios = list.map((x) => x.ratio);
-    console.log(`raypipe ${backend} ${r.memory} ${r.accel}: ${times(list)}, ${r.rays} rays (${r.hits} hits), ` +
-      `${mrays({ ...r, ms: median(list.map((x) => x.ms)) })} Mrays/s; rays per second ${median(ratios).toFixed(2)}x ` +
-      `three-mesh-bvh's (median of the rounds' ratios ${ratios.map((x) => x.toFixed(2)).join(", ")}; ` +
-      `by the means ${median(list.map((x) => x.meanRatio)).toFixed(2)}x)`);
+    // WebGPU against WebGL2 per ray, same walk, within each round.
+    const onWebgl2 = configs.findIndex((c) => c.backend === "webgl2" && c.accel === accel);
+    const perRay = rounds.map((round) => rate(round.raypipe[i], "ms") / rate(round.raypipe[onWebgl2], "ms"));
+    const againstWebgl2 = backend === "webgpu" && onWebgl2 >= 0
+      ? `; ${median(perRay).toFixed(2)}x raypipe webgl2's (rounds ${rounded(perRay)})`
+      : "";
+    console.log(`raypipe ${backend} ${r.memory} ${accel}: ${times(list)}, ${r.rays} rays (${r.hits} hits), ` +
+      `${mrays({ ...r, ms: median(list.map((x) => x.ms)) })} Mrays/s; rays per second ` +
+      `${median(list.map((x) => x.ratio)).toFixed(2)}x three-mesh-bvh's on ${backend} ` +
+      `(rounds ${rounded(list.map((x) => x.ratio))}; by the means ${median(list.map((x) => x.meanRatio)).toFixed(2)}x)${againstWebgl2}`);
   });
   if (options.json) {
     fs.writeFileSync(options.json, JSON.stringify({ width, height, frames, model: path.basename(options.model), peer: peerName, rounds }, null, 2));

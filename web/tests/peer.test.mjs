@@ -1,5 +1,6 @@
-// The peer benchmark (web/peer/run.mjs) on a small generated sphere, WebGL2 only: its validation must
-// stop a run whose images differ before any time is printed, and pass a run whose images agree.
+// The peer benchmark (web/peer/run.mjs) on a small generated sphere: its validation must stop a run
+// whose images differ before any time is printed (WebGL2), and pass a run whose images agree (both
+// backends, both peers).
 // Times are not checked here (docs/BENCHMARKS.md has them); only that they are printed or not.
 import { test } from "node:test";
 import assert from "node:assert/strict";
@@ -31,28 +32,30 @@ function sphereObj(rings, segments) {
   return lines.join("\n") + "\n";
 }
 
-function benchmark(...extra) {
+function benchmark(backends, ...extra) {
   const folder = fs.mkdtempSync(path.join(os.tmpdir(), "raypipe-peer-test-"));
   const model = path.join(folder, "sphere.obj");
   fs.writeFileSync(model, sphereObj(16, 24));
   const run = spawnSync("node", [path.join(web, "peer/run.mjs"), "--model", model, "--width", "64", "--height", "48",
-    "--backends", "webgl2", "--rounds", "1", ...extra], { encoding: "utf8", timeout: TIMEOUT_MS });
+    "--backends", backends, "--rounds", "1", ...extra], { encoding: "utf8", timeout: TIMEOUT_MS });
   fs.rmSync(folder, { recursive: true, force: true });
   return { status: run.status, output: `${run.stdout}${run.stderr}` };
 }
 
 test("the peer benchmark refuses to time images that differ (the peer's camera turned by 8 degrees)", { timeout: TIMEOUT_MS }, () => {
-  const { status, output } = benchmark("--skew-peer", "8");
+  const { status, output } = benchmark("webgl2", "--skew-peer", "8");
   assert.equal(status, 1, output);
-  assert.match(output, /the images differ: raypipe \(webgl2, threaded\) hits \d+, three-mesh-bvh \d+/);
+  assert.match(output, /the images differ: raypipe \(webgl2, threaded\) hits \d+, three-mesh-bvh \(webgl2\) \d+/);
   assert.doesNotMatch(output, /ms per frame/);
 });
 
-test("the peer benchmark times both tracers where their images agree", { timeout: TIMEOUT_MS }, () => {
-  const { status, output } = benchmark();
+test("the peer benchmark times both tracers on both backends where their images agree", { timeout: TIMEOUT_MS }, () => {
+  const { status, output } = benchmark("webgl2,webgpu");
   assert.equal(status, 0, output);
   assert.match(output, /three-mesh-bvh [\d.]+ \(three [\d.]+\) webgl2 texture: [\d.]+ ms per frame/);
+  assert.match(output, /three-mesh-bvh [\d.]+ \(three [\d.]+\) webgpu storage: [\d.]+ ms per frame/);
   for (const walk of ["threaded", "stack"]) {
-    assert.match(output, new RegExp(`raypipe webgl2 texture ${walk}: [\\d.]+ ms per frame .*, \\d+ rays .*x three-mesh-bvh's`));
+    assert.match(output, new RegExp(`raypipe webgl2 texture ${walk}: [\\d.]+ ms per frame .*, \\d+ rays .*x three-mesh-bvh's on webgl2`));
+    assert.match(output, new RegExp(`raypipe webgpu storage ${walk}: [\\d.]+ ms per frame .*x three-mesh-bvh's on webgpu .*x raypipe webgl2's`));
   }
 });
