@@ -5,7 +5,7 @@
 // hit whose normal faces the light.
 //
 //   node web/peer/run.mjs [--model FILE.ply] [--width 320] [--height 240] [--frames 20] [--rounds 3]
-//                         [--backends webgl2,webgpu] [--accel threaded,stack] [--webgpu-memory storage]
+//                         [--backends webgl2,webgpu] [--accel threaded,stack] [--webgpu-memory MODE]
 //                         [--json OUT.json]
 //
 // Needs the page built (scripts/build-web.sh target/web), the native binary (target/release/raypipe,
@@ -42,8 +42,9 @@ const { values: options } = parseArgs({
     backends: { type: "string", default: "webgl2,webgpu" },
     // Each walk is timed on each backend.
     accel: { type: "string", default: "threaded,stack" },
-    // WebGL2 reads the scene from textures only; WebGPU from storage buffers (default) or textures.
-    "webgpu-memory": { type: "string", default: "storage" },
+    // WebGL2 reads the scene from textures only; WebGPU from storage buffers or textures, by
+    // default the page's choice for the adapter.
+    "webgpu-memory": { type: "string" },
     json: { type: "string" },
     site: { type: "string", default: path.join(root, "target/web") },
     raypipe: { type: "string", default: process.env.RAYPIPE_BIN ?? path.join(root, "target/release/raypipe") },
@@ -68,7 +69,7 @@ if (!(width > 0 && height > 0 && frames >= 20 && Number(options.rounds) >= 1)) {
 }
 const backends = options.backends.split(",");
 for (const b of backends) if (!["webgl2", "webgpu"].includes(b)) fail(`--backends: unknown ${b} (webgl2, webgpu)`);
-if (!["storage", "texture"].includes(options["webgpu-memory"])) fail("--webgpu-memory: storage or texture");
+if (![undefined, "storage", "texture"].includes(options["webgpu-memory"])) fail("--webgpu-memory: storage or texture");
 const walks = options.accel.split(",");
 const WALKS = ["brute", "stack", "stackless", "threaded"];
 for (const a of walks) if (!WALKS.includes(a)) fail(`--accel: unknown ${a} (${WALKS.join(", ")})`);
@@ -185,7 +186,7 @@ async function measureRaypipe(backend, accel) {
     requestAnimationFrame(watch);
   });
   const memory = backend === "webgl2" ? "texture" : options["webgpu-memory"];
-  const query = `model=/scene/scene.glb&backend=${backend}&memory=${memory}&accel=${accel}&depth=1` +
+  const query = `model=/scene/scene.glb&backend=${backend}${memory ? `&memory=${memory}` : ""}&accel=${accel}&depth=1` +
     `&width=${width}&height=${height}&spp=4096`;
   await page.goto(`${server.origin}/index.html?${query}`);
   const until = (condition, arg) => page.waitForFunction(condition, arg, { timeout: TIMEOUT_MS, polling: 50 });

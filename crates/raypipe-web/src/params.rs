@@ -21,7 +21,7 @@ impl_choice!(
         (
             WebGpu,
             "webgpu",
-            "WebGPU: storage memory, compute, the BVH rebuilt in compute passes"
+            "WebGPU: storage or texture memory, compute; from storage the BVH rebuilt in compute passes"
         ),
         (
             WebGl2,
@@ -124,7 +124,8 @@ pub struct StartParams {
     /// A file to fetch and open once the page runs, by a URL relative to the page.
     pub model: Option<String>,
     pub accel: Accel,
-    /// `None`: the backend's default (storage on WebGPU, texture on WebGL2).
+    /// `None`: the adapter's default (`GpuContext::default_memory`: texture on WebGL2 and on a
+    /// browser's software fallback adapter, storage on other WebGPU adapters).
     pub memory: Option<MemoryMode>,
     pub pipeline: Pipeline,
     /// `None`: the scene's own.

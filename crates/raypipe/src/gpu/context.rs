@@ -187,9 +187,13 @@ impl GpuContext {
     }
 
     /// The memory mode for scenes of any size: storage buffers where the fragment stage has them,
-    /// textures otherwise.
+    /// textures otherwise, and textures on a browser's software fallback adapter (Chromium's
+    /// SwiftShader), where the walks run 1.3x to 2x faster from textures than from storage buffers
+    /// (docs/BENCHMARKS.md, "The page against three-mesh-bvh").
     pub fn default_memory(&self) -> MemoryMode {
-        if self.memory_modes().contains(&MemoryMode::Storage) {
+        let browser_fallback =
+            self.info.backend == wgpu::Backend::BrowserWebGpu && self.info.device_type == wgpu::DeviceType::Cpu;
+        if self.memory_modes().contains(&MemoryMode::Storage) && !browser_fallback {
             MemoryMode::Storage
         } else {
             MemoryMode::Texture
