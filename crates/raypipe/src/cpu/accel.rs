@@ -53,7 +53,9 @@ pub fn brute_occluded(primitives: &Primitives, ray: &Ray, t_max: f32) -> bool {
 /// The closest primitive hit that beats `best`; with `shadow`, the first hit nearer than best.t
 /// (`traverse_stack` in `accel_stack.wgsl`): a per-pixel stack, nearer child first, over the
 /// depth-first nodes of [`threaded`], where a node's left child is the next node and its right child
-/// follows the left subtree.
+/// follows the left subtree. The shader splits this loop in two (inner nodes down to a leaf, then the
+/// leaf's primitive) for GPUs run on the CPU; the nodes and primitives tested, and their order, are
+/// the same.
 ///
 /// [`threaded`]: crate::bvh::threaded
 pub fn traverse_stack(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {

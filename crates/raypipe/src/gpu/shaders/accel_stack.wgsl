@@ -21,18 +21,34 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var stack: array<u32, BVH_STACK_SIZE>;
     var stack_t: array<f32, BVH_STACK_SIZE>;
     var size = 0u;
+    var has_node = true;
+    // Two loops (Aila and Laine's while-while): the inner one walks inner nodes down to the next
+    // leaf, the outer one tests that leaf's primitive. SwiftShader and llvmpipe run a loop's whole
+    // body for every step any of its lanes takes, so the primitive test is kept out of the
+    // box-testing steps. The nodes tested, and their order, are those of one loop.
     loop {
-        if (is_leaf(node)) {
-            if (hit_primitive(node.link & ~LEAF_BIT, ray, &hit) && shadow) {
-                return hit;
+        loop {
+            if (!has_node) {
+                // Resume at the next waiting node that the ray enters no farther than the best hit.
+                if (size == 0u) {
+                    break;
+                }
+                size -= 1u;
+                if (stack_t[size] > hit.t) {
+                    continue;
+                }
+                index = stack[size];
+                node = load_threaded_node(index);
+                has_node = true;
             }
-        } else {
+            if (is_leaf(node)) {
+                break;
+            }
             let left_index = index + 1u;
             let left = load_threaded_node(left_index);
             let right_index = select(left.link, left_index + 1u, is_leaf(left));
             let right = load_threaded_node(right_index);
-            // Leaf children are box-tested too and visited as nodes: one primitive test per step,
-            // where testing them here would put three in the loop, and SwiftShader runs them all.
+            // Leaf children are box-tested too and visited as nodes.
             let t_left = intersect_box(quantized_min(left), quantized_max(left), origin, inv_dir, hit.t);
             let t_right = intersect_box(quantized_min(right), quantized_max(right), origin, inv_dir, hit.t);
             if (t_left >= 0.0 && t_right >= 0.0) {
@@ -49,32 +65,23 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
                     node = left;
                 }
                 size += 1u;
-                continue;
-            }
-            if (t_left >= 0.0) {
+            } else if (t_left >= 0.0) {
                 index = left_index;
                 node = left;
-                continue;
-            }
-            if (t_right >= 0.0) {
+            } else if (t_right >= 0.0) {
                 index = right_index;
                 node = right;
-                continue;
+            } else {
+                has_node = false;
             }
         }
-        // Resume at the next waiting node that the ray enters no farther than the best hit.
-        var resumed = false;
-        while (size > 0u && !resumed) {
-            size -= 1u;
-            if (stack_t[size] <= hit.t) {
-                index = stack[size];
-                resumed = true;
-            }
-        }
-        if (!resumed) {
+        if (!has_node) {
             break;
         }
-        node = load_threaded_node(index);
+        if (hit_primitive(node.link & ~LEAF_BIT, ray, &hit) && shadow) {
+            return hit;
+        }
+        has_node = false;
     }
     return hit;
 }
