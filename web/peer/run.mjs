@@ -157,8 +157,7 @@ async function newPage() {
 /// The peer on `backend`: its WebGL2 page (textures) or its WebGPU page (storage buffers).
 async function measurePeer(backend) {
   const page = await newPage();
-  const file = backend === "webgl2" ? "index.html" : "webgpu.html";
-  await page.goto(`${server.origin}/peer/${file}?model=/scene/peer.glb&width=${width}&height=${height}`);
+  await page.goto(`${server.origin}/peer/index.html?backend=${backend}&model=/scene/peer.glb&width=${width}&height=${height}`);
   await page.waitForFunction((n) => window.peerStatus?.error || window.peerStatus?.frames >= n, WARM_UP + frames + 1, { timeout: TIMEOUT_MS, polling: 50 });
   const status = await page.evaluate(() => window.peerStatus);
   if (status.error) throw new Error(`three-mesh-bvh on ${backend}: ${status.error} ${page.errors}`);

@@ -5,7 +5,7 @@
 // primary ray per pixel and, where it hits and the interpolated normal faces the light, one shadow
 // ray, bounded by the light's distance (the API's `maxDist`).
 //
-//   peer/webgpu.html?model=URL&width=W&height=H
+//   peer/index.html?backend=webgpu&model=URL&width=W&height=H
 //
 // A frame (the kernel, then the quad) is submitted on every animation frame; `window.peerStatus`
 // publishes the frames' times by the page's clock, and `window.peerCount()` runs the kernel once
