@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Checks that a change left raypipe's images alone: renders every built-in scene and the Bunny with
 # two builds (say, before and after a restructuring) on the CPU reference, on Vulkan and on GL, in
-# storage and texture memory, and compares each pair with `raypipe diff --tolerance exact` (every
-# channel of every pixel equal). Prints one line per image and exits 1 if any differs.
+# storage and texture memory, with every BVH walk (or those in $WALKS, say WALKS=stack), and compares
+# each pair with `raypipe diff --tolerance exact` (every channel of every pixel equal). Prints one line
+# per image and exits 1 if any differs.
 #
 #   scripts/same-images.sh OLD_RAYPIPE NEW_RAYPIPE [WIDTH HEIGHT]
 #
@@ -23,23 +24,26 @@ trap 'rm -rf "$out"' EXIT
 scenes=(whitted sphere-8k torus-5k random:2000 bounce:100 "$bunny")
 # device, backend (for WGPU_BACKEND), memory
 routes=("cpu - storage" "gpu vulkan storage" "gpu vulkan texture" "gpu gl storage" "gpu gl texture")
+read -r -a walks <<< "${WALKS:-threaded stack stackless}"
 failed=0
 for scene in "${scenes[@]}"; do
-  for route in "${routes[@]}"; do
-    read -r device backend memory <<< "$route"
-    name="$(basename "$scene" | tr ':' '_')-$device-$backend-$memory"
-    for build in old new; do
-      binary=$old
-      [ $build = new ] && binary=$new
-      WGPU_BACKEND=${backend/-/vulkan} "$binary" render "$scene" --device "$device" --memory "$memory" \
-        --width "$width" --height "$height" -q -o "$out/$name-$build.png"
+  for walk in "${walks[@]}"; do
+    for route in "${routes[@]}"; do
+      read -r device backend memory <<< "$route"
+      name="$(basename "$scene" | tr ':' '_')-$walk-$device-$backend-$memory"
+      for build in old new; do
+        binary=$old
+        [ $build = new ] && binary=$new
+        WGPU_BACKEND=${backend/-/vulkan} "$binary" render "$scene" --device "$device" --memory "$memory" \
+          --accel "$walk" --width "$width" --height "$height" -q -o "$out/$name-$build.png"
+      done
+      if "$new" diff "$out/$name-old.png" "$out/$name-new.png" --tolerance exact > "$out/diff.txt" 2>&1; then
+        echo "same:    $scene, $walk, on $device $backend $memory"
+      else
+        echo "DIFFERS: $scene, $walk, on $device $backend $memory: $(tr '\n' ' ' < "$out/diff.txt")"
+        failed=1
+      fi
     done
-    if "$new" diff "$out/$name-old.png" "$out/$name-new.png" --tolerance exact > "$out/diff.txt" 2>&1; then
-      echo "same:    $scene on $device $backend $memory"
-    else
-      echo "DIFFERS: $scene on $device $backend $memory: $(tr '\n' ' ' < "$out/diff.txt")"
-      failed=1
-    fi
   done
 done
 exit $failed
