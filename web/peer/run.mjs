@@ -257,10 +257,11 @@ function report() {
     const r = list[0];
     // WebGPU against WebGL2 per ray, same walk, within each round.
     const onWebgl2 = configs.findIndex((c) => c.backend === "webgl2" && c.accel === accel);
-    const perRay = rounds.map((round) => rate(round.raypipe[i], "ms") / rate(round.raypipe[onWebgl2], "ms"));
-    const againstWebgl2 = backend === "webgpu" && onWebgl2 >= 0
-      ? `; ${median(perRay).toFixed(2)}x raypipe webgl2's (rounds ${rounded(perRay)})`
-      : "";
+    let againstWebgl2 = "";
+    if (backend === "webgpu" && onWebgl2 >= 0) {
+      const perRay = rounds.map((round) => rate(round.raypipe[i], "ms") / rate(round.raypipe[onWebgl2], "ms"));
+      againstWebgl2 = `; ${median(perRay).toFixed(2)}x raypipe webgl2's (rounds ${rounded(perRay)})`;
+    }
     console.log(`raypipe ${backend} ${r.memory} ${accel}: ${times(list)}, ${r.rays} rays (${r.hits} hits), ` +
       `${mrays({ ...r, ms: median(list.map((x) => x.ms)) })} Mrays/s; rays per second ` +
       `${median(list.map((x) => x.ratio)).toFixed(2)}x three-mesh-bvh's on ${backend} ` +
