@@ -49,8 +49,9 @@ async function main() {
     ambient: uniform(SHADING.ambient),
     rayBias: uniform(rayBias),
   };
-  // The pixel's display color (the WebGL2 peer's: gamma 2.2 where it hits) and what it traced: w = 0 for a miss, 1 for a hit, 2 for a hit that sent a
-  // shadow ray. The camera ray is the WebGL2 peer's (three-mesh-bvh's GLSL ndcToCameraRay).
+  // The pixel's display color (the WebGL2 peer's: gamma 2.2 where it hits) and what it traced: w = 0
+  // for a miss, 1 for a hit, 2 for a hit that sent a shadow ray. The camera ray is the WebGL2 peer's
+  // (three-mesh-bvh's GLSL ndcToCameraRay).
   const tracePixel = wgslTagFn/* wgsl */ `
     fn tracePixel(pixel: vec2u) -> vec4f {
       let ndc = vec2f(
@@ -87,18 +88,19 @@ async function main() {
       let l = toLight / lightDistance;
       let nDotL = dot(shading, l);
       var color = ${u.ambient} * ${u.albedo};
-      if (nDotL <= 0.0) {
-        return vec4f(pow(clamp(color, vec3f(0.0), vec3f(1.0)), vec3f(1.0 / 2.2)), 1.0);
+      var traced = 1.0;
+      if (nDotL > 0.0) {
+        traced = 2.0;
+        var shadow: ${rayStruct};
+        shadow.origin = position + normal * ${u.rayBias};
+        shadow.direction = l;
+        shadow.maxDist = lightDistance;
+        var blocker: ${rayIntersectionResultStruct};
+        if (!${bvh.fns.raycastFirstHit}(shadow, &blocker)) {
+          color += ${u.lightColor} * ${u.albedo} * nDotL;
+        }
       }
-      var shadow: ${rayStruct};
-      shadow.origin = position + normal * ${u.rayBias};
-      shadow.direction = l;
-      shadow.maxDist = lightDistance;
-      var blocker: ${rayIntersectionResultStruct};
-      if (!${bvh.fns.raycastFirstHit}(shadow, &blocker)) {
-        color += ${u.lightColor} * ${u.albedo} * nDotL;
-      }
-      return vec4f(pow(clamp(color, vec3f(0.0), vec3f(1.0)), vec3f(1.0 / 2.2)), 2.0);
+      return vec4f(pow(clamp(color, vec3f(0.0), vec3f(1.0)), vec3f(1.0 / 2.2)), traced);
     }
   `;
 
@@ -106,9 +108,9 @@ async function main() {
   const pixelOf = (index) => uvec2(index.mod(width), index.div(width));
   const image = new StorageTexture(width, height);
   const trace = Fn(() => {
-    const traced = tracePixel(pixelOf(instanceIndex));
     If(instanceIndex.lessThan(pixels), () => {
-      textureStore(image, pixelOf(instanceIndex), vec4(traced.xyz, 1)).toWriteOnly();
+      const pixel = pixelOf(instanceIndex);
+      textureStore(image, pixel, vec4(tracePixel(pixel).xyz, 1)).toWriteOnly();
     });
   })().compute(pixels);
   const codes = instancedArray(pixels, "uint");
