@@ -10,6 +10,7 @@ pub mod display;
 mod error;
 pub mod readback;
 pub mod rebuild;
+pub mod region;
 pub mod renderer;
 pub mod shader;
 pub mod threaded;

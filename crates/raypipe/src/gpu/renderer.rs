@@ -11,11 +11,13 @@
 
 use super::readback::TextureReadback;
 use super::rebuild::SceneRebuild;
+use super::region::{PixelRect, projected_rect, walked_box};
 use super::shader::{RecordKind, SceneFeatures, ShaderConfig, compose};
 use super::threaded::encode_frame_copy;
 use super::timing::PassTimestamps;
 use super::upload::{SceneResources, SharedBuffers, upload};
 use super::{GpuContext, GpuError};
+use crate::bvh::aabb::Aabb;
 use crate::error::MissingBvh;
 use crate::image::Frame;
 use crate::modes::Count;
@@ -156,6 +158,9 @@ pub struct TimedFrame {
 enum TracePipeline {
     Fragment {
         pipeline: wgpu::RenderPipeline,
+        /// Where the tracer is confined to the scene's projected box: the shader for the pixels
+        /// outside it (`fs_miss`).
+        miss: Option<wgpu::RenderPipeline>,
         vertices: wgpu::Buffer,
     },
     Compute(wgpu::ComputePipeline),
@@ -178,6 +183,10 @@ pub struct Renderer {
     bvh_frame: Option<wgpu::Buffer>,
     /// The scene's arrays, kept to be rewritten ([`Renderer::write_scene`]).
     resources: SceneResources,
+    /// The box a BVH walk tests first, where the fragment tracer runs only on the pixels it
+    /// projects to ([`super::region`]): a BVH the host knows (not rebuilt on the GPU), no planes
+    /// (which no box holds), the ray count (a cost view counts the misses' box tests too).
+    walked_box: Option<Aabb>,
     timer: Option<PassTimestamps>,
 }
 
@@ -224,6 +233,9 @@ impl Renderer {
         self.resources
             .write(&self.ctx.queue, scene, self.options.accel, kinds)?;
         self.restart();
+        if self.walked_box.is_some() {
+            self.walked_box = scene.bvh.as_ref().and_then(walked_box);
+        }
         if kinds.contains(&RecordKind::ThreadedNode) {
             self.globals.bvh_frame = scene.globals.bvh_frame;
             let offset = std::mem::offset_of!(GpuGlobals, bvh_frame) as u64;
@@ -267,6 +279,12 @@ impl Renderer {
             count,
         } = options;
         check_pipeline(ctx, pipeline)?;
+        let confined = pipeline == Pipeline::Fragment
+            && accel.uses_bvh()
+            && count == Count::Rays
+            && shared.is_none()
+            && scene.planes.is_empty();
+        let walked_box = scene.bvh.as_ref().and_then(walked_box).filter(|_| confined);
         ctx.checked("uploading the scene and building the pipeline", || {
             let resources = upload(ctx, scene, memory, accel, shared, tracer_stage(pipeline))?;
             let globals = scene.globals;
@@ -287,8 +305,15 @@ impl Renderer {
                 features: SceneFeatures::of(scene),
             });
             let previous_layout = previous_sample_layout(&ctx.device, pipeline);
-            let (trace_pipeline, bind_group) =
-                build_pipeline(ctx, pipeline, &source, &resources, &globals_buffer, &previous_layout);
+            let (trace_pipeline, bind_group) = build_pipeline(
+                ctx,
+                pipeline,
+                &source,
+                &resources,
+                &globals_buffer,
+                &previous_layout,
+                walked_box.is_some(),
+            );
             Ok(Self {
                 ctx: ctx.clone(),
                 options,
@@ -301,6 +326,7 @@ impl Renderer {
                 readbacks: readbacks(&ctx.device, width, height),
                 bvh_frame: shared.and_then(|s| s.bvh_frame.clone()),
                 resources,
+                walked_box,
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
@@ -340,6 +366,19 @@ impl Renderer {
     /// The next draw starts the sums again, at the pixel centres.
     pub fn restart(&mut self) {
         self.accumulation.restarted = true;
+    }
+
+    /// The pixels the next draw traces: the whole frame, or where the fragment tracer is confined
+    /// ([`super::region`]) the rectangle the scene's box projects to, or none where it projects to
+    /// no pixel. The others get the background, one ray each, as a traced miss would.
+    pub fn traced_region(&self) -> Option<PixelRect> {
+        match &self.walked_box {
+            Some(bounds) => projected_rect(&self.globals.camera, bounds),
+            None => {
+                let (width, height) = self.size();
+                Some(PixelRect::whole(width, height))
+            }
+        }
     }
 
     /// The camera as the shader reads it.
@@ -411,7 +450,11 @@ impl Renderer {
         let written = &self.accumulation.targets[1 - read];
         let previous = &self.accumulation.reads[read];
         match &self.pipeline {
-            TracePipeline::Fragment { pipeline, vertices } => {
+            TracePipeline::Fragment {
+                pipeline,
+                miss,
+                vertices,
+            } => {
                 let attachments = [&written.color_view, &written.surface_view].map(|view| {
                     Some(wgpu::RenderPassColorAttachment {
                         view,
@@ -431,11 +474,25 @@ impl Renderer {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &self.bind_group, &[]);
                 pass.set_bind_group(1, previous, &[]);
                 pass.set_vertex_buffer(0, vertices.slice(..));
-                pass.draw(0..3, 0..1);
+                let (width, height) = written.size();
+                let traced = self.traced_region();
+                if let Some(miss) = miss
+                    .as_ref()
+                    .filter(|_| traced != Some(PixelRect::whole(width, height)))
+                {
+                    // Every pixel the misses' way first (a shader that traces nothing), then the
+                    // tracer over the box's pixels.
+                    pass.set_pipeline(miss);
+                    pass.draw(0..3, 0..1);
+                }
+                if let Some(rect) = traced {
+                    pass.set_pipeline(pipeline);
+                    pass.set_scissor_rect(rect.x, rect.y, rect.width, rect.height);
+                    pass.draw(0..3, 0..1);
+                }
             }
             TracePipeline::Compute(pipeline) => {
                 let (width, height) = written.size();
@@ -655,6 +712,7 @@ fn build_pipeline(
     resources: &SceneResources,
     globals: &wgpu::Buffer,
     previous_layout: &wgpu::BindGroupLayout,
+    with_miss: bool,
 ) -> (TracePipeline, wgpu::BindGroup) {
     let device = &ctx.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -707,37 +765,48 @@ fn build_pipeline(
         blend: None,
         write_mask: wgpu::ColorWrites::ALL,
     });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("trace"),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: 8,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x2],
-            })],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: None,
-        multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[target.clone(), target],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
+    let fullscreen = |label, fragment_entry| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 8,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x2],
+                })],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(fragment_entry),
+                compilation_options: Default::default(),
+                targets: &[target.clone(), target.clone()],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+    let pipeline = fullscreen("trace", "fs_main");
+    let miss = with_miss.then(|| fullscreen("trace misses", "fs_miss"));
     let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("fullscreen triangle"),
         contents: bytemuck::cast_slice(&FULLSCREEN_TRIANGLE),
         usage: wgpu::BufferUsages::VERTEX,
     });
-    (TracePipeline::Fragment { pipeline, vertices }, bind_group)
+    (
+        TracePipeline::Fragment {
+            pipeline,
+            miss,
+            vertices,
+        },
+        bind_group,
+    )
 }
 
 #[cfg(test)]

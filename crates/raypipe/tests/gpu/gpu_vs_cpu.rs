@@ -3,11 +3,14 @@
 
 use crate::common::harness::Test;
 use crate::common::*;
+use glam::Vec3;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::Count;
+use raypipe::gpu::region::PixelRect;
 use raypipe::gpu::{GpuContext, RendererOptions};
 use raypipe::modes::{Accel, MemoryMode};
-use raypipe::records::PackedScene;
+use raypipe::records::{GpuCamera, PackedScene};
+use raypipe::scene::Camera;
 
 fn check(ctx: &GpuContext, spec: &str, width: u32, height: u32) {
     let mut scene = packed(spec, width, height, 5);
@@ -169,6 +172,67 @@ fn spheres_and_triangles(ctx: &GpuContext) {
     check_scene(ctx, "spheres-and-triangles", &scene);
 }
 
+/// The fragment tracer runs only on the pixels the scene's box projects to
+/// (`raypipe::gpu::region`); a shader that traces nothing gives the others the background. A small
+/// cluster (a mirror among them) off the frame's centre, four jittered samples so that the misses
+/// accumulate too, every walk and both memory modes: the CPU's image and rays. Then the camera
+/// moved by `set_camera`: turned away (no pixel traced), and inside the box (every pixel).
+fn pixels_outside_the_projected_box_match_the_cpu(ctx: &GpuContext) {
+    let text = "[camera]\neye = [0, 0.5, -6]\ntarget = [0, 0, 0]\n[material.mirror]\nreflect = 0.8\n\
+        [material.red]\ncolor = [0.9, 0.1, 0.1]\n[[light]]\nposition = [3, 5, -4]\n\
+        [[sphere]]\ncenter = [1.2, 0.6, 0]\nradius = 0.3\nmaterial = \"mirror\"\n\
+        [[sphere]]\ncenter = [1.7, 0.4, 0.3]\nradius = 0.25\nmaterial = \"red\"\n\
+        [[sphere]]\ncenter = [1.4, 1.0, -0.2]\nradius = 0.2\nmaterial = \"red\"\n";
+    let mut scene = raypipe::scene::file::parse(text).unwrap();
+    scene.settings.width = 64;
+    scene.settings.height = 48;
+    let mut scene = PackedScene::new(&scene).unwrap();
+    scene.build_bvh(MortonBits::Bits30);
+    let pixels = 64 * 48;
+    let with_camera = |eye: Vec3, target: Vec3| {
+        let camera = Camera {
+            eye,
+            target,
+            up: Vec3::Y,
+            fov_degrees: 40.0,
+        };
+        let mut moved = scene.clone();
+        moved.globals.camera = GpuCamera::new(&camera, 64, 48);
+        (camera, moved)
+    };
+    let turned_away = with_camera(Vec3::new(0.0, 0.5, -6.0), Vec3::new(0.0, 0.5, -7.0));
+    let inside = with_camera(Vec3::new(1.45, 0.7, 0.0), Vec3::new(1.45, 0.7, 1.0));
+    for memory in [MemoryMode::Storage, MemoryMode::Texture] {
+        for accel in Accel::BVH {
+            let name = format!("outside-the-box-{memory}-{accel:?}");
+            let options = RendererOptions {
+                memory,
+                accel,
+                ..Default::default()
+            };
+            let mut gpu = renderer(ctx, &scene, options);
+            let region = gpu.traced_region().expect("the cluster is in view");
+            let traced = region.width * region.height;
+            assert!(traced > 0 && traced * 4 < pixels, "{name}: traced {region:?}");
+            let frame = pollster::block_on(gpu.render_samples(4, |_| {})).unwrap().frame;
+            let cpu = raypipe::cpu::render_with(&scene, accel, Count::Rays, 4, &|| {}).unwrap();
+            assert_frames_match(&name, &frame, &cpu);
+            assert_eq!(frame.rays(), cpu.rays(), "{name}: rays");
+            for (view, (camera, moved), region) in [
+                ("turned-away", &turned_away, None),
+                ("inside", &inside, Some(PixelRect::whole(64, 48))),
+            ] {
+                gpu.set_camera(camera);
+                assert_eq!(gpu.traced_region(), region, "{name}-{view}");
+                let frame = pollster::block_on(gpu.render_samples(2, |_| {})).unwrap().frame;
+                let cpu = raypipe::cpu::render_with(moved, accel, Count::Rays, 2, &|| {}).unwrap();
+                assert_frames_match(&format!("{name}-{view}"), &frame, &cpu);
+                assert_eq!(frame.rays(), cpu.rays(), "{name}-{view}: rays");
+            }
+        }
+    }
+}
+
 pub fn tests() -> Vec<Test> {
     crate::tests![
         gpu whitted,
@@ -181,5 +245,6 @@ pub fn tests() -> Vec<Test> {
         gpu coincident_spheres,
         gpu cost_aov_counts_the_same_tests_on_both_devices,
         gpu spheres_and_triangles,
+        gpu pixels_outside_the_projected_box_match_the_cpu,
     ]
 }

@@ -16,3 +16,11 @@ fn fs_main(@builtin(position) position: vec4<f32>) -> FragmentOutput {
     let sums = sample_pixel(vec2<u32>(position.xy));
     return FragmentOutput(sums.color, sums.surface);
 }
+
+// The pixels outside the scene's projected box, drawn before the tracer's scissored draw.
+@fragment
+fn fs_miss(@builtin(position) position: vec4<f32>) -> FragmentOutput {
+    let sums = miss_pixel(vec2<u32>(position.xy));
+    return FragmentOutput(sums.color, sums.surface);
+}
+

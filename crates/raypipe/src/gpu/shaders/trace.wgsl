@@ -199,3 +199,16 @@ fn sample_pixel(pixel: vec2<u32>) -> PixelSums {
     }
     return PixelSums(bitcast<vec4<u32>>(color), bitcast<vec4<u32>>(surface));
 }
+
+// The sums of a pixel whose primary ray misses the box around the scene's primitives (outside the
+// rectangle it projects to, src/gpu/region.rs; the tracer never runs there): what sample_pixel
+// gives such a ray, the background and one ray, without tracing it.
+fn miss_pixel(pixel: vec2<u32>) -> PixelSums {
+    var color = vec4<f32>(vec3<f32>(0.0) + globals.scene.background, 1.0);
+    let surface = vec4<f32>(vec3<f32>(0.0), DEPTH_MISS);
+    if (globals.camera.sample > 0u) {
+        color = bitcast<vec4<f32>>(textureLoad(previous_color, vec2<i32>(pixel), 0)) + color;
+    }
+    return PixelSums(bitcast<vec4<u32>>(color), bitcast<vec4<u32>>(surface));
+}
+
