@@ -10,6 +10,8 @@ export const FLAGS = [
   "--no-sandbox", "--disable-quic", "--no-first-run", "--disable-background-networking",
   "--disable-component-update", "--disable-sync", "--enable-unsafe-webgpu", "--enable-unsafe-swiftshader",
   "--use-angle=swiftshader", "--enable-features=Vulkan", "--use-vulkan=swiftshader",
+  // More, for a diagnosis (say, "--enable-dawn-features=disable_robustness"): never in a published run.
+  ...(process.env.CHROMIUM_FLAGS ?? "").split(" ").filter(Boolean),
 ];
 
 const TYPES = {
