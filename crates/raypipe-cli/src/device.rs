@@ -63,6 +63,8 @@ pub struct RenderOutcome {
     pub wall_ms: f64,
     /// GPU time of the render pass from timestamp queries, where the adapter has them.
     pub gpu_ms: Option<f64>,
+    /// The pixels the GPU's tracer ran on (`Renderer::traced_region`); the CPU traces them all.
+    pub traced_pixels: u64,
 }
 
 /// The CPU reference tracer, in words.
@@ -144,7 +146,9 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
                 block_on(renderer.render_samples_with(options.samples, |_| {}, |done| bar.set_position(done as u64)));
             bar.finish_and_clear();
             let timed = timed?;
+            let traced_pixels = renderer.traced_region().map_or(0, |r| r.width as u64 * r.height as u64);
             Ok(RenderOutcome {
+                traced_pixels,
                 frame: timed.frame,
                 device: ctx.describe(),
                 wall_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -155,6 +159,7 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
             let start = Instant::now();
             let frame = render_cpu(scene, options)?;
             Ok(RenderOutcome {
+                traced_pixels: frame.width as u64 * frame.height as u64,
                 frame,
                 device: cpu_description(),
                 wall_ms: start.elapsed().as_secs_f64() * 1e3,

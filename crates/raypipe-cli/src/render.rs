@@ -249,6 +249,12 @@ fn say_stats(args: &RenderArgs, packed: &PackedScene, outcome: &RenderOutcome) -
         rays as f64 / pixels as f64,
         rays as f64 / (ms * 1e3)
     );
+    if outcome.traced_pixels < pixels {
+        crate::say!(
+            "traced {} of {pixels} pixels: the scene's box projects to those, the others' rays miss it",
+            outcome.traced_pixels
+        );
+    }
     Ok(())
 }
 

@@ -233,7 +233,11 @@ impl Renderer {
         self.resources
             .write(&self.ctx.queue, scene, self.options.accel, kinds)?;
         self.restart();
-        if self.walked_box.is_some() {
+        let tree_written = kinds
+            .iter()
+            .any(|k| matches!(k, RecordKind::Node | RecordKind::ThreadedNode));
+        if self.walked_box.is_some() && tree_written {
+            // The walks test the new tree's root from now on.
             self.walked_box = scene.bvh.as_ref().and_then(walked_box);
         }
         if kinds.contains(&RecordKind::ThreadedNode) {
@@ -479,10 +483,8 @@ impl Renderer {
                 pass.set_vertex_buffer(0, vertices.slice(..));
                 let (width, height) = written.size();
                 let traced = self.traced_region();
-                if let Some(miss) = miss
-                    .as_ref()
-                    .filter(|_| traced != Some(PixelRect::whole(width, height)))
-                {
+                let whole = traced == Some(PixelRect::whole(width, height));
+                if let Some(miss) = miss.as_ref().filter(|_| !whole) {
                     // Every pixel the misses' way first (a shader that traces nothing), then the
                     // tracer over the box's pixels.
                     pass.set_pipeline(miss);
@@ -490,7 +492,9 @@ impl Renderer {
                 }
                 if let Some(rect) = traced {
                     pass.set_pipeline(pipeline);
-                    pass.set_scissor_rect(rect.x, rect.y, rect.width, rect.height);
+                    if !whole {
+                        pass.set_scissor_rect(rect.x, rect.y, rect.width, rect.height);
+                    }
                     pass.draw(0..3, 0..1);
                 }
             }
