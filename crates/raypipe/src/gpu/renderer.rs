@@ -1,9 +1,12 @@
 //! The renderer: one full-screen triangle, a passthrough vertex stage, and the tracer in the
 //! fragment stage writing the frame targets (colour and ray count, normal and depth, as f32 bits in
 //! rgba32uint); or, with [`Pipeline::Compute`], the same tracer in a compute kernel writing the same
-//! targets as storage textures. It owns its handles and its targets, records its work into a caller's encoder, and
-//! never reads back unless asked: a window shows the targets through [`super::display::Display`],
-//! files and tests read them with [`Renderer::read_frame`].
+//! targets as storage textures. With a BVH walk over a tree the host built, the triangle is drawn
+//! under a scissor around the scene's projected box, and the pixels outside get a traced miss's
+//! result from a shader that traces nothing ([`super::region`]). It owns its handles and its
+//! targets, records its work into a caller's encoder, and never reads back unless asked: a window
+//! shows the targets through [`super::display::Display`], files and tests read them with
+//! [`Renderer::read_frame`].
 //!
 //! Samples accumulate: the targets come in two pairs, and each draw adds one sample per pixel to
 //! the sums in one pair while writing the other ([`Renderer::encode`]); a camera, scene or size
