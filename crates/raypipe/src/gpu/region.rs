@@ -70,13 +70,13 @@ pub fn projected_rect(camera: &GpuCamera, bounds: &Aabb) -> Option<PixelRect> {
         );
         let to_corner = point - eye;
         let depth = to_corner.dot(forward);
-        // camera_ray: x = (2 px / width - 1) tan aspect, y = (1 - 2 py / height) tan.
-        let x = (to_corner.dot(right) / depth / half_width + 1.0) * 0.5 * width as f64;
-        let y = (1.0 - to_corner.dot(up) / depth / half_height) * 0.5 * height as f64;
         if depth < 0.0 {
             behind += 1;
             continue;
         }
+        // camera_ray: x = (2 px / width - 1) tan aspect, y = (1 - 2 py / height) tan.
+        let x = (to_corner.dot(right) / depth / half_width + 1.0) * 0.5 * width as f64;
+        let y = (1.0 - to_corner.dot(up) / depth / half_height) * 0.5 * height as f64;
         let in_front = depth > 1e-6 * to_corner.length();
         if !in_front || !x.is_finite() || !y.is_finite() {
             return whole;

@@ -23,4 +23,3 @@ fn fs_miss(@builtin(position) position: vec4<f32>) -> FragmentOutput {
     let sums = miss_pixel(vec2<u32>(position.xy));
     return FragmentOutput(sums.color, sums.surface);
 }
-

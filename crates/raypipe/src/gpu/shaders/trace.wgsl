@@ -190,9 +190,15 @@ fn sample_pixel(pixel: vec2<u32>) -> PixelSums {
     let sample = globals.camera.sample;
     let traced = trace_pixel(camera_ray(vec2<f32>(pixel) + sample_offset(pixel, sample)));
     let count = select(ray_count, primary_cost, WRITE_COST);
-    var color = vec4<f32>(traced.color, f32(count));
-    var surface = vec4<f32>(traced.normal, traced.depth);
-    if (sample > 0u) {
+    return summed(pixel, vec4<f32>(traced.color, f32(count)), vec4<f32>(traced.normal, traced.depth));
+}
+
+// A sample's colour and count added to the pixel's sums so far; its surface kept only where it is
+// the first (the centre sample's).
+fn summed(pixel: vec2<u32>, sample_color: vec4<f32>, sample_surface: vec4<f32>) -> PixelSums {
+    var color = sample_color;
+    var surface = sample_surface;
+    if (globals.camera.sample > 0u) {
         let texel = vec2<i32>(pixel);
         color = bitcast<vec4<f32>>(textureLoad(previous_color, texel, 0)) + color;
         surface = bitcast<vec4<f32>>(textureLoad(previous_surface, texel, 0));
@@ -204,11 +210,7 @@ fn sample_pixel(pixel: vec2<u32>) -> PixelSums {
 // rectangle it projects to, src/gpu/region.rs; the tracer never runs there): what sample_pixel
 // gives such a ray, the background and one ray, without tracing it.
 fn miss_pixel(pixel: vec2<u32>) -> PixelSums {
-    var color = vec4<f32>(vec3<f32>(0.0) + globals.scene.background, 1.0);
-    let surface = vec4<f32>(vec3<f32>(0.0), DEPTH_MISS);
-    if (globals.camera.sample > 0u) {
-        color = bitcast<vec4<f32>>(textureLoad(previous_color, vec2<i32>(pixel), 0)) + color;
-    }
-    return PixelSums(bitcast<vec4<u32>>(color), bitcast<vec4<u32>>(surface));
+    // Added to zero, as trace_task adds it to the pixel's colour.
+    let color = vec3<f32>(0.0) + globals.scene.background;
+    return summed(pixel, vec4<f32>(color, 1.0), vec4<f32>(vec3<f32>(0.0), DEPTH_MISS));
 }
-
