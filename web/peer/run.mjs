@@ -5,7 +5,8 @@
 // hit whose normal faces the light.
 //
 //   node web/peer/run.mjs [--model FILE.ply] [--width 320] [--height 240] [--frames 20] [--rounds 3]
-//                         [--backends webgl2,webgpu] [--accel threaded,stack] [--webgpu-memory MODE]
+//                         [--backends webgl2,webgpu] [--accel threaded,stack] [--builder lbvh,sah]
+//                         [--webgpu-memory MODE]
 //                         [--json OUT.json]
 //
 // Needs the page built (scripts/build-web.sh target/web), the native binary (target/release/raypipe,
@@ -17,9 +18,9 @@
 // Times: the median interval between the page's frames by its own clock (requestAnimationFrame's
 // timestamps) over --frames frames after warm-up, and the mean over them; rays per frame are pixels
 // plus shadow rays, and the ratio is of rays per second, against the peer on the same backend (and,
-// for raypipe on WebGPU, against raypipe on WebGL2 with the same walk). Each of --rounds rounds loads
-// every page anew (the peers, then raypipe on each backend) and takes its ratios within itself; the
-// report gives the medians over the rounds, and each round's figures.
+// for raypipe on WebGPU, against raypipe on WebGL2 with the same walk and tree). Each of --rounds
+// rounds loads every page anew (the peers, then raypipe on each backend) and takes its ratios within
+// itself; the report gives the medians over the rounds, and each round's figures.
 import { execFileSync } from "node:child_process";
 import fs from "node:fs";
 import os from "node:os";
@@ -42,6 +43,8 @@ const { values: options } = parseArgs({
     backends: { type: "string", default: "webgl2,webgpu" },
     // Each walk is timed on each backend.
     accel: { type: "string", default: "threaded,stack" },
+    // And with each way of building raypipe's tree (the page's `builder`): the LBVH, binned SAH.
+    builder: { type: "string", default: "lbvh" },
     // WebGL2 reads the scene from textures only; WebGPU from storage buffers or textures, by
     // default the page's choice for the adapter.
     "webgpu-memory": { type: "string" },
@@ -74,7 +77,10 @@ const walks = options.accel.split(",");
 const WALKS = ["brute", "stack", "stackless", "threaded"];
 for (const a of walks) if (!WALKS.includes(a)) fail(`--accel: unknown ${a} (${WALKS.join(", ")})`);
 // What each round measures of raypipe's page, in this order.
-const configs = backends.flatMap((backend) => walks.map((accel) => ({ backend, accel })));
+const builders = options.builder.split(",");
+for (const b of builders) if (!["lbvh", "sah"].includes(b)) fail(`--builder: unknown ${b} (lbvh, sah)`);
+const configs = backends.flatMap((backend) =>
+  walks.flatMap((accel) => builders.map((builder) => ({ backend, accel, builder }))));
 
 /// One line and exit 1, with the scratch folder (if made) gone.
 function fail(line) {
@@ -122,8 +128,8 @@ try {
     const peers = {};
     for (const backend of backends) peers[backend] = await measurePeer(backend);
     const raypipe = [];
-    for (const { backend, accel } of configs) {
-      const result = await measureRaypipe(backend, accel);
+    for (const { backend, accel, builder } of configs) {
+      const result = await measureRaypipe(backend, accel, builder);
       const peer = peers[backend];
       validate(result, peer);
       raypipe.push({ ...result, ratio: rate(result, "ms") / rate(peer, "ms"), meanRatio: rate(result, "meanMs") / rate(peer, "meanMs") });
@@ -169,8 +175,8 @@ async function measurePeer(backend) {
   return { tracer: peerName, backend, memory, ...timing, rays: pixels + counts.shadowRays, ...counts, adapter: status.renderer, buildMs: status.buildMs };
 }
 
-async function measureRaypipe(backend, accel) {
-  const name = `raypipe ${backend} ${accel}`;
+async function measureRaypipe(backend, accel, builder) {
+  const name = `raypipe ${backend} ${accel} ${builder}`;
   const page = await newPage();
   // Every animation frame's timestamp with the page's frame count then: a frame's time is the
   // interval to the next frame that traced.
@@ -185,7 +191,7 @@ async function measureRaypipe(backend, accel) {
     requestAnimationFrame(watch);
   });
   const memory = backend === "webgl2" ? "texture" : options["webgpu-memory"];
-  const query = `model=/scene/scene.glb&backend=${backend}${memory ? `&memory=${memory}` : ""}&accel=${accel}&depth=1` +
+  const query = `model=/scene/scene.glb&backend=${backend}${memory ? `&memory=${memory}` : ""}&accel=${accel}&builder=${builder}&depth=1` +
     `&width=${width}&height=${height}&spp=4096`;
   await page.goto(`${server.origin}/index.html?${query}`);
   const until = (condition, arg) => page.waitForFunction(condition, arg, { timeout: TIMEOUT_MS, polling: 50 });
@@ -197,6 +203,7 @@ async function measureRaypipe(backend, accel) {
   const log = await page.evaluate(() => window.frameLog);
   const status = await page.evaluate(() => ({ ...window.raypipeStatus }));
   if (status.error) throw new Error(`${name}: ${status.error}`);
+  if (status.builder !== builder) throw new Error(`${name}: the page built its tree by ${status.builder}`);
   // Only consecutive frames: an interval that spans two frames (a missed observation) is left out.
   const timed = log.filter(([, n]) => n > start + WARM_UP && n <= start + WARM_UP + frames + 1);
   const intervals = timed.slice(1).flatMap(([t, n], i) => (n === timed[i][1] + 1 ? [t - timed[i][0]] : []));
@@ -212,7 +219,7 @@ async function measureRaypipe(backend, accel) {
   for (let i = 0; i < png.data.length; i += 4) hits += png.data[i] + png.data[i + 1] + png.data[i + 2] > 0;
   await page.close();
   return {
-    tracer: "raypipe", backend, memory: status.memory, accel: status.accel, ...timing, rays: nativeRays,
+    tracer: "raypipe", backend, memory: status.memory, accel: status.accel, builder: status.builder, ...timing, rays: nativeRays,
     hits, shadowRays: nativeRays - pixels, adapter: status.adapter,
   };
 }
@@ -252,17 +259,17 @@ function report() {
     console.log(`${peerName} ${backend} ${peer.memory}: ${times(peers)}, ${peer.rays} rays (${peer.hits} hits), ` +
       `${mrays({ ...peer, ms: median(peers.map((r) => r.ms)) })} Mrays/s`);
   }
-  configs.forEach(({ backend, accel }, i) => {
+  configs.forEach(({ backend, accel, builder }, i) => {
     const list = rounds.map((r) => r.raypipe[i]);
     const r = list[0];
     // WebGPU against WebGL2 per ray, same walk, within each round.
-    const onWebgl2 = configs.findIndex((c) => c.backend === "webgl2" && c.accel === accel);
+    const onWebgl2 = configs.findIndex((c) => c.backend === "webgl2" && c.accel === accel && c.builder === builder);
     let againstWebgl2 = "";
     if (backend === "webgpu" && onWebgl2 >= 0) {
       const perRay = rounds.map((round) => rate(round.raypipe[i], "ms") / rate(round.raypipe[onWebgl2], "ms"));
       againstWebgl2 = `; ${median(perRay).toFixed(2)}x raypipe webgl2's (rounds ${rounded(perRay)})`;
     }
-    console.log(`raypipe ${backend} ${r.memory} ${accel}: ${times(list)}, ${r.rays} rays (${r.hits} hits), ` +
+    console.log(`raypipe ${backend} ${r.memory} ${accel} ${builder}: ${times(list)}, ${r.rays} rays (${r.hits} hits), ` +
       `${mrays({ ...r, ms: median(list.map((x) => x.ms)) })} Mrays/s; rays per second ` +
       `${median(list.map((x) => x.ratio)).toFixed(2)}x three-mesh-bvh's on ${backend} ` +
       `(rounds ${rounded(list.map((x) => x.ratio))}; by the means ${median(list.map((x) => x.meanRatio)).toFixed(2)}x)${againstWebgl2}`);

@@ -317,6 +317,23 @@ for (const backend of ["webgpu", "webgl2"]) {
       }
     });
 
+    test("?builder=sah traces random:2000 as the CPU renders it; a moving scene is refused with its reason and the scene stays", async () => {
+      const query = `scene=random:2000&accel=stack&builder=sah&width=${size.width}&height=${size.height}&backend=${backend}&spp=1`;
+      const page = await open(query);
+      const opened = await until(page, (s) => s.primitives === 2000 && !s.busy && s.samples >= s.spp, "random:2000");
+      assert.equal(opened.builder, "sah");
+      await until(page, (s, frames) => s.frames >= frames, "a frame of random:2000", { arg: opened.frames + 2 });
+      assertSimilar(await screenshot(page, `${backend}-builder-sah`), reference("random:2000", size.width, size.height));
+      assert.deepEqual(page.errors, []);
+      await page.evaluate(() => window.raypipeViewer.set("scene", "bounce:40"));
+      const refused = await until(page, (s) => s.error != null && !s.busy, "the refusal of bounce:40");
+      assert.match(refused.error, /sah builder builds a still scene's tree once/);
+      assert.equal(refused.scene, "random:2000");
+      assert.equal(refused.builder, "sah");
+      await shows(page, refused.error);
+      await page.close();
+    });
+
     test("bounce:N stands still when paused, equal to the CPU's first frame, and moves between frames", async () => {
       const spec = "bounce:300";
       const small = { width: 96, height: 72 };

@@ -55,7 +55,15 @@ test("the peer benchmark times both tracers on both backends where their images 
   assert.match(output, /three-mesh-bvh [\d.]+ \(three [\d.]+\) webgl2 texture: [\d.]+ ms per frame/);
   assert.match(output, /three-mesh-bvh [\d.]+ \(three [\d.]+\) webgpu storage: [\d.]+ ms per frame/);
   for (const walk of ["threaded", "stack"]) {
-    assert.match(output, new RegExp(`raypipe webgl2 texture ${walk}: [\\d.]+ ms per frame .*, \\d+ rays .*x three-mesh-bvh's on webgl2`));
-    assert.match(output, new RegExp(`raypipe webgpu (storage|texture) ${walk}: [\\d.]+ ms per frame .*x three-mesh-bvh's on webgpu .*x raypipe webgl2's`));
+    assert.match(output, new RegExp(`raypipe webgl2 texture ${walk} lbvh: [\\d.]+ ms per frame .*, \\d+ rays .*x three-mesh-bvh's on webgl2`));
+    assert.match(output, new RegExp(`raypipe webgpu (storage|texture) ${walk} lbvh: [\\d.]+ ms per frame .*x three-mesh-bvh's on webgpu .*x raypipe webgl2's`));
+  }
+});
+
+test("the peer benchmark times raypipe's page with each tree builder", { timeout: TIMEOUT_MS }, () => {
+  const { status, output } = benchmark("webgl2", "--accel", "stack", "--builder", "lbvh,sah");
+  assert.equal(status, 0, output);
+  for (const builder of ["lbvh", "sah"]) {
+    assert.match(output, new RegExp(`raypipe webgl2 texture stack ${builder}: [\\d.]+ ms per frame .*x three-mesh-bvh's on webgl2`));
   }
 });

@@ -15,7 +15,7 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::image::diff::{Tolerance, compare};
-use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use raypipe::scene::model::is_model_file;
@@ -57,6 +57,11 @@ pub struct BenchArgs {
     /// Samples per pixel of every timed frame (as `render --spp`); times and rays cover them all.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::scene_args::MAX_SPP as i64))]
     pub(crate) spp: u32,
+    /// How the BVH over a still scene is built, once per count: the LBVH (Karras 2012), or binned
+    /// SAH (a better tree, built about 50 times slower). Not with --rebuild or --motion, which
+    /// rebuild the LBVH every frame.
+    #[arg(long, value_parser = choice::<Builder>(), default_value_t)]
+    pub(crate) builder: Builder,
     /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately.
     #[arg(long)]
     pub(crate) rebuild: bool,
@@ -106,6 +111,8 @@ struct Row {
     clock: String,
     adapter: String,
     backend: String,
+    /// How the tree was built: "lbvh" or "sah".
+    builder: String,
 }
 
 /// Per-phase medians of a rebuild's timings (`BuildTimings`' phases).
@@ -159,7 +166,13 @@ fn options(pipeline: Pipeline, memory: MemoryMode, accel: Accel) -> RendererOpti
 
 /// The scene of one bench point, at the given size, packed with a CPU-built BVH: a built-in family
 /// at `count` spheres, or a model with `count` spheres on its surface or as its triangles.
-fn scene(family: &str, as_: MeshAs, count: usize, width: u32, height: u32) -> anyhow::Result<(Scene, PackedScene)> {
+fn scene(
+    family: &str,
+    as_: MeshAs,
+    count: usize,
+    size: (u32, u32),
+    builder: Builder,
+) -> anyhow::Result<(Scene, PackedScene)> {
     let mut scene = if is_model_file(Path::new(family)) {
         let options = ModelOptions {
             as_: Some(as_),
@@ -174,10 +187,9 @@ fn scene(family: &str, as_: MeshAs, count: usize, width: u32, height: u32) -> an
             "bench scene '{family}': use a family that takes a count (random, sphere, torus or bounce) or a model file"
         );
     };
-    scene.settings.width = width;
-    scene.settings.height = height;
+    (scene.settings.width, scene.settings.height) = size;
     let mut packed = PackedScene::new(&scene)?;
-    packed.build_bvh(MortonBits::Bits30);
+    packed.build_bvh_with(builder, MortonBits::Bits30);
     Ok((scene, packed))
 }
 
@@ -190,8 +202,9 @@ struct Reference {
 
 impl Reference {
     /// At 64x48, or the bench's size where that is smaller.
-    fn new(ctx: &GpuContext, family: &str, as_: MeshAs, count: usize, size: (u32, u32)) -> anyhow::Result<Self> {
-        let (_, scene) = scene(family, as_, count, size.0.min(64), size.1.min(48))?;
+    fn new(ctx: &GpuContext, args: &BenchArgs, as_: MeshAs, count: usize) -> anyhow::Result<Self> {
+        let size = (args.width.min(64), args.height.min(48));
+        let (_, scene) = scene(&args.scene, as_, count, size, args.builder)?;
         let mut renderer = block_on(Renderer::new(
             ctx,
             &scene,
@@ -244,7 +257,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     let mut rows = Vec::new();
     let mut refused = Vec::new();
     for &count in &counts {
-        let (loaded, packed) = scene(&args.scene, as_, count, args.width, args.height)?;
+        let (loaded, packed) = scene(&args.scene, as_, count, (args.width, args.height), args.builder)?;
         let count = packed.primitive_count();
         // One rebuild per walk, which writes the count's primitives into its own buffers (the stack
         // and threaded walks also lay out its tree), shared by the walk's pipelines and memories.
@@ -274,8 +287,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                 bar.set_message(format!("{point}: compiling, checking the image"));
                 if (pipeline, accel) != (Pipeline::Fragment, Accel::Brute) {
                     if reference.is_none() {
-                        let size = (args.width, args.height);
-                        reference = Some(Reference::new(&ctx, &args.scene, as_, count, size)?);
+                        reference = Some(Reference::new(&ctx, &args, as_, count)?);
                     }
                     let checked = reference
                         .as_ref()
@@ -338,6 +350,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
 fn check_args(args: &BenchArgs) -> anyhow::Result<MeshAs> {
     anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
     anyhow::ensure!(
+        args.builder == Builder::Lbvh || !(args.rebuild || args.motion),
+        "--builder {} builds a still scene's tree once; --rebuild and --motion rebuild the LBVH every frame",
+        args.builder
+    );
+    anyhow::ensure!(
         !args.rebuild || args.memory.iter().all(|&m| m == MemoryMode::Storage),
         "--rebuild builds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
     );
@@ -382,13 +399,20 @@ impl Row {
             clock: clock.into(),
             adapter: ctx.info.name.clone(),
             backend: format!("{:?}", ctx.info.backend),
+            builder: name(&args.builder),
         }
     }
 }
 
 /// The points as a table on standard output, under the adapter and the size.
 fn print_table(args: &BenchArgs, ctx: &GpuContext, clock: &str, rows: &[Row]) -> anyhow::Result<()> {
-    crate::say!("adapter: {} ({clock}), {}x{}", ctx.describe(), args.width, args.height);
+    crate::say!(
+        "adapter: {} ({clock}), {}x{}, BVH built by {}",
+        ctx.describe(),
+        args.width,
+        args.height,
+        args.builder
+    );
     crate::say!(
         "{:>8} {:>9} {:>10} {:>8} {:>10} {:>10} {:>10}",
         "count",
@@ -463,12 +487,12 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
     let mut file = std::fs::File::create(path).with_context(|| format!("{}: cannot write", path.display()))?;
     writeln!(
         file,
-        "count,pipeline,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,build_morton_ms,build_sort_ms,build_hierarchy_ms,build_bounds_ms,build_links_ms,build_layout_ms,clock,adapter,backend"
+        "count,pipeline,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,build_morton_ms,build_sort_ms,build_hierarchy_ms,build_bounds_ms,build_links_ms,build_layout_ms,clock,adapter,backend,builder"
     )?;
     for r in rows {
         writeln!(
             file,
-            "{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},{},\"{}\",{}",
+            "{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},{},\"{}\",{},{}",
             r.count,
             r.pipeline,
             r.accel,
@@ -486,7 +510,8 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
             BuildPhases::csv(r.build_phases_ms),
             r.clock,
             r.adapter.replace('"', "'"),
-            r.backend
+            r.backend,
+            r.builder
         )?;
     }
     Ok(())

@@ -9,20 +9,12 @@ use raypipe::bvh::sah::{build_binned_sah, sah_cost};
 use raypipe::bvh::{BuildTimings, Bvh};
 use raypipe::gpu::build::{Codes, GpuLbvhBuilder};
 use raypipe::gpu::{Backend, GpuContext};
+use raypipe::modes::Builder;
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use serde::Serialize;
 use std::process::ExitCode;
 use std::time::Instant;
-
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum Builder {
-    /// The linear BVH (Karras 2012), parallel.
-    #[default]
-    Lbvh,
-    /// Top-down binned SAH, serial: the quality reference.
-    Sah,
-}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BuildDevice {
@@ -34,7 +26,7 @@ pub enum BuildDevice {
 pub struct BvhArgs {
     /// A built-in scene or a TOML file; the BVH is built over its spheres.
     scene: String,
-    #[arg(long, value_enum, default_value_t)]
+    #[arg(long, value_parser = choice::<Builder>(), default_value_t)]
     builder: Builder,
     /// Where the LBVH is built: the CPU (rayon) or the GPU (compute passes).
     #[arg(long, value_enum, default_value_t = BuildDevice::Cpu)]

@@ -127,6 +127,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             "{}: --frames renders a moving scene (an animated glTF, bounce:N)",
             args.scene.spec
         );
+        args.scene.check_builder_for_motion(&scene)?;
         // Frame k's time depends on k alone: a split run poses the frames of a whole one.
         let times = frames
             .map(|k| {
@@ -144,7 +145,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         .map_err(|e| e.in_origin(&args.scene.spec))?;
     let mut packed = PackedScene::new(&posed).map_err(|e| e.in_origin(&args.scene.spec))?;
     if args.scene.accel.uses_bvh() {
-        packed.build_bvh(MortonBits::default());
+        packed.build_bvh_with(args.scene.builder, MortonBits::default());
     }
     let outcome = render(&packed, &options).map_err(|e| e.context(args.scene.spec.clone()))?;
     let frame = &outcome.frame;

@@ -88,6 +88,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
         io::check_writable(path)?;
     }
     let scene = args.scene.load()?;
+    args.scene.check_builder_for_motion(&scene)?;
     // Checked here, so that a bad size or depth is one line before any window opens.
     raypipe::records::PackedScene::new(&scene).map_err(|e| e.in_origin(&args.scene.spec))?;
     let options = ViewerOptions {
@@ -95,6 +96,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
         modes: Modes {
             pipeline: args.scene.pipeline,
             accel: args.scene.accel,
+            builder: args.scene.builder,
             memory: args.scene.memory,
             depth: scene.settings.max_depth,
             view: args.scene.aov,

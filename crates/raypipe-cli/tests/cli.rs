@@ -502,6 +502,49 @@ fn a_split_sequence_equals_one_run_byte_for_byte() {
     }
 }
 
+/// Binned SAH builds another tree, which must not change a pixel: the closest hit does not depend
+/// on the order a walk meets primitives in (ties go to the lower index). Where the scene moves, the
+/// tree is rebuilt every frame by the LBVH, so `--builder sah` is refused there.
+#[test]
+fn the_sah_builder_renders_the_same_image_and_refuses_motion() {
+    let dir = test_dir("builder");
+    let image = |builder: &str| {
+        let path = dir.join(format!("{builder}.png"));
+        let out = raypipe(&[
+            "render",
+            "random:300",
+            "--device",
+            "cpu",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--accel",
+            "stack",
+            "--builder",
+            builder,
+            "-o",
+            path.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        std::fs::read(path).unwrap()
+    };
+    assert_eq!(image("sah"), image("lbvh"));
+    let out = raypipe(&[
+        "render",
+        "bounce:10",
+        "--device",
+        "cpu",
+        "--builder",
+        "sah",
+        "--frames",
+        "0..2",
+        "-o",
+        "f_%03d.png",
+    ]);
+    assert_clean_error(&out, &["--builder sah builds a still scene's tree once"]);
+}
+
 #[test]
 fn time_and_frames_need_a_moving_scene_and_good_ranges() {
     let out = raypipe(&["render", "whitted", "--device", "cpu", "--time", "1", "-o", "/dev/null"]);

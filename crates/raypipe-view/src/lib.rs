@@ -23,7 +23,7 @@ pub use tracer::{TraceError, Tracer, next_texture, present_format};
 use raypipe::gpu::{Backend, GpuContext, GpuError};
 use raypipe::image::Frame;
 use raypipe::modes::Aov;
-use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -33,6 +33,8 @@ pub struct Modes {
     /// The stage that traces: the fragment shader of a full-screen triangle, or a compute kernel.
     pub pipeline: Pipeline,
     pub accel: Accel,
+    /// How a still scene's BVH is built (a moving scene's is the LBVH, rebuilt every frame).
+    pub builder: Builder,
     pub memory: MemoryMode,
     /// Bounces after the primary ray.
     pub depth: u32,
@@ -104,8 +106,14 @@ impl Modes {
     /// Whether going from `current` to these modes needs a new tracer (another shader or scene
     /// records); the other views share one, but the cost view needs the shader's cost variant.
     pub fn needs_new_tracer(&self, current: &Modes) -> bool {
-        (self.pipeline, self.accel, self.memory, self.depth)
-            != (current.pipeline, current.accel, current.memory, current.depth)
+        (self.pipeline, self.accel, self.builder, self.memory, self.depth)
+            != (
+                current.pipeline,
+                current.accel,
+                current.builder,
+                current.memory,
+                current.depth,
+            )
             || (self.view == Aov::Cost) != (current.view == Aov::Cost)
     }
 

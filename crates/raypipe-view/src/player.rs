@@ -279,9 +279,10 @@ impl Player {
 
 fn log_modes(modes: &Modes) {
     log::info!(
-        "pipeline {}, acceleration {}, memory {}, depth {}, view {}{}",
+        "pipeline {}, acceleration {} (built by {}), memory {}, depth {}, view {}{}",
         modes.pipeline,
         modes.accel,
+        modes.builder,
         modes.memory,
         modes.depth,
         modes.view,

@@ -12,7 +12,7 @@ use raypipe::error::InputError;
 use raypipe::gpu::build::depth_bound;
 use raypipe::gpu::{Display, GpuContext, GpuError, RecordKind, Renderer, RendererOptions, SceneRebuild};
 use raypipe::modes::Aov;
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::modes::{Accel, Builder, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
 
@@ -72,6 +72,12 @@ impl Tracer {
             count: modes.view.count(),
         };
         let primitives = packed.primitive_count();
+        if scene.motion.is_some() && modes.builder != Builder::Lbvh {
+            return Err(TraceError::Modes(format!(
+                "the {} builder builds a still scene's tree once; this scene moves, and its tree is rebuilt every frame by the LBVH",
+                modes.builder
+            )));
+        }
         if scene.motion.is_some() && modes.memory != MemoryMode::Storage {
             let mut builder = LbvhBuilder::<u64>::new();
             let mut cpu_build_ms = None;
@@ -107,7 +113,7 @@ impl Tracer {
         let cpu_build_ms = modes
             .accel
             .uses_bvh()
-            .then(|| packed.build_bvh(MortonBits::Bits30).total());
+            .then(|| packed.build_bvh_with(modes.builder, MortonBits::Bits30).total());
         let renderer = Renderer::new(ctx, &packed, options).await?;
         Ok(Self {
             renderer,

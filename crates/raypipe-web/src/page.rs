@@ -181,6 +181,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
     let modes = Modes {
         pipeline: params.pipeline,
         accel: params.accel,
+        builder: params.builder,
         memory: params.memory.unwrap_or(ctx.default_memory()),
         depth: params.depth.unwrap_or(scene.settings.max_depth),
         view: params.view,
@@ -291,6 +292,7 @@ impl Page {
         set("primitives", (player.tracer.primitives as u32).into());
         set("pipeline", modes.pipeline.name().into());
         set("accel", modes.accel.name().into());
+        set("builder", modes.builder.name().into());
         set("memory", modes.memory.name().into());
         set("memories", memory_names(&self.ctx).into());
         set("depth", modes.depth.into());
@@ -391,6 +393,7 @@ impl Viewer {
                 return Page::open_scene(&self.page, name, loaded);
             }
             Setting::Accel(accel) => asked.accel = accel,
+            Setting::Builder(builder) => asked.builder = builder,
             Setting::Memory(memory) => asked.memory = memory,
             Setting::Pipeline(pipeline) => asked.pipeline = pipeline,
             Setting::Depth(depth) => asked.depth = depth,

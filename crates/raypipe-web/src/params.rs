@@ -5,7 +5,7 @@
 use raypipe::Choice;
 use raypipe::impl_choice;
 use raypipe::modes::Aov;
-use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::MAX_DEPTH_LIMIT;
 
 /// The browser API the page traces through.
@@ -48,6 +48,7 @@ pub enum Setting {
     /// A model or scene file to fetch, by a URL relative to the page (the page's script fetches it).
     Model(String),
     Accel(Accel),
+    Builder(Builder),
     Memory(MemoryMode),
     Pipeline(Pipeline),
     Depth(u32),
@@ -65,8 +66,8 @@ pub enum Setting {
 
 /// The keys, for messages.
 pub const KEYS: &[&str] = &[
-    "scene", "model", "accel", "memory", "pipeline", "depth", "aov", "paused", "time", "speed", "spp", "width",
-    "height", "backend",
+    "scene", "model", "accel", "builder", "memory", "pipeline", "depth", "aov", "paused", "time", "speed", "spp",
+    "width", "height", "backend",
 ];
 
 impl Setting {
@@ -97,6 +98,7 @@ impl Setting {
             "model" if value.is_empty() => return Err("model=: give a file's URL".into()),
             "model" => Setting::Model(value.to_string()),
             "accel" => Setting::Accel(choice(key, value)?),
+            "builder" => Setting::Builder(choice(key, value)?),
             "memory" => Setting::Memory(choice(key, value)?),
             "pipeline" => Setting::Pipeline(choice(key, value)?),
             "depth" => Setting::Depth(number(0..=MAX_DEPTH_LIMIT)?),
@@ -124,6 +126,8 @@ pub struct StartParams {
     /// A file to fetch and open once the page runs, by a URL relative to the page.
     pub model: Option<String>,
     pub accel: Accel,
+    /// How a still scene's BVH is built.
+    pub builder: Builder,
     /// `None`: the adapter's default (`GpuContext::default_memory`: texture on WebGL2 and on a
     /// browser's software fallback adapter, storage on other WebGPU adapters).
     pub memory: Option<MemoryMode>,
@@ -148,6 +152,7 @@ impl Default for StartParams {
             scene: "whitted".into(),
             model: None,
             accel: Accel::Threaded,
+            builder: Builder::Lbvh,
             memory: None,
             pipeline: Pipeline::Fragment,
             depth: None,
@@ -183,6 +188,7 @@ impl StartParams {
             Setting::Scene(name) => self.scene = name,
             Setting::Model(url) => self.model = Some(url),
             Setting::Accel(accel) => self.accel = accel,
+            Setting::Builder(builder) => self.builder = builder,
             Setting::Memory(memory) => self.memory = Some(memory),
             Setting::Pipeline(pipeline) => self.pipeline = pipeline,
             Setting::Depth(depth) => self.depth = Some(depth),
@@ -227,6 +233,7 @@ mod tests {
         let query = [
             ("scene", "random:2000"),
             ("accel", "threaded"),
+            ("builder", "sah"),
             ("memory", "texture"),
             ("width", "320"),
             ("height", "240"),
@@ -246,6 +253,7 @@ mod tests {
                 scene: "random:2000".into(),
                 model: Some("models/bunny.ply".into()),
                 accel: Accel::Threaded,
+                builder: Builder::Sah,
                 memory: Some(MemoryMode::Texture),
                 pipeline: Pipeline::Fragment,
                 depth: Some(3),
@@ -281,7 +289,7 @@ mod tests {
                 "accel=bvh: expected one of brute, stack, stackless, threaded",
                 "width=0: expected a whole number in 1..=8192",
                 "depth=33: expected a whole number in 0..=32",
-                "unknown setting 'colour' (known: scene, model, accel, memory, pipeline, depth, aov, paused, time, speed, spp, width, height, backend)",
+                "unknown setting 'colour' (known: scene, model, accel, builder, memory, pipeline, depth, aov, paused, time, speed, spp, width, height, backend)",
                 "time=NaN: expected a number of seconds in 0..=86400",
             ]
         );
@@ -304,6 +312,9 @@ mod tests {
     fn every_mode_name_parses_back() {
         for &accel in Accel::ALL {
             assert_eq!(Setting::parse("accel", accel.name()), Ok(Setting::Accel(accel)));
+        }
+        for &builder in Builder::ALL {
+            assert_eq!(Setting::parse("builder", builder.name()), Ok(Setting::Builder(builder)));
         }
         for &memory in MemoryMode::ALL {
             assert_eq!(Setting::parse("memory", memory.name()), Ok(Setting::Memory(memory)));

@@ -49,6 +49,34 @@ impl Accel {
     pub const BVH: [Accel; 3] = [Accel::Stack, Accel::Stackless, Accel::Threaded];
 }
 
+/// How the BVH over a scene's primitives is built on the host.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Builder {
+    /// The linear BVH (Karras 2012), built in parallel in milliseconds: the paper's tree, and the
+    /// one a moving scene gets again every frame.
+    #[default]
+    Lbvh,
+    /// Top-down binned SAH, serial and about 50 times slower to build, for a tree that costs some
+    /// 10 % fewer tests a ray (docs/BENCHMARKS.md): for still scenes, whose tree is built once.
+    Sah,
+}
+
+impl_choice!(
+    Builder,
+    [
+        (
+            Lbvh,
+            "lbvh",
+            "the linear BVH (Karras 2012), built in parallel: the paper's tree, rebuilt every frame where the scene moves"
+        ),
+        (
+            Sah,
+            "sah",
+            "top-down binned SAH, serial: a better tree for a still scene, built once"
+        ),
+    ]
+);
+
 /// How scene records reach the fragment shader.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum MemoryMode {

@@ -30,7 +30,50 @@ pub fn build_binned_sah(boxes: &[Aabb]) -> Bvh {
     }
     let mut primitives: Vec<u32> = (0..n as u32).collect();
     let centroids: Vec<glam::Vec3> = boxes.iter().map(|b| b.centroid()).collect();
-    split(&mut nodes, &mut primitives, boxes, &centroids, NONE);
+    // Ranges of `primitives` still to split, with the node that points to each and from which side:
+    // an explicit stack (not recursion, which a lopsided tree could run past a thread's stack), the
+    // right half under the left so that nodes come out in depth-first order.
+    let mut pending = vec![Pending {
+        range: 0..n,
+        parent: NONE,
+        is_right: false,
+    }];
+    while let Some(Pending {
+        range,
+        parent,
+        is_right,
+    }) = pending.pop()
+    {
+        let index = nodes.len() as u32;
+        if parent != NONE {
+            let parent = &mut nodes[parent as usize];
+            *(if is_right { &mut parent.right } else { &mut parent.left }) = index;
+        }
+        let prims = &mut primitives[range.clone()];
+        let bounds = prims.iter().fold(Aabb::EMPTY, |b, &p| b.union(boxes[p as usize]));
+        nodes.push(GpuNode {
+            min: bounds.min.to_array(),
+            max: bounds.max.to_array(),
+            parent,
+            ..GpuNode::default()
+        });
+        if let [only] = prims {
+            nodes[index as usize].left = *only;
+            nodes[index as usize].right = LEAF;
+            continue;
+        }
+        let mid = range.start + split(prims, boxes, &centroids);
+        pending.push(Pending {
+            range: mid..range.end,
+            parent: index,
+            is_right: true,
+        });
+        pending.push(Pending {
+            range: range.start..mid,
+            parent: index,
+            is_right: false,
+        });
+    }
     // Depth-first numbering makes the escape of a node the index just past its subtree.
     let mut ends = vec![0u32; nodes.len()];
     for i in (0..nodes.len()).rev() {
@@ -49,20 +92,16 @@ pub fn build_binned_sah(boxes: &[Aabb]) -> Bvh {
     }
 }
 
-fn split(nodes: &mut Vec<GpuNode>, prims: &mut [u32], boxes: &[Aabb], centroids: &[glam::Vec3], parent: u32) -> u32 {
-    let index = nodes.len() as u32;
-    let bounds = prims.iter().fold(Aabb::EMPTY, |b, &p| b.union(boxes[p as usize]));
-    nodes.push(GpuNode {
-        min: bounds.min.to_array(),
-        max: bounds.max.to_array(),
-        parent,
-        ..GpuNode::default()
-    });
-    if prims.len() == 1 {
-        nodes[index as usize].left = prims[0];
-        nodes[index as usize].right = LEAF;
-        return index;
-    }
+/// A range of primitives waiting to become a subtree under `parent` (NONE for the root).
+struct Pending {
+    range: std::ops::Range<usize>,
+    parent: u32,
+    is_right: bool,
+}
+
+/// Orders two or more primitives so that the cheapest binned split puts the first ones left, and
+/// says how many: at least one a side.
+fn split(prims: &mut [u32], boxes: &[Aabb], centroids: &[glam::Vec3]) -> usize {
     let centroid_bounds = prims.iter().fold(Aabb::EMPTY, |b, &p| b.grow(centroids[p as usize]));
     let extent = centroid_bounds.max - centroid_bounds.min;
     let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bins left of the split)
@@ -104,7 +143,7 @@ fn split(nodes: &mut Vec<GpuNode>, prims: &mut [u32], boxes: &[Aabb], centroids:
             }
         }
     }
-    let mid = match best {
+    match best {
         Some((_, axis, bin)) => {
             let (mut i, mut j) = (0, prims.len());
             while i < j {
@@ -121,11 +160,5 @@ fn split(nodes: &mut Vec<GpuNode>, prims: &mut [u32], boxes: &[Aabb], centroids:
         }
         // All centroids coincide: split the list in half.
         None => prims.len() / 2,
-    };
-    let (left_prims, right_prims) = prims.split_at_mut(mid);
-    let left = split(nodes, left_prims, boxes, centroids, index);
-    let right = split(nodes, right_prims, boxes, centroids, index);
-    nodes[index as usize].left = left;
-    nodes[index as usize].right = right;
-    index
+    }
 }
