@@ -3,7 +3,7 @@
 use crate::Modes;
 use raypipe::Choice;
 use raypipe::modes::Aov;
-use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 
 /// What the panel shows.
 pub struct Readout<'a> {
@@ -76,6 +76,7 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout, playback: Opt
             ui.separator();
             choose::<Pipeline>(ui, "pipeline", &mut asked.pipeline);
             choose::<Accel>(ui, "acceleration", &mut asked.accel);
+            choose::<Builder>(ui, "BVH builder", &mut asked.builder);
             choose::<MemoryMode>(ui, "memory", &mut asked.memory);
             choose::<Aov>(ui, "view", &mut asked.view);
             ui.add(egui::Slider::new(&mut asked.depth, 0..=raypipe::scene::MAX_DEPTH_LIMIT).text("depth"));

@@ -70,8 +70,8 @@ pub async fn start(canvas: web_sys::HtmlCanvasElement, query: String) -> Result<
     }
 }
 
-/// What the page's controls offer, from Rust: `{ choices: { accel: [names], memory, pipeline,
-/// aov }, accept: ".ply,...", maxDepth, maxSpp }`. The page's script fills its controls from it.
+/// What the page's controls offer, from Rust: `{ choices: { accel: [names], builder, memory,
+/// pipeline, aov }, accept: ".ply,...", maxDepth, maxSpp }`. The page's script fills its controls from it.
 #[wasm_bindgen]
 pub fn controls() -> JsValue {
     let object = js_sys::Object::new();
@@ -378,8 +378,8 @@ fn publish_failure(why: &str) {
 
 #[wasm_bindgen]
 impl Viewer {
-    /// Changes one setting by the URL's names (`accel`, `memory`, `pipeline`, `depth`, `aov`,
-    /// `paused`, `spp`, `scene`); a bad value or a mode that cannot serve the scene shows its
+    /// Changes one setting by the URL's names (`accel`, `builder`, `memory`, `pipeline`, `depth`,
+    /// `aov`, `paused`, `spp`, `scene`); a bad value or a mode that cannot serve the scene shows its
     /// message and changes nothing.
     pub fn set(&self, key: &str, value: &str) {
         let setting = match Setting::parse(key, value) {

@@ -212,6 +212,7 @@ pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
     }
     vec![
         ("accel", names::<Accel>()),
+        ("builder", names::<Builder>()),
         ("memory", names::<MemoryMode>()),
         ("pipeline", names::<Pipeline>()),
         ("aov", names::<Aov>()),
@@ -298,7 +299,7 @@ mod tests {
     #[test]
     fn every_listed_control_value_parses() {
         let lists = control_choices();
-        assert_eq!(lists.len(), 4);
+        assert_eq!(lists.len(), 5);
         for (key, names) in lists {
             assert!(names.len() >= 2, "{key}: {names:?}");
             for name in names {
