@@ -30,9 +30,9 @@ pub fn build_binned_sah(boxes: &[Aabb]) -> Bvh {
     }
     let mut primitives: Vec<u32> = (0..n as u32).collect();
     let centroids: Vec<glam::Vec3> = boxes.iter().map(|b| b.centroid()).collect();
-    // Ranges of `primitives` still to split, with the node that points to each and from which side:
-    // an explicit stack (not recursion, which a lopsided tree could run past a thread's stack), the
-    // right half under the left so that nodes come out in depth-first order.
+    // Ranges of `primitives` still to split, with the node that points to each and from which side,
+    // on a stack of their own rather than the thread's (wasm's is 1 MiB): the right half under the
+    // left, so that nodes come out in depth-first order.
     let mut pending = vec![Pending {
         range: 0..n,
         parent: NONE,
