@@ -172,6 +172,25 @@ def summarise(out):
                 f"faster pipeline: {fmt(faster)} fps, {verdict(faster > BUNNY_FPS_TARGET)}"
             )
 
+    lines += ["## The Bunny's triangles over a tree built once: the LBVH against binned SAH", ""]
+    by_builder = {b: load_results(out / f"bunny-triangles-{b}") for b in ("lbvh", "sah")}
+    if None in by_builder.values():
+        missing.append("the Bunny's triangles over a tree built once")
+    else:
+        r0 = by_builder["lbvh"][0]
+        lines += [
+            f"{r0['width']}x{r0['height']}, fragment pipeline, trace ms:",
+            "",
+            "| accel | LBVH | SAH | SAH / LBVH |",
+            "| --- | ---: | ---: | ---: |",
+        ]
+        sah = {r["accel"]: r["ms_median"] for r in by_builder["sah"]}
+        for r in by_builder["lbvh"]:
+            if r["accel"] in sah:
+                ratio = sah[r["accel"]] / r["ms_median"]
+                lines.append(f"| {r['accel']} | {fmt(r['ms_median'], 3)} | {fmt(sah[r['accel']], 3)} | {ratio:.2f} |")
+        lines.append("")
+
     lines += ["## LBVH builds, GPU against CPU", ""]
     builds_path = out / "builds.jsonl"
     builds = []
@@ -284,6 +303,8 @@ def self_test():
                 row(20000, "fragment", "threaded", 1.5, 0.5),
                 row(20000, "compute", "threaded", 1.0, 0.25),
             ],
+            "bunny-triangles-lbvh": [row(69451, "fragment", "stack", 2.0), row(69451, "fragment", "threaded", 3.0)],
+            "bunny-triangles-sah": [row(69451, "fragment", "stack", 1.5), row(69451, "fragment", "threaded", 3.3)],
         }.items():
             (out / name).mkdir()
             (out / name / "results.json").write_text(json.dumps(rows))
@@ -335,6 +356,8 @@ def self_test():
         "compute / fragment 1.60",
         "| 1,000,000 | 30-bit | 0.800 (0.100, 0.200, 0.300) | 1,250.0 | 8.000 | 0.10 |",
         "not measured: the Bunny as triangles",
+        "| stack | 2.000 | 1.500 | 0.75 |",
+        "| threaded | 3.000 | 3.300 | 1.10 |",
         "| 100,128 | fragment | 0.010 | 0.250 | 0.500 | 4.000 | 15.8 % | 0.500 | 1.05 |",
     ):
         if needle not in text:

@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Measures one GPU in one command: Figure 4 (frames per second against sphere count) at 1920x1080
 # and 256x256 for every mode and both pipelines, the Bunny as 20K spheres and as its 69K triangles
-# at 1920x1080 with the BVH rebuilt every frame, the GPU and CPU LBVH builds from 100K to 16M
-# primitives with 30- and 63-bit Morton codes, and an animated skinned mesh of 10K to 1M triangles
-# (scripts/skinned-mesh.py) posed, rebuilt and refitted every frame at 640x360.
+# at 1920x1080 with the BVH rebuilt every frame (and its triangles over a tree built once by the
+# LBVH and by binned SAH), the GPU and CPU LBVH builds from 100K to 16M primitives with 30- and
+# 63-bit Morton codes, and an animated skinned mesh of 10K to 1M triangles (scripts/skinned-mesh.py)
+# posed, rebuilt and refitted every frame at 640x360.
 #
-#   scripts/gpu-bench.sh OUT_DIR            # on a real GPU: at most 9 minutes
+#   scripts/gpu-bench.sh OUT_DIR            # on a real GPU: at most 9.5 minutes
 #   scripts/gpu-bench.sh --quick OUT_DIR    # the same steps at small sizes (CI runs it on lavapipe)
 #
 # Writes under OUT_DIR: info.txt (`raypipe info`), a folder per benchmark with results.csv,
@@ -76,8 +77,9 @@ if [[ $quick -eq 1 ]]; then
   motion_counts=(3000)
   motion_frames=(--frames 2 --warmup 1 --width 64 --height 36)
   # Seconds for: Figure 4's BVH modes and its brute force (each size), the Bunny's spheres and its
-  # triangles, one build, one build of the largest count, and one animated mesh.
-  limits=(300 300 300 300 120 120 300)
+  # triangles, one build, one build of the largest count, one animated mesh, and the Bunny's
+  # triangles over a tree built once (each builder).
+  limits=(300 300 300 300 120 120 300 300)
 else
   sizes=(1920x1080 256x256)
   brute_counts=1000,2000,5000,10000,20000
@@ -89,8 +91,9 @@ else
   build_runs=5
   motion_counts=(10000 100000 1000000)
   motion_frames=(--frames 30 --warmup 3 --width 640 --height 360)
-  # As above; at most 2 x (90 + 25) + 2 x 25 + 12 x 8 + 4 x 25 + 3 x 20 = 536 seconds in all.
-  limits=(90 25 25 25 8 25 20)
+  # As above; at most 2 x (90 + 25) + 2 x 25 + 12 x 8 + 4 x 25 + 3 x 20 + 2 x 12 = 560 seconds in
+  # all.
+  limits=(90 25 25 25 8 25 20 12)
 fi
 
 "$raypipe" info > "$out/info.txt" 2>&1 || { cat "$out/info.txt"; exit 2; }
@@ -114,6 +117,12 @@ if [[ -n $models ]]; then
   step "Bunny, triangles, rebuilt every frame" "${limits[3]}" \
     "$raypipe" bench "$models/bunny.ply" --as triangles --accel stack,stackless,threaded \
     --pipeline fragment,compute "${bunny_size[@]}" --rebuild "${frames[@]}" --out "$out/bunny-triangles"
+  # A still model's tree built once on the host, by the LBVH and by binned SAH (--builder).
+  for builder in lbvh sah; do
+    step "Bunny, triangles, $builder tree built once" "${limits[7]}" \
+      "$raypipe" bench "$models/bunny.ply" --as triangles --builder "$builder" --accel stack,threaded \
+      --pipeline fragment "${bunny_size[@]}" "${frames[@]}" --out "$out/bunny-triangles-$builder"
+  done
 else
   echo "== Bunny: skipped, no bunny.ply in ../shared/models or .models (set RAYPIPE_MODELS)" | tee -a "$log"
   failed=1
