@@ -6,6 +6,7 @@ use crate::report::median;
 use crate::scene_args::{MAX_SPP, SceneArgs, aov_image};
 use anyhow::bail;
 use clap::Args;
+use raypipe::bvh::BuildTimings;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::modes::Aov;
 use raypipe::records::PackedScene;
@@ -144,9 +145,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         .at_time(args.scene.scene_time(&scene, start)?)
         .map_err(|e| e.in_origin(&args.scene.spec))?;
     let mut packed = PackedScene::new(&posed).map_err(|e| e.in_origin(&args.scene.spec))?;
-    if args.scene.accel.uses_bvh() {
-        packed.build_bvh_with(args.scene.builder, MortonBits::default());
-    }
+    let build = args
+        .scene
+        .accel
+        .uses_bvh()
+        .then(|| packed.build_bvh_with(args.scene.builder, MortonBits::default()));
     let outcome = render(&packed, &options).map_err(|e| e.context(args.scene.spec.clone()))?;
     let frame = &outcome.frame;
     io::write_as(&aov_image(args.scene.aov, is_exr, frame), &output, is_exr)?;
@@ -162,7 +165,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     }
 
     if args.stats {
-        say_stats(&args, &packed, &outcome)?;
+        say_stats(&args, &packed, build, &outcome)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -217,7 +220,12 @@ fn check_output(args: &RenderArgs) -> anyhow::Result<(PathBuf, bool)> {
 
 /// `--stats`' lines: the scene, the device, and the render's time and rays (or, for a cost render,
 /// the nodes tested).
-fn say_stats(args: &RenderArgs, packed: &PackedScene, outcome: &RenderOutcome) -> anyhow::Result<()> {
+fn say_stats(
+    args: &RenderArgs,
+    packed: &PackedScene,
+    build: Option<BuildTimings>,
+    outcome: &RenderOutcome,
+) -> anyhow::Result<()> {
     let frame = &outcome.frame;
     let pixels = frame.width as u64 * frame.height as u64;
     let rays = frame.rays();
@@ -233,6 +241,15 @@ fn say_stats(args: &RenderArgs, packed: &PackedScene, outcome: &RenderOutcome) -
         packed.max_depth
     );
     say_device(args, &outcome.device)?;
+    if let (Some(build), Some(bvh)) = (build, &packed.bvh) {
+        crate::say!(
+            "bvh: {} on the CPU in {:.2} ms, {} nodes, depth {}",
+            args.scene.builder,
+            build.total(),
+            bvh.nodes.len(),
+            bvh.depth
+        );
+    }
     if args.scene.aov == Aov::Cost {
         let counts = frame.counts();
         let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;

@@ -523,10 +523,17 @@ fn the_sah_builder_renders_the_same_image_and_refuses_motion() {
             "stack",
             "--builder",
             builder,
+            "--stats",
             "-o",
             path.to_str().unwrap(),
         ]);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let said = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(said.contains(&format!("bvh: {builder} on the CPU in ")), "{said}");
         std::fs::read(path).unwrap()
     };
     assert_eq!(image("sah"), image("lbvh"));
