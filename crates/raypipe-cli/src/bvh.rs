@@ -5,7 +5,7 @@ use raypipe::bvh::aabb::Aabb;
 use raypipe::bvh::key::Key;
 use raypipe::bvh::lbvh::{Hierarchy, LbvhBuilder};
 use raypipe::bvh::morton::MortonBits;
-use raypipe::bvh::sah::{build_binned_sah, sah_cost};
+use raypipe::bvh::sah::sah_cost;
 use raypipe::bvh::{BuildTimings, Bvh};
 use raypipe::gpu::build::{Codes, GpuLbvhBuilder};
 use raypipe::gpu::{Backend, GpuContext};
@@ -14,7 +14,6 @@ use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use serde::Serialize;
 use std::process::ExitCode;
-use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BuildDevice {
@@ -206,13 +205,9 @@ fn build_timed(args: &BvhArgs, packed: &PackedScene, boxes: &[Aabb], hierarchy: 
             let mut bvh = None;
             let timings = (0..runs)
                 .map(|_| {
-                    let start = Instant::now();
-                    bvh = Some(build_binned_sah(boxes));
-                    // The SAH builder has no LBVH phases: its whole time counts as hierarchy.
-                    BuildTimings {
-                        hierarchy: start.elapsed().as_secs_f64() * 1e3,
-                        ..BuildTimings::default()
-                    }
+                    let (built, timings) = Bvh::build_binned_sah(boxes);
+                    bvh = Some(built);
+                    timings
                 })
                 .collect();
             cpu((bvh.expect("at least one run"), timings))

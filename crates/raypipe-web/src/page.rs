@@ -71,7 +71,8 @@ pub async fn start(canvas: web_sys::HtmlCanvasElement, query: String) -> Result<
 }
 
 /// What the page's controls offer, from Rust: `{ choices: { accel: [names], builder, memory,
-/// pipeline, aov }, accept: ".ply,...", maxDepth, maxSpp }`. The page's script fills its controls from it.
+/// pipeline, aov }, accept: ".ply,...", maxDepth, maxSpp }`. The page's script fills its controls
+/// from it.
 #[wasm_bindgen]
 pub fn controls() -> JsValue {
     let object = js_sys::Object::new();

@@ -63,6 +63,18 @@ impl Bvh {
         }
     }
 
+    /// The binned-SAH tree of `boxes` ([`sah::build_binned_sah`]) with its build time, all of it
+    /// counted as the hierarchy's: the builder has none of the LBVH's other phases.
+    pub fn build_binned_sah(boxes: &[Aabb]) -> (Bvh, BuildTimings) {
+        let start = web_time::Instant::now();
+        let bvh = sah::build_binned_sah(boxes);
+        let timings = BuildTimings {
+            hierarchy: start.elapsed().as_secs_f64() * 1e3,
+            ..BuildTimings::default()
+        };
+        (bvh, timings)
+    }
+
     /// The linear BVH of `boxes` whose Morton codes are given (so devices can be compared on
     /// identical input). `bits` says how many low bits of each code are used.
     pub fn build_from_codes(boxes: &[Aabb], codes: &[u64], bits: MortonBits) -> (Bvh, BuildTimings) {

@@ -7,14 +7,12 @@ use super::{
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::{GpuNode, NONE};
 use crate::bvh::morton::MortonBits;
-use crate::bvh::sah::build_binned_sah;
 use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
 use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
 use crate::modes::Builder;
 use crate::scene::{Camera, Moved, Plane, Scene, Sphere, Triangle};
 use glam::Vec3;
-use web_time::Instant;
 
 /// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
 /// read.
@@ -201,23 +199,12 @@ impl PackedScene {
     }
 
     /// Builds the BVH over the primitives on the CPU with `builder` (the LBVH from `bits`-bit Morton
-    /// codes); the SAH build's whole time is its hierarchy's.
+    /// codes).
     pub fn build_bvh_with(&mut self, builder: Builder, bits: MortonBits) -> BuildTimings {
         let boxes = self.primitive_boxes();
         let (bvh, timings) = match builder {
             Builder::Lbvh => Bvh::build_lbvh(&boxes, bits),
-            Builder::Sah => {
-                let start = Instant::now();
-                let bvh = build_binned_sah(&boxes);
-                let hierarchy = start.elapsed().as_secs_f64() * 1e3;
-                (
-                    bvh,
-                    BuildTimings {
-                        hierarchy,
-                        ..Default::default()
-                    },
-                )
-            }
+            Builder::Sah => Bvh::build_binned_sah(&boxes),
         };
         self.set_bvh(bvh);
         timings
