@@ -6,7 +6,7 @@ use super::intersect::{
     intersect_triangle, safe_inverse, v3,
 };
 use crate::bvh::layout::GpuNode;
-use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree};
+use crate::bvh::threaded::{GpuThreadedNode, LEAF_BIT, QuantizationFrame, ThreadedTree};
 use glam::Vec3;
 
 /// Brute force: every ray against every primitive (`accel_brute.wgsl`).
@@ -69,8 +69,11 @@ pub fn traverse_stack(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, be
         let (lo, hi) = node.corners();
         intersect_box(lo, hi, origin, inv_dir, t_max)
     };
-    let (mut index, mut node) = (0u32, root);
-    if !node.is_leaf() && enter(&node, hit.t) < 0.0 {
+    // The node being visited, named by what its visit needs: an inner node by its position, a leaf
+    // by its link (LEAF_BIT | primitive), as are the waiting ones.
+    let name = |index: u32, node: &GpuThreadedNode| if node.is_leaf() { node.link } else { index };
+    let mut current = name(0, &root);
+    if !root.is_leaf() && enter(&root, hit.t) < 0.0 {
         return hit;
     }
     // Nodes waiting to be visited, with the distance where the ray enters them: no more than the
@@ -78,45 +81,38 @@ pub fn traverse_stack(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, be
     let capacity = tree.stack_size as usize;
     let mut stack: Vec<(u32, f32)> = Vec::with_capacity(capacity);
     loop {
-        if node.is_leaf() {
-            if hit_primitive(primitives, node.primitive(), ray, &mut hit) && shadow {
+        if current & LEAF_BIT != 0 {
+            if hit_primitive(primitives, current & !LEAF_BIT, ray, &mut hit) && shadow {
                 return hit;
             }
         } else {
-            let left_index = index + 1;
+            let left_index = current + 1;
             let left = nodes[left_index as usize];
             let right_index = if left.is_leaf() { left_index + 1 } else { left.link };
             let right = nodes[right_index as usize];
+            let (left_name, right_name) = (name(left_index, &left), name(right_index, &right));
             // Leaf children are box-tested too and visited as nodes: one primitive test per step.
             let t_left = enter(&left, hit.t);
             let t_right = enter(&right, hit.t);
-            if t_left >= 0.0 && t_right >= 0.0 {
-                // Both: go to the nearer (left on a tie), the other waits.
+            let (enters_left, enters_right) = (t_left >= 0.0, t_right >= 0.0);
+            // The nearer child is visited next (left on a tie); where the ray enters both, the
+            // other waits.
+            let right_first = enters_right && (!enters_left || t_right < t_left);
+            if enters_left && enters_right {
                 assert!(
                     stack.len() < capacity,
                     "the BVH stack of {capacity} overflowed: the tree is deeper than its stated depth"
                 );
-                if t_right < t_left {
-                    stack.push((left_index, t_left));
-                    (index, node) = (right_index, right);
-                } else {
-                    stack.push((right_index, t_right));
-                    (index, node) = (left_index, left);
-                }
-                continue;
+                stack.push(if right_first { (left_name, t_left) } else { (right_name, t_right) });
             }
-            if t_left >= 0.0 {
-                (index, node) = (left_index, left);
-                continue;
-            }
-            if t_right >= 0.0 {
-                (index, node) = (right_index, right);
+            if enters_left || enters_right {
+                current = if right_first { right_name } else { left_name };
                 continue;
             }
         }
         // Resume at the next waiting node that the ray enters no farther than the best hit.
         match std::iter::from_fn(|| stack.pop()).find(|&(_, t)| t <= hit.t) {
-            Some((waiting, _)) => (index, node) = (waiting, nodes[waiting as usize]),
+            Some((waiting, _)) => current = waiting,
             None => break,
         }
     }

@@ -246,11 +246,22 @@ pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32
     count_box_tests(1);
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
-    let near = t0.min(t1);
-    let far = t0.max(t1);
-    let t_enter = near.x.max(near.y).max(near.z.max(0.0));
-    let t_exit = far.x.min(far.y).min(far.z.min(t_max));
+    let swap = t1.cmplt(t0);
+    let near = Vec3::select(swap, t1, t0);
+    let far = Vec3::select(swap, t0, t1);
+    let t_enter = larger(larger(near.x, near.y), larger(near.z, 0.0));
+    let t_exit = smaller(smaller(far.x, far.y), smaller(far.z, t_max));
     if t_enter <= t_exit { t_enter } else { NO_HIT }
+}
+
+/// The larger of two numbers that are not NaN (`larger` in the shader).
+fn larger(a: f32, b: f32) -> f32 {
+    if b > a { b } else { a }
+}
+
+/// The smaller of two numbers that are not NaN (`smaller` in the shader).
+fn smaller(a: f32, b: f32) -> f32 {
+    if b < a { b } else { a }
 }
 
 /// Tests a primitive of the BVH; when it beats the best hit, it becomes the best hit and this says

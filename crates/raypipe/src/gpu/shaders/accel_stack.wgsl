@@ -12,9 +12,12 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
     // The ray in the quantization frame, where box corners are whole quanta: t is unchanged.
     let origin = (ray.origin - globals.bvh_frame.origin) * globals.bvh_frame.inverse_quantum;
     let inv_dir = safe_inverse(ray.dir) * globals.bvh_frame.quantum;
-    var index = 0u;
-    var node = load_threaded_node(0u);
-    if (!is_leaf(node) && intersect_box(quantized_min(node), quantized_max(node), origin, inv_dir, hit.t) < 0.0) {
+    // The node being visited, named by what its visit needs: an inner node by its position, a leaf
+    // by its link (LEAF_BIT | primitive). Waiting nodes are named the same way, so resuming one
+    // fetches nothing.
+    let root = load_threaded_node(0u);
+    var current = select(0u, root.link, is_leaf(root));
+    if (!is_leaf(root) && intersect_box(quantized_min(root), quantized_max(root), origin, inv_dir, hit.t) < 0.0) {
         return hit;
     }
     // Nodes waiting to be visited, with the distance where the ray enters them.
@@ -37,48 +40,38 @@ fn traverse_stack(ray: Ray, best: Hit, shadow: bool) -> Hit {
                 if (stack_t[size] > hit.t) {
                     continue;
                 }
-                index = stack[size];
-                node = load_threaded_node(index);
+                current = stack[size];
                 has_node = true;
             }
-            if (is_leaf(node)) {
+            if ((current & LEAF_BIT) != 0u) {
                 break;
             }
-            let left_index = index + 1u;
+            let left_index = current + 1u;
             let left = load_threaded_node(left_index);
             let right_index = select(left.link, left_index + 1u, is_leaf(left));
             let right = load_threaded_node(right_index);
+            let left_name = select(left_index, left.link, is_leaf(left));
+            let right_name = select(right_index, right.link, is_leaf(right));
             // Leaf children are box-tested too and visited as nodes.
             let t_left = intersect_box(quantized_min(left), quantized_max(left), origin, inv_dir, hit.t);
             let t_right = intersect_box(quantized_min(right), quantized_max(right), origin, inv_dir, hit.t);
-            if (t_left >= 0.0 && t_right >= 0.0) {
-                // Both: go to the nearer (left on a tie), the other waits.
-                if (t_right < t_left) {
-                    stack[size] = left_index;
-                    stack_t[size] = t_left;
-                    index = right_index;
-                    node = right;
-                } else {
-                    stack[size] = right_index;
-                    stack_t[size] = t_right;
-                    index = left_index;
-                    node = left;
-                }
+            let enters_left = t_left >= 0.0;
+            let enters_right = t_right >= 0.0;
+            // The nearer child is visited next (left on a tie); where the ray enters both, the
+            // other waits.
+            let right_first = enters_right && (!enters_left || t_right < t_left);
+            if (enters_left && enters_right) {
+                stack[size] = select(right_name, left_name, right_first);
+                stack_t[size] = select(t_right, t_left, right_first);
                 size += 1u;
-            } else if (t_left >= 0.0) {
-                index = left_index;
-                node = left;
-            } else if (t_right >= 0.0) {
-                index = right_index;
-                node = right;
-            } else {
-                has_node = false;
             }
+            current = select(left_name, right_name, right_first);
+            has_node = enters_left || enters_right;
         }
         if (!has_node) {
             break;
         }
-        if (hit_primitive(node.link & ~LEAF_BIT, ray, &hit) && shadow) {
+        if (hit_primitive(current & ~LEAF_BIT, ray, &hit) && shadow) {
             return hit;
         }
         has_node = false;

@@ -176,15 +176,26 @@ fn safe_inverse(dir: vec3<f32>) -> vec3<f32> {
     return 1.0 / select(dir, vec3<f32>(TINY_DIRECTION), abs(dir) < vec3<f32>(TINY_DIRECTION));
 }
 
+// min and max of numbers that are not NaN, as a compare and a select: a box test's are, and the
+// software rasterizers pay for min's and max's NaN rules with a compare and a blend more each.
+fn larger(a: f32, b: f32) -> f32 {
+    return select(a, b, b > a);
+}
+
+fn smaller(a: f32, b: f32) -> f32 {
+    return select(a, b, b < a);
+}
+
 // Where the ray enters the box (0 if it starts inside), if it does so by t_max; else NO_HIT.
 fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
     box_tests += 1u;
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
-    let near = min(t0, t1);
-    let far = max(t0, t1);
-    let t_enter = max(max(near.x, near.y), max(near.z, 0.0));
-    let t_exit = min(min(far.x, far.y), min(far.z, t_max));
+    let swap = t1 < t0;
+    let near = select(t0, t1, swap);
+    let far = select(t1, t0, swap);
+    let t_enter = larger(larger(near.x, near.y), larger(near.z, 0.0));
+    let t_exit = smaller(smaller(far.x, far.y), smaller(far.z, t_max));
     if (t_enter <= t_exit) {
         return t_enter;
     }
