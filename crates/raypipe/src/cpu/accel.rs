@@ -103,7 +103,11 @@ pub fn traverse_stack(tree: ThreadedTree, primitives: &Primitives, ray: &Ray, be
                     stack.len() < capacity,
                     "the BVH stack of {capacity} overflowed: the tree is deeper than its stated depth"
                 );
-                stack.push(if right_first { (left_name, t_left) } else { (right_name, t_right) });
+                stack.push(if right_first {
+                    (left_name, t_left)
+                } else {
+                    (right_name, t_right)
+                });
             }
             if enters_left || enters_right {
                 current = if right_first { right_name } else { left_name };
