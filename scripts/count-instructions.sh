@@ -28,11 +28,14 @@ icd=/usr/share/vulkan/icd.d/lvp_icd.json
 [ -f "$icd" ] || { echo "scripts/count-instructions.sh: no lavapipe ($icd; scripts/install-deps.sh)" >&2; exit 2; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+status=0
 VK_DRIVER_FILES=$icd WGPU_BACKEND=vulkan valgrind --tool=callgrind --callgrind-out-file="$work/callgrind.out" \
-  "$binary" render "$@" -o "$work/image.png" --quiet > "$work/valgrind.log" 2>&1 || {
-  cat "$work/valgrind.log" >&2
-  exit 1
-}
+  "$binary" render "$@" -o "$work/image.png" --quiet > "$work/valgrind.log" 2>&1 || status=$?
+if [ $status != 0 ]; then
+  # raypipe's own words, without valgrind's (its lines start with ==PID==).
+  grep -v '^==[0-9]*==' "$work/valgrind.log" >&2
+  exit $status
+fi
 # Callgrind files name an object once and refer to it by number after: ob=(N) NAME, then ob=(N).
 # Costs follow as "position cost" lines under the current object (cob= is a callee's, not ours).
 awk '
