@@ -42,8 +42,8 @@ awk '
   /^ob=/ { match($0, /\(([0-9]+)\)/); id = substr($0, RSTART + 1, RLENGTH - 2)
            name = $0; sub(/^ob=\([0-9]+\) ?/, "", name); if (name != "") names[id] = name
            current = names[id]; next }
-  /^c?ob=/ { match($0, /\(([0-9]+)\)/); id = substr($0, RSTART + 1, RLENGTH - 2)
-             name = $0; sub(/^cob=\([0-9]+\) ?/, "", name); if (name != "") names[id] = name; next }
+  /^cob=/ { match($0, /\(([0-9]+)\)/); id = substr($0, RSTART + 1, RLENGTH - 2)
+            name = $0; sub(/^cob=\([0-9]+\) ?/, "", name); if (name != "") names[id] = name; next }
   /^calls=/ { skip = 1; next }
   /^[0-9+*-]/ { if (skip) { skip = 0; next } if (current == "???") total += $NF }
   END { printf "%.0f instructions in JIT-compiled shader code\n", total }
