@@ -9,6 +9,7 @@ use raypipe::bvh::BuildTimings;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::{self, Count};
+use raypipe::gpu::region::TracedPixels;
 use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
@@ -64,7 +65,7 @@ pub struct RenderOutcome {
     /// GPU time of the render pass from timestamp queries, where the adapter has them.
     pub gpu_ms: Option<f64>,
     /// The pixels the GPU's tracer ran on (`Renderer::traced_region`); the CPU traces them all.
-    pub traced_pixels: u64,
+    pub traced: TracedPixels,
 }
 
 /// The CPU reference tracer, in words.
@@ -146,9 +147,9 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
                 block_on(renderer.render_samples_with(options.samples, |_| {}, |done| bar.set_position(done as u64)));
             bar.finish_and_clear();
             let timed = timed?;
-            let traced_pixels = renderer.traced_region().map_or(0, |r| r.width as u64 * r.height as u64);
+            let traced = renderer.traced_region();
             Ok(RenderOutcome {
-                traced_pixels,
+                traced,
                 frame: timed.frame,
                 device: ctx.describe(),
                 wall_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -159,7 +160,7 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
             let start = Instant::now();
             let frame = render_cpu(scene, options)?;
             Ok(RenderOutcome {
-                traced_pixels: frame.width as u64 * frame.height as u64,
+                traced: TracedPixels::whole(frame.width, frame.height),
                 frame,
                 device: cpu_description(),
                 wall_ms: start.elapsed().as_secs_f64() * 1e3,

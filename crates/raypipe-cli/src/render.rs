@@ -267,10 +267,12 @@ fn say_stats(
         rays as f64 / pixels as f64,
         rays as f64 / (ms * 1e3)
     );
-    if outcome.traced_pixels < pixels {
+    let traced = &outcome.traced;
+    if traced.pixel_count() < pixels {
         crate::say!(
-            "traced {} of {pixels} pixels: the scene's box projects to those, the others' rays miss it",
-            outcome.traced_pixels
+            "traced {} of {pixels} pixels, in {} rectangles: the scene's boxes project to those, the others' rays miss them",
+            traced.pixel_count(),
+            traced.rects.len()
         );
     }
     Ok(())

@@ -1,14 +1,28 @@
-//! Where a frame's primary rays can hit anything: the pixels that the box around the scene's
-//! primitives projects to. The fragment tracer runs only there, under a scissor rectangle; every
-//! other pixel's primary ray misses the box, so a shader that traces nothing writes what the tracer
-//! would (the background, one ray). A software rasterizer runs the whole tracer for every 2x2 group
-//! of pixels, hit or miss (docs/BENCHMARKS.md): a model that fills a third of the frame pays for a
-//! third of it.
+//! Where a frame's primary rays can hit anything: the pixels that the scene's boxes project to. The
+//! fragment tracer runs only there, under scissor rectangles; every other pixel's primary ray misses
+//! every box, so a shader that traces nothing writes what the tracer would (the background, one
+//! ray). A software rasterizer runs the whole tracer for every 2x2 group of pixels, hit or miss
+//! (docs/BENCHMARKS.md): a model that fills a third of the frame pays for a third of it.
+//!
+//! The boxes are the BVH's own, from the root down (a [`BoxCover`]): a node whose projection is
+//! large is replaced by its children's, so the traced pixels hug the model's outline instead of its
+//! bounding box, in tiles of [`TILE`] pixels.
 
 use crate::bvh::aabb::Aabb;
 use crate::records::GpuCamera;
 use crate::records::packed::PackedBvh;
 use glam::{DVec2, DVec3, Vec3};
+
+/// The side of the square tiles the traced pixels are made of: even, so that no 2x2 group of
+/// pixels is split between the tracer and the misses' shader.
+pub const TILE: u32 = 4;
+/// A node whose rectangle holds more pixels than this is replaced by its children's.
+const REFINE_ABOVE_PIXELS: u32 = 64;
+/// At most this many nodes replaced by their children a frame: the host's share of a frame stays
+/// well under a millisecond.
+const REFINE_BUDGET: usize = 4096;
+/// The levels of the BVH a cover keeps below its root.
+const COVER_LEVELS: u32 = 12;
 
 /// A rectangle of pixels: columns `x..x + width`, rows `y..y + height` (row 0 at the top).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,17 +44,187 @@ impl PixelRect {
     }
 }
 
-/// The box the BVH walks test first, in world space: the root of the threaded nodes (the stack and
-/// threaded walks'), its quantized corners rounded outward from the build layout's root (the
-/// stackless walk's), so it holds both. A ray that misses it misses every primitive of the tree.
-pub fn walked_box(bvh: &PackedBvh) -> Option<Aabb> {
-    let root = bvh.threaded_nodes.first()?;
-    let (low, high) = root.corners();
-    let frame = &bvh.frame;
-    Some(Aabb {
-        min: frame.origin + low * frame.quantum,
-        max: frame.origin + high * frame.quantum,
-    })
+/// The pixels a frame traces: disjoint rectangles, in rows from the top.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TracedPixels {
+    pub rects: Vec<PixelRect>,
+}
+
+impl TracedPixels {
+    pub fn whole(width: u32, height: u32) -> Self {
+        Self {
+            rects: vec![PixelRect::whole(width, height)],
+        }
+    }
+
+    pub fn is_whole(&self, width: u32, height: u32) -> bool {
+        self.rects == [PixelRect::whole(width, height)]
+    }
+
+    pub fn pixel_count(&self) -> u64 {
+        self.rects.iter().map(|r| r.width as u64 * r.height as u64).sum()
+    }
+
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        self.rects
+            .iter()
+            .any(|r| (r.x..r.x + r.width).contains(&x) && (r.y..r.y + r.height).contains(&y))
+    }
+}
+
+/// The top levels of a BVH as world-space boxes, each holding its subtree's primitives: a ray that
+/// enters none of a cut's boxes misses every primitive. The boxes are the threaded nodes' (the stack
+/// and threaded walks'), whose quantized corners are rounded outward from the build layout's (the
+/// stackless walk's), so they hold both.
+#[derive(Clone, Debug)]
+pub struct BoxCover {
+    /// Depth-first from the root.
+    nodes: Vec<CoverNode>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct CoverNode {
+    bounds: Aabb,
+    /// Where the children are in the cover; none for a leaf or a node on the last level kept.
+    children: Option<[u32; 2]>,
+}
+
+impl BoxCover {
+    /// None for a tree without nodes.
+    pub fn new(bvh: &PackedBvh) -> Option<Self> {
+        let tree = &bvh.threaded_nodes;
+        if tree.is_empty() {
+            return None;
+        }
+        let frame = &bvh.frame;
+        let bounds = |index: usize| {
+            let (low, high) = tree[index].corners();
+            Aabb {
+                min: frame.origin + low * frame.quantum,
+                max: frame.origin + high * frame.quantum,
+            }
+        };
+        let mut nodes: Vec<CoverNode> = Vec::new();
+        // (threaded node, its level, the cover node that points to it, which child it is)
+        let mut pending = vec![(0usize, 0u32, None::<(usize, usize)>)];
+        while let Some((index, level, parent)) = pending.pop() {
+            let at = nodes.len();
+            if let Some((parent, side)) = parent {
+                nodes[parent].children.get_or_insert([0; 2])[side] = at as u32;
+            }
+            nodes.push(CoverNode {
+                bounds: bounds(index),
+                children: None,
+            });
+            if tree[index].is_leaf() || level == COVER_LEVELS {
+                continue;
+            }
+            // Depth-first numbering: the left child is the next node, the right one comes after
+            // the left subtree.
+            let left = index + 1;
+            let right = if tree[left].is_leaf() {
+                left + 1
+            } else {
+                tree[left].link as usize
+            };
+            pending.push((right, level + 1, Some((at, 1))));
+            pending.push((left, level + 1, Some((at, 0))));
+        }
+        Some(Self { nodes })
+    }
+
+    /// The root's box: the one every walk tests first.
+    pub fn root(&self) -> Aabb {
+        self.nodes[0].bounds
+    }
+
+    /// The pixels where a primary ray can enter one of the boxes: the tiles that the rectangles of
+    /// a cut through the cover overlap ([`projected_rect`]), a node's children's replacing its own
+    /// while it spans more than [`REFINE_ABOVE_PIXELS`].
+    pub fn traced_pixels(&self, camera: &GpuCamera) -> TracedPixels {
+        let (width, height) = (camera.width as u32, camera.height as u32);
+        let (columns, rows) = (width.div_ceil(TILE) as usize, height.div_ceil(TILE) as usize);
+        let mut covered = vec![false; columns * rows];
+        let mut mark = |rect: PixelRect| {
+            let (x0, x1) = (rect.x / TILE, (rect.x + rect.width).div_ceil(TILE));
+            for y in rect.y / TILE..(rect.y + rect.height).div_ceil(TILE) {
+                let row = y as usize * columns;
+                covered[row + x0 as usize..row + x1 as usize].fill(true);
+            }
+        };
+        let mut pending = vec![0usize];
+        let mut refined = 0;
+        while let Some(index) = pending.pop() {
+            let node = &self.nodes[index];
+            let Some(rect) = projected_rect(camera, &node.bounds) else {
+                continue;
+            };
+            match node.children {
+                Some([left, right]) if rect.width * rect.height > REFINE_ABOVE_PIXELS && refined < REFINE_BUDGET => {
+                    refined += 1;
+                    pending.push(right as usize);
+                    pending.push(left as usize);
+                }
+                _ => mark(rect),
+            }
+        }
+        TracedPixels {
+            rects: tile_rects(&covered, columns, width, height),
+        }
+    }
+}
+
+/// The covered tiles as few disjoint rectangles: each row's runs, a run stretched down over the
+/// rows below that have the same run.
+fn tile_rects(covered: &[bool], columns: usize, width: u32, height: u32) -> Vec<PixelRect> {
+    // Runs of a row: [first column, end column).
+    let runs = |row: &[bool]| {
+        let mut runs = Vec::new();
+        let mut start = None;
+        for (column, &on) in row.iter().chain([&false]).enumerate() {
+            match (on, start) {
+                (true, None) => start = Some(column),
+                (false, Some(first)) => {
+                    runs.push((first, column));
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        runs
+    };
+    let pixels = |tiles: (usize, usize), size: u32| {
+        let first = tiles.0 as u32 * TILE;
+        (first, (tiles.1 as u32 * TILE).min(size) - first)
+    };
+    let mut rects: Vec<PixelRect> = Vec::new();
+    // Rectangles that reach down to the row above, by their runs.
+    let mut open: Vec<((usize, usize), usize)> = Vec::new();
+    for (y, row) in covered.chunks(columns).enumerate() {
+        let mut still_open = Vec::new();
+        for run in runs(row) {
+            match open.iter().find(|(r, _)| *r == run) {
+                Some(&(_, rect)) => {
+                    let (_, rect_height) = pixels((y, y + 1), height);
+                    rects[rect].height += rect_height;
+                    still_open.push((run, rect));
+                }
+                None => {
+                    let (x, rect_width) = pixels(run, width);
+                    let (y, rect_height) = pixels((y, y + 1), height);
+                    still_open.push((run, rects.len()));
+                    rects.push(PixelRect {
+                        x,
+                        y,
+                        width: rect_width,
+                        height: rect_height,
+                    });
+                }
+            }
+        }
+        open = still_open;
+    }
+    rects
 }
 
 /// The pixels where a primary ray (anywhere in its pixel: later samples are jittered) can enter
@@ -205,5 +389,95 @@ mod tests {
             max: Vec3::new(51.0, 1.0, -2.0),
         };
         assert_eq!(projected_rect(&camera, &aside), None);
+    }
+
+    /// Every sub-pixel position whose ray enters one of a BVH's leaf boxes lies in the traced
+    /// pixels, which are fewer than the root box's rectangle: a ring of spheres seen from above (a
+    /// hole in the middle), from its side, and from inside it.
+    #[test]
+    fn rays_that_enter_a_leaf_box_start_in_the_traced_pixels() {
+        let scene = crate::scene::builtin::by_name("torus:400").unwrap().unwrap();
+        let mut packed = crate::records::PackedScene::new(&scene).unwrap();
+        packed.build_bvh(crate::bvh::morton::MortonBits::Bits30);
+        let bvh = packed.bvh.as_ref().unwrap();
+        let cover = BoxCover::new(bvh).unwrap();
+        let leaves: Vec<Aabb> = bvh
+            .threaded_nodes
+            .iter()
+            .filter(|node| node.is_leaf())
+            .map(|node| {
+                let (low, high) = node.corners();
+                Aabb {
+                    min: bvh.frame.origin + low * bvh.frame.quantum,
+                    max: bvh.frame.origin + high * bvh.frame.quantum,
+                }
+            })
+            .collect();
+        for (eye, tighter) in [
+            (Vec3::new(0.3, 3.0, 0.4), true),
+            (Vec3::new(3.5, 0.8, -1.0), true),
+            (Vec3::new(0.9, 0.0, 0.0), false),
+        ] {
+            let camera = camera(eye, Vec3::ZERO);
+            let traced = cover.traced_pixels(&camera);
+            assert!(disjoint(&traced.rects), "from {eye}: {:?}", traced.rects);
+            let mut entered = 0;
+            for iy in 0..360 {
+                for ix in 0..480 {
+                    let (px, py) = (ix as f32 / 3.0 + 1.0 / 6.0, iy as f32 / 3.0 + 1.0 / 6.0);
+                    let dir = ray_dir(&camera, px, py);
+                    if !leaves.iter().any(|leaf| ray_enters(eye, dir, leaf)) {
+                        continue;
+                    }
+                    entered += 1;
+                    let (x, y) = (px as u32, py as u32);
+                    assert!(
+                        traced.contains(x, y),
+                        "from {eye}: pixel ({x}, {y}) sees a leaf but is not traced"
+                    );
+                }
+            }
+            assert!(entered > 1000, "from {eye}: only {entered} rays enter a leaf");
+            if tighter {
+                let rect = projected_rect(&camera, &cover.root()).unwrap();
+                let root_pixels = rect.width as u64 * rect.height as u64;
+                assert!(
+                    traced.pixel_count() * 10 < root_pixels * 9,
+                    "from {eye}: {} traced against the root's {root_pixels}",
+                    traced.pixel_count()
+                );
+            }
+        }
+    }
+
+    fn disjoint(rects: &[PixelRect]) -> bool {
+        rects.iter().enumerate().all(|(i, a)| {
+            rects[i + 1..]
+                .iter()
+                .all(|b| a.x + a.width <= b.x || b.x + b.width <= a.x || a.y + a.height <= b.y || b.y + b.height <= a.y)
+        })
+    }
+
+    proptest::proptest! {
+        /// The rectangles are disjoint and hold exactly the covered tiles' pixels, cut at the
+        /// image's edges.
+        #[test]
+        fn tile_rects_hold_exactly_the_covered_tiles(
+            width in 1u32..40,
+            height in 1u32..40,
+            bits in proptest::collection::vec(proptest::bool::weighted(0.6), 100),
+        ) {
+            let (columns, rows) = (width.div_ceil(TILE) as usize, height.div_ceil(TILE) as usize);
+            let covered: Vec<bool> = (0..columns * rows).map(|i| bits[i % bits.len()]).collect();
+            let rects = tile_rects(&covered, columns, width, height);
+            proptest::prop_assert!(disjoint(&rects));
+            let traced = TracedPixels { rects };
+            for y in 0..height {
+                for x in 0..width {
+                    let tile = (y / TILE) as usize * columns + (x / TILE) as usize;
+                    proptest::prop_assert_eq!(traced.contains(x, y), covered[tile], "pixel ({}, {})", x, y);
+                }
+            }
+        }
     }
 }

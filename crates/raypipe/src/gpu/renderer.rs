@@ -14,13 +14,12 @@
 
 use super::readback::TextureReadback;
 use super::rebuild::SceneRebuild;
-use super::region::{PixelRect, projected_rect, walked_box};
+use super::region::{BoxCover, TracedPixels};
 use super::shader::{RecordKind, SceneFeatures, ShaderConfig, compose};
 use super::threaded::encode_frame_copy;
 use super::timing::PassTimestamps;
 use super::upload::{SceneResources, SharedBuffers, upload};
 use super::{GpuContext, GpuError};
-use crate::bvh::aabb::Aabb;
 use crate::error::MissingBvh;
 use crate::image::Frame;
 use crate::modes::Count;
@@ -169,6 +168,21 @@ enum TracePipeline {
     Compute(wgpu::ComputePipeline),
 }
 
+/// The fragment tracer confined to the pixels where a primary ray can hit the scene
+/// ([`super::region`]): the BVH's top boxes, and the pixels they project to from the camera now.
+struct Confinement {
+    cover: BoxCover,
+    pixels: TracedPixels,
+}
+
+impl Confinement {
+    fn new(scene: &PackedScene, camera: &GpuCamera) -> Option<Self> {
+        let cover = BoxCover::new(scene.bvh.as_ref()?)?;
+        let pixels = cover.traced_pixels(camera);
+        Some(Self { cover, pixels })
+    }
+}
+
 pub struct Renderer {
     ctx: GpuContext,
     options: RendererOptions,
@@ -186,10 +200,10 @@ pub struct Renderer {
     bvh_frame: Option<wgpu::Buffer>,
     /// The scene's arrays, kept to be rewritten ([`Renderer::write_scene`]).
     resources: SceneResources,
-    /// The box a BVH walk tests first, where the fragment tracer runs only on the pixels it
-    /// projects to ([`super::region`]): a BVH the host knows (not rebuilt on the GPU), no planes
-    /// (which no box holds), the ray count (a cost view counts the misses' box tests too).
-    walked_box: Option<Aabb>,
+    /// Where the fragment tracer runs only on the pixels the BVH's boxes project to
+    /// ([`super::region`]): a BVH the host knows (not rebuilt on the GPU), no planes (which no box
+    /// holds), the ray count (a cost view counts the misses' box tests too).
+    confinement: Option<Confinement>,
     timer: Option<PassTimestamps>,
 }
 
@@ -239,9 +253,9 @@ impl Renderer {
         let tree_written = kinds
             .iter()
             .any(|k| matches!(k, RecordKind::Node | RecordKind::ThreadedNode));
-        if self.walked_box.is_some() && tree_written {
-            // The walks test the new tree's root from now on.
-            self.walked_box = scene.bvh.as_ref().and_then(walked_box);
+        if self.confinement.is_some() && tree_written {
+            // The walks test the new tree's boxes from now on.
+            self.confinement = Confinement::new(scene, &self.globals.camera);
         }
         if kinds.contains(&RecordKind::ThreadedNode) {
             self.globals.bvh_frame = scene.globals.bvh_frame;
@@ -291,7 +305,9 @@ impl Renderer {
             && count == Count::Rays
             && shared.is_none()
             && scene.planes.is_empty();
-        let walked_box = scene.bvh.as_ref().and_then(walked_box).filter(|_| confined);
+        let confinement = confined
+            .then(|| Confinement::new(scene, &scene.globals.camera))
+            .flatten();
         ctx.checked("uploading the scene and building the pipeline", || {
             let resources = upload(ctx, scene, memory, accel, shared, tracer_stage(pipeline))?;
             let globals = scene.globals;
@@ -319,7 +335,7 @@ impl Renderer {
                 &resources,
                 &globals_buffer,
                 &previous_layout,
-                walked_box.is_some(),
+                confinement.is_some(),
             );
             Ok(Self {
                 ctx: ctx.clone(),
@@ -333,7 +349,7 @@ impl Renderer {
                 readbacks: readbacks(&ctx.device, width, height),
                 bvh_frame: shared.and_then(|s| s.bvh_frame.clone()),
                 resources,
-                walked_box,
+                confinement,
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
@@ -376,14 +392,14 @@ impl Renderer {
     }
 
     /// The pixels the next draw traces: the whole frame, or where the fragment tracer is confined
-    /// ([`super::region`]) the rectangle the scene's box projects to, or none where it projects to
-    /// no pixel. The others get the background, one ray each, as a traced miss would.
-    pub fn traced_region(&self) -> Option<PixelRect> {
-        match &self.walked_box {
-            Some(bounds) => projected_rect(&self.globals.camera, bounds),
+    /// ([`super::region`]) the tiles the BVH's boxes project to, none where they project to no
+    /// pixel. The others get the background, one ray each, as a traced miss would.
+    pub fn traced_region(&self) -> TracedPixels {
+        match &self.confinement {
+            Some(confinement) => confinement.pixels.clone(),
             None => {
                 let (width, height) = self.size();
-                Some(PixelRect::whole(width, height))
+                TracedPixels::whole(width, height)
             }
         }
     }
@@ -433,6 +449,9 @@ impl Renderer {
     fn write_camera(&mut self, camera: GpuCamera) {
         self.restart();
         self.globals.camera = camera;
+        if let Some(confinement) = &mut self.confinement {
+            confinement.pixels = confinement.cover.traced_pixels(&camera);
+        }
         let offset = std::mem::offset_of!(GpuGlobals, camera) as u64;
         self.ctx
             .queue
@@ -485,20 +504,22 @@ impl Renderer {
                 pass.set_bind_group(1, previous, &[]);
                 pass.set_vertex_buffer(0, vertices.slice(..));
                 let (width, height) = written.size();
-                let traced = self.traced_region();
-                let whole = traced == Some(PixelRect::whole(width, height));
-                if let Some(miss) = miss.as_ref().filter(|_| !whole) {
-                    // Every pixel the misses' way first (a shader that traces nothing), then the
-                    // tracer over the box's pixels.
-                    pass.set_pipeline(miss);
-                    pass.draw(0..3, 0..1);
-                }
-                if let Some(rect) = traced {
-                    pass.set_pipeline(pipeline);
-                    if !whole {
-                        pass.set_scissor_rect(rect.x, rect.y, rect.width, rect.height);
+                match (&self.confinement, miss) {
+                    (Some(confinement), Some(miss)) if !confinement.pixels.is_whole(width, height) => {
+                        // Every pixel the misses' way first (a shader that traces nothing), then
+                        // the tracer over the boxes' pixels, a scissored draw a rectangle.
+                        pass.set_pipeline(miss);
+                        pass.draw(0..3, 0..1);
+                        pass.set_pipeline(pipeline);
+                        for rect in &confinement.pixels.rects {
+                            pass.set_scissor_rect(rect.x, rect.y, rect.width, rect.height);
+                            pass.draw(0..3, 0..1);
+                        }
                     }
-                    pass.draw(0..3, 0..1);
+                    _ => {
+                        pass.set_pipeline(pipeline);
+                        pass.draw(0..3, 0..1);
+                    }
                 }
             }
             TracePipeline::Compute(pipeline) => {

@@ -6,7 +6,6 @@ use crate::common::*;
 use glam::Vec3;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::Count;
-use raypipe::gpu::region::PixelRect;
 use raypipe::gpu::{GpuContext, RendererOptions};
 use raypipe::modes::{Accel, Builder, MemoryMode};
 use raypipe::records::{GpuCamera, PackedScene};
@@ -197,11 +196,12 @@ fn sah_trees_trace_as_the_lbvh_does(ctx: &GpuContext) {
     }
 }
 
-/// The fragment tracer runs only on the pixels the scene's box projects to
+/// The fragment tracer runs only on the pixels the BVH's boxes project to
 /// (`raypipe::gpu::region`); a shader that traces nothing gives the others the background. A small
 /// cluster (a mirror among them) off the frame's centre, four jittered samples so that the misses
 /// accumulate too, every walk and both memory modes: the CPU's image and rays. Then the camera
-/// moved by `set_camera`: turned away (no pixel traced), and inside the box (every pixel).
+/// moved by `set_camera`: turned away (no pixel traced), and inside the root box (its projection
+/// folds there, so its children's are taken).
 fn pixels_outside_the_projected_box_match_the_cpu(ctx: &GpuContext) {
     let text = "[camera]\neye = [0, 0.5, -6]\ntarget = [0, 0, 0]\n[material.mirror]\nreflect = 0.8\n\
         [material.red]\ncolor = [0.9, 0.1, 0.1]\n[[light]]\nposition = [3, 5, -4]\n\
@@ -236,19 +236,17 @@ fn pixels_outside_the_projected_box_match_the_cpu(ctx: &GpuContext) {
                 ..Default::default()
             };
             let mut gpu = renderer(ctx, &scene, options);
-            let region = gpu.traced_region().expect("the cluster is in view");
-            let traced = region.width * region.height;
-            assert!(traced > 0 && traced * 4 < pixels, "{name}: traced {region:?}");
+            let traced = gpu.traced_region().pixel_count();
+            assert!(traced > 0 && traced * 4 < pixels, "{name}: traced {traced} pixels");
             let frame = pollster::block_on(gpu.render_samples(4, |_| {})).unwrap().frame;
             let cpu = raypipe::cpu::render_with(&scene, accel, Count::Rays, 4, &|| {}).unwrap();
             assert_frames_match(&name, &frame, &cpu);
             assert_eq!(frame.rays(), cpu.rays(), "{name}: rays");
-            for (view, (camera, moved), region) in [
-                ("turned-away", &turned_away, None),
-                ("inside", &inside, Some(PixelRect::whole(64, 48))),
-            ] {
+            for (view, (camera, moved), any_traced) in [("turned-away", &turned_away, false), ("inside", &inside, true)]
+            {
                 gpu.set_camera(camera);
-                assert_eq!(gpu.traced_region(), region, "{name}-{view}");
+                let traced = gpu.traced_region().pixel_count();
+                assert_eq!(traced > 0, any_traced, "{name}-{view}: traced {traced} pixels");
                 let frame = pollster::block_on(gpu.render_samples(2, |_| {})).unwrap().frame;
                 let cpu = raypipe::cpu::render_with(moved, accel, Count::Rays, 2, &|| {}).unwrap();
                 assert_frames_match(&format!("{name}-{view}"), &frame, &cpu);
