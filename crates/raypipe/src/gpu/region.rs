@@ -18,11 +18,10 @@ use glam::{DVec2, DVec3, Vec3};
 pub const TILE: u32 = 4;
 /// A node whose rectangle holds more pixels than this is replaced by its children's.
 const REFINE_ABOVE_PIXELS: u32 = 64;
-/// At most this many nodes replaced by their children a frame: the host's share of a frame stays
-/// well under a millisecond.
-const REFINE_BUDGET: usize = 4096;
-/// The levels of the BVH a cover keeps below its root.
-const COVER_LEVELS: u32 = 12;
+/// The levels of the BVH a cover keeps below its root: at most 2047 boxes to project each time the
+/// camera moves (0.4 ms for the Bunny on one core of the development machine), and tiles that
+/// hold 1.27 times the pixels of the 2x2 groups that hit it (docs/BENCHMARKS.md).
+const COVER_LEVELS: u32 = 10;
 
 /// A rectangle of pixels: columns `x..x + width`, rows `y..y + height` (row 0 at the top).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -145,27 +144,27 @@ impl BoxCover {
         let (width, height) = (camera.width as u32, camera.height as u32);
         let (columns, rows) = (width.div_ceil(TILE) as usize, height.div_ceil(TILE) as usize);
         let mut covered = vec![false; columns * rows];
-        let mut mark = |rect: PixelRect| {
-            let (x0, x1) = (rect.x / TILE, (rect.x + rect.width).div_ceil(TILE));
-            for y in rect.y / TILE..(rect.y + rect.height).div_ceil(TILE) {
+        // The rows of tiles a rectangle overlaps, as ranges of `covered`.
+        let tile_rows = |rect: PixelRect| {
+            let (x0, x1) = ((rect.x / TILE) as usize, (rect.x + rect.width).div_ceil(TILE) as usize);
+            (rect.y / TILE..(rect.y + rect.height).div_ceil(TILE)).map(move |y| {
                 let row = y as usize * columns;
-                covered[row + x0 as usize..row + x1 as usize].fill(true);
-            }
+                row + x0..row + x1
+            })
         };
+        let projection = Projection::new(camera);
         let mut pending = vec![0usize];
-        let mut refined = 0;
         while let Some(index) = pending.pop() {
             let node = &self.nodes[index];
-            let Some(rect) = projected_rect(camera, &node.bounds) else {
+            let Some(rect) = projection.rect(&node.bounds) else {
                 continue;
             };
             match node.children {
-                Some([left, right]) if rect.width * rect.height > REFINE_ABOVE_PIXELS && refined < REFINE_BUDGET => {
-                    refined += 1;
+                Some([left, right]) if rect.width * rect.height > REFINE_ABOVE_PIXELS => {
                     pending.push(right as usize);
                     pending.push(left as usize);
                 }
-                _ => mark(rect),
+                _ => tile_rows(rect).for_each(|row| covered[row].fill(true)),
             }
         }
         TracedPixels {
@@ -233,57 +232,87 @@ fn tile_rects(covered: &[bool], columns: usize, width: u32, height: u32) -> Vec<
 /// frame, or lies wholly behind the eye (a primary ray only goes forward). The whole frame where it
 /// reaches from behind the eye to its front: the projection folds there.
 pub fn projected_rect(camera: &GpuCamera, bounds: &Aabb) -> Option<PixelRect> {
-    let (width, height) = (camera.width as u32, camera.height as u32);
-    let whole = Some(PixelRect::whole(width, height));
-    if width == 0 || height == 0 || bounds.min.cmpgt(bounds.max).any() {
-        return None;
-    }
-    // In f64: corners near the eye's plane project far out.
-    let f = |v: [f32; 3]| Vec3::from(v).as_dvec3();
-    let (eye, forward, right, up) = (f(camera.eye), f(camera.forward), f(camera.right), f(camera.up));
-    let half_width = camera.tan_half_fov as f64 * camera.aspect as f64;
-    let half_height = camera.tan_half_fov as f64;
-    let (mut low, mut high) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
-    let mut behind = 0;
-    for corner in 0..8 {
-        let pick = |axis: usize, lo: f32, hi: f32| if corner & (1 << axis) == 0 { lo } else { hi };
-        let point = DVec3::new(
-            pick(0, bounds.min.x, bounds.max.x) as f64,
-            pick(1, bounds.min.y, bounds.max.y) as f64,
-            pick(2, bounds.min.z, bounds.max.z) as f64,
-        );
-        let to_corner = point - eye;
-        let depth = to_corner.dot(forward);
-        if depth < 0.0 {
-            behind += 1;
-            continue;
-        }
+    Projection::new(camera).rect(bounds)
+}
+
+/// A camera's projection onto pixel positions, in f64: corners near the eye's plane project far
+/// out.
+struct Projection {
+    width: u32,
+    height: u32,
+    eye: DVec3,
+    forward: DVec3,
+    /// The camera's right and up axes scaled so that a point's dot product with them over its
+    /// depth is its offset from the frame's centre in pixels (down for `down`).
+    right: DVec3,
+    down: DVec3,
+}
+
+impl Projection {
+    fn new(camera: &GpuCamera) -> Self {
+        let f = |v: [f32; 3]| Vec3::from(v).as_dvec3();
+        let (width, height) = (camera.width as u32, camera.height as u32);
         // camera_ray: x = (2 px / width - 1) tan aspect, y = (1 - 2 py / height) tan.
-        let x = (to_corner.dot(right) / depth / half_width + 1.0) * 0.5 * width as f64;
-        let y = (1.0 - to_corner.dot(up) / depth / half_height) * 0.5 * height as f64;
-        let in_front = depth > 1e-6 * to_corner.length();
-        if !in_front || !x.is_finite() || !y.is_finite() {
-            return whole;
+        let half_width = camera.tan_half_fov as f64 * camera.aspect as f64;
+        let half_height = camera.tan_half_fov as f64;
+        Self {
+            width,
+            height,
+            eye: f(camera.eye),
+            forward: f(camera.forward),
+            right: f(camera.right) * (0.5 * width as f64 / half_width),
+            down: f(camera.up) * (-0.5 * height as f64 / half_height),
         }
-        low = low.min(DVec2::new(x, y));
-        high = high.max(DVec2::new(x, y));
     }
-    match behind {
-        0 => {}
-        8 => return None,
-        _ => return whole,
+
+    fn rect(&self, bounds: &Aabb) -> Option<PixelRect> {
+        let (width, height) = (self.width, self.height);
+        let whole = Some(PixelRect::whole(width, height));
+        if width == 0 || height == 0 || bounds.min.cmpgt(bounds.max).any() {
+            return None;
+        }
+        let centre = DVec2::new(width as f64, height as f64) * 0.5;
+        let (low_corner, high_corner) = (bounds.min.as_dvec3(), bounds.max.as_dvec3());
+        let (mut low, mut high) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+        let mut behind = 0;
+        for corner in 0..8 {
+            let point = DVec3::select(
+                glam::BVec3::new(corner & 1 != 0, corner & 2 != 0, corner & 4 != 0),
+                high_corner,
+                low_corner,
+            );
+            let to_corner = point - self.eye;
+            let depth = to_corner.dot(self.forward);
+            if depth < 0.0 {
+                behind += 1;
+                continue;
+            }
+            let in_front = depth * depth > 1e-12 * to_corner.length_squared();
+            let scale = 1.0 / depth;
+            let position = centre + DVec2::new(to_corner.dot(self.right), to_corner.dot(self.down)) * scale;
+            if !in_front || !position.is_finite() {
+                return whole;
+            }
+            low = low.min(position);
+            high = high.max(position);
+        }
+        match behind {
+            0 => {}
+            8 => return None,
+            _ => return whole,
+        }
+        // Pixel i holds the positions i..i + 1; one more on each side for rounding.
+        let first = |v: f64, size: u32| (v.floor() - 1.0).clamp(0.0, size as f64) as u32;
+        let end = |v: f64, size: u32| (v.floor() + 2.0).clamp(0.0, size as f64) as u32;
+        let (x0, x1) = (first(low.x, width), end(high.x, width));
+        let (y0, y1) = (first(low.y, height), end(high.y, height));
+        (x0 < x1 && y0 < y1).then_some(PixelRect {
+            x: x0,
+            y: y0,
+            width: x1 - x0,
+            height: y1 - y0,
+        })
     }
-    // Pixel i holds the positions i..i + 1; one more on each side for rounding.
-    let first = |v: f64, size: u32| (v.floor() - 1.0).clamp(0.0, size as f64) as u32;
-    let end = |v: f64, size: u32| (v.floor() + 2.0).clamp(0.0, size as f64) as u32;
-    let (x0, x1) = (first(low.x, width), end(high.x, width));
-    let (y0, y1) = (first(low.y, height), end(high.y, height));
-    (x0 < x1 && y0 < y1).then_some(PixelRect {
-        x: x0,
-        y: y0,
-        width: x1 - x0,
-        height: y1 - y0,
-    })
 }
 
 #[cfg(test)]

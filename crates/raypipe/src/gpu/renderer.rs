@@ -2,8 +2,8 @@
 //! fragment stage writing the frame targets (colour and ray count, normal and depth, as f32 bits in
 //! rgba32uint); or, with [`Pipeline::Compute`], the same tracer in a compute kernel writing the same
 //! targets as storage textures. With a BVH walk over a tree the host built, the triangle is drawn
-//! under a scissor around the scene's projected box, and the pixels outside get a traced miss's
-//! result from a shader that traces nothing ([`super::region`]). It owns its handles and its
+//! under scissors around the tiles the tree's top boxes project to, and the pixels outside get a
+//! traced miss's result from a shader that traces nothing ([`super::region`]). It owns its handles and its
 //! targets, records its work into a caller's encoder, and never reads back unless asked: a window
 //! shows the targets through [`super::display::Display`], files and tests read them with
 //! [`Renderer::read_frame`].
