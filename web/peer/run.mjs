@@ -241,9 +241,11 @@ function rate(result, time) {
 }
 
 /// The median of numbers.
+/// The middle value; for an even count the mean of the middle two.
 function median(values) {
   const sorted = [...values].sort((a, b) => a - b);
-  return sorted[Math.floor(sorted.length / 2)];
+  const half = Math.floor(sorted.length / 2);
+  return sorted.length % 2 ? sorted[half] : (sorted[half - 1] + sorted[half]) / 2;
 }
 
 function report() {
