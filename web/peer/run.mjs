@@ -240,8 +240,7 @@ function rate(result, time) {
   return result.rays / result[time];
 }
 
-/// The median of numbers.
-/// The middle value; for an even count the mean of the middle two.
+/// The median of numbers: the middle one; for an even count the mean of the middle two.
 function median(values) {
   const sorted = [...values].sort((a, b) => a - b);
   const half = Math.floor(sorted.length / 2);

@@ -105,6 +105,15 @@ impl QuantizationFrame {
             q(hi.y) | q(hi.z) << 16,
         ]
     }
+
+    /// The box a node's quantized corners stand for, in world space.
+    pub fn world_box(&self, node: &GpuThreadedNode) -> Aabb {
+        let (low, high) = node.corners();
+        Aabb {
+            min: self.origin + low * self.quantum,
+            max: self.origin + high * self.quantum,
+        }
+    }
 }
 
 /// Subnormals as zero: GPUs may flush them, and the two devices must quantize alike.
@@ -287,8 +296,7 @@ mod tests {
                 bounds: frame.quantize(bounds),
                 link: 0,
             };
-            let (lo, hi) = node.corners();
-            let (lo, hi) = (frame.origin + lo * frame.quantum, frame.origin + hi * frame.quantum);
+            let Aabb { min: lo, max: hi } = frame.world_box(&node);
             assert!(
                 lo.cmple(bounds.min).all() && hi.cmpge(bounds.max).all(),
                 "{bounds:?}: {lo} {hi}"

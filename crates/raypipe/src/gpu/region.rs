@@ -95,14 +95,6 @@ impl BoxCover {
         if tree.is_empty() {
             return None;
         }
-        let frame = &bvh.frame;
-        let bounds = |index: usize| {
-            let (low, high) = tree[index].corners();
-            Aabb {
-                min: frame.origin + low * frame.quantum,
-                max: frame.origin + high * frame.quantum,
-            }
-        };
         let mut nodes: Vec<CoverNode> = Vec::new();
         // (threaded node, its level, the cover node that points to it, which child it is)
         let mut pending = vec![(0usize, 0u32, None::<(usize, usize)>)];
@@ -112,7 +104,7 @@ impl BoxCover {
                 nodes[parent].children.get_or_insert([0; 2])[side] = at as u32;
             }
             nodes.push(CoverNode {
-                bounds: bounds(index),
+                bounds: bvh.frame.world_box(&tree[index]),
                 children: None,
             });
             if tree[index].is_leaf() || level == COVER_LEVELS {
@@ -138,7 +130,7 @@ impl BoxCover {
     }
 
     /// The pixels where a primary ray can enter one of the boxes: the tiles that the rectangles of
-    /// a cut through the cover overlap ([`projected_rect`]), a node's children's replacing its own
+    /// a cut through the cover overlap ([`Projection::rect`]), a node's children's replacing its own
     /// while it spans more than [`REFINE_ABOVE_PIXELS`].
     pub fn traced_pixels(&self, camera: &GpuCamera) -> TracedPixels {
         let (width, height) = (camera.width as u32, camera.height as u32);
@@ -199,18 +191,17 @@ fn tile_rects(covered: &[bool], columns: usize, width: u32, height: u32) -> Vec<
     let mut rects: Vec<PixelRect> = Vec::new();
     // Rectangles that reach down to the row above, by their runs.
     let mut open: Vec<((usize, usize), usize)> = Vec::new();
-    for (y, row) in covered.chunks(columns).enumerate() {
+    for (row_index, row) in covered.chunks(columns).enumerate() {
+        let (y, rect_height) = pixels((row_index, row_index + 1), height);
         let mut still_open = Vec::new();
         for run in runs(row) {
             match open.iter().find(|(r, _)| *r == run) {
                 Some(&(_, rect)) => {
-                    let (_, rect_height) = pixels((y, y + 1), height);
                     rects[rect].height += rect_height;
                     still_open.push((run, rect));
                 }
                 None => {
                     let (x, rect_width) = pixels(run, width);
-                    let (y, rect_height) = pixels((y, y + 1), height);
                     still_open.push((run, rects.len()));
                     rects.push(PixelRect {
                         x,
@@ -224,15 +215,6 @@ fn tile_rects(covered: &[bool], columns: usize, width: u32, height: u32) -> Vec<
         open = still_open;
     }
     rects
-}
-
-/// The pixels where a primary ray (anywhere in its pixel: later samples are jittered) can enter
-/// `bounds`: the rectangle around its corners' projections, a pixel wider on every side for the
-/// rounding of the shader's `camera_ray`. `None` where no pixel can: the box projects outside the
-/// frame, or lies wholly behind the eye (a primary ray only goes forward). The whole frame where it
-/// reaches from behind the eye to its front: the projection folds there.
-pub fn projected_rect(camera: &GpuCamera, bounds: &Aabb) -> Option<PixelRect> {
-    Projection::new(camera).rect(bounds)
 }
 
 /// A camera's projection onto pixel positions, in f64: corners near the eye's plane project far
@@ -265,6 +247,11 @@ impl Projection {
         }
     }
 
+    /// The pixels where a primary ray (anywhere in its pixel: later samples are jittered) can
+    /// enter `bounds`: the rectangle around its corners' projections, a pixel wider on every side
+    /// for the rounding of the shader's `camera_ray`. `None` where no pixel can: the box projects
+    /// outside the frame, or lies wholly behind the eye (a primary ray only goes forward). The
+    /// whole frame where it reaches from behind the eye to its front: the projection folds there.
     fn rect(&self, bounds: &Aabb) -> Option<PixelRect> {
         let (width, height) = (self.width, self.height);
         let whole = Some(PixelRect::whole(width, height));
@@ -319,6 +306,10 @@ impl Projection {
 mod tests {
     use super::*;
     use crate::scene::Camera;
+
+    fn projected_rect(camera: &GpuCamera, bounds: &Aabb) -> Option<PixelRect> {
+        Projection::new(camera).rect(bounds)
+    }
 
     fn camera(eye: Vec3, target: Vec3) -> GpuCamera {
         let camera = Camera {
@@ -434,13 +425,7 @@ mod tests {
             .threaded_nodes
             .iter()
             .filter(|node| node.is_leaf())
-            .map(|node| {
-                let (low, high) = node.corners();
-                Aabb {
-                    min: bvh.frame.origin + low * bvh.frame.quantum,
-                    max: bvh.frame.origin + high * bvh.frame.quantum,
-                }
-            })
+            .map(|node| bvh.frame.world_box(node))
             .collect();
         for (eye, tighter) in [
             (Vec3::new(0.3, 3.0, 0.4), true),
