@@ -88,19 +88,34 @@ macro_rules! say {
     }};
 }
 
-/// The median of `values` (the upper one of an even count); 0 for none.
+/// The median of `values` (for an even count the mean of the middle two, as the peer benchmark
+/// takes it); 0 for none.
 pub fn median(values: impl IntoIterator<Item = f64>) -> f64 {
     let mut v: Vec<f64> = values.into_iter().collect();
     if v.is_empty() {
         return 0.0;
     }
     v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    let half = v.len() / 2;
+    if v.len().is_multiple_of(2) {
+        (v[half - 1] + v[half]) / 2.0
+    } else {
+        v[half]
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn median_is_the_middle_value_or_the_mean_of_the_middle_two() {
+        assert_eq!(median([]), 0.0);
+        assert_eq!(median([3.0]), 3.0);
+        assert_eq!(median([5.0, 1.0, 3.0]), 3.0);
+        assert_eq!(median([4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median([1.0, 100.0]), 50.5);
+    }
 
     /// A frame past the adapter's largest allocation says how big a frame fits and the way out.
     #[test]
