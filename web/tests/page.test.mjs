@@ -386,7 +386,9 @@ test("a bad URL setting is reported and the rest applies", async () => {
   const status = await until(page, (s) => s.frames >= 1 && s.error != null, "a frame");
   assert.equal(status.error, "accel=bvh: expected one of brute, stack, stackless, threaded");
   assert.equal(status.width, 64);
-  assert.equal(status.accel, "threaded");
+  // The walk the page takes where the URL names none: the stack walk on a software adapter, as
+  // Chromium's SwiftShader is here.
+  assert.equal(status.accel, "stack");
   await shows(page, status.error);
   await page.close();
 });

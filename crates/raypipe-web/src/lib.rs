@@ -1,7 +1,8 @@
 //! raypipe in a web page: the viewer compiled to `wasm32-unknown-unknown`, tracing on a canvas
 //! through WebGPU (storage memory, moving scenes rebuilt in compute passes; texture memory on the
 //! browser's software fallback adapter, where it is faster) or WebGL2 (texture memory, since its
-//! fragment shaders have no storage buffers; moving scenes rebuilt on the CPU in wasm).
+//! fragment shaders have no storage buffers; moving scenes rebuilt on the CPU in wasm). Where the
+//! URL names no walk, a software adapter gets the stack walk, its fastest, and others the threaded.
 //! `scripts/build-web.sh` builds the page; `web/` holds its HTML and script.
 //!
 //! The tracer, the camera and the modes are the native viewer's (`raypipe-view`); this crate is

@@ -181,7 +181,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
     (scene.settings.width, scene.settings.height) = (params.width, params.height);
     let modes = Modes {
         pipeline: params.pipeline,
-        accel: params.accel,
+        accel: params.accel.unwrap_or(ctx.default_accel()),
         builder: params.builder,
         memory: params.memory.unwrap_or(ctx.default_memory()),
         depth: params.depth.unwrap_or(scene.settings.max_depth),

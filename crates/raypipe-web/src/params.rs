@@ -125,7 +125,9 @@ pub struct StartParams {
     pub scene: String,
     /// A file to fetch and open once the page runs, by a URL relative to the page.
     pub model: Option<String>,
-    pub accel: Accel,
+    /// `None`: the adapter's default (`GpuContext::default_accel`: the stack walk on a software
+    /// adapter, the threaded walk on others).
+    pub accel: Option<Accel>,
     /// How a still scene's BVH is built.
     pub builder: Builder,
     /// `None`: the adapter's default (`GpuContext::default_memory`: texture on WebGL2 and on a
@@ -151,7 +153,7 @@ impl Default for StartParams {
         Self {
             scene: "whitted".into(),
             model: None,
-            accel: Accel::Threaded,
+            accel: None,
             builder: Builder::Lbvh,
             memory: None,
             pipeline: Pipeline::Fragment,
@@ -187,7 +189,7 @@ impl StartParams {
         match setting {
             Setting::Scene(name) => self.scene = name,
             Setting::Model(url) => self.model = Some(url),
-            Setting::Accel(accel) => self.accel = accel,
+            Setting::Accel(accel) => self.accel = Some(accel),
             Setting::Builder(builder) => self.builder = builder,
             Setting::Memory(memory) => self.memory = Some(memory),
             Setting::Pipeline(pipeline) => self.pipeline = pipeline,
@@ -253,7 +255,7 @@ mod tests {
             StartParams {
                 scene: "random:2000".into(),
                 model: Some("models/bunny.ply".into()),
-                accel: Accel::Threaded,
+                accel: Some(Accel::Threaded),
                 builder: Builder::Sah,
                 memory: Some(MemoryMode::Texture),
                 pipeline: Pipeline::Fragment,
@@ -283,7 +285,8 @@ mod tests {
         let (params, errors) = StartParams::from_pairs(query);
         assert_eq!(params.height, 200);
         assert_eq!(params.width, StartParams::default().width);
-        assert_eq!(params.accel, Accel::Threaded);
+        // A bad walk leaves the adapter's default.
+        assert_eq!(params.accel, None);
         assert_eq!(
             errors,
             [

@@ -6,7 +6,7 @@
 use super::GpuError;
 use crate::error::one_line;
 use crate::impl_choice;
-use crate::modes::MemoryMode;
+use crate::modes::{Accel, MemoryMode};
 use std::future::Future;
 use std::pin::Pin;
 use std::sync::{Arc, Mutex};
@@ -197,6 +197,19 @@ impl GpuContext {
             MemoryMode::Storage
         } else {
             MemoryMode::Texture
+        }
+    }
+
+    /// The BVH walk for a page that names none: the stack walk on a software adapter (Chromium's
+    /// SwiftShader under WebGPU or WebGL2, llvmpipe), where it is the fastest (on SwiftShader 1.3x
+    /// to 1.8x the threaded walk's speed on the Bunny, level with it on llvmpipe:
+    /// docs/BENCHMARKS.md, "The page against three-mesh-bvh"); the threaded walk elsewhere, as
+    /// `raypipe` defaults to.
+    pub fn default_accel(&self) -> Accel {
+        if self.info.device_type == wgpu::DeviceType::Cpu {
+            Accel::Stack
+        } else {
+            Accel::Threaded
         }
     }
 
