@@ -350,7 +350,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
 fn check_args(args: &BenchArgs) -> anyhow::Result<MeshAs> {
     anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
     anyhow::ensure!(
-        args.builder == Builder::Lbvh || !(args.rebuild || args.motion),
+        args.builder.follows_motion() || !(args.rebuild || args.motion),
         "--builder {} builds a still scene's tree once; --rebuild and --motion rebuild the LBVH every frame",
         args.builder
     );

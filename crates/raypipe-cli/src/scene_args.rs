@@ -82,7 +82,7 @@ impl SceneArgs {
     /// Refuses a builder other than the LBVH where the scene moves frame by frame: its tree is
     /// rebuilt every frame, and by the LBVH.
     pub fn check_builder_for_motion(&self, scene: &Scene) -> anyhow::Result<()> {
-        if scene.motion.is_some() && self.builder != Builder::Lbvh {
+        if scene.motion.is_some() && !self.builder.follows_motion() {
             bail!(
                 "{}: --builder {} builds a still scene's tree once; this scene moves, and its tree is rebuilt every frame by the LBVH",
                 self.spec,

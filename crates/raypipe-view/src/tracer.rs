@@ -12,7 +12,7 @@ use raypipe::error::InputError;
 use raypipe::gpu::build::depth_bound;
 use raypipe::gpu::{Display, GpuContext, GpuError, RecordKind, Renderer, RendererOptions, SceneRebuild};
 use raypipe::modes::Aov;
-use raypipe::modes::{Accel, Builder, MemoryMode};
+use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
 
@@ -72,7 +72,7 @@ impl Tracer {
             count: modes.view.count(),
         };
         let primitives = packed.primitive_count();
-        if scene.motion.is_some() && modes.builder != Builder::Lbvh {
+        if scene.motion.is_some() && !modes.builder.follows_motion() {
             return Err(TraceError::Modes(format!(
                 "the {} builder builds a still scene's tree once; this scene moves, and its tree is rebuilt every frame by the LBVH",
                 modes.builder

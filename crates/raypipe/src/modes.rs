@@ -77,6 +77,14 @@ impl_choice!(
     ]
 );
 
+impl Builder {
+    /// Whether this builder's tree can follow a scene that moves: such a tree is rebuilt every
+    /// frame, which is the LBVH's job; the others build a still scene's tree once.
+    pub fn follows_motion(self) -> bool {
+        self == Builder::Lbvh
+    }
+}
+
 /// How scene records reach the fragment shader.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum MemoryMode {
