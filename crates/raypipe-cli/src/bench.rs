@@ -18,10 +18,9 @@ use raypipe::image::diff::{Tolerance, compare};
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
-use raypipe::scene::model::is_model_file;
+use raypipe::scene::is_model_file;
 use raypipe::scene::model::{MeshAs, ModelOptions};
 use serde::Serialize;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -139,16 +138,6 @@ impl BuildPhases {
             layout: phase(|b| b.layout),
         })
     }
-
-    fn csv(phases: Option<Self>) -> String {
-        match phases {
-            Some(p) => format!(
-                "{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-                p.morton, p.sort, p.hierarchy, p.bounds, p.links, p.layout
-            ),
-            None => ",,,,,".into(),
-        }
-    }
 }
 
 fn name<T: Choice>(value: &T) -> String {
@@ -228,6 +217,41 @@ impl Reference {
     }
 }
 
+/// One rebuild per walk that reads a tree, with --rebuild: it writes the count's primitives into
+/// its own buffers (the stack and threaded walks also lay out its tree), shared by the walk's
+/// pipelines and memories.
+fn rebuild_for(
+    ctx: &GpuContext,
+    args: &BenchArgs,
+    scene: &Scene,
+    packed: &PackedScene,
+    accel: Accel,
+) -> anyhow::Result<Option<SceneRebuild>> {
+    if !(args.rebuild && accel.uses_bvh()) {
+        return Ok(None);
+    }
+    Ok(Some(block_on(SceneRebuild::new(
+        ctx,
+        scene,
+        packed,
+        accel,
+        MortonBits::Bits30,
+    ))?))
+}
+
+/// The renderer a point is timed with: over the scene's tree, or over `rebuild`'s.
+fn timed_renderer(
+    ctx: &GpuContext,
+    packed: &PackedScene,
+    rebuild: Option<&SceneRebuild>,
+    options: RendererOptions,
+) -> anyhow::Result<Renderer> {
+    Ok(match rebuild {
+        Some(rebuild) => block_on(Renderer::with_rebuild(ctx, packed, rebuild, options))?,
+        None => block_on(Renderer::new(ctx, packed, options))?,
+    })
+}
+
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     if args.motion {
         return motion::run(&args);
@@ -259,25 +283,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     for &count in &counts {
         let (loaded, packed) = scene(&args.scene, as_, count, (args.width, args.height), args.builder)?;
         let count = packed.primitive_count();
-        // One rebuild per walk, which writes the count's primitives into its own buffers (the stack
-        // and threaded walks also lay out its tree), shared by the walk's pipelines and memories.
-        let rebuild_for = |accel: Accel| -> anyhow::Result<Option<SceneRebuild>> {
-            if args.rebuild && accel.uses_bvh() {
-                Ok(Some(block_on(SceneRebuild::new(
-                    &ctx,
-                    &loaded,
-                    &packed,
-                    accel,
-                    MortonBits::Bits30,
-                ))?))
-            } else {
-                Ok(None)
-            }
-        };
         // Made on first need: a run of brute force alone does not render it.
         let mut reference: Option<Reference> = None;
         for &accel in &args.accel {
-            let rebuild = rebuild_for(accel)?;
+            let rebuild = rebuild_for(&ctx, &args, &loaded, &packed, accel)?;
             for (&pipeline, &memory) in args
                 .pipeline
                 .iter()
@@ -285,33 +294,21 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
             {
                 let point = format!("{count} {} {} {}", name(&pipeline), name(&accel), name(&memory));
                 bar.set_message(format!("{point}: compiling, checking the image"));
-                if (pipeline, accel) != (Pipeline::Fragment, Accel::Brute) {
-                    if reference.is_none() {
-                        reference = Some(Reference::new(&ctx, &args, as_, count)?);
-                    }
-                    let checked = reference
-                        .as_ref()
-                        .expect("made above")
-                        .check(&ctx, pipeline, accel, memory);
-                    if let Err(e) = checked {
-                        refused.push(format!("{point}: {}", crate::report::message(&e)));
-                        bar.inc(1);
-                        continue;
-                    }
-                }
-                let renderer = match &rebuild {
-                    Some(rebuild) => block_on(Renderer::with_rebuild(
-                        &ctx,
-                        &packed,
-                        rebuild,
-                        options(pipeline, memory, accel),
-                    )),
-                    None => block_on(Renderer::new(&ctx, &packed, options(pipeline, memory, accel))),
+                let checked = if (pipeline, accel) == (Pipeline::Fragment, Accel::Brute) {
+                    Ok(())
+                } else {
+                    let reference = match &mut reference {
+                        Some(reference) => reference,
+                        empty => empty.insert(Reference::new(&ctx, &args, as_, count)?),
+                    };
+                    reference.check(&ctx, pipeline, accel, memory)
                 };
+                let modes = options(pipeline, memory, accel);
+                let renderer = checked.and_then(|()| timed_renderer(&ctx, &packed, rebuild.as_ref(), modes));
                 let mut renderer = match renderer {
-                    Ok(r) => r,
+                    Ok(renderer) => renderer,
                     Err(e) => {
-                        refused.push(format!("{point}: {}", crate::report::message(&e.into())));
+                        refused.push(format!("{point}: {}", crate::report::message(&e)));
                         bar.inc(1);
                         continue;
                     }
@@ -477,44 +474,10 @@ fn time_frames(
 
 /// results.csv and results.json in `out`; returns the JSON.
 fn write_results(out: &Path, rows: &[Row]) -> anyhow::Result<String> {
-    write_csv(&out.join("results.csv"), rows)?;
+    crate::report::write_csv(&out.join("results.csv"), rows)?;
     let json = serde_json::to_string_pretty(rows)?;
     std::fs::write(out.join("results.json"), &json).with_context(|| format!("{}: cannot write", out.display()))?;
     Ok(json)
-}
-
-fn write_csv(path: &std::path::Path, rows: &[Row]) -> anyhow::Result<()> {
-    let mut file = std::fs::File::create(path).with_context(|| format!("{}: cannot write", path.display()))?;
-    writeln!(
-        file,
-        "count,pipeline,accel,memory,width,height,spp,frames,ms_median,ms_min,ms_max,fps,mrays_per_s,build_ms_median,build_morton_ms,build_sort_ms,build_hierarchy_ms,build_bounds_ms,build_links_ms,build_layout_ms,clock,adapter,backend,builder"
-    )?;
-    for r in rows {
-        writeln!(
-            file,
-            "{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.3},{:.4},{},{},{},\"{}\",{},{}",
-            r.count,
-            r.pipeline,
-            r.accel,
-            r.memory,
-            r.width,
-            r.height,
-            r.spp,
-            r.frames,
-            r.ms_median,
-            r.ms_min,
-            r.ms_max,
-            r.fps,
-            r.mrays_per_s,
-            r.build_ms_median.map(|b| format!("{b:.4}")).unwrap_or_default(),
-            BuildPhases::csv(r.build_phases_ms),
-            r.clock,
-            r.adapter.replace('"', "'"),
-            r.backend,
-            r.builder
-        )?;
-    }
-    Ok(())
 }
 
 /// fps against count, one line per (pipeline, accel, memory), titled with the adapter and resolution.

@@ -6,11 +6,10 @@ use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use pollster::block_on;
 use raypipe::bvh::BuildTimings;
-use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::{self, Count};
 use raypipe::gpu::region::TracedPixels;
-use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{Backend, CpuRebuild, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
@@ -197,10 +196,7 @@ pub fn render_frames(
         options.count == Count::Rays,
         "--aov cost renders single frames; drop --frames"
     );
-    let motion = scene
-        .motion
-        .as_ref()
-        .ok_or_else(|| anyhow::anyhow!("the scene does not move"))?;
+    ensure!(scene.motion.is_some(), "the scene does not move");
     let Some(&(_, first_time)) = times.first() else {
         anyhow::bail!("no frames to render");
     };
@@ -257,16 +253,15 @@ pub fn render_frames(
         }
         None => {
             outcome.device = cpu_description();
-            let mut builder = LbvhBuilder::<u64>::new();
+            // The records were packed at the first frame's time: its tree is built over them.
+            let (mut rebuild, first) = CpuRebuild::new(&mut packed, options.accel);
             for (index, &(frame, t)) in times.iter().enumerate() {
-                if index > 0 {
-                    packed.apply(&motion.moved(scene, t)?);
-                }
-                if options.accel.uses_bvh() {
-                    let timings = builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
-                    packed.set_bvh(builder.to_bvh());
-                    outcome.builds.push(timings);
-                }
+                let build = if index == 0 {
+                    first
+                } else {
+                    rebuild.move_to(scene, &mut packed, t)?.build
+                };
+                outcome.builds.extend(build);
                 let start = Instant::now();
                 let frame_image = render_cpu(&packed, options)?;
                 outcome.render_ms.push(start.elapsed().as_secs_f64() * 1e3);

@@ -54,6 +54,13 @@ fn gpu_message(error: &GpuError) -> String {
             bytes >> 20,
             max >> 20
         ),
+        GpuError::PipelineUnsupported {
+            adapter,
+            pipeline,
+            what,
+        } => {
+            format!("adapter {adapter} cannot {what}, which --pipeline {pipeline} needs")
+        }
         other => other.to_string(),
     }
 }
@@ -104,9 +111,134 @@ pub fn median(values: impl IntoIterator<Item = f64>) -> f64 {
     }
 }
 
+/// Writes `rows` (each a struct serialized as an object) as CSV: a header of the fields' names,
+/// nested objects' fields as `outer.inner`, null as an empty field, and a field that holds a
+/// comma, a quote or a line break quoted (RFC 4180), so that a scene's or an adapter's name stays
+/// one field. A nested object that is null in some rows leaves its fields empty there.
+pub fn write_csv<T: serde::Serialize>(path: &std::path::Path, rows: &[T]) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let mut flat = Vec::new();
+    for row in rows {
+        let mut fields = Vec::new();
+        flatten(String::new(), serde_json::to_value(row)?, &mut fields);
+        flat.push(fields);
+    }
+    // Every row's names in their order; a null that stands for an object another row has is
+    // replaced by that object's fields.
+    let mut header: Vec<String> = Vec::new();
+    for fields in &flat {
+        let mut at = 0;
+        for (name, _) in fields {
+            match header.iter().position(|h| h == name) {
+                Some(i) => at = i + 1,
+                None => {
+                    header.insert(at, name.clone());
+                    at += 1;
+                }
+            }
+        }
+    }
+    let stands_for_object = |h: &String| header.iter().any(|other| other.starts_with(&format!("{h}.")));
+    let header: Vec<String> = header.iter().filter(|h| !stands_for_object(h)).cloned().collect();
+    let mut text = csv_line(header.iter().map(String::as_str));
+    for fields in &flat {
+        let value = |h: &String| {
+            fields
+                .iter()
+                .find(|(name, _)| name == h)
+                .map_or("", |(_, v)| v.as_str())
+        };
+        text += &csv_line(header.iter().map(value));
+    }
+    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// `value`'s leaves with their dotted names, in the order serde gives the fields.
+fn flatten(name: String, value: serde_json::Value, out: &mut Vec<(String, String)>) {
+    use serde_json::Value;
+    match value {
+        Value::Object(fields) => {
+            for (key, value) in fields {
+                let inner = if name.is_empty() { key } else { format!("{name}.{key}") };
+                flatten(inner, value, out);
+            }
+        }
+        Value::Null => out.push((name, String::new())),
+        Value::String(text) => out.push((name, text)),
+        other => out.push((name, other.to_string())),
+    }
+}
+
+fn csv_line<'a>(fields: impl Iterator<Item = &'a str>) -> String {
+    let quoted: Vec<String> = fields
+        .map(|field| {
+            if field.contains([',', '"', '\n', '\r']) {
+                format!("\"{}\"", field.replace('"', "\"\""))
+            } else {
+                field.to_string()
+            }
+        })
+        .collect();
+    quoted.join(",") + "\n"
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[derive(serde::Serialize)]
+    struct Phases {
+        sort: f64,
+    }
+
+    #[derive(serde::Serialize)]
+    struct Row {
+        scene: &'static str,
+        count: u32,
+        build: Option<Phases>,
+    }
+
+    /// A name with a comma or a quote stays one field; nested fields are named by their path;
+    /// missing ones are empty.
+    #[test]
+    fn csv_rows_quote_what_would_split_a_field() {
+        let path = std::env::temp_dir().join(format!("raypipe-csv-{}.csv", std::process::id()));
+        let rows = [
+            Row {
+                scene: "bunny, small \"a\"",
+                count: 3,
+                build: Some(Phases { sort: 0.5 }),
+            },
+            Row {
+                scene: "plain",
+                count: 4,
+                build: None,
+            },
+        ];
+        let first_empty = [
+            Row {
+                scene: "a",
+                count: 1,
+                build: None,
+            },
+            Row {
+                scene: "b",
+                count: 2,
+                build: Some(Phases { sort: 0.25 }),
+            },
+        ];
+        write_csv(&path, &rows).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(
+            text,
+            "scene,count,build.sort\n\"bunny, small \"\"a\"\"\",3,0.5\nplain,4,\n"
+        );
+        write_csv(&path, &first_empty).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(text, "scene,count,build.sort\na,1,\nb,2,0.25\n");
+    }
 
     #[test]
     fn median_is_the_middle_value_or_the_mean_of_the_middle_two() {

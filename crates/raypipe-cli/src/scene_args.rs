@@ -9,7 +9,7 @@ use raypipe::image::{FloatImage, Frame, heatmap};
 use raypipe::modes::{Accel, Aov, Builder, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
 use raypipe::scene::animation::ClipChoice;
-use raypipe::scene::model::is_model_file;
+use raypipe::scene::is_model_file;
 use raypipe::scene::model::{MeshAs, ModelOptions, Normals};
 
 /// What names the scene and how it is traced: the flags `render` and `view` share.
@@ -145,7 +145,7 @@ pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
     if !model.is_default() && !is_model_file(std::path::Path::new(spec)) {
         bail!(
             "scene '{spec}': --as, --spheres, --rotate, --normals, --crease and --animation apply to model files ({})",
-            raypipe::scene::model::model_extension_list()
+            raypipe::scene::model_extension_list()
         );
     }
     if model.as_ == Some(MeshAs::Triangles) && model.spheres.is_some() {

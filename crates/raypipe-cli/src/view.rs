@@ -8,7 +8,7 @@ use raypipe::image::Frame;
 use raypipe::modes::Aov;
 use raypipe::scene::Scene;
 use raypipe::scene::model::ModelOptions;
-use raypipe_view::{Host, Modes, Script, ViewerOptions};
+use raypipe_view::{Host, HostError, Modes, Script, ViewerOptions};
 use std::cell::Cell;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -43,20 +43,28 @@ pub struct ViewArgs {
     spp: u32,
 }
 
+/// `error` about `path`, worded as the command line words it.
+fn host_error(path: &Path, error: &anyhow::Error) -> HostError {
+    HostError {
+        path: path.to_path_buf(),
+        reason: crate::report::message(error),
+    }
+}
+
 /// Dropped files load as `render` loads them; screenshots are written as it writes them.
 struct CliHost {
     shots: Cell<u32>,
 }
 
 impl Host for CliHost {
-    fn load(&self, path: &Path) -> Result<Scene, String> {
+    fn load(&self, path: &Path) -> Result<Scene, HostError> {
         let spec = path.to_string_lossy();
-        load_scene(&spec, &ModelOptions::default()).map_err(|e| crate::report::message(&e))
+        load_scene(&spec, &ModelOptions::default()).map_err(|e| host_error(path, &e))
     }
 
-    fn save(&self, frame: &Frame, view: Aov, path: &Path) -> Result<(), String> {
+    fn save(&self, frame: &Frame, view: Aov, path: &Path) -> Result<(), HostError> {
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        io::write(&aov_image(view, is_exr, frame), path).map_err(|e| crate::report::message(&e))
+        io::write(&aov_image(view, is_exr, frame), path).map_err(|e| host_error(path, &e))
     }
 
     fn screenshot_path(&self, view: Aov) -> PathBuf {

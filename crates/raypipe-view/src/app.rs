@@ -2,12 +2,10 @@
 //! with the panel and presented.
 
 use crate::panel::{self, Playback, Readout};
-use crate::player::{Player, present_mode, surface_config};
-use crate::{Host, ModeKey, Modes, Script, Summary, ViewError, ViewerOptions, next_texture, present_format};
-use glam::Vec3;
+use crate::player::{FlyKeys, Player, Screen, Timings};
+use crate::{Host, ModeKey, Modes, ScreenshotError, Script, Summary, ViewError, ViewerOptions};
 use pollster::block_on;
-use raypipe::gpu::{Display, GpuContext};
-use std::collections::HashSet;
+use raypipe::gpu::GpuContext;
 use std::sync::Arc;
 use web_time::Instant;
 use winit::application::ApplicationHandler;
@@ -45,14 +43,16 @@ pub fn run(options: ViewerOptions, host: Box<dyn Host>) -> Result<Summary, ViewE
 /// What lives on the GPU once the window exists.
 struct Gpu {
     window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
-    ctx: GpuContext,
-    display: Display,
+    screen: Screen,
     player: Player,
+    panel: PanelPainter,
+}
+
+/// egui's state for the panel drawn over the frame.
+struct PanelPainter {
     egui: egui::Context,
-    egui_state: egui_winit::State,
-    egui_renderer: egui_wgpu::Renderer,
+    state: egui_winit::State,
+    renderer: egui_wgpu::Renderer,
 }
 
 #[derive(Default)]
@@ -60,20 +60,7 @@ struct Input {
     orbiting: bool,
     panning: bool,
     cursor: Option<(f64, f64)>,
-    held: HashSet<KeyCode>,
-}
-
-impl Input {
-    /// The fly direction the held keys ask for: forward (W, S), right (D, A), up (E, Q).
-    fn fly(&self) -> Vec3 {
-        let held = |k| self.held.contains(&k);
-        let axis = |plus, minus| (held(plus) as i32 - held(minus) as i32) as f32;
-        Vec3::new(
-            axis(KeyCode::KeyW, KeyCode::KeyS),
-            axis(KeyCode::KeyD, KeyCode::KeyA),
-            axis(KeyCode::KeyE, KeyCode::KeyQ),
-        )
-    }
+    fly: FlyKeys,
 }
 
 struct Viewer {
@@ -138,25 +125,23 @@ impl Viewer {
             .create_surface(window.clone())
             .map_err(|e| ViewError::Window(e.to_string()))?;
         let ctx = block_on(GpuContext::for_surface(&instance, &surface))?;
-        let caps = surface.get_capabilities(&ctx.adapter);
-        let format = present_format(&caps)
-            .ok_or_else(|| ViewError::Window(format!("{} cannot present to this window", ctx.describe())))?;
         let size = window.inner_size();
         let mut modes = self.options.modes;
-        let config = surface_config(&caps, format, (size.width, size.height), modes.vsync);
-        surface.configure(&ctx.device, &config);
+        let adapter = ctx.describe();
+        let screen = Screen::new(ctx, surface, (size.width, size.height), modes.vsync)
+            .ok_or_else(|| ViewError::Window(format!("{adapter} cannot present to this window")))?;
+        let ctx = &screen.ctx;
         if !ctx.memory_modes().contains(&modes.memory) {
             modes.memory = ctx.default_memory();
         }
         let mut player = block_on(Player::new(
-            &ctx,
+            ctx,
             self.options.name.clone(),
             self.options.scene.clone(),
             modes,
-            (config.width, config.height),
+            screen.size(),
             self.options.samples,
-        ))
-        .map_err(|e| ViewError::Scene(e.to_string()))?;
+        ))?;
         player.start_at(self.options.time);
         if self.options.script.is_some() {
             player.clock.step = Some(SCRIPT_STEP);
@@ -170,17 +155,16 @@ impl Viewer {
             None,
             Some(ctx.limits().max_texture_dimension_2d as usize),
         );
-        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, Default::default());
+        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, screen.config.format, Default::default());
         Ok(Gpu {
-            display: Display::new(&ctx, format),
             window,
-            surface,
-            config,
-            ctx,
+            screen,
             player,
-            egui,
-            egui_state,
-            egui_renderer,
+            panel: PanelPainter {
+                egui,
+                state: egui_state,
+                renderer: egui_renderer,
+            },
         })
     }
 
@@ -188,12 +172,10 @@ impl Viewer {
     fn set_modes(&mut self, asked: Modes) {
         let Some(gpu) = &mut self.gpu else { return };
         if asked.vsync != gpu.player.modes.vsync {
-            let caps = gpu.surface.get_capabilities(&gpu.ctx.adapter);
-            gpu.config.present_mode = present_mode(&caps, asked.vsync);
-            gpu.surface.configure(&gpu.ctx.device, &gpu.config);
+            gpu.screen.set_vsync(asked.vsync);
         }
         if let Some(request) = gpu.player.set_modes(asked) {
-            let built = block_on(request.build(&gpu.ctx));
+            let built = block_on(request.build(&gpu.screen.ctx));
             gpu.player.install(request, built);
         }
     }
@@ -206,19 +188,17 @@ impl Viewer {
         match self.host.load(path) {
             Ok(scene) => {
                 let request = gpu.player.open(name, scene);
-                let built = block_on(request.build(&gpu.ctx));
+                let built = block_on(request.build(&gpu.screen.ctx));
                 gpu.player.install(request, built);
                 gpu.window.set_title(&format!("raypipe · {}", gpu.player.name));
             }
-            Err(why) => gpu.player.say(why),
+            Err(why) => gpu.player.say(why.to_string()),
         }
     }
 
     fn key(&mut self, code: KeyCode, pressed: bool) {
-        if pressed {
-            self.input.held.insert(code);
-        } else {
-            self.input.held.remove(&code);
+        // winit's key names are the browser's `KeyboardEvent.code` names, which FlyKeys takes.
+        if self.input.fly.set(&format!("{code:?}"), pressed) || !pressed {
             return;
         }
         let Some(gpu) = &mut self.gpu else { return };
@@ -235,7 +215,7 @@ impl Viewer {
                 let path = self.host.screenshot_path(gpu.player.modes.view);
                 let said = match self.screenshot(&path) {
                     Ok(()) => format!("saved {}", path.display()),
-                    Err(why) => why,
+                    Err(why) => why.to_string(),
                 };
                 log::info!("{said}");
                 if let Some(gpu) = &mut self.gpu {
@@ -251,24 +231,15 @@ impl Viewer {
     }
 
     /// Saves the frame shown (tracing one sample first where none is); the error says why not.
-    fn screenshot(&mut self, path: &std::path::Path) -> Result<(), String> {
+    fn screenshot(&mut self, path: &std::path::Path) -> Result<(), ScreenshotError> {
         let Some(gpu) = &mut self.gpu else {
-            return Err("no frame yet".into());
+            return Err(ScreenshotError::NoFrame);
         };
-        let player = &mut gpu.player;
-        if player.tracer.renderer.samples() == 0 {
-            let mut encoder = gpu.ctx.device.create_command_encoder(&Default::default());
-            player.tracer.encode(&mut encoder);
-            gpu.ctx.queue.submit([encoder.finish()]);
-        }
-        let frame = block_on(player.tracer.renderer.read_back()).map_err(|e| e.to_string())?;
-        self.host.save(&frame, player.modes.view, path)
+        let frame = block_on(gpu.player.read_frame(&gpu.screen.ctx))?;
+        Ok(self.host.save(&frame, gpu.player.modes.view, path)?)
     }
 
     fn draw(&mut self, event_loop: &ActiveEventLoop) {
-        let now = Instant::now();
-        let seconds = (now - self.last_frame).as_secs_f64();
-        self.last_frame = now;
         let script = self.options.script.clone();
         let Some(gpu) = &mut self.gpu else { return };
         if let Some(script) = &script
@@ -277,42 +248,31 @@ impl Viewer {
         {
             gpu.player.camera.orbit_degrees(script.orbit_degrees);
         }
-        let trace = gpu.player.advance(seconds as f32, self.input.fly());
-        self.idle = !trace && !gpu.player.moving() && self.input.held.is_empty();
-        let Some(surface_texture) = next_texture(&gpu.surface, &gpu.ctx.device, &gpu.config) else {
+        let mut asked = None;
+        let show_panel = self.show_panel;
+        let report = gpu.player.frame(
+            &gpu.screen,
+            self.input.fly.direction(),
+            Timings::Wait,
+            |player, encoder, view| {
+                if !show_panel {
+                    return Vec::new();
+                }
+                let (modes, first) = draw_panel(&mut gpu.panel, &gpu.window, &gpu.screen, player, encoder, view);
+                asked = Some(modes);
+                first
+            },
+        );
+        self.last_frame = Instant::now();
+        self.idle = !report.traced && !gpu.player.moving() && !self.input.fly.any();
+        if !report.presented {
             return;
-        };
-        let view = surface_texture.texture.create_view(&Default::default());
-        let ctx = gpu.ctx.clone();
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        gpu.player.encode(&mut encoder, &gpu.display, &view, trace);
-        let asked = if self.show_panel {
-            Some(draw_panel(gpu, &ctx, encoder, &view))
-        } else {
-            ctx.queue.submit([encoder.finish()]);
-            None
-        };
-        ctx.queue.present(surface_texture);
-        // The frame's GPU time where the adapter has timestamps; this waits for the frame.
-        let gpu_ms = if trace {
-            block_on(gpu.player.tracer.renderer.read_gpu_ms()).ok().flatten()
-        } else {
-            None
-        };
-        if let Some(ms) = gpu_ms {
-            self.trace_times.push(ms);
         }
-        if gpu.player.frames > 0 {
-            self.frame_times.push(seconds * 1e3);
+        self.trace_times.extend(report.gpu_ms);
+        // The first frame's interval counts from the window's opening.
+        if gpu.player.frames > 1 {
+            self.frame_times.push(report.seconds * 1e3);
         }
-        if let Some(rebuild) = &gpu.player.tracer.rebuild
-            && gpu.player.modes.accel.uses_bvh()
-            && trace
-            && let Ok(timings) = block_on(rebuild.read_timings())
-        {
-            gpu.player.build_ms = Some(timings.total());
-        }
-        gpu.player.finish(seconds, gpu_ms);
         if let Some(asked) = asked
             && asked != gpu.player.modes
         {
@@ -336,30 +296,37 @@ impl Viewer {
         if let Some(path) = &script.screenshot
             && let Err(why) = self.screenshot(path)
         {
-            return self.fail(event_loop, ViewError::Scene(why));
+            return self.fail(event_loop, why.into());
         }
         event_loop.exit();
     }
 }
 
-/// Records the panel over the frame and submits the frame; returns the modes the panel asks for.
-/// Its time slider and speed go to the player's clock at once.
-fn draw_panel(gpu: &mut Gpu, ctx: &GpuContext, mut encoder: wgpu::CommandEncoder, view: &wgpu::TextureView) -> Modes {
-    let raw = gpu.egui_state.take_egui_input(&gpu.window);
+/// Records the panel over the frame; returns the modes the panel asks for and the command buffers
+/// to submit before the frame's. Its time slider and speed go to the player's clock at once.
+fn draw_panel(
+    panel: &mut PanelPainter,
+    window: &Window,
+    screen: &Screen,
+    player: &mut Player,
+    encoder: &mut wgpu::CommandEncoder,
+    view: &wgpu::TextureView,
+) -> (Modes, Vec<wgpu::CommandBuffer>) {
+    let ctx = &screen.ctx;
+    let raw = panel.state.take_egui_input(window);
     let adapter = ctx.describe();
-    let player = &gpu.player;
+    let (width, height) = screen.size();
     let readout = Readout {
         scene: &player.name,
         adapter: &adapter,
-        primitives: player.tracer.primitives,
-        size: (gpu.config.width, gpu.config.height),
+        primitives: player.primitives(),
+        size: (width, height),
         fps: player.rate.fps,
         frame_ms: player.rate.frame_ms,
         timestamps: ctx.timestamps,
         // The frame's full ray count lives in its targets; the panel counts primary rays.
-        mrays_per_s: (gpu.config.width as u64 * gpu.config.height as u64) as f64
-            / (player.rate.frame_ms.max(1e-6) * 1e3),
-        samples: (player.tracer.renderer.targets().samples(), player.spp),
+        mrays_per_s: (width as u64 * height as u64) as f64 / (player.rate.frame_ms.max(1e-6) * 1e3),
+        samples: (player.gathered(), player.spp),
         build_ms: player.build_ms,
         message: player.message.as_deref(),
     };
@@ -370,30 +337,29 @@ fn draw_panel(gpu: &mut Gpu, ctx: &GpuContext, mut encoder: wgpu::CommandEncoder
         speed: player.clock.speed,
     });
     let mut asked = modes;
-    let output = gpu.egui.run_pass(raw, |ui_ctx| {
+    let output = panel.egui.run_pass(raw, |ui_ctx| {
         asked = panel::draw(ui_ctx, &modes, &readout, playback.as_mut());
     });
     if let Some(playback) = playback {
-        gpu.player.clock.speed = playback.speed;
-        if playback.time != gpu.player.clock.time {
-            gpu.player.seek(playback.time);
+        player.clock.speed = playback.speed;
+        if playback.time != player.clock.time {
+            player.seek(playback.time);
         }
     }
-    gpu.egui_state
-        .handle_platform_output(&gpu.window, output.platform_output);
-    let jobs = gpu.egui.tessellate(output.shapes, output.pixels_per_point);
+    panel.state.handle_platform_output(window, output.platform_output);
+    let jobs = panel.egui.tessellate(output.shapes, output.pixels_per_point);
     let screen = egui_wgpu::ScreenDescriptor {
-        size_in_pixels: [gpu.config.width, gpu.config.height],
+        size_in_pixels: [width, height],
         pixels_per_point: output.pixels_per_point,
     };
     for (id, deltas) in &output.textures_delta.set {
         for delta in deltas {
-            gpu.egui_renderer.update_texture(&ctx.device, &ctx.queue, *id, delta);
+            panel.renderer.update_texture(&ctx.device, &ctx.queue, *id, delta);
         }
     }
-    let extra = gpu
-        .egui_renderer
-        .update_buffers(&ctx.device, &ctx.queue, &mut encoder, &jobs, &screen);
+    let first = panel
+        .renderer
+        .update_buffers(&ctx.device, &ctx.queue, encoder, &jobs, &screen);
     let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("panel"),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -410,12 +376,11 @@ fn draw_panel(gpu: &mut Gpu, ctx: &GpuContext, mut encoder: wgpu::CommandEncoder
         occlusion_query_set: None,
         multiview_mask: None,
     });
-    gpu.egui_renderer.render(&mut pass.forget_lifetime(), &jobs, &screen);
-    ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
+    panel.renderer.render(&mut pass.forget_lifetime(), &jobs, &screen);
     for id in &output.textures_delta.free {
-        gpu.egui_renderer.free_texture(id);
+        panel.renderer.free_texture(id);
     }
-    asked
+    (asked, first)
 }
 
 impl ApplicationHandler for Viewer {
@@ -434,7 +399,7 @@ impl ApplicationHandler for Viewer {
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         let consumed = match &mut self.gpu {
-            Some(gpu) if self.show_panel => gpu.egui_state.on_window_event(&gpu.window, &event).consumed,
+            Some(gpu) if self.show_panel => gpu.panel.state.on_window_event(&gpu.window, &event).consumed,
             _ => false,
         };
         match event {
@@ -444,10 +409,8 @@ impl ApplicationHandler for Viewer {
                     && size.width > 0
                     && size.height > 0
                 {
-                    gpu.config.width = size.width;
-                    gpu.config.height = size.height;
-                    gpu.surface.configure(&gpu.ctx.device, &gpu.config);
-                    if let Err(error) = gpu.player.tracer.renderer.resize(size.width, size.height) {
+                    gpu.screen.resize(size.width, size.height);
+                    if let Err(error) = gpu.player.resize(size.width, size.height) {
                         gpu.player.say(error.to_string());
                     }
                 }
@@ -474,7 +437,7 @@ impl ApplicationHandler for Viewer {
                 if let Some((px, py)) = self.input.cursor {
                     let (dx, dy) = ((x - px) as f32, (y - py) as f32);
                     if let Some(gpu) = &mut self.gpu {
-                        let height = gpu.config.height as f32;
+                        let height = gpu.screen.config.height as f32;
                         if self.input.orbiting {
                             gpu.player.camera.orbit(dx, dy);
                         } else if self.input.panning {

@@ -17,7 +17,7 @@ pub mod player;
 pub mod tracer;
 
 pub use camera::CameraControl;
-pub use player::{Clock, Player, TracerRequest, surface_config};
+pub use player::{Clock, FlyKeys, FrameReport, Player, Screen, Timings, TracerRequest, surface_config};
 pub use tracer::{TraceError, Tracer, next_texture, present_format};
 
 use raypipe::gpu::{Backend, GpuContext, GpuError};
@@ -117,17 +117,27 @@ impl Modes {
             || (self.view == Aov::Cost) != (current.view == Aov::Cost)
     }
 
-    /// Whether the device can trace with these modes at all; the error is one line.
-    pub fn check(&self, ctx: &GpuContext) -> Result<(), String> {
+    /// Whether the device can trace with these modes at all.
+    pub fn check(&self, ctx: &GpuContext) -> Result<(), ModesError> {
         if !ctx.memory_modes().contains(&self.memory) {
-            return Err(format!(
-                "{} has no {} memory for fragment shaders",
-                ctx.describe(),
-                self.memory
-            ));
+            return Err(ModesError::NoMemory {
+                adapter: ctx.describe(),
+                memory: self.memory,
+            });
         }
         Ok(())
     }
+}
+
+/// Why modes cannot serve a scene on a device.
+#[derive(Debug, thiserror::Error)]
+pub enum ModesError {
+    #[error("{adapter} has no {memory} memory for fragment shaders")]
+    NoMemory { adapter: String, memory: MemoryMode },
+    #[error(
+        "the {0} builder builds a still scene's tree once; this scene moves, and its tree is rebuilt every frame by the LBVH"
+    )]
+    BuilderCannotFollowMotion(Builder),
 }
 
 /// A run that draws a fixed number of frames and exits: for tests and demos.
@@ -160,12 +170,32 @@ pub struct ViewerOptions {
 
 /// What the viewer asks of the program that runs it.
 pub trait Host {
-    /// Loads a dropped file as a scene; the error is one line.
-    fn load(&self, path: &Path) -> Result<Scene, String>;
+    /// Loads a dropped file as a scene.
+    fn load(&self, path: &Path) -> Result<Scene, HostError>;
     /// Saves a frame (the linear frame, as read back) to `path`, as `raypipe render` writes files.
-    fn save(&self, frame: &Frame, view: Aov, path: &Path) -> Result<(), String>;
+    fn save(&self, frame: &Frame, view: Aov, path: &Path) -> Result<(), HostError>;
     /// Where `P` saves its next screenshot of `view`.
     fn screenshot_path(&self, view: Aov) -> PathBuf;
+}
+
+/// A file the host could not load or save: the file, and the host's one line on why, in its own
+/// words (a command line names its flags).
+#[derive(Debug, thiserror::Error)]
+#[error("{reason}")]
+pub struct HostError {
+    pub path: PathBuf,
+    pub reason: String,
+}
+
+/// Why `P` (or a script's last frame) saved no screenshot.
+#[derive(Debug, thiserror::Error)]
+pub enum ScreenshotError {
+    #[error("no frame yet")]
+    NoFrame,
+    #[error(transparent)]
+    Read(#[from] GpuError),
+    #[error(transparent)]
+    Save(#[from] HostError),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -176,8 +206,11 @@ pub enum ViewError {
     Window(String),
     #[error(transparent)]
     Gpu(#[from] GpuError),
-    #[error("{0}")]
-    Scene(String),
+    /// The scene could not be traced with the modes asked for.
+    #[error(transparent)]
+    Trace(#[from] TraceError),
+    #[error(transparent)]
+    Screenshot(#[from] ScreenshotError),
 }
 
 /// What a run drew, and how fast.

@@ -1,18 +1,22 @@
 //! One frame loop for every host: the scene, its modes, camera and tracer, and the motion's clock,
 //! stepped the same way in the window (`app.rs`) and on the page (crates/raypipe-web). A host owns
-//! its event loop, surface and controls; each frame it calls [`Player::advance`], records
-//! [`Player::encode`] into its encoder, presents, and calls [`Player::finish`].
+//! its event loop, its [`Screen`] and its controls; at each of its frames it calls
+//! [`Player::frame`], which advances the clock and the camera, traces, shows, lets the host draw
+//! its overlay into the same encoder, presents, and keeps the frame rate.
 //!
 //! Changing modes or the scene needs a new tracer, which is built asynchronously (a window blocks
 //! on it, a page awaits it): [`Player::set_modes`] and [`Player::open`] return a
 //! [`TracerRequest`] to build, and [`Player::install`] puts its result in place; on failure the
 //! current scene and tracer stay and the message shows.
 
-use crate::tracer::{TraceError, Tracer};
+use crate::tracer::{TraceError, Tracer, next_texture, present_format};
 use crate::{CameraControl, Modes};
 use glam::Vec3;
-use raypipe::gpu::{Display, GpuContext};
+use raypipe::gpu::{Display, GpuContext, GpuError};
+use raypipe::image::Frame;
 use raypipe::scene::{Camera, Scene};
+use std::collections::HashSet;
+use web_time::Instant;
 
 /// Fly speed: the distance to the target per second.
 const FLY_PER_SECOND: f32 = 0.8;
@@ -64,13 +68,121 @@ impl FrameRate {
     }
 }
 
+/// Where a host presents its frames: the window's or the canvas's surface, as configured, and the
+/// display pass that draws into it.
+pub struct Screen {
+    pub ctx: GpuContext,
+    pub surface: wgpu::Surface<'static>,
+    pub config: wgpu::SurfaceConfiguration,
+    pub display: Display,
+}
+
+impl Screen {
+    /// The surface configured for `size` pixels in a linear format ([`present_format`]), presented
+    /// as `vsync` says; `None` where the surface offers no format to present in.
+    pub fn new(ctx: GpuContext, surface: wgpu::Surface<'static>, size: (u32, u32), vsync: bool) -> Option<Self> {
+        let caps = surface.get_capabilities(&ctx.adapter);
+        let format = present_format(&caps)?;
+        let config = surface_config(&caps, format, size, vsync);
+        surface.configure(&ctx.device, &config);
+        Some(Self {
+            display: Display::new(&ctx, format),
+            ctx,
+            surface,
+            config,
+        })
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.config.width, self.config.height)
+    }
+
+    /// The surface at a new size (a window resized).
+    pub fn resize(&mut self, width: u32, height: u32) {
+        (self.config.width, self.config.height) = (width, height);
+        self.surface.configure(&self.ctx.device, &self.config);
+    }
+
+    /// Presentation with or without waiting for the display's refresh, as the surface allows.
+    pub fn set_vsync(&mut self, vsync: bool) {
+        let caps = self.surface.get_capabilities(&self.ctx.adapter);
+        self.config.present_mode = present_mode(&caps, vsync);
+        self.surface.configure(&self.ctx.device, &self.config);
+    }
+}
+
+/// Whether a frame waits for its GPU times.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Timings {
+    /// Not read: a page cannot wait for the GPU inside an animation frame, and a read that spans
+    /// the browser's event loop would hold the tracer.
+    Skip,
+    /// Read after presenting, waiting for the frame: the trace pass's time (with timestamps) and,
+    /// where the BVH is rebuilt on the GPU, the build's.
+    #[cfg(not(target_arch = "wasm32"))]
+    Wait,
+}
+
+/// What one [`Player::frame`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameReport {
+    /// It traced a sample (a still frame with all its samples only shows them again).
+    pub traced: bool,
+    /// It presented: a surface with no texture to give this time presents nothing.
+    pub presented: bool,
+    /// Seconds since the previous call.
+    pub seconds: f64,
+    /// The trace pass's GPU time, where it was read.
+    pub gpu_ms: Option<f64>,
+}
+
+/// The fly keys held down, by the names a browser's `KeyboardEvent.code` gives them (winit's
+/// `KeyCode` names are the same): W and S forward and back, D and A right and left, E and Q up and
+/// down.
+#[derive(Clone, Debug, Default)]
+pub struct FlyKeys {
+    held: HashSet<&'static str>,
+}
+
+impl FlyKeys {
+    const KEYS: [&'static str; 6] = ["KeyW", "KeyS", "KeyD", "KeyA", "KeyE", "KeyQ"];
+
+    /// Notes a key going down or up; returns whether it is a fly key.
+    pub fn set(&mut self, code: &str, down: bool) -> bool {
+        let Some(key) = Self::KEYS.iter().find(|&&k| k == code) else {
+            return false;
+        };
+        if down {
+            self.held.insert(key);
+        } else {
+            self.held.remove(key);
+        }
+        true
+    }
+
+    /// Whether any is held.
+    pub fn any(&self) -> bool {
+        !self.held.is_empty()
+    }
+
+    /// Forward, right and up, each -1, 0 or 1.
+    pub fn direction(&self) -> Vec3 {
+        let held = |k: &str| self.held.contains(k) as i32 as f32;
+        Vec3::new(
+            held("KeyW") - held("KeyS"),
+            held("KeyD") - held("KeyA"),
+            held("KeyE") - held("KeyQ"),
+        )
+    }
+}
+
 pub struct Player {
     pub name: String,
     /// The scene as loaded (its motion's time 0).
     pub scene: Scene,
     pub modes: Modes,
     pub camera: CameraControl,
-    pub tracer: Tracer,
+    tracer: Tracer,
     pub clock: Clock,
     /// Samples per pixel a still frame gathers, one per frame.
     pub spp: u32,
@@ -83,6 +195,8 @@ pub struct Player {
     pub frames: u32,
     /// Tracer requests made: a tracer that lands after a later request is dropped.
     requested: u32,
+    last_frame: Instant,
+    last_presented: Instant,
 }
 
 /// A tracer to build for new modes or a new scene; [`Player::install`] takes the result.
@@ -128,7 +242,97 @@ impl Player {
             rate: FrameRate::default(),
             frames: 0,
             requested: 0,
+            last_frame: Instant::now(),
+            last_presented: Instant::now(),
         })
+    }
+
+    /// One frame on `screen`: the camera flown along `fly` (forward, right, up, each -1 to 1) and
+    /// the clock advanced by the time since the last call, the scene posed, the next sample traced
+    /// (unless all are gathered) and shown; then `overlay` records what the host draws over it
+    /// into the same encoder (returning command buffers to submit first, as egui's do), and the
+    /// frame is submitted and presented. The frame rate counts presented frames.
+    pub fn frame(
+        &mut self,
+        screen: &Screen,
+        fly: Vec3,
+        timings: Timings,
+        overlay: impl FnOnce(&mut Player, &mut wgpu::CommandEncoder, &wgpu::TextureView) -> Vec<wgpu::CommandBuffer>,
+    ) -> FrameReport {
+        let now = Instant::now();
+        let seconds = (now - self.last_frame).as_secs_f64();
+        self.last_frame = now;
+        let traced = self.advance(seconds as f32, fly);
+        let mut report = FrameReport {
+            traced,
+            presented: false,
+            seconds,
+            gpu_ms: None,
+        };
+        let Some(texture) = next_texture(&screen.surface, &screen.ctx.device, &screen.config) else {
+            return report;
+        };
+        let view = texture.texture.create_view(&Default::default());
+        let ctx = &screen.ctx;
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        self.encode(&mut encoder, &screen.display, &view, traced);
+        let first = overlay(self, &mut encoder, &view);
+        ctx.queue.submit(first.into_iter().chain([encoder.finish()]));
+        ctx.queue.present(texture);
+        report.presented = true;
+        if traced {
+            report.gpu_ms = self.read_timings(timings);
+        }
+        let presented = (now - self.last_presented).as_secs_f64();
+        self.last_presented = now;
+        self.finish(presented, report.gpu_ms);
+        report
+    }
+
+    /// The frame's GPU times where `timings` waits for them: the trace's is returned, a GPU
+    /// rebuild's is kept as the build time.
+    fn read_timings(&mut self, timings: Timings) -> Option<f64> {
+        match timings {
+            Timings::Skip => None,
+            #[cfg(not(target_arch = "wasm32"))]
+            Timings::Wait => {
+                if let Some(ms) = pollster::block_on(self.tracer.read_gpu_build_ms()) {
+                    self.build_ms = Some(ms);
+                }
+                pollster::block_on(self.tracer.renderer.read_gpu_ms()).ok().flatten()
+            }
+        }
+    }
+
+    /// The scene's primitives.
+    pub fn primitives(&self) -> usize {
+        self.tracer.primitives
+    }
+
+    /// Samples per pixel in the frame shown.
+    pub fn gathered(&self) -> u32 {
+        self.tracer.renderer.targets().samples()
+    }
+
+    /// Gathers up to `spp` samples per pixel, from the first again.
+    pub fn set_spp(&mut self, spp: u32) {
+        self.spp = spp.max(1);
+        self.tracer.renderer.restart();
+    }
+
+    /// Traces at a new size (the window's or the canvas's); the samples start again.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), GpuError> {
+        self.tracer.renderer.resize(width, height)
+    }
+
+    /// The frame shown, read back linear (tracing one sample first where none is).
+    pub async fn read_frame(&mut self, ctx: &GpuContext) -> Result<Frame, GpuError> {
+        if self.tracer.renderer.samples() == 0 {
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            self.tracer.encode(&mut encoder);
+            ctx.queue.submit([encoder.finish()]);
+        }
+        self.tracer.renderer.read_back().await
     }
 
     /// Whether the scene moves now (it has motion and is not paused).
@@ -159,7 +363,7 @@ impl Player {
     /// Starts a frame `seconds` after the last: the camera flown along `fly` (forward, right, up,
     /// each -1 to 1), the clock advanced unless paused, the scene posed where its time changed.
     /// Returns whether the frame traces a sample (a still frame with all its samples does not).
-    pub fn advance(&mut self, seconds: f32, fly: Vec3) -> bool {
+    fn advance(&mut self, seconds: f32, fly: Vec3) -> bool {
         if fly != Vec3::ZERO {
             let step = FLY_PER_SECOND * seconds.min(LONGEST_FLY_STEP);
             self.camera.fly(fly.x * step, fly.y * step, fly.z * step);
@@ -171,7 +375,7 @@ impl Player {
         // Either restarts the samples if it changes anything.
         self.tracer.renderer.set_camera(&self.camera.camera);
         if self.scene.motion.is_some() && self.tracer.time != Some(self.clock.time) {
-            match self.tracer.pose(&self.scene, self.clock.time, self.modes.accel) {
+            match self.tracer.pose(&self.scene, self.clock.time) {
                 Ok(Some(ms)) => self.build_ms = Some(ms),
                 Ok(None) => {}
                 Err(why) => self.say(why.to_string()),
@@ -182,7 +386,7 @@ impl Player {
 
     /// Records the frame into `encoder`: the next sample where `trace`, then the display pass
     /// into `target`.
-    pub fn encode(
+    fn encode(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         display: &Display,
@@ -197,7 +401,7 @@ impl Player {
     }
 
     /// Ends a frame `seconds` after the last, whose trace took `gpu_ms` where that was measured.
-    pub fn finish(&mut self, seconds: f64, gpu_ms: Option<f64>) {
+    fn finish(&mut self, seconds: f64, gpu_ms: Option<f64>) {
         if self.frames > 0 {
             self.rate.update(seconds, gpu_ms);
         }

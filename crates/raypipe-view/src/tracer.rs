@@ -5,14 +5,11 @@
 //! A moving scene keeps its packed records: each new time rewrites only the records that move
 //! (spheres, or triangles with their normals), then the BVH over them.
 
-use crate::Modes;
-use raypipe::bvh::lbvh::LbvhBuilder;
+use crate::{Modes, ModesError};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::error::InputError;
-use raypipe::gpu::build::depth_bound;
-use raypipe::gpu::{Display, GpuContext, GpuError, RecordKind, Renderer, RendererOptions, SceneRebuild};
-use raypipe::modes::Aov;
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::gpu::{CpuRebuild, Display, GpuContext, GpuError, Renderer, RendererOptions, SceneRebuild};
+use raypipe::modes::{Aov, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
 
@@ -20,8 +17,8 @@ use raypipe::scene::{Camera, Scene};
 #[derive(Debug, thiserror::Error)]
 pub enum TraceError {
     /// The device cannot trace with the modes asked for.
-    #[error("{0}")]
-    Modes(String),
+    #[error(transparent)]
+    Modes(#[from] ModesError),
     #[error(transparent)]
     Scene(#[from] InputError),
     #[error(transparent)]
@@ -35,20 +32,30 @@ const COST_MAX: f32 = 200.0;
 
 pub struct Tracer {
     pub renderer: Renderer,
-    /// For a moving scene in storage memory: its spheres and BVH, rebuilt on the GPU before every
-    /// frame.
-    pub rebuild: Option<SceneRebuild>,
-    /// For a moving scene in uniform or texture memory: the CPU builder that rebuilds its BVH
-    /// before every frame, whose records are then rewritten in place.
-    pub cpu_rebuild: Option<LbvhBuilder<u64>>,
     /// The primitives' count, for the panel.
     pub primitives: usize,
     /// The BVH's build time on the CPU, where it was built there (once).
     pub cpu_build_ms: Option<f64>,
     /// The time of the motion the scene stands at, in seconds; `None` until it first moves.
     pub time: Option<f32>,
-    /// A moving scene's records as last posed: each new time rewrites the ones that move.
-    moving: Option<PackedScene>,
+    motion: Motion,
+}
+
+/// How the tracer's scene moves, if it does.
+enum Motion {
+    Still,
+    /// Storage memory: the primitives and the BVH rebuilt on the GPU before every frame.
+    OnGpu {
+        rebuild: SceneRebuild,
+        /// The records as last posed: each new time rewrites the ones that move.
+        packed: PackedScene,
+    },
+    /// Uniform or texture memory: posed and rebuilt on the CPU, then the records that changed
+    /// rewritten in place.
+    OnCpu {
+        rebuild: CpuRebuild,
+        packed: PackedScene,
+    },
 }
 
 impl Tracer {
@@ -59,7 +66,7 @@ impl Tracer {
         size: (u32, u32),
         camera: &Camera,
     ) -> Result<Self, TraceError> {
-        modes.check(ctx).map_err(TraceError::Modes)?;
+        modes.check(ctx)?;
         let mut scene = scene.clone();
         scene.settings.max_depth = modes.depth;
         (scene.settings.width, scene.settings.height) = size;
@@ -72,64 +79,37 @@ impl Tracer {
             count: modes.view.count(),
         };
         let primitives = packed.primitive_count();
-        if scene.motion.is_some() && !modes.builder.follows_motion() {
-            return Err(TraceError::Modes(format!(
-                "the {} builder builds a still scene's tree once; this scene moves, and its tree is rebuilt every frame by the LBVH",
-                modes.builder
-            )));
-        }
-        if scene.motion.is_some() && modes.memory != MemoryMode::Storage {
-            let mut builder = LbvhBuilder::<u64>::new();
-            let mut cpu_build_ms = None;
-            if modes.accel.uses_bvh() {
-                cpu_build_ms = Some(builder.build(&packed.primitive_boxes(), MortonBits::Bits30).total());
-                packed.set_bvh(builder.to_bvh());
-            }
-            let bound = depth_bound(primitives, MortonBits::Bits30);
-            let renderer = Renderer::with_depth_bound(ctx, &packed, options, bound).await?;
-            return Ok(Self {
-                renderer,
-                rebuild: None,
-                cpu_rebuild: Some(builder),
-                primitives,
-                cpu_build_ms,
-                time: None,
-                moving: Some(packed),
-            });
-        }
-        if scene.motion.is_some() {
+        let (renderer, cpu_build, motion) = if scene.motion.is_none() {
+            let build = modes
+                .accel
+                .uses_bvh()
+                .then(|| packed.build_bvh_with(modes.builder, MortonBits::Bits30));
+            (Renderer::new(ctx, &packed, options).await?, build, Motion::Still)
+        } else if !modes.builder.follows_motion() {
+            return Err(ModesError::BuilderCannotFollowMotion(modes.builder).into());
+        } else if modes.memory == MemoryMode::Storage {
             let rebuild = SceneRebuild::new(ctx, &scene, &packed, modes.accel, MortonBits::Bits30).await?;
             let renderer = Renderer::with_rebuild(ctx, &packed, &rebuild, options).await?;
-            return Ok(Self {
-                renderer,
-                rebuild: Some(rebuild),
-                cpu_rebuild: None,
-                primitives,
-                cpu_build_ms: None,
-                time: None,
-                moving: Some(packed),
-            });
-        }
-        let cpu_build_ms = modes
-            .accel
-            .uses_bvh()
-            .then(|| packed.build_bvh_with(modes.builder, MortonBits::Bits30).total());
-        let renderer = Renderer::new(ctx, &packed, options).await?;
+            (renderer, None, Motion::OnGpu { rebuild, packed })
+        } else {
+            let (rebuild, build) = CpuRebuild::new(&mut packed, modes.accel);
+            let bound = rebuild.depth_bound(primitives);
+            let renderer = Renderer::with_depth_bound(ctx, &packed, options, bound).await?;
+            (renderer, build, Motion::OnCpu { rebuild, packed })
+        };
         Ok(Self {
             renderer,
-            rebuild: None,
-            cpu_rebuild: None,
             primitives,
-            cpu_build_ms,
+            cpu_build_ms: cpu_build.map(|timings| timings.total()),
             time: None,
-            moving: None,
+            motion,
         })
     }
 
     /// Records the next sample per pixel; where the scene moves on the GPU, the first after a
     /// restart poses it (skinning) and rebuilds its BVH first.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(rebuild) = &self.rebuild
+        if let Motion::OnGpu { rebuild, .. } = &self.motion
             && self.renderer.samples() == 0
         {
             rebuild.encode(encoder);
@@ -140,31 +120,37 @@ impl Tracer {
     /// Moves the scene (as loaded) to `t` seconds of its motion: the moved records written to the
     /// GPU rebuild's buffers, or the BVH rebuilt on the CPU and the moved records and nodes
     /// rewritten. Returns the CPU build's time. The samples start again.
-    pub fn pose(&mut self, scene: &Scene, t: f32, accel: Accel) -> Result<Option<f64>, TraceError> {
-        let (Some(motion), Some(packed)) = (&scene.motion, &mut self.moving) else {
+    pub fn pose(&mut self, scene: &Scene, t: f32) -> Result<Option<f64>, TraceError> {
+        if scene.motion.is_none() {
             return Ok(None);
-        };
+        }
         self.time = Some(t);
         self.renderer.restart();
-        if let Some(rebuild) = &self.rebuild {
-            if let Some(moved) = rebuild.move_to(scene, packed, t)? {
-                self.renderer.write_moved(packed, moved)?;
+        match &mut self.motion {
+            Motion::Still => Ok(None),
+            Motion::OnGpu { rebuild, packed } => {
+                if let Some(moved) = rebuild.move_to(scene, packed, t)? {
+                    self.renderer.write_moved(packed, moved)?;
+                }
+                Ok(None)
             }
-            return Ok(None);
+            Motion::OnCpu { rebuild, packed } => {
+                let step = rebuild.move_to(scene, packed, t)?;
+                rebuild.write(&step, packed, &mut self.renderer)?;
+                Ok(step.build.map(|timings| timings.total()))
+            }
         }
-        let moved = packed.apply(&motion.moved(scene, t)?);
-        let Some(builder) = &mut self.cpu_rebuild else {
-            return Ok(None);
-        };
-        let mut ms = None;
-        let mut kinds = RecordKind::moved(moved).to_vec();
-        if accel.uses_bvh() {
-            ms = Some(builder.build(&packed.primitive_boxes(), MortonBits::Bits30).total());
-            packed.set_bvh(builder.to_bvh());
-            kinds.extend([RecordKind::Node, RecordKind::ThreadedNode]);
+    }
+
+    /// The GPU time of the last BVH rebuild on the GPU, where the scene is rebuilt there and the
+    /// walk reads a tree; this waits for the frame that ran it.
+    pub async fn read_gpu_build_ms(&self) -> Option<f64> {
+        match &self.motion {
+            Motion::OnGpu { rebuild, .. } if self.renderer.options().accel.uses_bvh() => {
+                rebuild.read_timings().await.ok().map(|timings| timings.total())
+            }
+            _ => None,
         }
-        self.renderer.write_records(packed, &kinds)?;
-        Ok(ms)
     }
 }
 

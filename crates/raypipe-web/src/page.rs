@@ -9,13 +9,11 @@
 //! message shown.
 
 use crate::params::{Setting, StartParams, WebBackend};
-use glam::Vec3;
 use raypipe::Choice;
-use raypipe::gpu::{Display, GpuContext};
+use raypipe::gpu::GpuContext;
 use raypipe::scene::Scene;
-use raypipe_view::{ModeKey, Modes, Player, TracerRequest, next_texture, present_format, surface_config};
+use raypipe_view::{FlyKeys, ModeKey, Modes, Player, Screen, Timings, TracerRequest};
 use std::cell::RefCell;
-use std::collections::HashSet;
 use std::rc::Rc;
 use wasm_bindgen::JsCast;
 use wasm_bindgen::prelude::*;
@@ -29,21 +27,16 @@ pub struct Viewer {
 
 struct Page {
     backend: WebBackend,
-    ctx: GpuContext,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
-    display: Display,
+    screen: Screen,
     /// The scene, modes, camera, tracer and clock. Its frame rate is the wall clock's between
     /// presented frames: the browser paces them by the GPU's progress. Timestamp queries are not
-    /// read here, since their read would hold the renderer across the browser's event loop.
+    /// read here ([`Timings::Skip`]).
     player: Player,
     /// A tracer is being built.
     busy: bool,
-    held: HashSet<String>,
+    fly: FlyKeys,
     started: Instant,
     first_frame_ms: Option<f64>,
-    last_frame: Instant,
-    last_presented: Instant,
 }
 
 /// Starts the viewer on `canvas` with the settings of `query` (the URL's `?...`). Where the page
@@ -174,10 +167,10 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
             ctx.describe()
         ));
     }
-    let caps = surface.get_capabilities(&ctx.adapter);
-    let format = present_format(&caps).ok_or_else(|| format!("{} cannot present to the canvas", ctx.describe()))?;
-    let config = surface_config(&caps, format, (params.width, params.height), true);
-    surface.configure(&ctx.device, &config);
+    let adapter = ctx.describe();
+    let screen = Screen::new(ctx, surface, (params.width, params.height), true)
+        .ok_or_else(|| format!("{adapter} cannot present to the canvas"))?;
+    let ctx = &screen.ctx;
     (scene.settings.width, scene.settings.height) = (params.width, params.height);
     let modes = Modes {
         pipeline: params.pipeline,
@@ -189,27 +182,20 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         paused: params.paused,
         vsync: true,
     };
-    let size = (config.width, config.height);
-    let mut player = Player::new(&ctx, params.scene.clone(), scene, modes, size, params.spp)
+    let mut player = Player::new(ctx, params.scene.clone(), scene, modes, screen.size(), params.spp)
         .await
         .map_err(|why| format!("{}: {why}", params.scene))?;
     player.message = (!errors.is_empty()).then(|| errors.join("; "));
     player.start_at(params.time);
     player.clock.speed = params.speed;
-    let now = Instant::now();
     Ok(Page {
         backend,
-        display: Display::new(&ctx, format),
-        ctx,
-        surface,
-        config,
+        screen,
         player,
         busy: false,
-        held: HashSet::new(),
-        started: now,
+        fly: FlyKeys::default(),
+        started: Instant::now(),
         first_frame_ms: None,
-        last_frame: now,
-        last_presented: now,
     })
 }
 
@@ -241,36 +227,16 @@ impl Page {
     fn frame(page: &Rc<RefCell<Page>>) {
         let mut this = page.borrow_mut();
         let this = &mut *this;
-        let now = Instant::now();
-        let seconds = (now - this.last_frame).as_secs_f64();
-        this.last_frame = now;
-        let trace = this.player.advance(seconds as f32, this.fly());
-        let Some(texture) = next_texture(&this.surface, &this.ctx.device, &this.config) else {
+        let report = this
+            .player
+            .frame(&this.screen, this.fly.direction(), Timings::Skip, |_, _, _| Vec::new());
+        if !report.presented {
             return;
-        };
-        let view = texture.texture.create_view(&Default::default());
-        let mut encoder = this.ctx.device.create_command_encoder(&Default::default());
-        this.player.encode(&mut encoder, &this.display, &view, trace);
-        this.ctx.queue.submit([encoder.finish()]);
-        this.ctx.queue.present(texture);
-        if this.first_frame_ms.is_none() {
-            this.first_frame_ms = Some((now - this.started).as_secs_f64() * 1e3);
         }
-        // Between presented frames: a callback that found no texture to draw into presented none.
-        let presented = (now - this.last_presented).as_secs_f64();
-        this.last_presented = now;
-        this.player.finish(presented, None);
+        if this.first_frame_ms.is_none() {
+            this.first_frame_ms = Some(this.started.elapsed().as_secs_f64() * 1e3);
+        }
         this.publish();
-    }
-
-    /// The fly direction the held keys ask for: forward (W, S), right (D, A), up (E, Q).
-    fn fly(&self) -> Vec3 {
-        let held = |k: &str| self.held.contains(k) as i32 as f32;
-        Vec3::new(
-            held("KeyW") - held("KeyS"),
-            held("KeyD") - held("KeyA"),
-            held("KeyE") - held("KeyQ"),
-        )
     }
 
     /// `window.raypipeStatus`: what runs, for the page's readout and for tests.
@@ -284,18 +250,18 @@ impl Page {
         let modes = &player.modes;
         set("frames", player.frames.into());
         set("backend", self.backend.name().into());
-        set("adapter", self.ctx.describe().into());
+        set("adapter", self.screen.ctx.describe().into());
         set("scene", player.name.clone().into());
         set("error", player.message.clone().map_or(JsValue::NULL, JsValue::from));
         set("busy", self.busy.into());
-        set("width", self.config.width.into());
-        set("height", self.config.height.into());
-        set("primitives", (player.tracer.primitives as u32).into());
+        set("width", self.screen.config.width.into());
+        set("height", self.screen.config.height.into());
+        set("primitives", (player.primitives() as u32).into());
         set("pipeline", modes.pipeline.name().into());
         set("accel", modes.accel.name().into());
         set("builder", modes.builder.name().into());
         set("memory", modes.memory.name().into());
-        set("memories", memory_names(&self.ctx).into());
+        set("memories", memory_names(&self.screen.ctx).into());
         set("depth", modes.depth.into());
         set("aov", modes.view.name().into());
         set("paused", modes.paused.into());
@@ -303,7 +269,7 @@ impl Page {
         set("time", player.clock.time.into());
         set("duration", optional(player.duration().map(f64::from)));
         set("speed", player.clock.speed.into());
-        set("samples", player.tracer.renderer.targets().samples().into());
+        set("samples", player.gathered().into());
         set("spp", player.spp.into());
         set("fps", player.rate.fps.into());
         set("frameMs", player.rate.frame_ms.into());
@@ -323,7 +289,7 @@ impl Page {
             // The last request's message no longer applies.
             this.player.message = None;
             this.publish();
-            this.ctx.clone()
+            this.screen.ctx.clone()
         };
         let page = page.clone();
         wasm_bindgen_futures::spawn_local(async move {
@@ -344,7 +310,7 @@ impl Page {
             Ok(mut scene) => {
                 let request = {
                     let mut this = page.borrow_mut();
-                    (scene.settings.width, scene.settings.height) = (this.config.width, this.config.height);
+                    (scene.settings.width, scene.settings.height) = this.screen.size();
                     this.player.open(name, scene)
                 };
                 Page::build(page, request);
@@ -401,9 +367,7 @@ impl Viewer {
             Setting::View(view) => asked.view = view,
             Setting::Paused(paused) => asked.paused = paused,
             Setting::Spp(spp) => {
-                let mut this = self.page.borrow_mut();
-                this.player.spp = spp;
-                this.player.tracer.renderer.restart();
+                self.page.borrow_mut().player.set_spp(spp);
                 return;
             }
             Setting::Time(time) => {
@@ -461,7 +425,7 @@ impl Viewer {
     pub fn drag(&self, dx: f32, dy: f32, pan: bool) {
         let mut this = self.page.borrow_mut();
         if pan {
-            let height = this.config.height as f32;
+            let height = this.screen.config.height as f32;
             this.player.camera.pan(dx, dy, height);
         } else {
             this.player.camera.orbit(dx, dy);
@@ -476,14 +440,7 @@ impl Viewer {
     /// A key by its `KeyboardEvent.code`: the viewer's keys (R, B, G, M, V, [ ], Space, and
     /// W A S D Q E held to fly). Returns whether the viewer used it.
     pub fn key(&self, code: &str, pressed: bool) -> bool {
-        const FLY: [&str; 6] = ["KeyW", "KeyA", "KeyS", "KeyD", "KeyQ", "KeyE"];
-        if FLY.contains(&code) {
-            let mut this = self.page.borrow_mut();
-            if pressed {
-                this.held.insert(code.to_string());
-            } else {
-                this.held.remove(code);
-            }
+        if self.page.borrow_mut().fly.set(code, pressed) {
             return true;
         }
         if !pressed {

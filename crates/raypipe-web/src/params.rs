@@ -3,7 +3,7 @@
 //! tested natively.
 
 use raypipe::Choice;
-use raypipe::impl_choice;
+use raypipe::choice::impl_choice;
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::MAX_DEPTH_LIMIT;
@@ -223,7 +223,7 @@ pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
 
 /// What the page's file input takes: every model and scene format the library reads.
 pub fn file_accept() -> String {
-    let models = raypipe::scene::model::model_extension_list().replace(' ', "");
+    let models = raypipe::scene::model_extension_list().replace(' ', "");
     format!("{models},.toml")
 }
 

@@ -20,8 +20,10 @@ pub trait Choice: Copy + PartialEq + std::fmt::Debug + 'static {
 }
 
 /// Implements [`Choice`] and `Display` (the name) for an enum from `(Variant, "name", "about")` rows.
+/// Exported from here as [`impl_choice`]; `macro_export` alone would put it at the crate root.
+#[doc(hidden)]
 #[macro_export]
-macro_rules! impl_choice {
+macro_rules! __impl_choice {
     ($ty:ty, [$(($variant:ident, $name:literal, $about:literal)),+ $(,)?]) => {
         impl $crate::choice::Choice for $ty {
             const ALL: &'static [Self] = &[$(<$ty>::$variant),+];
@@ -39,3 +41,6 @@ macro_rules! impl_choice {
         }
     };
 }
+
+#[doc(inline)]
+pub use crate::__impl_choice as impl_choice;

@@ -2,7 +2,7 @@
 //! reach the shader. They sit at the bottom of the module graph, so that the CPU tracer, the GPU
 //! renderer and their callers name the same types.
 
-use crate::impl_choice;
+use crate::choice::impl_choice;
 
 /// How a ray finds its closest primitive. The default is the fastest measured mode (docs/BENCHMARKS.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

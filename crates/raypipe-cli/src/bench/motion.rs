@@ -10,19 +10,17 @@ use crate::report::median;
 use anyhow::Context;
 use pollster::block_on;
 use raypipe::Choice;
-use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu;
-use raypipe::gpu::build::depth_bound;
-use raypipe::gpu::{GpuContext, RecordKind, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{CpuRebuild, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::image::diff::{Tolerance, compare};
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
-use raypipe::scene::model::{MeshAs, ModelOptions, is_model_file};
+use raypipe::scene::is_model_file;
+use raypipe::scene::model::{MeshAs, ModelOptions};
 use raypipe::scene::{Motion, Scene};
 use serde::Serialize;
-use std::io::Write;
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -64,7 +62,6 @@ struct MotionRow {
     /// The first timed frame at which refitting (refit + trace of the refitted tree) costs more
     /// than rebuilding (build + trace of the fresh tree); none if refitting wins throughout.
     refit_loses_from_frame: Option<usize>,
-    clock: String,
     adapter: String,
     backend: String,
 }
@@ -130,7 +127,12 @@ fn load(args: &BenchArgs) -> anyhow::Result<Scene> {
 
 pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     let ctx = block_on(GpuContext::require(args.backend))?;
-    let clock = if ctx.timestamps { "gpu timestamps" } else { "wall clock" };
+    // The GPU's phases run in one submission: only timestamp queries tell them apart.
+    anyhow::ensure!(
+        ctx.timestamps,
+        "bench --motion splits a frame's GPU work by timestamp queries, which {} lacks; bench --rebuild times whole frames by the wall clock",
+        ctx.describe()
+    );
     anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
     anyhow::ensure!(
         args.fps.is_finite() && args.fps > 0.0,
@@ -160,6 +162,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     let mut rows = Vec::new();
     let mut refit_frames = Vec::new();
     let mut refused = Vec::new();
+    let check = Check {
+        time: check_time,
+        reference: &reference,
+    };
     for &memory in &args.memory {
         for &pipeline in &args.pipeline {
             for &accel in &args.accel {
@@ -171,65 +177,15 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
                     accel,
                     ..Default::default()
                 };
-                let timed = if memory == MemoryMode::Storage {
-                    gpu_point(&ctx, &scene, options, args, &times)
-                } else {
-                    cpu_point(&ctx, &scene, options, args, &times)
-                };
-                let point_result = timed.and_then(|(frames, first, refits)| {
-                    let color = compare(&first.display(), &reference.display())?;
-                    Tolerance::COLOR
-                        .check(&color)
-                        .map_err(|e| anyhow::anyhow!("its image at {check_time} s differs from the CPU's: {e}"))?;
-                    Ok((frames, refits))
-                });
-                let (frames, refits) = match point_result {
-                    Ok(done) => done,
-                    Err(e) => {
-                        refused.push(format!("{point}: {}", crate::report::message(&e)));
-                        bar.inc(1);
-                        continue;
+                match time_point(&ctx, &scene, options, args, &times, &check) {
+                    Ok((frames, refits)) => {
+                        rows.push(MotionRow::new(&name, &scene, options, args, &ctx, &frames, &refits));
+                        refit_frames.extend(refits);
+                        // After every point: a run cut short keeps what it measured.
+                        write_results(&args.out, &rows, &refit_frames)?;
                     }
-                };
-                let part = |f: fn(&FrameTimes) -> f64| median(frames.iter().map(f));
-                let (eval, skin, build, upload, trace) = (
-                    part(|f| f.eval),
-                    part(|f| f.skin),
-                    part(|f| f.build),
-                    part(|f| f.upload),
-                    part(|f| f.trace),
-                );
-                let frame_ms = eval + skin + build + upload + trace;
-                let (refit_ms, refit_trace_ratio_last, refit_loses_from_frame) = summarize_refits(&refits);
-                rows.push(MotionRow {
-                    scene: name.clone(),
-                    triangles: scene.triangles.len(),
-                    spheres: scene.spheres.len(),
-                    pipeline: pipeline.name().into(),
-                    accel: accel.name().into(),
-                    memory: memory.name().into(),
-                    width: args.width,
-                    height: args.height,
-                    spp: args.spp,
-                    frames: args.frames,
-                    moved_on: if memory == MemoryMode::Storage { "gpu" } else { "cpu" }.into(),
-                    eval_ms: eval,
-                    skin_ms: skin,
-                    build_ms: build,
-                    upload_ms: upload,
-                    trace_ms: trace,
-                    frame_ms,
-                    motion_share: (skin + build) / frame_ms,
-                    refit_ms,
-                    refit_trace_ratio_last,
-                    refit_loses_from_frame,
-                    clock: clock.into(),
-                    adapter: ctx.info.name.clone(),
-                    backend: format!("{:?}", ctx.info.backend),
-                });
-                refit_frames.extend(refits);
-                // After every point: a run cut short keeps what it measured.
-                write_results(&args.out, &rows, &refit_frames)?;
+                    Err(e) => refused.push(format!("{point}: {}", crate::report::message(&e))),
+                }
                 bar.inc(1);
             }
         }
@@ -243,7 +199,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         crate::say!("{json}");
         return Ok(ExitCode::SUCCESS);
     }
-    print_table(args, &ctx, clock, &name, scene.triangles.len(), &rows)?;
+    print_table(args, &ctx, &name, scene.triangles.len(), &rows)?;
     crate::say!("results: {}/motion.csv, motion.json", args.out.display());
     Ok(if rows.is_empty() {
         ExitCode::from(2)
@@ -252,17 +208,93 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     })
 }
 
+/// The CPU's image of the first timed frame, which every point's must match.
+struct Check<'a> {
+    time: f32,
+    reference: &'a Frame,
+}
+
+/// One point's timed frames and refit comparison, its image checked first.
+fn time_point(
+    ctx: &GpuContext,
+    scene: &Scene,
+    options: RendererOptions,
+    args: &BenchArgs,
+    times: &[f32],
+    check: &Check,
+) -> anyhow::Result<(Vec<FrameTimes>, Vec<RefitFrame>)> {
+    let (frames, first, refits) = if options.memory == MemoryMode::Storage {
+        gpu_point(ctx, scene, options, args, times)?
+    } else {
+        cpu_point(ctx, scene, options, args, times)?
+    };
+    let color = compare(&first.display(), &check.reference.display())?;
+    Tolerance::COLOR
+        .check(&color)
+        .map_err(|e| anyhow::anyhow!("its image at {} s differs from the CPU's: {e}", check.time))?;
+    Ok((frames, refits))
+}
+
+impl MotionRow {
+    /// The medians of a point's frames.
+    fn new(
+        name: &str,
+        scene: &Scene,
+        options: RendererOptions,
+        args: &BenchArgs,
+        ctx: &GpuContext,
+        frames: &[FrameTimes],
+        refits: &[RefitFrame],
+    ) -> Self {
+        let part = |f: fn(&FrameTimes) -> f64| median(frames.iter().map(f));
+        let (eval, skin, build, upload, trace) = (
+            part(|f| f.eval),
+            part(|f| f.skin),
+            part(|f| f.build),
+            part(|f| f.upload),
+            part(|f| f.trace),
+        );
+        let frame_ms = eval + skin + build + upload + trace;
+        let (refit_ms, refit_trace_ratio_last, refit_loses_from_frame) = summarize_refits(refits);
+        let on_gpu = options.memory == MemoryMode::Storage;
+        Self {
+            scene: name.to_string(),
+            triangles: scene.triangles.len(),
+            spheres: scene.spheres.len(),
+            pipeline: options.pipeline.name().into(),
+            accel: options.accel.name().into(),
+            memory: options.memory.name().into(),
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            frames: args.frames,
+            moved_on: if on_gpu { "gpu" } else { "cpu" }.into(),
+            eval_ms: eval,
+            skin_ms: skin,
+            build_ms: build,
+            upload_ms: upload,
+            trace_ms: trace,
+            frame_ms,
+            motion_share: (skin + build) / frame_ms,
+            refit_ms,
+            refit_trace_ratio_last,
+            refit_loses_from_frame,
+            adapter: ctx.info.name.clone(),
+            backend: format!("{:?}", ctx.info.backend),
+        }
+    }
+}
+
 /// The points as a table on standard output, under the adapter, the scene and the size.
 fn print_table(
     args: &BenchArgs,
     ctx: &GpuContext,
-    clock: &str,
     name: &str,
     triangles: usize,
     rows: &[MotionRow],
 ) -> anyhow::Result<()> {
     crate::say!(
-        "adapter: {} ({clock}), {name}: {} triangles, {}x{}, {} frames at {} fps",
+        "adapter: {} (gpu timestamps), {name}: {} triangles, {}x{}, {} frames at {} fps",
         ctx.describe(),
         triangles,
         args.width,
@@ -418,33 +450,18 @@ fn cpu_point(
 ) -> anyhow::Result<(Vec<FrameTimes>, Frame, Vec<RefitFrame>)> {
     let motion = scene.motion.as_ref().expect("a moving scene");
     let mut packed = PackedScene::new(scene)?;
-    let mut builder = LbvhBuilder::<u64>::new();
-    if options.accel.uses_bvh() {
-        builder.build(&packed.primitive_boxes(), BITS);
-        packed.set_bvh(builder.to_bvh());
-    }
-    let bound = depth_bound(packed.primitive_count(), BITS);
+    let (mut rebuild, _) = CpuRebuild::new(&mut packed, options.accel);
+    let bound = rebuild.depth_bound(packed.primitive_count());
     let mut renderer = block_on(Renderer::with_depth_bound(ctx, &packed, options, bound))?;
     let mut frames = Vec::new();
     let mut first = None;
     for (k, &t) in times.iter().enumerate() {
         let eval = evaluate(motion, t);
-        let start = Instant::now();
-        let moved = packed.apply(&motion.moved(scene, t)?);
-        // `moved` evaluates the clips again before it skins.
-        let skin = (elapsed_ms(start) - eval).max(0.0);
-        let mut build = 0.0;
-        let mut kinds = RecordKind::moved(moved).to_vec();
-        if options.accel.uses_bvh() {
-            let start = Instant::now();
-            builder.build(&packed.primitive_boxes(), BITS);
-            packed.set_bvh(builder.to_bvh());
-            build = elapsed_ms(start);
-            kinds.extend([RecordKind::Node, RecordKind::ThreadedNode]);
-        }
-        let start = Instant::now();
-        renderer.write_records(&packed, &kinds)?;
-        let upload = elapsed_ms(start);
+        let step = rebuild.move_to(scene, &mut packed, t)?;
+        // Posing evaluates the clips again before it skins.
+        let skin = (step.pose_ms - eval).max(0.0);
+        let build = step.build.map_or(0.0, |timings| timings.total());
+        let upload = rebuild.write(&step, &packed, &mut renderer)?;
         let traced = block_on(renderer.render_samples(args.spp, |_| {}))?;
         if k >= args.warmup {
             first.get_or_insert(traced.frame);
@@ -462,57 +479,9 @@ fn cpu_point(
 
 /// motion.csv, motion.json and, with refits, refit.csv in `out`; returns the JSON.
 fn write_results(out: &Path, rows: &[MotionRow], refits: &[RefitFrame]) -> anyhow::Result<String> {
-    let path = out.join("motion.csv");
-    let mut file = std::fs::File::create(&path).with_context(|| format!("{}: cannot write", path.display()))?;
-    writeln!(
-        file,
-        "scene,triangles,spheres,pipeline,accel,memory,width,height,spp,frames,moved_on,eval_ms,skin_ms,build_ms,upload_ms,trace_ms,frame_ms,motion_share,refit_ms,refit_trace_ratio_last,refit_loses_from_frame,clock,adapter,backend"
-    )?;
-    let optional = |v: Option<f64>| v.map(|v| format!("{v:.4}")).unwrap_or_default();
-    for r in rows {
-        writeln!(
-            file,
-            "{},{},{},{},{},{},{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{},\"{}\",{}",
-            r.scene,
-            r.triangles,
-            r.spheres,
-            r.pipeline,
-            r.accel,
-            r.memory,
-            r.width,
-            r.height,
-            r.spp,
-            r.frames,
-            r.moved_on,
-            r.eval_ms,
-            r.skin_ms,
-            r.build_ms,
-            r.upload_ms,
-            r.trace_ms,
-            r.frame_ms,
-            r.motion_share,
-            optional(r.refit_ms),
-            optional(r.refit_trace_ratio_last),
-            r.refit_loses_from_frame.map(|f| f.to_string()).unwrap_or_default(),
-            r.clock,
-            r.adapter.replace('"', "'"),
-            r.backend
-        )?;
-    }
+    crate::report::write_csv(&out.join("motion.csv"), rows)?;
     if !refits.is_empty() {
-        let path = out.join("refit.csv");
-        let mut file = std::fs::File::create(&path).with_context(|| format!("{}: cannot write", path.display()))?;
-        writeln!(
-            file,
-            "pipeline,accel,frame,time,build_ms,refit_ms,trace_rebuilt_ms,trace_refitted_ms"
-        )?;
-        for r in refits {
-            writeln!(
-                file,
-                "{},{},{},{},{:.4},{:.4},{:.4},{:.4}",
-                r.pipeline, r.accel, r.frame, r.time, r.build_ms, r.refit_ms, r.trace_rebuilt_ms, r.trace_refitted_ms
-            )?;
-        }
+        crate::report::write_csv(&out.join("refit.csv"), refits)?;
     }
     let json = serde_json::to_string_pretty(&serde_json::json!({ "points": rows, "refit": refits }))?;
     std::fs::write(out.join("motion.json"), &json).with_context(|| format!("{}: cannot write", out.display()))?;

@@ -141,7 +141,7 @@ pub enum Hierarchy {
     Searches,
 }
 
-crate::impl_choice!(
+crate::choice::impl_choice!(
     Hierarchy,
     [
         (

@@ -14,7 +14,7 @@ pub enum MortonBits {
     Bits63,
 }
 
-crate::impl_choice!(
+crate::choice::impl_choice!(
     MortonBits,
     [
         (Bits30, "30", "10 bits per axis, in the low 30 bits"),

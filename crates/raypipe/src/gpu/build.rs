@@ -764,18 +764,8 @@ impl Buffers {
         triangle_count: usize,
     ) -> Result<Self, GpuError> {
         let count = sphere_count + triangle_count;
-        let limits = ctx.limits();
         let n = count as u64;
-        let node_bytes = (2 * n).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
-        if node_bytes > limits.max_storage_buffer_binding_size {
-            return Err(GpuError::TooBig {
-                memory: MemoryMode::Storage,
-                array: "node",
-                records: (2 * count).saturating_sub(1),
-                needed: Capacity::Bytes(node_bytes),
-                allowed: Capacity::Bytes(limits.max_storage_buffer_binding_size),
-            });
-        }
+        let node_bytes = node_room(ctx, count)?;
         let device = &ctx.device;
         let blocks = n.div_ceil(BLOCK as u64);
         // A binding may not be empty: an absent kind of primitive gets room for one record.
@@ -811,21 +801,7 @@ impl Buffers {
             (variant.sibling_boxes.words_per_split() * n.saturating_sub(1)).max(sort_words(bits, variant.ranking, n));
         let climb = storage_buffer(device, "climb", climb_words * 4, wgpu::BufferUsages::COPY_DST);
         let nodes = storage_buffer(device, "nodes", node_bytes, wgpu::BufferUsages::COPY_SRC);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("build params"),
-            size: PARAMS_STRIDE * sort_passes(bits) as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        for pass in 0..sort_passes(bits) {
-            let p = BuildParams {
-                count: count as u32,
-                shift: pass * DIGIT_BITS,
-                sphere_count: sphere_count as u32,
-            };
-            ctx.queue
-                .write_buffer(&params, pass as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
-        }
+        let params = params_buffer(ctx, bits, count, sphere_count);
         let bind_group = |pairs_in: &wgpu::Buffer, pairs_out: &wgpu::Buffer| {
             let resources = [
                 &spheres, pairs_in, pairs_out, &scratch, &splits, &climb, &nodes, &triangles,
@@ -860,6 +836,43 @@ impl Buffers {
             nodes,
         })
     }
+}
+
+/// The bytes of the node array of `count` primitives, where a storage binding holds them.
+fn node_room(ctx: &GpuContext, count: usize) -> Result<u64, GpuError> {
+    let allowed = ctx.limits().max_storage_buffer_binding_size;
+    let node_bytes = (2 * count as u64).saturating_sub(1) * std::mem::size_of::<GpuNode>() as u64;
+    if node_bytes > allowed {
+        return Err(GpuError::TooBig {
+            memory: MemoryMode::Storage,
+            array: "node",
+            records: (2 * count).saturating_sub(1),
+            needed: Capacity::Bytes(node_bytes),
+            allowed: Capacity::Bytes(allowed),
+        });
+    }
+    Ok(node_bytes)
+}
+
+/// The kernels' parameters, one [`BuildParams`] per sort pass at [`PARAMS_STRIDE`] (a dynamic
+/// offset picks the pass's digit).
+fn params_buffer(ctx: &GpuContext, bits: MortonBits, count: usize, sphere_count: usize) -> wgpu::Buffer {
+    let params = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("build params"),
+        size: PARAMS_STRIDE * sort_passes(bits) as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    for pass in 0..sort_passes(bits) {
+        let p = BuildParams {
+            count: count as u32,
+            shift: pass * DIGIT_BITS,
+            sphere_count: sphere_count as u32,
+        };
+        ctx.queue
+            .write_buffer(&params, pass as u64 * PARAMS_STRIDE, bytemuck::bytes_of(&p));
+    }
+    params
 }
 
 /// A bound on the depth of any LBVH over `count` primitives with codes of `bits`: each level of the

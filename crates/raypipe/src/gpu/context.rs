@@ -4,8 +4,8 @@
 //! awaits them. An adapter can be asked for a surface (WebGL2 has none to offer before its canvas).
 
 use super::GpuError;
+use crate::choice::impl_choice;
 use crate::error::one_line;
-use crate::impl_choice;
 use crate::modes::{Accel, MemoryMode};
 use std::future::Future;
 use std::pin::Pin;

@@ -17,7 +17,9 @@ use super::timing::PassTimestamps;
 use super::{GpuContext, GpuError};
 use crate::error::{Element, InputError};
 use crate::records::{GpuTriangleNormals, StructLayout};
-use crate::scene::animation::{Animated, CornerNormals, InstancePose, MAX_INFLUENCES};
+use crate::scene::animation::{
+    Animated, CornerNormals, InstancePose, MAX_INFLUENCES, PlacedInstance, RestPrimitive, Rig,
+};
 use crate::scene::{MAX_COORDINATE, Motion};
 use crate::struct_layout;
 use bytemuck::{Pod, Zeroable};
@@ -171,91 +173,8 @@ impl DeformRecords {
         // Entries of each group, by global group number, before they are laid out.
         let mut group_entries: Vec<Vec<u32>> = Vec::new();
         for animated in animations {
-            let rig = &animated.rig;
             for placed in &animated.placed {
-                let instance = &rig.instances[placed.instance];
-                let rest = &instance.rest;
-                let vertex_first = out.vertices.len() as u32;
-                let vertex_count = rest.positions.len() as u32;
-                let index = out.instances.len() as u32;
-                let (normals, crease_cos) = match placed.normals {
-                    CornerNormals::File => (NormalSource::File, 0.0),
-                    CornerNormals::Smooth(crease) => (NormalSource::Smooth, crease.to_radians().cos()),
-                    CornerNormals::Flat => (NormalSource::Flat, 0.0),
-                };
-                let matrices = instance.skin.map_or(1, |s| rig.skins[s].joints.len()) as u32;
-                out.instances.push(DeformInstance {
-                    vertex_first,
-                    vertex_count,
-                    target_first: out.targets.len() as u32,
-                    target_count: rest.targets.len() as u32,
-                    matrix_first: out.matrix_count,
-                    skinned: instance.skin.is_some() as u32,
-                    weight_first: out.weight_count,
-                    normals: normals as u32,
-                    crease_cos,
-                });
-                out.matrix_count += matrices;
-                out.weight_count += rest.targets.len() as u32;
-                for (v, &position) in rest.positions.iter().enumerate() {
-                    let normal = rest.normals.as_ref().map_or(Vec3::ZERO, |n| n[v]);
-                    out.vertices.push(DeformVertex {
-                        position: position.to_array(),
-                        instance: index,
-                        normal: normal.to_array(),
-                        _pad: 0,
-                    });
-                    out.influences
-                        .push(rest.influences.get(v).map_or_else(Default::default, |inf| {
-                            let mut joints = [0u32; 4];
-                            for (k, &joint) in inf.joints.iter().enumerate().take(MAX_INFLUENCES) {
-                                joints[k / 2] |= (joint as u32) << (16 * (k % 2));
-                            }
-                            DeformInfluences {
-                                joints,
-                                weights_low: inf.weights[..4].try_into().expect("eight weights"),
-                                weights_high: inf.weights[4..].try_into().expect("eight weights"),
-                            }
-                        }));
-                }
-                let mut reach = rest.positions.iter().map(|p| p.length()).fold(0.0, f32::max);
-                for target in &rest.targets {
-                    let offsets = target.positions.as_deref().unwrap_or_default();
-                    reach += offsets.iter().map(|d| d.length()).fold(0.0, f32::max);
-                    for v in 0..rest.positions.len() {
-                        let zero = Vec3::ZERO;
-                        let position = offsets.get(v).unwrap_or(&zero);
-                        let normal = target.normals.as_deref().and_then(|n| n.get(v)).unwrap_or(&zero);
-                        out.targets.push(DeformOffset {
-                            position: position.extend(0.0).to_array(),
-                            normal: normal.extend(0.0).to_array(),
-                        });
-                    }
-                }
-                out.reach.push(reach);
-                // Faces around each rest position, for smooth normals.
-                let mut group_of: HashMap<[u32; 3], u32> = HashMap::new();
-                for (k, corners) in placed.triangles.iter().enumerate() {
-                    let face = out.triangles.len() as u32;
-                    let mut groups = [0u32; 3];
-                    if normals == NormalSource::Smooth {
-                        for (c, &v) in corners.iter().enumerate() {
-                            let key = rest.positions[v as usize].to_array().map(f32::to_bits);
-                            let group = *group_of.entry(key).or_insert_with(|| {
-                                group_entries.push(Vec::new());
-                                group_entries.len() as u32 - 1
-                            });
-                            group_entries[group as usize].push(face * 4 + c as u32);
-                            groups[c] = group;
-                        }
-                    }
-                    out.triangles.push(DeformTriangle {
-                        corners: corners.map(|v| vertex_first + v),
-                        triangle: (placed.first_triangle + k) as u32,
-                        groups,
-                        instance: index,
-                    });
-                }
+                out.add_instance(&animated.rig, placed, &mut group_entries);
             }
         }
         // The weights follow the matrices in the frame.
@@ -271,6 +190,117 @@ impl DeformRecords {
         out.groups.push(start);
         out.groups.extend(group_entries.into_iter().flatten());
         out
+    }
+
+    /// One placed instance: its record, its rest vertices and their influences, its morph
+    /// offsets, its faces (grouped around each rest position for smooth normals).
+    fn add_instance(&mut self, rig: &Rig, placed: &PlacedInstance, group_entries: &mut Vec<Vec<u32>>) {
+        let instance = &rig.instances[placed.instance];
+        let rest = &instance.rest;
+        let vertex_first = self.vertices.len() as u32;
+        let index = self.instances.len() as u32;
+        let (normals, crease_cos) = match placed.normals {
+            CornerNormals::File => (NormalSource::File, 0.0),
+            CornerNormals::Smooth(crease) => (NormalSource::Smooth, crease.to_radians().cos()),
+            CornerNormals::Flat => (NormalSource::Flat, 0.0),
+        };
+        let matrices = instance.skin.map_or(1, |s| rig.skins[s].joints.len()) as u32;
+        self.instances.push(DeformInstance {
+            vertex_first,
+            vertex_count: rest.positions.len() as u32,
+            target_first: self.targets.len() as u32,
+            target_count: rest.targets.len() as u32,
+            matrix_first: self.matrix_count,
+            skinned: instance.skin.is_some() as u32,
+            weight_first: self.weight_count,
+            normals: normals as u32,
+            crease_cos,
+        });
+        self.matrix_count += matrices;
+        self.weight_count += rest.targets.len() as u32;
+        self.add_vertices(rest, index);
+        let reach = self.add_targets(rest);
+        self.reach.push(reach);
+        let smooth = normals == NormalSource::Smooth;
+        self.add_faces(placed, rest, (vertex_first, index), smooth.then_some(group_entries));
+    }
+
+    fn add_vertices(&mut self, rest: &RestPrimitive, instance: u32) {
+        for (v, &position) in rest.positions.iter().enumerate() {
+            let normal = rest.normals.as_ref().map_or(Vec3::ZERO, |n| n[v]);
+            self.vertices.push(DeformVertex {
+                position: position.to_array(),
+                instance,
+                normal: normal.to_array(),
+                _pad: 0,
+            });
+            self.influences
+                .push(rest.influences.get(v).map_or_else(Default::default, |inf| {
+                    let mut joints = [0u32; 4];
+                    for (k, &joint) in inf.joints.iter().enumerate().take(MAX_INFLUENCES) {
+                        joints[k / 2] |= (joint as u32) << (16 * (k % 2));
+                    }
+                    DeformInfluences {
+                        joints,
+                        weights_low: inf.weights[..4].try_into().expect("eight weights"),
+                        weights_high: inf.weights[4..].try_into().expect("eight weights"),
+                    }
+                }));
+        }
+    }
+
+    /// The morph offsets of every vertex, target by target; returns the farthest a vertex lies
+    /// from the origin with every target at full weight.
+    fn add_targets(&mut self, rest: &RestPrimitive) -> f32 {
+        let mut reach = rest.positions.iter().map(|p| p.length()).fold(0.0, f32::max);
+        for target in &rest.targets {
+            let offsets = target.positions.as_deref().unwrap_or_default();
+            reach += offsets.iter().map(|d| d.length()).fold(0.0, f32::max);
+            for v in 0..rest.positions.len() {
+                let zero = Vec3::ZERO;
+                let position = offsets.get(v).unwrap_or(&zero);
+                let normal = target.normals.as_deref().and_then(|n| n.get(v)).unwrap_or(&zero);
+                self.targets.push(DeformOffset {
+                    position: position.extend(0.0).to_array(),
+                    normal: normal.extend(0.0).to_array(),
+                });
+            }
+        }
+        reach
+    }
+
+    /// The placed triangles (`first` is the instance's first vertex and its index); where
+    /// `group_entries` is given (smooth normals), each corner joins the group of the faces around
+    /// its rest position.
+    fn add_faces(
+        &mut self,
+        placed: &PlacedInstance,
+        rest: &RestPrimitive,
+        (vertex_first, instance): (u32, u32),
+        mut group_entries: Option<&mut Vec<Vec<u32>>>,
+    ) {
+        let mut group_of: HashMap<[u32; 3], u32> = HashMap::new();
+        for (k, corners) in placed.triangles.iter().enumerate() {
+            let face = self.triangles.len() as u32;
+            let mut groups = [0u32; 3];
+            if let Some(group_entries) = group_entries.as_deref_mut() {
+                for (c, &v) in corners.iter().enumerate() {
+                    let key = rest.positions[v as usize].to_array().map(f32::to_bits);
+                    let group = *group_of.entry(key).or_insert_with(|| {
+                        group_entries.push(Vec::new());
+                        group_entries.len() as u32 - 1
+                    });
+                    group_entries[group as usize].push(face * 4 + c as u32);
+                    groups[c] = group;
+                }
+            }
+            self.triangles.push(DeformTriangle {
+                corners: corners.map(|v| vertex_first + v),
+                triangle: (placed.first_triangle + k) as u32,
+                groups,
+                instance,
+            });
+        }
     }
 
     /// The frame's matrices and weights as the pass reads them, after checking that no vertex can
@@ -304,6 +334,90 @@ impl DeformRecords {
 fn within_reach(m: &Mat4, reach: f32) -> bool {
     let linear = m.x_axis.truncate().length() + m.y_axis.truncate().length() + m.z_axis.truncate().length();
     m.w_axis.truncate().abs().max_element() + linear * reach <= MAX_COORDINATE
+}
+
+/// The skinning pass's buffers but the build's triangle records, which it writes into.
+struct DeformBuffers {
+    params: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    vertices: wgpu::Buffer,
+    influences: wgpu::Buffer,
+    targets: wgpu::Buffer,
+    frame: wgpu::Buffer,
+    posed: wgpu::Buffer,
+    placed: wgpu::Buffer,
+    faces: wgpu::Buffer,
+    groups: wgpu::Buffer,
+    triangle_normals: wgpu::Buffer,
+}
+
+impl DeformBuffers {
+    fn new(device: &wgpu::Device, records: &DeformRecords, normals: &[GpuTriangleNormals]) -> Self {
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            // A binding may not be empty: at least one record of the largest kind (influences).
+            let mut bytes = contents.to_vec();
+            bytes.resize(bytes.len().max(size_of::<DeformInfluences>()), 0);
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::STORAGE | usage,
+            })
+        };
+        let none = wgpu::BufferUsages::empty();
+        let frame_words = 16 * records.matrix_count as u64 + records.weight_count.next_multiple_of(4).max(4) as u64;
+        Self {
+            params: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("deform params"),
+                contents: bytemuck::bytes_of(&DeformParams {
+                    vertex_count: records.vertices.len() as u32,
+                    triangle_count: records.triangles.len() as u32,
+                }),
+                usage: wgpu::BufferUsages::UNIFORM,
+            }),
+            instances: init("deform instances", bytemuck::cast_slice(&records.instances), none),
+            vertices: init("rest vertices", bytemuck::cast_slice(&records.vertices), none),
+            influences: init("joint influences", bytemuck::cast_slice(&records.influences), none),
+            targets: init("morph offsets", bytemuck::cast_slice(&records.targets), none),
+            frame: storage_buffer(device, "deform frame", frame_words * 4, wgpu::BufferUsages::COPY_DST),
+            posed: storage_buffer(
+                device,
+                "posed vertices",
+                (records.vertices.len().max(1) * size_of::<PosedVertex>()) as u64,
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            placed: init("deform triangles", bytemuck::cast_slice(&records.triangles), none),
+            faces: storage_buffer(
+                device,
+                "faces",
+                (records.triangles.len().max(1) * size_of::<Face>()) as u64,
+                none,
+            ),
+            groups: init("face groups", bytemuck::cast_slice(&records.groups), none),
+            triangle_normals: init(
+                "triangle_normals",
+                bytemuck::cast_slice(normals),
+                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            ),
+        }
+    }
+
+    /// Every buffer at its binding in deform.wgsl, `triangles` (the build's records) at 10.
+    fn bindings<'a>(&'a self, triangles: &'a wgpu::Buffer) -> [&'a wgpu::Buffer; 12] {
+        [
+            &self.params,
+            &self.instances,
+            &self.vertices,
+            &self.influences,
+            &self.targets,
+            &self.frame,
+            &self.posed,
+            &self.placed,
+            &self.faces,
+            &self.groups,
+            triangles,
+            &self.triangle_normals,
+        ]
+    }
 }
 
 /// The skinning pass over a scene's animations, writing into a rebuild's triangle records and the
@@ -355,70 +469,14 @@ impl GpuDeform {
     ) -> Self {
         let device = &ctx.device;
         let records = DeformRecords::new(&animations);
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            // A binding may not be empty: at least one record of the largest kind (influences).
-            let mut bytes = contents.to_vec();
-            bytes.resize(bytes.len().max(size_of::<DeformInfluences>()), 0);
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::STORAGE | usage,
-            })
-        };
-        let none = wgpu::BufferUsages::empty();
-        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("deform params"),
-            contents: bytemuck::bytes_of(&DeformParams {
-                vertex_count: records.vertices.len() as u32,
-                triangle_count: records.triangles.len() as u32,
-            }),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let instances = init("deform instances", bytemuck::cast_slice(&records.instances), none);
-        let vertices = init("rest vertices", bytemuck::cast_slice(&records.vertices), none);
-        let influences = init("joint influences", bytemuck::cast_slice(&records.influences), none);
-        let targets = init("morph offsets", bytemuck::cast_slice(&records.targets), none);
-        let placed = init("deform triangles", bytemuck::cast_slice(&records.triangles), none);
-        let groups = init("face groups", bytemuck::cast_slice(&records.groups), none);
-        let frame_words = 16 * records.matrix_count as u64 + records.weight_count.next_multiple_of(4).max(4) as u64;
-        let frame = storage_buffer(device, "deform frame", frame_words * 4, wgpu::BufferUsages::COPY_DST);
-        let posed = storage_buffer(
-            device,
-            "posed vertices",
-            (records.vertices.len().max(1) * size_of::<PosedVertex>()) as u64,
-            wgpu::BufferUsages::COPY_SRC,
-        );
-        let faces = storage_buffer(
-            device,
-            "faces",
-            (records.triangles.len().max(1) * size_of::<Face>()) as u64,
-            none,
-        );
-        let triangle_normals = init(
-            "triangle_normals",
-            bytemuck::cast_slice(normals),
-            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        );
+        let buffers = DeformBuffers::new(device, &records, normals);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("deform"),
             source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
         // Each kernel binds only what it reads: all twelve buffers at once exceed the eight storage
         // buffers a stage may have. Layouts come from the kernels.
-        let all: [(u32, &wgpu::Buffer); 12] = [
-            (0, &params),
-            (1, &instances),
-            (2, &vertices),
-            (3, &influences),
-            (4, &targets),
-            (5, &frame),
-            (6, &posed),
-            (7, &placed),
-            (8, &faces),
-            (9, &groups),
-            (10, triangles),
-            (11, &triangle_normals),
-        ];
+        let all = buffers.bindings(triangles);
         let kernel = |entry_point: &str, bindings: &[u32]| {
             let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry_point),
@@ -432,7 +490,7 @@ impl GpuDeform {
                 .iter()
                 .map(|&b| wgpu::BindGroupEntry {
                     binding: b,
-                    resource: all[b as usize].1.as_entire_binding(),
+                    resource: all[b as usize].as_entire_binding(),
                 })
                 .collect();
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -451,9 +509,9 @@ impl GpuDeform {
             records,
             kernels: [vertices_kernel, gather_kernel, smooth_kernel],
             bind_groups: [vertices_group, gather_group, smooth_group],
-            frame,
-            posed,
-            triangle_normals,
+            frame: buffers.frame,
+            posed: buffers.posed,
+            triangle_normals: buffers.triangle_normals,
             timer: ctx.timestamps.then(|| PassTimestamps::new(&ctx.device, "skinning", 1)),
         }
     }

@@ -2,7 +2,7 @@
 
 use super::context::Backend;
 use crate::error::MissingBvh;
-use crate::modes::MemoryMode;
+use crate::modes::{MemoryMode, Pipeline};
 use std::fmt;
 
 #[derive(Debug, thiserror::Error)]
@@ -46,6 +46,13 @@ pub enum GpuError {
     },
     #[error("adapter {adapter} cannot {what}")]
     Unsupported { adapter: String, what: &'static str },
+    /// The adapter lacks what `pipeline` needs.
+    #[error("adapter {adapter} cannot {what}, which the {pipeline} pipeline needs")]
+    PipelineUnsupported {
+        adapter: String,
+        pipeline: Pipeline,
+        what: &'static str,
+    },
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
     #[error("WGPU_BACKEND={0:?} names no backend wgpu knows (vulkan, gl, metal, dx12, webgpu)")]

@@ -20,6 +20,6 @@ pub mod upload;
 pub use context::{Backend, GpuContext};
 pub use display::Display;
 pub use error::{Capacity, GpuError};
-pub use rebuild::SceneRebuild;
+pub use rebuild::{CpuRebuild, CpuStep, SceneRebuild};
 pub use renderer::{Renderer, RendererOptions, TimedFrame};
 pub use shader::RecordKind;

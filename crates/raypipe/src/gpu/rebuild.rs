@@ -8,13 +8,20 @@
 //! `render --frames`, `bench --rebuild` and a live viewer use it the same way:
 //! [`SceneRebuild::move_to`] a time, [`SceneRebuild::encode`], then [`super::Renderer::encode`]
 //! (or `read_frame_after`).
+//!
+//! Where the shader reads uniform or texture memory (WebGL2's route), no compute pass can write
+//! its records: [`CpuRebuild`] poses the scene and builds its LBVH on the CPU, then rewrites the
+//! records that changed ([`CpuRebuild::write`]). The CPU reference uses its first half alone.
 
 use super::build::{GpuLbvhBuilder, depth_bound};
 use super::deform::GpuDeform;
+use super::renderer::Renderer;
+use super::shader::RecordKind;
 use super::threaded::GpuThreadedLayout;
 use super::upload::SharedBuffers;
 use super::{GpuContext, GpuError};
 use crate::bvh::BuildTimings;
+use crate::bvh::lbvh::LbvhBuilder;
 use crate::bvh::morton::MortonBits;
 use crate::error::InputError;
 use crate::modes::Accel;
@@ -181,5 +188,84 @@ impl SceneRebuild {
             timings.layout = layout.read_ms(self.builder.context()).await?.unwrap_or(0.0);
         }
         Ok(timings)
+    }
+}
+
+/// A moving scene's per-frame rebuild on the CPU: its records posed in place, the LBVH built over
+/// them (where the walk reads one), and the records that changed rewritten in a renderer.
+pub struct CpuRebuild {
+    builder: LbvhBuilder<u64>,
+    bits: MortonBits,
+    /// Whether the walk reads a BVH: brute force moves the primitives but builds nothing.
+    builds: bool,
+}
+
+/// What one [`CpuRebuild::move_to`] changed, and what it took on the CPU.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CpuStep {
+    pub moved: MovedRecords,
+    /// The motion evaluated and the moved records rewritten, in milliseconds.
+    pub pose_ms: f64,
+    /// The tree's build, by phase, where the walk reads one.
+    pub build: Option<BuildTimings>,
+}
+
+impl CpuRebuild {
+    /// A rebuild for `accel`'s walk with 30-bit Morton codes, as the GPU's rebuild builds; the
+    /// first tree of `packed` is built here, and its timings returned.
+    pub fn new(packed: &mut PackedScene, accel: Accel) -> (Self, Option<BuildTimings>) {
+        let mut rebuild = Self {
+            builder: LbvhBuilder::new(),
+            bits: MortonBits::Bits30,
+            builds: accel.uses_bvh(),
+        };
+        let first = rebuild.build(packed);
+        (rebuild, first)
+    }
+
+    /// A bound on the depth of every tree this rebuild can make over `primitives`: the walk's
+    /// stack size for a renderer made before the scene moves ([`Renderer::with_depth_bound`]).
+    pub fn depth_bound(&self, primitives: usize) -> u32 {
+        depth_bound(primitives, self.bits)
+    }
+
+    /// Builds the tree over `packed`'s primitives where they stand, and gives it to `packed`.
+    pub fn build(&mut self, packed: &mut PackedScene) -> Option<BuildTimings> {
+        if !self.builds {
+            return None;
+        }
+        let timings = self.builder.build(&packed.primitive_boxes(), self.bits);
+        packed.set_bvh(self.builder.to_bvh());
+        Some(timings)
+    }
+
+    /// Moves `packed`'s records to `t` seconds of `scene`'s motion (`scene` as loaded) and builds
+    /// the tree over them.
+    pub fn move_to(&mut self, scene: &Scene, packed: &mut PackedScene, t: f32) -> Result<CpuStep, InputError> {
+        let motion = scene
+            .motion
+            .as_ref()
+            .ok_or_else(|| InputError::new("the scene does not move"))?;
+        let start = web_time::Instant::now();
+        let moved = packed.apply(&motion.moved(scene, t)?);
+        let pose_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(CpuStep {
+            moved,
+            pose_ms,
+            build: self.build(packed),
+        })
+    }
+
+    /// Rewrites in `renderer` the records `step` changed in `packed`: the moved primitives and,
+    /// where a tree was built, its nodes in both layouts. Returns the time it took, in
+    /// milliseconds. The renderer's samples start again.
+    pub fn write(&self, step: &CpuStep, packed: &PackedScene, renderer: &mut Renderer) -> Result<f64, GpuError> {
+        let start = web_time::Instant::now();
+        let mut kinds = RecordKind::moved(step.moved).to_vec();
+        if step.build.is_some() {
+            kinds.extend([RecordKind::Node, RecordKind::ThreadedNode]);
+        }
+        renderer.write_records(packed, &kinds)?;
+        Ok(start.elapsed().as_secs_f64() * 1e3)
     }
 }

@@ -671,8 +671,9 @@ fn readbacks(device: &wgpu::Device, width: u32, height: u32) -> [TextureReadback
 fn check_pipeline(ctx: &GpuContext, pipeline: Pipeline) -> Result<(), GpuError> {
     let usages = ctx.adapter.get_texture_format_features(TARGET_FORMAT).allowed_usages;
     let unsupported = |what| {
-        Err(GpuError::Unsupported {
+        Err(GpuError::PipelineUnsupported {
             adapter: ctx.describe(),
+            pipeline,
             what,
         })
     };
@@ -687,10 +688,10 @@ fn check_pipeline(ctx: &GpuContext, pipeline: Pipeline) -> Result<(), GpuError> 
                 .flags
                 .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS) =>
         {
-            unsupported("run compute shaders (--pipeline compute)")
+            unsupported("run compute shaders")
         }
         Pipeline::Compute if !usages.contains(wgpu::TextureUsages::STORAGE_BINDING) => {
-            unsupported("write rgba32uint storage textures (--pipeline compute)")
+            unsupported("write rgba32uint storage textures")
         }
         _ => Ok(()),
     }
@@ -733,6 +734,41 @@ fn previous_sample_layout(device: &wgpu::Device, pipeline: Pipeline) -> wgpu::Bi
     })
 }
 
+/// Group 0 of the tracer: the globals at binding 0, then the scene's records.
+fn scene_bind_group(
+    device: &wgpu::Device,
+    kind: Pipeline,
+    resources: &SceneResources,
+    globals: &wgpu::Buffer,
+) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: tracer_stage(kind),
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }];
+    layout_entries.extend_from_slice(&resources.layout_entries);
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("scene"),
+        entries: &layout_entries,
+    });
+    let mut entries = vec![wgpu::BindGroupEntry {
+        binding: 0,
+        resource: globals.as_entire_binding(),
+    }];
+    entries.extend(resources.bind_entries());
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene"),
+        layout: &layout,
+        entries: &entries,
+    });
+    (layout, bind_group)
+}
+
 fn build_pipeline(
     ctx: &GpuContext,
     kind: Pipeline,
@@ -747,31 +783,7 @@ fn build_pipeline(
         label: Some("trace"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     });
-    let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
-        binding: 0,
-        visibility: tracer_stage(kind),
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }];
-    layout_entries.extend_from_slice(&resources.layout_entries);
-    let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("scene"),
-        entries: &layout_entries,
-    });
-    let mut entries = vec![wgpu::BindGroupEntry {
-        binding: 0,
-        resource: globals.as_entire_binding(),
-    }];
-    entries.extend(resources.bind_entries());
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("scene"),
-        layout: &bind_group_layout,
-        entries: &entries,
-    });
+    let (bind_group_layout, bind_group) = scene_bind_group(device, kind, resources, globals);
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("trace"),
         bind_group_layouts: &[Some(&bind_group_layout), Some(previous_layout)],

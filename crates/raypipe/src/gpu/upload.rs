@@ -158,63 +158,8 @@ pub fn upload(
                 buffer_binding(false),
                 Resource::Shared(shared_buffer.expect("checked by the match guard")),
             ),
-            MemoryMode::Uniform | MemoryMode::Storage => {
-                let uniform = memory == MemoryMode::Uniform;
-                // Bindings may not be empty: an empty array travels as one zeroed record.
-                let mut bytes = records.bytes().to_vec();
-                if bytes.is_empty() {
-                    bytes.resize(records.record_size(), 0);
-                }
-                let (limit, usage) = if uniform {
-                    (limits.max_uniform_buffer_binding_size, wgpu::BufferUsages::UNIFORM)
-                } else {
-                    (limits.max_storage_buffer_binding_size, wgpu::BufferUsages::STORAGE)
-                };
-                // Moving scenes rewrite their records in place (`SceneResources::write`).
-                let usage = usage | wgpu::BufferUsages::COPY_DST;
-                if bytes.len() as u64 > limit {
-                    return Err(GpuError::TooBig {
-                        memory,
-                        array: name,
-                        records: records.len(),
-                        needed: Capacity::Bytes(bytes.len() as u64),
-                        allowed: Capacity::Bytes(limit),
-                    });
-                }
-                let buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(name),
-                    contents: &bytes,
-                    usage,
-                });
-                (buffer_binding(uniform), Resource::Buffer(buffer))
-            }
-            MemoryMode::Texture => {
-                // Indices (node links among them) travel as exact floats: below 2^24.
-                if records.len() > MAX_TEXEL_INTEGER as usize {
-                    return Err(GpuError::TooBig {
-                        memory,
-                        array: name,
-                        records: records.len(),
-                        needed: Capacity::ExactIndices { records: None },
-                        allowed: Capacity::ExactIndices {
-                            records: Some(MAX_TEXEL_INTEGER as u64),
-                        },
-                    });
-                }
-                let mut texels = records.texel_data();
-                let rows = texture_rows(ctx, (name, records.len()), texels.len(), texels_per_row)?;
-                texels.resize(rows * texels_per_row as usize, [0; 4]);
-                let format = records.texel_format();
-                let texture = texel_texture(
-                    ctx,
-                    name,
-                    texture_format(format),
-                    (texels_per_row, rows as u32),
-                    bytemuck::cast_slice(&texels),
-                );
-                let view = texture.create_view(&Default::default());
-                (texture_binding(format), Resource::Texture(texture, view))
-            }
+            MemoryMode::Uniform | MemoryMode::Storage => buffer_resource(ctx, memory, name, records)?,
+            MemoryMode::Texture => texture_resource(ctx, name, records, texels_per_row)?,
         };
         out.layout_entries.push(wgpu::BindGroupLayoutEntry {
             binding,
@@ -232,6 +177,78 @@ pub fn upload(
         count: None,
     });
     Ok(out)
+}
+
+/// A record array as a uniform or storage buffer, within the adapter's binding size.
+fn buffer_resource(
+    ctx: &GpuContext,
+    memory: MemoryMode,
+    name: &'static str,
+    records: &dyn RecordSlice,
+) -> Result<(wgpu::BindingType, Resource), GpuError> {
+    let limits = ctx.limits();
+    let uniform = memory == MemoryMode::Uniform;
+    // Bindings may not be empty: an empty array travels as one zeroed record.
+    let mut bytes = records.bytes().to_vec();
+    if bytes.is_empty() {
+        bytes.resize(records.record_size(), 0);
+    }
+    let (limit, usage) = if uniform {
+        (limits.max_uniform_buffer_binding_size, wgpu::BufferUsages::UNIFORM)
+    } else {
+        (limits.max_storage_buffer_binding_size, wgpu::BufferUsages::STORAGE)
+    };
+    // Moving scenes rewrite their records in place (`SceneResources::write`).
+    let usage = usage | wgpu::BufferUsages::COPY_DST;
+    if bytes.len() as u64 > limit {
+        return Err(GpuError::TooBig {
+            memory,
+            array: name,
+            records: records.len(),
+            needed: Capacity::Bytes(bytes.len() as u64),
+            allowed: Capacity::Bytes(limit),
+        });
+    }
+    let buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(name),
+        contents: &bytes,
+        usage,
+    });
+    Ok((buffer_binding(uniform), Resource::Buffer(buffer)))
+}
+
+/// A record array as texels, `texels_per_row` to a row of a texture.
+fn texture_resource(
+    ctx: &GpuContext,
+    name: &'static str,
+    records: &dyn RecordSlice,
+    texels_per_row: u32,
+) -> Result<(wgpu::BindingType, Resource), GpuError> {
+    // Indices (node links among them) travel as exact floats: below 2^24.
+    if records.len() > MAX_TEXEL_INTEGER as usize {
+        return Err(GpuError::TooBig {
+            memory: MemoryMode::Texture,
+            array: name,
+            records: records.len(),
+            needed: Capacity::ExactIndices { records: None },
+            allowed: Capacity::ExactIndices {
+                records: Some(MAX_TEXEL_INTEGER as u64),
+            },
+        });
+    }
+    let mut texels = records.texel_data();
+    let rows = texture_rows(ctx, (name, records.len()), texels.len(), texels_per_row)?;
+    texels.resize(rows * texels_per_row as usize, [0; 4]);
+    let format = records.texel_format();
+    let texture = texel_texture(
+        ctx,
+        name,
+        texture_format(format),
+        (texels_per_row, rows as u32),
+        bytemuck::cast_slice(&texels),
+    );
+    let view = texture.create_view(&Default::default());
+    Ok((texture_binding(format), Resource::Texture(texture, view)))
 }
 
 /// The textures' texels in one rgba16float texture, `texels_per_row` wide (one texel where the

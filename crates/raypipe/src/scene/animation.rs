@@ -9,6 +9,7 @@
 //! cubic Hermite spline of the keys' tangents; rotations are normalized after interpolation.
 
 use super::Similarity;
+use crate::error::InputError;
 use crate::mesh::Mesh;
 use glam::{Mat3, Mat4, Quat, Vec3};
 use std::sync::Arc;
@@ -44,20 +45,20 @@ pub struct Sampler {
 
 impl Sampler {
     /// Checks the invariants [`Sampler::sample`] relies on; the error names what is wrong.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InputError> {
         if self.times.is_empty() {
-            return Err("no keys".into());
+            return Err(InputError::new("no keys"));
         }
         if let Some(k) = self.times.iter().position(|t| !t.is_finite()) {
-            return Err(format!("key time {k} is not finite"));
+            return Err(InputError::new(format!("key time {k} is not finite")));
         }
         if let Some(k) = self.times.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(format!(
+            return Err(InputError::new(format!(
                 "key times must increase: key {} at {} s follows {} s",
                 k + 1,
                 self.times[k + 1],
                 self.times[k]
-            ));
+            )));
         }
         let per_key = self.width
             * if self.interpolation == Interpolation::CubicSpline {
@@ -66,14 +67,14 @@ impl Sampler {
                 1
             };
         if self.values.len() != self.times.len() * per_key {
-            return Err(format!(
+            return Err(InputError::new(format!(
                 "{} output values for {} keys of {per_key}",
                 self.values.len(),
                 self.times.len()
-            ));
+            )));
         }
         if let Some(v) = self.values.iter().position(|v| !v.is_finite()) {
-            return Err(format!("output value {v} is not finite"));
+            return Err(InputError::new(format!("output value {v} is not finite")));
         }
         Ok(())
     }
@@ -205,9 +206,9 @@ pub enum Transform {
 impl Transform {
     /// Finite numbers and a rotation of about unit length (it is normalized when composed); the
     /// error says what is off.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), InputError> {
         match *self {
-            Transform::Matrix(m) if !m.is_finite() => Err("matrix must be finite".into()),
+            Transform::Matrix(m) if !m.is_finite() => Err(InputError::new("matrix must be finite")),
             Transform::Matrix(_) => Ok(()),
             Transform::Decomposed {
                 translation,
@@ -215,11 +216,13 @@ impl Transform {
                 scale,
             } => {
                 if !(translation.is_finite() && rotation.is_finite() && scale.is_finite()) {
-                    return Err("translation, rotation and scale must be finite".into());
+                    return Err(InputError::new("translation, rotation and scale must be finite"));
                 }
                 let length = rotation.length();
                 if !(length > 0.5 && length < 2.0) {
-                    return Err(format!("rotation must be a unit quaternion (length {length})"));
+                    return Err(InputError::new(format!(
+                        "rotation must be a unit quaternion (length {length})"
+                    )));
                 }
                 Ok(())
             }
@@ -328,7 +331,7 @@ pub struct Pose {
 impl Rig {
     /// The clip `choice` names (the first where it names none), or `None` where the file has no
     /// animation; the error lists what it has.
-    pub fn clip(&self, choice: Option<&ClipChoice>) -> Result<Option<usize>, String> {
+    pub fn clip(&self, choice: Option<&ClipChoice>) -> Result<Option<usize>, InputError> {
         let names = || {
             let listed: Vec<String> = self
                 .clips
@@ -347,9 +350,12 @@ impl Rig {
             Some(ClipChoice::Index(i)) if *i < self.clips.len() => Ok(Some(*i)),
             Some(ClipChoice::Name(name)) => match self.clips.iter().position(|c| c.name.as_deref() == Some(name)) {
                 Some(i) => Ok(Some(i)),
-                None => Err(format!("no animation named {name:?}; the file has: {}", names())),
+                None => Err(InputError::new(format!(
+                    "no animation named {name:?}; the file has: {}",
+                    names()
+                ))),
             },
-            Some(ClipChoice::Index(i)) => Err(format!("no animation {i}; the file has: {}", names())),
+            Some(ClipChoice::Index(i)) => Err(InputError::new(format!("no animation {i}; the file has: {}", names()))),
         }
     }
 

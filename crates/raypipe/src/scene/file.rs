@@ -201,98 +201,16 @@ fn set_view(scene: &mut Scene, def: &SceneDef) {
 
 fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
     let line = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
-    let mut scene = Scene::default();
-
-    set_view(&mut scene, &def);
-
-    let mut material_index: HashMap<&str, u32> = HashMap::new();
-    let mut material_lines = Vec::new();
-    for (name, m) in &def.material {
-        let d = Material::default();
-        let r = m.get_ref();
-        material_index.insert(name.as_str(), scene.materials.len() as u32);
-        material_lines.push((name.as_str(), line(m.span())));
-        scene.materials.push(Material {
-            color: r.color.map_or(d.color, vec3),
-            specular: r.specular.unwrap_or(d.specular),
-            shininess: r.shininess.unwrap_or(d.shininess),
-            reflect: r.reflect.unwrap_or(d.reflect),
-            transmit: r.transmit.unwrap_or(d.transmit),
-            ior: r.ior.unwrap_or(d.ior),
-            ..d
-        });
-    }
-    // Resolves a material name; an element without one gets the default material, added on first use.
-    let mut resolve = |name: &Option<String>, element: &Element, at: Option<usize>| -> Result<u32, InputError> {
-        let name = name.as_deref().unwrap_or(DEFAULT_MATERIAL);
-        if let Some(&index) = material_index.get(name) {
-            return Ok(index);
-        }
-        if name == DEFAULT_MATERIAL {
-            let index = scene.materials.len() as u32;
-            scene.materials.push(Material::default());
-            material_index.insert(DEFAULT_MATERIAL, index);
-            return Ok(index);
-        }
-        Err(at_element(at, element.clone(), format!("unknown material '{name}'")))
+    let mut tables = Tables {
+        scene: Scene::default(),
+        material_index: HashMap::new(),
     };
-
-    let mut sphere_lines = Vec::new();
-    for (i, s) in def.sphere.iter().enumerate() {
-        let at = line(s.span());
-        let r = s.get_ref();
-        let material = resolve(&r.material, &Element::Sphere(i), at)?;
-        sphere_lines.push(at);
-        scene.spheres.push(Sphere {
-            center: vec3(r.center),
-            radius: r.radius,
-            material,
-        });
-    }
-    let mut plane_lines = Vec::new();
-    for (i, p) in def.plane.iter().enumerate() {
-        let at = line(p.span());
-        let r = p.get_ref();
-        let element = Element::Plane(i);
-        let material = resolve(&r.material, &element, at)?;
-        let checker = match (&r.checker_material, r.checker_size) {
-            (None, None) => None,
-            (Some(_), _) => Some(Checker {
-                material: resolve(&r.checker_material, &element, at)?,
-                size: r.checker_size.unwrap_or(1.0),
-            }),
-            (None, Some(_)) => {
-                return Err(at_element(at, element, "checker_size needs checker_material"));
-            }
-        };
-        let normal = vec3(r.normal);
-        let Some(normal) = unit_vector(normal).filter(|_| normal.is_finite()) else {
-            return Err(at_element(at, element, "normal must be finite and not zero"));
-        };
-        plane_lines.push(at);
-        scene.planes.push(Plane {
-            point: vec3(r.point),
-            normal,
-            material,
-            checker,
-        });
-    }
-
-    let mut placements = Vec::new();
-    for (i, m) in def.mesh.iter().enumerate() {
-        let at = line(m.span());
-        let element = Element::Mesh(i);
-        placements.push((placement(m.get_ref(), &mut resolve, &element, at)?, element, at));
-    }
-    for (m, (placement, element, at)) in def.mesh.iter().zip(placements) {
-        let path = base.join(&m.get_ref().file);
-        if super::gltf::is_gltf_path(&path) {
-            add_gltf(&mut scene, &path, &placement).map_err(|e| e.nested_in(None, at, element.clone()))?;
-            continue;
-        }
-        let mesh = crate::mesh::load(&path).map_err(|e| e.nested_in(None, at, element.clone()))?;
-        add_mesh(&mut scene, mesh, &placement).map_err(|e| e.with_element(element).with_line(at))?;
-    }
+    set_view(&mut tables.scene, &def);
+    let material_lines = tables.add_materials(&def, &line);
+    let sphere_lines = tables.add_spheres(&def, &line)?;
+    let plane_lines = tables.add_planes(&def, &line)?;
+    tables.add_meshes(&def, base, &line)?;
+    let scene = tables.scene;
 
     // Semantic checks run on the finished scene; the element they name has its line here.
     scene.validate().map_err(|e| {
@@ -312,6 +230,127 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
         InputError { element, ..e }.with_line(at)
     })?;
     Ok(scene)
+}
+
+/// The line a table starts on, from its span in the file's text.
+type LineOf<'t> = &'t dyn Fn(std::ops::Range<usize>) -> Option<usize>;
+
+/// A scene as its file's tables are added, with its materials' indices by name.
+struct Tables<'d> {
+    scene: Scene,
+    material_index: HashMap<&'d str, u32>,
+}
+
+impl<'d> Tables<'d> {
+    /// The `[material.NAME]` tables; returns each one's name and line.
+    fn add_materials(&mut self, def: &'d SceneDef, line: LineOf) -> Vec<(&'d str, Option<usize>)> {
+        let mut lines = Vec::new();
+        for (name, m) in &def.material {
+            let d = Material::default();
+            let r = m.get_ref();
+            self.material_index
+                .insert(name.as_str(), self.scene.materials.len() as u32);
+            lines.push((name.as_str(), line(m.span())));
+            self.scene.materials.push(Material {
+                color: r.color.map_or(d.color, vec3),
+                specular: r.specular.unwrap_or(d.specular),
+                shininess: r.shininess.unwrap_or(d.shininess),
+                reflect: r.reflect.unwrap_or(d.reflect),
+                transmit: r.transmit.unwrap_or(d.transmit),
+                ior: r.ior.unwrap_or(d.ior),
+                ..d
+            });
+        }
+        lines
+    }
+
+    /// Resolves a material name; an element without one gets the default material, added on
+    /// first use.
+    fn resolve(&mut self, name: &Option<String>, element: &Element, at: Option<usize>) -> Result<u32, InputError> {
+        let name = name.as_deref().unwrap_or(DEFAULT_MATERIAL);
+        if let Some(&index) = self.material_index.get(name) {
+            return Ok(index);
+        }
+        if name == DEFAULT_MATERIAL {
+            let index = self.scene.materials.len() as u32;
+            self.scene.materials.push(Material::default());
+            self.material_index.insert(DEFAULT_MATERIAL, index);
+            return Ok(index);
+        }
+        Err(at_element(at, element.clone(), format!("unknown material '{name}'")))
+    }
+
+    /// The `[[sphere]]` tables; returns each one's line.
+    fn add_spheres(&mut self, def: &SceneDef, line: LineOf) -> Result<Vec<Option<usize>>, InputError> {
+        let mut lines = Vec::new();
+        for (i, s) in def.sphere.iter().enumerate() {
+            let at = line(s.span());
+            let r = s.get_ref();
+            let material = self.resolve(&r.material, &Element::Sphere(i), at)?;
+            lines.push(at);
+            self.scene.spheres.push(Sphere {
+                center: vec3(r.center),
+                radius: r.radius,
+                material,
+            });
+        }
+        Ok(lines)
+    }
+
+    /// The `[[plane]]` tables; returns each one's line.
+    fn add_planes(&mut self, def: &SceneDef, line: LineOf) -> Result<Vec<Option<usize>>, InputError> {
+        let mut lines = Vec::new();
+        for (i, p) in def.plane.iter().enumerate() {
+            let at = line(p.span());
+            let r = p.get_ref();
+            let element = Element::Plane(i);
+            let material = self.resolve(&r.material, &element, at)?;
+            let checker = match (&r.checker_material, r.checker_size) {
+                (None, None) => None,
+                (Some(_), _) => Some(Checker {
+                    material: self.resolve(&r.checker_material, &element, at)?,
+                    size: r.checker_size.unwrap_or(1.0),
+                }),
+                (None, Some(_)) => {
+                    return Err(at_element(at, element, "checker_size needs checker_material"));
+                }
+            };
+            let normal = vec3(r.normal);
+            let Some(normal) = unit_vector(normal).filter(|_| normal.is_finite()) else {
+                return Err(at_element(at, element, "normal must be finite and not zero"));
+            };
+            lines.push(at);
+            self.scene.planes.push(Plane {
+                point: vec3(r.point),
+                normal,
+                material,
+                checker,
+            });
+        }
+        Ok(lines)
+    }
+
+    /// The `[[mesh]]` tables: every placement checked first, then each file read (relative to
+    /// `base`) and placed.
+    fn add_meshes(&mut self, def: &SceneDef, base: &Path, line: LineOf) -> Result<(), InputError> {
+        let mut placements = Vec::new();
+        for (i, m) in def.mesh.iter().enumerate() {
+            let at = line(m.span());
+            let element = Element::Mesh(i);
+            let mut resolve = |name: &Option<String>, element: &Element, at| self.resolve(name, element, at);
+            placements.push((placement(m.get_ref(), &mut resolve, &element, at)?, element, at));
+        }
+        for (m, (placement, element, at)) in def.mesh.iter().zip(placements) {
+            let path = base.join(&m.get_ref().file);
+            if super::gltf::is_gltf_path(&path) {
+                add_gltf(&mut self.scene, &path, &placement).map_err(|e| e.nested_in(None, at, element.clone()))?;
+                continue;
+            }
+            let mesh = crate::mesh::load(&path).map_err(|e| e.nested_in(None, at, element.clone()))?;
+            add_mesh(&mut self.scene, mesh, &placement).map_err(|e| e.with_element(element).with_line(at))?;
+        }
+        Ok(())
+    }
 }
 
 /// A glTF's triangles placed by a mesh table, after the file's own node transforms, with the file's

@@ -1,6 +1,7 @@
 //! Scenes: what is rendered, independent of how it reaches a tracer.
 //!
-//! A [`Scene`] comes from a TOML file ([`file`]) or a built-in generator ([`builtin`]); [`load`] picks
+//! A [`Scene`] comes from a TOML file ([`file`]), a built-in generator ([`builtin`]), or a model
+//! file read by [`mesh`](crate::mesh) or [`gltf`] and placed by [`model`]; [`Scene::load`] picks
 //! between them. `records::PackedScene` turns it into the flat records that the GPU shader and the CPU
 //! reference read.
 
@@ -8,16 +9,17 @@ pub mod animation;
 pub mod builtin;
 pub mod file;
 pub mod gltf;
+mod load;
 pub mod model;
 pub mod motion;
 pub mod texture;
 
+pub use load::{is_model_file, model_extension_list};
 pub use motion::{Bounce, Motion, Moved};
 pub use texture::{Texture, Wrap};
 
 use crate::error::{Element, InputError};
 use glam::{Quat, Vec2, Vec3};
-use std::path::Path;
 
 /// A pinhole camera. The ray convention is documented in `docs/scene-format.md` and implemented in
 /// `records::GpuCamera` (basis) and `camera_ray` (per pixel), identically on CPU and GPU.
@@ -208,92 +210,6 @@ pub fn unit_vector(v: Vec3) -> Option<Vec3> {
 }
 
 impl Scene {
-    /// Loads a scene by built-in name (`whitted`, `random:100:7`, ...), from a TOML file, from a
-    /// model file (`.ply`, `.obj`, `.off`) with a camera that frames it, or from a glTF
-    /// (`.gltf`, `.glb`) with its own camera and lights where it has them.
-    pub fn load(spec: &str) -> Result<Scene, InputError> {
-        Self::load_with(spec, &model::ModelOptions::default())
-    }
-
-    /// [`Scene::load`], with the options that apply to a model file; `options` must be the default
-    /// for anything else.
-    pub fn load_with(spec: &str, options: &model::ModelOptions) -> Result<Scene, InputError> {
-        let path = Path::new(spec);
-        if model::is_model_file(path) {
-            return model::model_scene(path, options);
-        }
-        if !options.is_default() {
-            return Err(InputError::new(format!(
-                "placement, sphere count and rotation apply to model files ({}) only",
-                model::model_extension_list()
-            ))
-            .in_origin(spec));
-        }
-        if let Some(scene) = builtin::by_name(spec)? {
-            return Ok(scene);
-        }
-        match path.extension() {
-            Some(ext) if ext == "toml" => return file::load(path),
-            None if path.exists() => return file::load(path),
-            Some(_) if path.exists() => {
-                return Err(InputError::new(format!(
-                    "unknown model format (expected a .toml scene, or a model ending in {})",
-                    model::model_extension_list()
-                ))
-                .in_origin(spec));
-            }
-            _ => {}
-        }
-        Err(InputError::new(format!(
-            "unknown scene '{spec}': not a file, and not a built-in ({})",
-            builtin::NAMES.join(", ")
-        )))
-    }
-
-    /// A scene from a file's contents rather than its path, for hosts without a file system (a web
-    /// page given a file): a TOML scene, a model (`.ply`, `.obj`, `.off`) framed as
-    /// [`Scene::load`] frames it, or a glTF (a `.glb`, or a `.gltf` whose buffers and images are
-    /// `data:` URIs: there is no folder to read others from). `name` is the file's name: its
-    /// extension picks the format, and every error starts with it. A TOML scene's `[[mesh]]` files
-    /// are read relative to the working directory, where there is one.
-    pub fn from_bytes(name: &str, bytes: &[u8]) -> Result<Scene, InputError> {
-        let path = Path::new(name);
-        if gltf::is_gltf_path(path) {
-            let mut notices = Vec::new();
-            let file = gltf::parse(bytes, gltf::Files::None, &mut notices).map_err(|e| e.in_origin(name))?;
-            for notice in notices {
-                log::info!("{name}: {notice}");
-            }
-            return model::gltf_scene(&file, name, &model::ModelOptions::default());
-        }
-        if let Some(format) = crate::mesh::MeshFormat::from_path(path) {
-            let mut notices = Vec::new();
-            let mesh = crate::mesh::parse(bytes, format, &mut notices).map_err(|e| e.in_origin(name))?;
-            for notice in notices {
-                log::info!("{name}: {notice}");
-            }
-            return model::scene_around(mesh, name, &model::ModelOptions::default());
-        }
-        if !path.extension().is_some_and(|ext| ext.eq_ignore_ascii_case("toml")) {
-            return Err(InputError::new(format!(
-                "unknown file type (expected a .toml scene, or a model ending in {})",
-                model::model_extension_list()
-            ))
-            .in_origin(name));
-        }
-        if bytes.len() as u64 > crate::input::MAX_SCENE_BYTES {
-            return Err(InputError::new(format!(
-                "cannot read scene file: {} bytes, more than the {} read",
-                bytes.len(),
-                crate::input::MAX_SCENE_BYTES
-            ))
-            .in_origin(name));
-        }
-        let text = std::str::from_utf8(bytes)
-            .map_err(|_| InputError::new("cannot read scene file: it is not UTF-8 text").in_origin(name))?;
-        file::parse(text).map_err(|e| e.in_origin(name))
-    }
-
     /// Checks every invariant the tracers rely on: finite numbers, positive radii, unit-length normals
     /// that exist, material indices in range, a camera that can see.
     pub fn validate(&self) -> Result<(), InputError> {
@@ -308,9 +224,7 @@ impl Scene {
             }
         }
         for (i, texture) in self.textures.iter().enumerate() {
-            texture
-                .validate()
-                .map_err(|msg| InputError::of(Element::Texture(i), msg))?;
+            texture.validate().map_err(|e| e.with_element(Element::Texture(i)))?;
         }
         let texels: u64 = self.textures.iter().map(|t| t.texels.len() as u64).sum();
         if texels > texture::MAX_TEXELS {

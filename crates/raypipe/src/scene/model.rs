@@ -1,14 +1,13 @@
 //! Meshes in scenes: a model placed (normalized, scaled, moved) and added as triangles or as spheres
 //! on its surface; and the scene `raypipe render MODEL` gets, which frames one model.
 
-use super::animation::ClipChoice;
+use super::animation::{Animated, ClipChoice, CornerNormals, PlacedInstance};
 use super::gltf::{GltfLight, GltfScene};
 use super::{Camera, Checker, Light, Material, Motion, Plane, RenderSettings, Scene, Similarity, Sphere, Triangle};
 use crate::bvh::aabb::Aabb;
 use crate::error::InputError;
 use crate::mesh::{self, Mesh};
 use glam::Vec3;
-use std::path::Path;
 use std::sync::Arc;
 
 /// What a mesh becomes in a scene.
@@ -21,7 +20,7 @@ pub enum MeshAs {
     Spheres,
 }
 
-crate::impl_choice!(
+crate::choice::impl_choice!(
     MeshAs,
     [
         (Triangles, "triangles", "its triangles, as primitives of the BVH"),
@@ -45,7 +44,7 @@ pub enum Normals {
     Smooth,
 }
 
-crate::impl_choice!(
+crate::choice::impl_choice!(
     Normals,
     [
         (Auto, "auto", "the file's vertex normals where it has them, else smooth"),
@@ -224,7 +223,7 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
 /// its clip, and its moving triangles join the scene's motion (spheres stand still).
 pub fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) -> Result<Similarity, InputError> {
     let clip = match &gltf.rig {
-        Some(rig) => rig.clip(placement.animation.as_ref()).map_err(InputError::new)?,
+        Some(rig) => rig.clip(placement.animation.as_ref())?,
         None if placement.animation.is_some() => {
             return Err(InputError::new("an animation is chosen, and the file has none"));
         }
@@ -238,11 +237,11 @@ pub fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) ->
         }
         _ => gltf,
     };
-    let place = gltf.similarity(placement);
+    let place = gltf_similarity(gltf, placement);
     match placement.as_ {
         MeshAs::Triangles => {
-            let starts = gltf.add_triangles(scene, placement, &place)?;
-            if let Some(animated) = clip.and_then(|clip| gltf.animated(clip, placement.time, &place, &starts)) {
+            let starts = add_gltf_triangles(scene, gltf, placement, &place)?;
+            if let Some(animated) = clip.and_then(|clip| animated_part(gltf, clip, placement.time, &place, &starts)) {
                 let animated = Arc::new(animated);
                 match &mut scene.motion {
                     None => scene.motion = Some(Motion::Animations(vec![animated])),
@@ -261,6 +260,103 @@ pub fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) ->
         }
     }
     Ok(place)
+}
+
+/// The placement's transform of a glTF: its rotation, then (with `normalize`) the box centred at
+/// the origin with its longest side 2, then its scale and translation.
+fn gltf_similarity(gltf: &GltfScene, placement: &Placement) -> Similarity {
+    let rotation = mesh::euler_rotation(placement.rotate);
+    let (mut scale, mut translation) = (1.0, Vec3::ZERO);
+    if placement.normalize {
+        let bounds = Aabb::around_points(
+            gltf.primitives
+                .iter()
+                .flat_map(|p| p.positions.iter().map(|&q| rotation * q)),
+        );
+        let longest = (bounds.max - bounds.min).max_element();
+        scale = if longest > 0.0 { 2.0 / longest } else { 1.0 };
+        translation = -bounds.centroid() * scale;
+    }
+    Similarity {
+        rotation,
+        scale: scale * placement.scale,
+        translation: translation * placement.scale + placement.translate,
+    }
+}
+
+/// Adds a glTF's triangles, placed, to `scene`, with its materials and textures after the scene's
+/// own. The file's vertex normals are used where `normals` is Auto and it has them; other
+/// triangles get smooth (or, for Flat, no) normals as model files do. Returns, per primitive,
+/// where its triangles start in `scene` and where its normals come from.
+fn add_gltf_triangles(
+    scene: &mut Scene,
+    gltf: &GltfScene,
+    placement: &Placement,
+    place: &Similarity,
+) -> Result<Vec<(usize, CornerNormals)>, InputError> {
+    if scene.triangles.len() + gltf.triangle_count() > super::MAX_RECORDS {
+        return Err(InputError::new(format!(
+            "more than the {} triangles a render takes",
+            super::MAX_RECORDS
+        )));
+    }
+    let material_base = scene.materials.len() as u32;
+    let texture_base = scene.textures.len() as u32;
+    scene.materials.extend(gltf.materials.iter().map(|m| Material {
+        texture: m.texture.map(|t| t + texture_base),
+        ..*m
+    }));
+    scene.textures.extend(gltf.textures.iter().cloned());
+    let mut starts = Vec::with_capacity(gltf.primitives.len());
+    for primitive in &gltf.primitives {
+        let normals_from = match (placement.normals, &primitive.normals) {
+            (Normals::Flat, _) => CornerNormals::Flat,
+            (Normals::Auto, Some(_)) => CornerNormals::File,
+            (Normals::Smooth, _) | (Normals::Auto, None) => CornerNormals::Smooth(placement.crease_degrees),
+        };
+        starts.push((scene.triangles.len(), normals_from));
+        let positions: Vec<Vec3> = primitive.positions.iter().map(|&p| place.point(p)).collect();
+        let corner_normals =
+            normals_from.corners(&primitive.triangles, &positions, primitive.normals.as_deref(), place);
+        for (f, t) in primitive.triangles.iter().enumerate() {
+            scene.triangles.push(Triangle {
+                vertices: t.map(|i| positions[i as usize]),
+                normals: corner_normals.as_ref().map(|n| n[f]),
+                uvs: primitive.uvs.as_ref().map(|uvs| t.map(|i| uvs[i as usize])),
+                material: material_base + primitive.material,
+            });
+        }
+    }
+    Ok(starts)
+}
+
+/// The moving part of a glTF (posed at `offset` of `clip`), placed as [`add_gltf_triangles`]
+/// placed it (`starts` is what it returned), or `None` where the clip moves none of it.
+fn animated_part(
+    gltf: &GltfScene,
+    clip: usize,
+    offset: f32,
+    place: &Similarity,
+    starts: &[(usize, CornerNormals)],
+) -> Option<Animated> {
+    let rig = gltf.rig.as_ref()?;
+    let moving = rig.moving_instances(clip);
+    let placed: Vec<PlacedInstance> = (0..gltf.primitives.len())
+        .filter(|&i| moving[i])
+        .map(|i| PlacedInstance {
+            instance: i,
+            first_triangle: starts[i].0,
+            triangles: gltf.primitives[i].triangles.clone(),
+            normals: starts[i].1,
+        })
+        .collect();
+    (!placed.is_empty()).then(|| Animated {
+        rig: rig.clone(),
+        clip,
+        offset,
+        place: *place,
+        placed,
+    })
 }
 
 /// What a caller says of a model file it renders alone: triangles or spheres, how many spheres, a
@@ -283,7 +379,7 @@ impl ModelOptions {
         *self == Self::default()
     }
 
-    fn placement(&self) -> Result<Placement, InputError> {
+    pub(super) fn placement(&self) -> Result<Placement, InputError> {
         let as_ = match (self.as_, self.spheres) {
             (Some(MeshAs::Triangles), Some(_)) => {
                 return Err(InputError::new("a sphere count needs the model placed as spheres"));
@@ -305,28 +401,8 @@ impl ModelOptions {
 }
 
 /// The scene for `raypipe render MODEL`: the model normalized (longest side 2, centred), clay on a
-/// checkered floor that touches it, two lights, and a camera that frames its bounding sphere.
-pub fn model_scene(path: &Path, options: &ModelOptions) -> Result<Scene, InputError> {
-    let shown = path.display().to_string();
-    options.placement().map_err(|e| e.in_origin(&shown))?;
-    if super::gltf::is_gltf_path(path) {
-        return gltf_scene(&super::gltf::load(path)?, &shown, options);
-    }
-    scene_around(mesh::load(path)?, &shown, options)
-}
-
-/// Whether `path` names a model file by its extension: a mesh (.ply, .obj, .off) or a glTF.
-pub fn is_model_file(path: &Path) -> bool {
-    mesh::is_model_path(path) || super::gltf::is_gltf_path(path)
-}
-
-/// The model extensions read, for messages: ".ply, .obj, .off, .gltf, .glb".
-pub fn model_extension_list() -> String {
-    format!("{}, .gltf, .glb", mesh::MeshFormat::extension_list())
-}
-
-/// [`model_scene`] for a mesh already parsed (a file a web page was given); `shown` names it in
-/// messages.
+/// checkered floor that touches it, two lights, and a camera that frames its bounding sphere;
+/// `shown` names the file in messages.
 pub fn scene_around(mesh: Mesh, shown: &str, options: &ModelOptions) -> Result<Scene, InputError> {
     let placement = options.placement().map_err(|e| e.in_origin(shown))?;
     let mut scene = Scene {

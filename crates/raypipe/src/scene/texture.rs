@@ -2,6 +2,7 @@
 //! of each axis. Both tracers sample them alike (`sample_texture` in `shaders/shade.wgsl` and
 //! `cpu/shade.rs`): bilinear, from the four texels around the point, without mipmaps.
 
+use crate::error::InputError;
 use half::f16;
 
 /// What a texture coordinate outside [0, 1] reads (glTF's sampler wrap modes).
@@ -91,13 +92,18 @@ impl Texture {
         self.texels[(y * self.width + x) as usize].map(|bits| f16::from_bits(bits).to_f32())
     }
 
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InputError> {
         let (w, h) = (self.width, self.height);
         if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
-            return Err(format!("size {w}x{h}: each side must be in 1..={MAX_TEXTURE_SIDE}"));
+            return Err(InputError::new(format!(
+                "size {w}x{h}: each side must be in 1..={MAX_TEXTURE_SIDE}"
+            )));
         }
         if self.texels.len() as u64 != w as u64 * h as u64 {
-            return Err(format!("{} texels for a {w}x{h} image", self.texels.len()));
+            return Err(InputError::new(format!(
+                "{} texels for a {w}x{h} image",
+                self.texels.len()
+            )));
         }
         if self
             .texels
@@ -105,7 +111,7 @@ impl Texture {
             .flatten()
             .any(|&bits| !f16::from_bits(bits).is_finite())
         {
-            return Err("texels must be finite".into());
+            return Err(InputError::new("texels must be finite"));
         }
         Ok(())
     }
@@ -143,10 +149,10 @@ mod tests {
         let mut texture = Texture::from_linear(2, 1, &[[0.0; 4]; 2], [Wrap::Clamp; 2]);
         texture.validate().unwrap();
         texture.height = 2;
-        assert_eq!(texture.validate().unwrap_err(), "2 texels for a 2x2 image");
+        assert_eq!(texture.validate().unwrap_err().message, "2 texels for a 2x2 image");
         texture.width = 0;
-        assert!(texture.validate().unwrap_err().starts_with("size 0x2"));
+        assert!(texture.validate().unwrap_err().message.starts_with("size 0x2"));
         let infinite = Texture::from_linear(1, 1, &[[f32::INFINITY, 0.0, 0.0, 1.0]], [Wrap::Clamp; 2]);
-        assert_eq!(infinite.validate().unwrap_err(), "texels must be finite");
+        assert_eq!(infinite.validate().unwrap_err().message, "texels must be finite");
     }
 }

@@ -19,9 +19,8 @@ mod material;
 pub use data::Files;
 pub use material::whitted;
 
-use super::animation::{Animated, CornerNormals, Instance, PlacedInstance, RestPrimitive, Rig};
-use super::model::{Normals, Placement};
-use super::{Camera, Light, Material, Scene, Similarity, Texture, Triangle};
+use super::animation::{Instance, RestPrimitive, Rig};
+use super::{Camera, Light, Material, Texture};
 use crate::error::InputError;
 use crate::mesh::Mesh;
 use data::{read_floats, read_indices};
@@ -663,104 +662,8 @@ impl GltfScene {
         mesh
     }
 
-    /// The placement's transform of this scene: its rotation, then (with `normalize`) the box
-    /// centred at the origin with its longest side 2, then its scale and translation.
-    pub fn similarity(&self, placement: &Placement) -> Similarity {
-        let rotation = crate::mesh::euler_rotation(placement.rotate);
-        let (mut scale, mut translation) = (1.0, Vec3::ZERO);
-        if placement.normalize {
-            let bounds = crate::bvh::aabb::Aabb::around_points(
-                self.primitives
-                    .iter()
-                    .flat_map(|p| p.positions.iter().map(|&q| rotation * q)),
-            );
-            let longest = (bounds.max - bounds.min).max_element();
-            scale = if longest > 0.0 { 2.0 / longest } else { 1.0 };
-            translation = -bounds.centroid() * scale;
-        }
-        Similarity {
-            rotation,
-            scale: scale * placement.scale,
-            translation: translation * placement.scale + placement.translate,
-        }
-    }
-
-    /// Adds the scene's triangles, placed, to `scene`, with its materials and textures after the
-    /// scene's own. The file's vertex normals are used where `normals` is Auto and it has them;
-    /// other triangles get smooth (or, for Flat, no) normals as model files do. Returns, per
-    /// primitive, where its triangles start in `scene` and where its normals come from.
-    pub fn add_triangles(
-        &self,
-        scene: &mut Scene,
-        placement: &Placement,
-        place: &Similarity,
-    ) -> Result<Vec<(usize, CornerNormals)>, InputError> {
-        if scene.triangles.len() + self.mesh_triangle_count() > crate::scene::MAX_RECORDS {
-            return Err(InputError::new(format!(
-                "more than the {} triangles a render takes",
-                crate::scene::MAX_RECORDS
-            )));
-        }
-        let material_base = scene.materials.len() as u32;
-        let texture_base = scene.textures.len() as u32;
-        scene.materials.extend(self.materials.iter().map(|m| Material {
-            texture: m.texture.map(|t| t + texture_base),
-            ..*m
-        }));
-        scene.textures.extend(self.textures.iter().cloned());
-        let mut starts = Vec::with_capacity(self.primitives.len());
-        for primitive in &self.primitives {
-            let normals_from = match (placement.normals, &primitive.normals) {
-                (Normals::Flat, _) => CornerNormals::Flat,
-                (Normals::Auto, Some(_)) => CornerNormals::File,
-                (Normals::Smooth, _) | (Normals::Auto, None) => CornerNormals::Smooth(placement.crease_degrees),
-            };
-            starts.push((scene.triangles.len(), normals_from));
-            let positions: Vec<Vec3> = primitive.positions.iter().map(|&p| place.point(p)).collect();
-            let corner_normals =
-                normals_from.corners(&primitive.triangles, &positions, primitive.normals.as_deref(), place);
-            for (f, t) in primitive.triangles.iter().enumerate() {
-                scene.triangles.push(Triangle {
-                    vertices: t.map(|i| positions[i as usize]),
-                    normals: corner_normals.as_ref().map(|n| n[f]),
-                    uvs: primitive.uvs.as_ref().map(|uvs| t.map(|i| uvs[i as usize])),
-                    material: material_base + primitive.material,
-                });
-            }
-        }
-        Ok(starts)
-    }
-
-    /// The moving part of this scene (posed at `offset` of `clip`), placed as `add_triangles`
-    /// placed it (`starts` is what it returned), or `None` where the clip moves none of it.
-    pub fn animated(
-        &self,
-        clip: usize,
-        offset: f32,
-        place: &Similarity,
-        starts: &[(usize, CornerNormals)],
-    ) -> Option<Animated> {
-        let rig = self.rig.as_ref()?;
-        let moving = rig.moving_instances(clip);
-        let placed: Vec<PlacedInstance> = (0..self.primitives.len())
-            .filter(|&i| moving[i])
-            .map(|i| PlacedInstance {
-                instance: i,
-                first_triangle: starts[i].0,
-                triangles: self.primitives[i].triangles.clone(),
-                normals: starts[i].1,
-            })
-            .collect();
-        (!placed.is_empty()).then(|| Animated {
-            rig: rig.clone(),
-            clip,
-            offset,
-            place: *place,
-            placed,
-        })
-    }
-
-    fn mesh_triangle_count(&self) -> usize {
+    /// The triangles of every primitive.
+    pub fn triangle_count(&self) -> usize {
         self.primitives.iter().map(|p| p.triangles.len()).sum()
     }
 }
