@@ -3,8 +3,8 @@
 
 mod common;
 // The binary's own image reader, to read back what it wrote.
-use common::models::{self, test_dir};
 use common::{assert_clean_error, raypipe};
+use common::{models, test_dir};
 use raypipe_cli::io;
 use std::path::{Path, PathBuf};
 use std::process::Output;

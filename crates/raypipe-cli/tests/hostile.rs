@@ -3,7 +3,7 @@
 //! output. Each ends in exit 0 with a whole file, or exit 2 with one short line; never a panic.
 
 mod common;
-use common::models::test_dir;
+use common::test_dir;
 use common::{assert_clean_error, raypipe, raypipe_on_a_terminal};
 use raypipe_cli::io;
 use std::path::{Path, PathBuf};

@@ -33,7 +33,6 @@ fn close(a: f32, b: f32) -> bool {
     (a - b).abs() < 1e-5
 }
 
-#[test]
 fn step_linear_and_cubic_samplers_at_keys_and_between() {
     let times = [1.0, 2.0, 4.0];
     let step = sampler(Interpolation::Step, &times, &[10.0, 20.0, 40.0], 1);
@@ -69,7 +68,6 @@ fn step_linear_and_cubic_samplers_at_keys_and_between() {
     assert!(close(at(&cubic, -1.0), 0.0) && close(at(&cubic, 5.0), 1.0));
 }
 
-#[test]
 fn rotations_are_slerped_and_normalized() {
     let half = std::f32::consts::FRAC_1_SQRT_2;
     let linear = sampler(
@@ -103,7 +101,6 @@ fn rotations_are_slerped_and_normalized() {
 
 /// The cylinder as the file poses it, against the same vertices bent by hand: each vertex is
 /// (1 - w) of itself plus w of itself turned about z around (0, BEND_HEIGHT, 0).
-#[test]
 fn a_two_bone_cylinder_bends_as_posed_by_hand() {
     let (builder, rest, weights) = skinned_cylinder(9);
     let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
@@ -125,7 +122,6 @@ fn a_two_bone_cylinder_bends_as_posed_by_hand() {
     }
 }
 
-#[test]
 fn a_morph_target_at_weight_one_half_is_halfway() {
     let file = parse(&morphing_quad(0.8).gltf(), Files::None, &mut Vec::new()).unwrap();
     for (t, z) in [(-1.0, 0.0), (0.0, 0.0), (0.5, 0.4), (1.0, 0.8), (2.0, 0.8)] {
@@ -138,7 +134,6 @@ fn a_morph_target_at_weight_one_half_is_halfway() {
 
 /// A scene places the file and plays it: the moving triangles at a time equal the file posed at
 /// that time; looping wraps, clamping holds.
-#[test]
 fn scenes_play_the_clip_clamped_or_looped() {
     let (builder, _, _) = skinned_cylinder(5);
     let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
@@ -165,7 +160,6 @@ fn scenes_play_the_clip_clamped_or_looped() {
     assert_eq!(posed.triangles, scene.triangles, "the scene as loaded is its time 0");
 }
 
-#[test]
 fn clips_are_chosen_by_name_or_index() {
     let (mut builder, _, _) = skinned_cylinder(5);
     builder.animations[0]["name"] = json!("Bend");
@@ -197,7 +191,6 @@ fn refusal(builder: &GltfBuilder) -> String {
     error
 }
 
-#[test]
 fn hostile_animations_and_skins_are_refused_with_one_line() {
     // Key times that do not increase.
     let (mut b, _, _) = skinned_cylinder(3);
@@ -237,7 +230,6 @@ fn hostile_animations_and_skins_are_refused_with_one_line() {
     assert!(error.contains("skin 0: 100000 joints, more than the 4096"), "{error}");
 }
 
-#[test]
 fn weights_that_do_not_sum_to_one_are_normalized_with_a_notice() {
     let (mut b, rest, weights) = skinned_cylinder(5);
     // Twice the file's weights, whose first is the only one where a vertex has one joint.
@@ -273,17 +265,9 @@ fn weights_that_do_not_sum_to_one_are_normalized_with_a_notice() {
 }
 
 /// Every sample model that animates moves between its start and a later time, and stays within
-/// reach; skipped without the models unless RAYPIPE_REQUIRE_MODELS=1.
-#[test]
-fn the_animated_samples_move() {
-    let Some(dir) = common::harness::models_dir().map(|d| d.join("gltf")) else {
-        assert!(
-            std::env::var("RAYPIPE_REQUIRE_MODELS").as_deref() != Ok("1"),
-            "../shared/models/ not found"
-        );
-        eprintln!("skipped: ../shared/models/ not found");
-        return;
-    };
+/// reach.
+fn the_animated_samples_move(models: &std::path::Path) {
+    let dir = models.join("gltf");
     for name in ["RiggedSimple", "BoxAnimated", "SimpleSkin", "AnimatedTriangle"] {
         let path = dir.join(format!("{name}.gltf"));
         let scene = Scene::load(path.to_str().unwrap()).unwrap();
@@ -297,7 +281,6 @@ fn the_animated_samples_move() {
 }
 
 /// Rewriting only the records that move gives the records of the scene packed anew at that time.
-#[test]
 fn moving_records_in_place_equals_packing_anew() {
     let (builder, _, _) = skinned_cylinder(6);
     let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
@@ -319,4 +302,19 @@ fn moving_records_in_place_equals_packing_anew() {
         packed,
         raypipe::records::PackedScene::new(&bounce.at_time(2.0).unwrap()).unwrap()
     );
+}
+
+fn main() -> std::process::ExitCode {
+    common::harness::run(raypipe_test_support::tests![
+        plain step_linear_and_cubic_samplers_at_keys_and_between,
+        plain rotations_are_slerped_and_normalized,
+        plain a_two_bone_cylinder_bends_as_posed_by_hand,
+        plain a_morph_target_at_weight_one_half_is_halfway,
+        plain scenes_play_the_clip_clamped_or_looped,
+        plain clips_are_chosen_by_name_or_index,
+        plain hostile_animations_and_skins_are_refused_with_one_line,
+        plain weights_that_do_not_sum_to_one_are_normalized_with_a_notice,
+        models the_animated_samples_move,
+        plain moving_records_in_place_equals_packing_anew,
+    ])
 }

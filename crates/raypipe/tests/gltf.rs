@@ -5,7 +5,7 @@
 mod common;
 
 use common::gltf_file::{GltfBuilder, Packing, glb, textured_quad};
-use common::models::test_dir;
+use common::test_dir;
 use glam::Vec3;
 use raypipe::scene::Scene;
 use raypipe::scene::gltf::{Files, GltfLight, GltfScene, parse};
@@ -41,7 +41,6 @@ fn hierarchy(child: Value) -> GltfBuilder {
     b
 }
 
-#[test]
 fn node_hierarchy_places_triangles_as_by_hand() {
     let half = std::f32::consts::FRAC_1_SQRT_2;
     let file = read(&hierarchy(json!({
@@ -56,7 +55,6 @@ fn node_hierarchy_places_triangles_as_by_hand() {
     assert_eq!(file.primitives[0].triangles, vec![[0, 1, 2]]);
 }
 
-#[test]
 fn a_matrix_node_equals_its_trs_twin() {
     // Column-major: the same turn, scale and translation as the test above.
     let file = read(&hierarchy(json!({
@@ -68,13 +66,11 @@ fn a_matrix_node_equals_its_trs_twin() {
     );
 }
 
-#[test]
 fn a_mirroring_node_turns_the_winding() {
     let file = read(&hierarchy(json!({ "scale": [-1, 1, 1] })));
     assert_eq!(file.primitives[0].triangles, vec![[0, 2, 1]]);
 }
 
-#[test]
 fn an_instanced_mesh_appears_at_every_node() {
     let mut b = GltfBuilder::default();
     let mesh = b.mesh(&TRIANGLE, None, &[0, 1, 2], None);
@@ -93,7 +89,6 @@ fn an_instanced_mesh_appears_at_every_node() {
     );
 }
 
-#[test]
 fn strips_fans_and_points_by_mode() {
     let mut b = GltfBuilder::default();
     b.mesh(
@@ -144,7 +139,6 @@ fn cameras_and_lights() -> GltfBuilder {
     b
 }
 
-#[test]
 fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
     let b = cameras_and_lights();
     let file = read(&b);
@@ -177,7 +171,6 @@ fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
     assert!(scene.lights[1].position.z > 100.0, "{:?}", scene.lights[1]);
 }
 
-#[test]
 fn without_camera_and_lights_a_file_is_framed_as_a_model() {
     let mut b = GltfBuilder::default();
     let mesh = b.mesh(&TRIANGLE, None, &[0, 1, 2], None);
@@ -208,7 +201,6 @@ fn glass_and_lamp() -> GltfBuilder {
     b
 }
 
-#[test]
 fn materials_map_to_whitted_ones() {
     let b = glass_and_lamp();
     let file = read(&b);
@@ -219,7 +211,6 @@ fn materials_map_to_whitted_ones() {
     assert_eq!(file.primitives[1].material, 1);
 }
 
-#[test]
 fn textures_keep_their_texels_and_wrap_modes() {
     let file = read(&textured_quad(2.0, [33071, 33648]));
     assert_eq!(file.textures.len(), 1);
@@ -234,7 +225,6 @@ fn textures_keep_their_texels_and_wrap_modes() {
     assert_eq!(file.primitives[0].uvs.as_ref().unwrap()[1], glam::Vec2::new(2.0, 2.0));
 }
 
-#[test]
 fn every_packing_gives_the_same_scene() {
     let dir = test_dir("gltf-packings");
     let b = textured_quad(3.0, [10497, 33071]);
@@ -259,7 +249,6 @@ fn every_packing_gives_the_same_scene() {
     );
 }
 
-#[test]
 fn a_gltf_mesh_table_places_the_file_after_its_own_transforms() {
     let dir = test_dir("gltf-mesh-table");
     let b = hierarchy(json!({}));
@@ -309,7 +298,6 @@ fn refused_bytes(bytes: &[u8]) -> String {
 /// A change to a document's JSON.
 type Edit = Box<dyn FnOnce(&mut Value)>;
 
-#[test]
 fn hostile_documents_end_in_one_line_naming_the_element() {
     let cases: Vec<(&str, Edit, &str)> = vec![
         (
@@ -431,7 +419,6 @@ fn hostile_documents_end_in_one_line_naming_the_element() {
     }
 }
 
-#[test]
 fn hostile_bytes_end_in_one_line() {
     let b = hierarchy(json!({}));
     let document = b.gltf();
@@ -463,7 +450,6 @@ fn hostile_bytes_end_in_one_line() {
     assert!(message.starts_with("not glTF JSON"), "{message}");
 }
 
-#[test]
 fn external_files_are_read_from_the_folder_only() {
     let dir = test_dir("gltf-external");
     let b = hierarchy(json!({}));
@@ -504,7 +490,6 @@ fn external_files_are_read_from_the_folder_only() {
     }
 }
 
-#[test]
 fn a_huge_texture_is_refused_before_it_is_decoded() {
     let b = textured_quad(1.0, [10497, 10497]);
     let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
@@ -540,7 +525,6 @@ fn crc32(bytes: &[u8]) -> u32 {
     !crc
 }
 
-#[test]
 fn unsupported_optional_extensions_are_ignored_with_a_notice() {
     let b = hierarchy(json!({}));
     let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
@@ -554,7 +538,6 @@ fn unsupported_optional_extensions_are_ignored_with_a_notice() {
 /// (20, 180, 60), in sRGB.
 const JPEG_BASE64: &str = "/9j/4AAQSkZJRgABAQAAAQABAAD/2wBDAAIBAQEBAQIBAQECAgICAgQDAgICAgUEBAMEBgUGBgYFBgYGBwkIBgcJBwYGCAsICQoKCgoKBggLDAsKDAkKCgr/2wBDAQICAgICAgUDAwUKBwYHCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgoKCgr/wAARCAAIABADASIAAhEBAxEB/8QAHwAAAQUBAQEBAQEAAAAAAAAAAAECAwQFBgcICQoL/8QAtRAAAgEDAwIEAwUFBAQAAAF9AQIDAAQRBRIhMUEGE1FhByJxFDKBkaEII0KxwRVS0fAkM2JyggkKFhcYGRolJicoKSo0NTY3ODk6Q0RFRkdISUpTVFVWV1hZWmNkZWZnaGlqc3R1dnd4eXqDhIWGh4iJipKTlJWWl5iZmqKjpKWmp6ipqrKztLW2t7i5usLDxMXGx8jJytLT1NXW19jZ2uHi4+Tl5ufo6erx8vP09fb3+Pn6/8QAHwEAAwEBAQEBAQEBAQAAAAAAAAECAwQFBgcICQoL/8QAtREAAgECBAQDBAcFBAQAAQJ3AAECAxEEBSExBhJBUQdhcRMiMoEIFEKRobHBCSMzUvAVYnLRChYkNOEl8RcYGRomJygpKjU2Nzg5OkNERUZHSElKU1RVVldYWVpjZGVmZ2hpanN0dXZ3eHl6goOEhYaHiImKkpOUlZaXmJmaoqOkpaanqKmqsrO0tba3uLm6wsPExcbHyMnK0tPU1dbX2Nna4uPk5ebn6Onq8vP09fb3+Pn6/9oADAMBAAIRAxEAPwD5Hr6Qoor8NzD7Pz/Q9z9ov/zTH/c7/wC6h//Z";
 
-#[test]
 fn jpeg_textures_decode_to_linear_texels() {
     let b = textured_quad(1.0, [10497, 10497]);
     let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
@@ -582,7 +565,6 @@ fn jpeg_textures_decode_to_linear_texels() {
 
 /// An image with neither a uri nor a buffer view is refused (gltf's own accessor would panic); an
 /// image in a buffer view without its mimeType is known by its first bytes.
-#[test]
 fn images_without_a_source_or_a_type() {
     let b = textured_quad(1.0, [10497, 10497]);
     let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
@@ -619,7 +601,6 @@ fn skinned_mesh(dir: &std::path::Path, triangles: usize) -> std::path::PathBuf {
 
 /// The benchmarks' skinned mesh loads with the triangles asked for, and its clip moves every ring
 /// but the root's: the chain bends.
-#[test]
 fn the_generated_skinned_mesh_loads_and_bends() {
     let dir = test_dir("skinned-mesh");
     let path = skinned_mesh(&dir, 5000);
@@ -646,24 +627,11 @@ fn the_generated_skinned_mesh_loads_and_bends() {
 }
 
 /// Every file these tests generate passes the Khronos glTF-Validator (npm gltf-validator, run by
-/// web/validate-gltf.mjs), so that they test glTF and not a dialect of raypipe's own. Skipped,
-/// with a message, where Node.js or the package (`npm ci --prefix web`) is missing, unless
+/// web/validate-gltf.mjs), so that they test glTF and not a dialect of raypipe's own. Ignored, with
+/// the reason, where Node.js or the package (`npm ci --prefix web`) is missing, unless
 /// RAYPIPE_REQUIRE_VALIDATOR=1 (CI) makes that a failure.
-#[test]
-fn generated_files_pass_the_khronos_validator() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+fn generated_files_pass_the_khronos_validator(root: &std::path::Path) {
     let script = root.join("web/validate-gltf.mjs");
-    let package = root.join("web/node_modules/gltf-validator");
-    let node = std::process::Command::new("node").arg("--version").output();
-    if !package.is_dir() || node.is_err() {
-        let why = format!("Node.js or {} is missing (npm ci --prefix web)", package.display());
-        assert!(
-            std::env::var("RAYPIPE_REQUIRE_VALIDATOR").as_deref() != Ok("1"),
-            "{why}"
-        );
-        eprintln!("skipped: {why}");
-        return;
-    }
     let dir = test_dir("gltf-validator");
     let mut files = Vec::new();
     let builders = [
@@ -704,4 +672,29 @@ fn generated_files_pass_the_khronos_validator() {
         files.len(),
         "{report}"
     );
+}
+
+fn main() -> std::process::ExitCode {
+    common::harness::run(raypipe_test_support::tests![
+        plain node_hierarchy_places_triangles_as_by_hand,
+        plain a_matrix_node_equals_its_trs_twin,
+        plain a_mirroring_node_turns_the_winding,
+        plain an_instanced_mesh_appears_at_every_node,
+        plain strips_fans_and_points_by_mode,
+        plain the_first_perspective_camera_and_the_lights_come_from_their_nodes,
+        plain without_camera_and_lights_a_file_is_framed_as_a_model,
+        plain materials_map_to_whitted_ones,
+        plain textures_keep_their_texels_and_wrap_modes,
+        plain every_packing_gives_the_same_scene,
+        plain a_gltf_mesh_table_places_the_file_after_its_own_transforms,
+        plain hostile_documents_end_in_one_line_naming_the_element,
+        plain hostile_bytes_end_in_one_line,
+        plain external_files_are_read_from_the_folder_only,
+        plain a_huge_texture_is_refused_before_it_is_decoded,
+        plain unsupported_optional_extensions_are_ignored_with_a_notice,
+        plain jpeg_textures_decode_to_linear_texels,
+        plain images_without_a_source_or_a_type,
+        plain the_generated_skinned_mesh_loads_and_bends,
+        validator generated_files_pass_the_khronos_validator,
+    ])
 }

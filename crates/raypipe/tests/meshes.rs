@@ -3,7 +3,8 @@
 //! line's messages for broken files are the CLI's tests.)
 
 mod common;
-use common::models::{self, TestModel, every_format, test_dir};
+use common::models::{self, TestModel, every_format};
+use common::test_dir;
 use glam::Vec3;
 use proptest::prelude::*;
 use raypipe::bvh::aabb::Aabb;
@@ -303,7 +304,7 @@ proptest! {
 /// each format with its own reason.
 #[test]
 fn a_sparse_gigabyte_is_refused_by_its_header() {
-    let dir = common::models::test_dir("sparse-models");
+    let dir = common::test_dir("sparse-models");
     for (name, expected) in [
         ("zeros.ply", "zeros.ply:1: expected 'ply': not a PLY file"),
         ("zeros.off", "zeros.off:1: expected the keyword OFF"),

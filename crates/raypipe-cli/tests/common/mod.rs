@@ -1,12 +1,21 @@
 //! Shared support of the command line's tests: running the binary, and what a clean error is.
 #![allow(dead_code)]
 
-#[path = "../../../raypipe/tests/common/harness.rs"]
-pub mod harness;
-#[path = "../../../raypipe/tests/common/models.rs"]
-pub mod models;
+// Not every test binary uses both.
+#[allow(unused_imports)]
+pub use raypipe_test_support::{self as harness, models};
 
+use std::path::PathBuf;
 use std::process::{Command, Output};
+
+/// A fresh, empty directory for a test's files: what an earlier run left there is removed first, so
+/// that no old output can satisfy a new run.
+pub fn test_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
 
 /// Runs the raypipe binary with `args`.
 pub fn raypipe(args: &[&str]) -> Output {

@@ -205,7 +205,7 @@ fn bench_splits_an_animated_frame_and_compares_refits(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         gpu bench_splits_an_animated_frame_and_compares_refits,
         gpu bench_reports_every_point_with_the_documented_keys,
         gpu bench_times_a_models_triangles_with_build_phases,

@@ -79,7 +79,7 @@ fn bvh_reports_the_documented_keys_on_the_gpu(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         plain bvh_reports_the_documented_keys_on_the_cpu,
         gpu bvh_reports_the_documented_keys_on_the_gpu,
     ]

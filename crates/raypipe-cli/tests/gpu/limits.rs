@@ -6,7 +6,7 @@ use crate::common::{assert_clean_error, raypipe};
 use raypipe::gpu::GpuContext;
 
 fn render(args: &[&str]) -> std::process::Output {
-    let out = crate::common::models::test_dir("limits").join("out.png");
+    let out = crate::common::test_dir("limits").join("out.png");
     let out = out.to_str().unwrap().to_string();
     raypipe(&[&["render"], args, &["--device", "gpu", "-q", "-o", &out]].concat())
 }
@@ -32,5 +32,5 @@ fn limits_are_one_line_that_names_the_scene_and_a_way_out(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![gpu limits_are_one_line_that_names_the_scene_and_a_way_out]
+    raypipe_test_support::tests![gpu limits_are_one_line_that_names_the_scene_and_a_way_out]
 }

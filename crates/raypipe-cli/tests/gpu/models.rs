@@ -1,8 +1,8 @@
 //! The shared scans through the command line.
 
 use crate::common::harness::Test;
-use crate::common::models::test_dir;
 use crate::common::raypipe;
+use crate::common::test_dir;
 use std::path::Path;
 
 fn the_bunny_renders_as_20k_spheres(models: &Path) {
@@ -62,7 +62,7 @@ fn a_gltf_sample_goes_through_bvh_and_bench(models: &Path) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         models the_bunny_renders_as_20k_spheres,
         models a_gltf_sample_goes_through_bvh_and_bench,
     ]

@@ -6,7 +6,7 @@ use crate::common::raypipe_on_a_terminal;
 use raypipe::gpu::GpuContext;
 
 fn gpu_renders_and_bench_points_show_progress(_: &GpuContext) {
-    let dir = crate::common::models::test_dir("progress");
+    let dir = crate::common::test_dir("progress");
     let out = dir.join("spp.png");
     let (ok, shown) = raypipe_on_a_terminal(&[
         "render",
@@ -55,5 +55,5 @@ fn gpu_renders_and_bench_points_show_progress(_: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![gpu gpu_renders_and_bench_points_show_progress]
+    raypipe_test_support::tests![gpu gpu_renders_and_bench_points_show_progress]
 }

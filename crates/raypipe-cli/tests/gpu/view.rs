@@ -4,8 +4,8 @@
 //! moving scene change the frames, and a mode that cannot serve the scene is refused.
 
 use crate::common::harness::Test;
-use crate::common::models::test_dir;
 use crate::common::raypipe;
+use crate::common::test_dir;
 use crate::io;
 use raypipe::gpu::GpuContext;
 use raypipe::image::diff::{Tolerance, compare};
@@ -115,13 +115,7 @@ fn scripted_frames_are_the_render(_: &GpuContext) {
 
 /// A glTF scene (the shared BoxTextured sample, its texture sampled in the shader) shows in the
 /// window as `render` draws it, in storage and in texture memory.
-fn a_gltf_scene_views_as_it_renders(_: &GpuContext) {
-    let Some(models) = crate::common::harness::models_dir() else {
-        let required = std::env::var("RAYPIPE_REQUIRE_MODELS").as_deref() == Ok("1");
-        assert!(!required, "../shared/models is missing");
-        eprintln!("skipped: ../shared/models is missing");
-        return;
-    };
+fn a_gltf_scene_views_as_it_renders(_: &GpuContext, models: &Path) {
     let dir = test_dir("view-gltf");
     let scene = models.join("gltf/BoxTextured.gltf");
     let scene = scene.to_str().unwrap();
@@ -189,13 +183,7 @@ fn orbit_and_motion_change_the_frames(_: &GpuContext) {
 /// An animated sample (the shared RiggedSimple) plays in the window: its frames change; held at a
 /// time (`--paused`) they are `render --time` of that time, in storage memory (skinned on the GPU)
 /// and in texture memory (on the CPU).
-fn an_animated_sample_plays_and_holds_its_time(_: &GpuContext) {
-    let Some(models) = crate::common::harness::models_dir() else {
-        let required = std::env::var("RAYPIPE_REQUIRE_MODELS").as_deref() == Ok("1");
-        assert!(!required, "../shared/models is missing");
-        eprintln!("skipped: ../shared/models is missing");
-        return;
-    };
+fn an_animated_sample_plays_and_holds_its_time(_: &GpuContext, models: &Path) {
     let dir = test_dir("view-animated");
     let scene = models.join("gltf/RiggedSimple.gltf");
     let scene = scene.to_str().unwrap();
@@ -396,13 +384,13 @@ fn dropped_files_load_or_leave_the_scene(_: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         gpu_window scripted_frames_are_the_render,
-        gpu_window a_gltf_scene_views_as_it_renders,
+        gpu_window_models a_gltf_scene_views_as_it_renders,
         gpu_window still_frames_gather_render_spp,
         gpu_window the_window_shows_the_frame,
         gpu_window orbit_and_motion_change_the_frames,
-        gpu_window an_animated_sample_plays_and_holds_its_time,
+        gpu_window_models an_animated_sample_plays_and_holds_its_time,
         gpu_window a_mode_that_cannot_serve_the_scene_is_one_line,
         gpu_window synthetic_input_switches_and_orbits,
         gpu_window the_window_survives_hiding_resizing_and_closes_cleanly,

@@ -4,8 +4,9 @@
 
 pub mod closed;
 pub mod gltf_file;
-pub mod harness;
-pub mod models;
+// Not every test binary uses both.
+#[allow(unused_imports)]
+pub use raypipe_test_support::{self as harness, models};
 
 use raypipe::gpu::{GpuContext, Renderer, RendererOptions};
 use raypipe::image::diff::{self, Tolerance};
@@ -14,6 +15,15 @@ use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use std::path::{Path, PathBuf};
+
+/// A fresh, empty directory for a test's files: what an earlier run left there is removed first, so
+/// that no old output can satisfy a new run.
+pub fn test_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
 
 /// Whitted's scene (mirror, glass, checker floor, two lights) with a quad of two triangles behind,
 /// at `width` x `height`: every primitive kind in one image.
@@ -63,8 +73,11 @@ pub fn render_cpu(scene: &PackedScene, accel: Accel) -> Frame {
     raypipe::cpu::render(scene, accel).unwrap()
 }
 
-#[allow(unused_imports)]
-pub use models::test_dir;
+/// [`models::mixed_scene`], its files in a test folder of its own.
+pub fn mixed_scene(rings: u32, sides: u32, spheres: usize) -> Scene {
+    let dir = test_dir(&format!("mixed-scene-{rings}-{sides}-{spheres}"));
+    models::mixed_scene(&dir, rings, sides, spheres)
+}
 
 fn output_dir() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("image-failures");

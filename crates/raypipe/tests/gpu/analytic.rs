@@ -176,7 +176,7 @@ fn gpu_triangle_depth_is_exact(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         plain cpu_sphere_silhouette_and_depth,
         gpu gpu_sphere_silhouette_and_depth,
         plain cpu_renders_do_not_depend_on_the_thread_count,

@@ -154,7 +154,7 @@ fn a_displayed_image_two_steps_off_fails(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         gpu color_and_normals_match_the_files,
         gpu accumulated_samples_show_their_mean,
         gpu cost_view_uses_the_heat_map_scale,

@@ -110,7 +110,7 @@ fn gpu_rebuilt_frames_match_the_cpu(ctx: &GpuContext) {
 
 /// Spheres flying among standing triangles, rebuilt on the GPU every frame: the CPU's frames.
 fn gpu_rebuilt_frames_with_triangles_match_the_cpu(ctx: &GpuContext) {
-    let mut scene = models::mixed_scene(12, 6, 300);
+    let mut scene = crate::common::mixed_scene(12, 6, 300);
     scene.settings.width = 48;
     scene.settings.height = 32;
     let velocities = (0..scene.spheres.len())
@@ -314,7 +314,7 @@ fn gpu_skinned_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path)
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         gpu gpu_skinning_and_morphing_match_the_cpu,
         gpu_models gpu_skinned_samples_match_the_cpu,
         gpu gpu_rebuilt_animated_frames_match_the_cpu,

@@ -262,7 +262,7 @@ fn gltf_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         plain cpu_checker_texels_land_where_the_uvs_say,
         gpu gpu_checker_texels_in_every_memory_mode_and_pipeline,
         gpu the_file_camera_gives_the_pinhole_depth,

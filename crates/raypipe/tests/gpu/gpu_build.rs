@@ -198,7 +198,7 @@ fn check_own_codes(mut builder: GpuLbvhBuilder, bits: MortonBits) {
 /// Spheres and triangles in one build: the GPU's triangle boxes are the CPU's to the bit, so the same
 /// codes give the same nodes, and the GPU's own codes give a valid tree over both kinds.
 fn spheres_and_triangles_build_alike(ctx: &GpuContext) {
-    let mut scene = crate::common::models::mixed_scene(16, 8, 700);
+    let mut scene = crate::common::mixed_scene(16, 8, 700);
     scene.settings.width = 16;
     scene.settings.height = 16;
     let packed = PackedScene::new(&scene).unwrap();
@@ -271,7 +271,7 @@ fn a_refit_keeps_the_tree_and_fits_its_boxes(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         gpu a_refit_keeps_the_tree_and_fits_its_boxes,
         gpu same_codes_give_identical_nodes,
         gpu every_build_variant_gives_identical_nodes,

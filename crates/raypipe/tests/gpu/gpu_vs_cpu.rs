@@ -162,7 +162,7 @@ fn cost_aov_counts_the_same_tests_on_both_devices(ctx: &GpuContext) {
 
 /// Triangles (smooth glass, flat mirror) and spheres in one BVH.
 fn spheres_and_triangles(ctx: &GpuContext) {
-    let mut scene = models::mixed_scene(24, 12, 1500);
+    let mut scene = crate::common::mixed_scene(24, 12, 1500);
     scene.settings.width = 96;
     scene.settings.height = 64;
     let mut scene = PackedScene::new(&scene).unwrap();
@@ -175,7 +175,7 @@ fn spheres_and_triangles(ctx: &GpuContext) {
 /// and depth, the same images. Triangles and spheres in one tree, every walk against brute force on
 /// both devices; and the stack and threaded walks in texture memory (the page's) against the CPU.
 fn sah_trees_trace_as_the_lbvh_does(ctx: &GpuContext) {
-    let mut scene = models::mixed_scene(24, 12, 1500);
+    let mut scene = crate::common::mixed_scene(24, 12, 1500);
     scene.settings.width = 96;
     scene.settings.height = 64;
     let mut scene = PackedScene::new(&scene).unwrap();
@@ -257,7 +257,7 @@ fn pixels_outside_the_projected_box_match_the_cpu(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         gpu whitted,
         gpu sixteen_samples_agree,
         gpu sphere_8k,

@@ -41,7 +41,7 @@ fn random_spheres_in_every_memory_mode(ctx: &GpuContext) {
 
 fn triangles_in_every_memory_mode(ctx: &GpuContext) {
     // 192 triangles and 100 spheres: 583 nodes (28 KB) fit the uniform limit.
-    let mut scene = models::mixed_scene(8, 4, 100);
+    let mut scene = crate::common::mixed_scene(8, 4, 100);
     scene.settings.width = 64;
     scene.settings.height = 48;
     let mut scene = PackedScene::new(&scene).unwrap();
@@ -76,7 +76,7 @@ fn uniform_memory_refuses_a_scene_too_big(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         gpu whitted_in_every_memory_mode,
         gpu random_spheres_in_every_memory_mode,
         gpu triangles_in_every_memory_mode,

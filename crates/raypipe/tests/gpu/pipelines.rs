@@ -68,5 +68,5 @@ fn compute_equals_fragment(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![gpu compute_equals_fragment]
+    raypipe_test_support::tests![gpu compute_equals_fragment]
 }

@@ -143,7 +143,7 @@ fn beyond_the_range_is_refused() {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         plain cpu_renders_alike_at_every_accepted_scale,
         gpu gpu_renders_alike_at_every_accepted_scale,
         plain beyond_the_range_is_refused,

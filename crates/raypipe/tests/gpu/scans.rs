@@ -51,7 +51,7 @@ fn the_bunny_shades_smooth_unless_asked_flat(models: &Path) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![
+    raypipe_test_support::tests![
         models the_shared_scans_load_with_their_published_counts,
         models the_bunny_shades_smooth_unless_asked_flat,
     ]

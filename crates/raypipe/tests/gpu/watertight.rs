@@ -21,5 +21,5 @@ fn no_ray_slips_between_triangles_on_the_gpu(ctx: &GpuContext) {
 }
 
 pub fn tests() -> Vec<Test> {
-    crate::tests![gpu no_ray_slips_between_triangles_on_the_gpu]
+    raypipe_test_support::tests![gpu no_ray_slips_between_triangles_on_the_gpu]
 }

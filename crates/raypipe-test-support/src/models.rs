@@ -1,10 +1,8 @@
 //! Models for tests, made here: a torus with vertex normals, written by independent writers in every
 //! format the loaders read (ASCII and binary PLY of either byte order, OFF, OBJ).
-#![allow(dead_code)]
 
 use std::f32::consts::TAU;
 use std::fmt::Write;
-use std::path::PathBuf;
 
 /// An indexed mesh as the writers see it: quads, so that loaders must triangulate.
 pub struct TestModel {
@@ -140,9 +138,9 @@ pub fn flat_off(model: &TestModel) -> Vec<u8> {
 }
 
 /// A scene of spheres and triangles mixed: a smooth glass torus, a flat mirror torus, a torus of
-/// clay spheres and a checkered floor. `rings` x `sides` quads per torus, `spheres` spheres.
-pub fn mixed_scene(rings: u32, sides: u32, spheres: usize) -> raypipe::scene::Scene {
-    let dir = test_dir(&format!("mixed-scene-{rings}-{sides}-{spheres}"));
+/// clay spheres and a checkered floor. `rings` x `sides` quads per torus, `spheres` spheres; its
+/// files are written to `dir`.
+pub fn mixed_scene(dir: &std::path::Path, rings: u32, sides: u32, spheres: usize) -> raypipe::scene::Scene {
     let model = torus(rings, sides);
     std::fs::write(dir.join("smooth.ply"), binary_ply(&model, true)).unwrap();
     std::fs::write(dir.join("flat.off"), flat_off(&model)).unwrap();
@@ -200,13 +198,4 @@ pub fn every_format(model: &TestModel) -> Vec<(&'static str, Vec<u8>)> {
         ("model.off", off(model)),
         ("model.obj", obj(model)),
     ]
-}
-
-/// A fresh, empty directory for a test's files: what an earlier run left there is removed first, so
-/// that no old output can satisfy a new run.
-pub fn test_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
