@@ -106,6 +106,14 @@ pub fn models_dir() -> Option<PathBuf> {
     dir.join("bunny.ply").is_file().then_some(dir)
 }
 
+/// `dir`, fresh and empty: what an earlier run left there is removed first, so that no old output
+/// can satisfy a new run. (A test binary passes its `CARGO_TARGET_TMPDIR` folder.)
+pub fn fresh_dir(dir: PathBuf) -> PathBuf {
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+    dir
+}
+
 /// Whether `tool` is a file in a folder on PATH.
 fn on_path(tool: &str) -> bool {
     std::env::var_os("PATH").is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join(tool).is_file()))

@@ -8,13 +8,9 @@ pub use raypipe_test_support::{self as harness, models};
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-/// A fresh, empty directory for a test's files: what an earlier run left there is removed first, so
-/// that no old output can satisfy a new run.
+/// A fresh, empty folder for a test's files ([`harness::fresh_dir`]).
 pub fn test_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    harness::fresh_dir(PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name))
 }
 
 /// Runs the raypipe binary with `args`.

@@ -16,13 +16,9 @@ use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use std::path::{Path, PathBuf};
 
-/// A fresh, empty directory for a test's files: what an earlier run left there is removed first, so
-/// that no old output can satisfy a new run.
+/// A fresh, empty folder for a test's files ([`harness::fresh_dir`]).
 pub fn test_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    harness::fresh_dir(PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name))
 }
 
 /// Whitted's scene (mirror, glass, checker floor, two lights) with a quad of two triangles behind,
