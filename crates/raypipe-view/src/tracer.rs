@@ -46,7 +46,8 @@ enum Motion {
     Still,
     /// Storage memory: the primitives and the BVH rebuilt on the GPU before every frame.
     OnGpu {
-        rebuild: SceneRebuild,
+        /// Boxed: it holds the build's buffers and kernels, far more than the other variants.
+        rebuild: Box<SceneRebuild>,
         /// The records as last posed: each new time rewrites the ones that move.
         packed: PackedScene,
     },
@@ -90,6 +91,7 @@ impl Tracer {
         } else if modes.memory == MemoryMode::Storage {
             let rebuild = SceneRebuild::new(ctx, &scene, &packed, modes.accel, MortonBits::Bits30).await?;
             let renderer = Renderer::with_rebuild(ctx, &packed, &rebuild, options).await?;
+            let rebuild = Box::new(rebuild);
             (renderer, None, Motion::OnGpu { rebuild, packed })
         } else {
             let (rebuild, build) = CpuRebuild::new(&mut packed, modes.accel);
