@@ -110,9 +110,9 @@ function reference(spec, width, height) {
 }
 
 /// `raypipe render FILE --device cpu` at a size: the reference of a file the page opens.
-function fileReference(file, width, height) {
-  const out = path.join(references, `${path.basename(file)}-${width}x${height}.png`);
-  execFileSync(raypipe, ["render", file, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "-q", "-o", out]);
+function fileReference(file, width, height, flags = []) {
+  const out = path.join(references, `${path.basename(file)}-${width}x${height}${flags.join("")}.png`);
+  execFileSync(raypipe, ["render", file, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, ...flags, "-q", "-o", out]);
   return out;
 }
 
@@ -305,6 +305,16 @@ for (const backend of ["webgpu", "webgl2"]) {
       assertSimilar(await screenshot(page, `${backend}-model-url`), fileReference(tetrahedron, size.width, size.height));
       assert.deepEqual(page.errors, []);
       await page.close();
+
+      // floor=0: the model as `raypipe render --floor none` shows it.
+      const floating = await open(`model=test-models/tetrahedron.obj&floor=0&${query}`);
+      const shown = await until(floating, (s) => s.scene === "tetrahedron.obj" && !s.busy && s.samples >= s.spp, "the model without its floor");
+      assert.equal(shown.floor, false);
+      await until(floating, (s, frames) => s.frames >= frames, "a frame of the model", { arg: shown.frames + 2 });
+      assertSimilar(await screenshot(floating, `${backend}-model-url-no-floor`),
+        fileReference(tetrahedron, size.width, size.height, ["--floor", "none"]));
+      assert.deepEqual(floating.errors, []);
+      await floating.close();
 
       for (const [file, line] of [["missing.ply", /^test-models\/missing\.ply: cannot fetch: HTTP 404/], ["broken.ply", /^broken\.ply:11: /]]) {
         const failing = await open(`model=test-models/${file}&${query}`);

@@ -10,7 +10,7 @@ use raypipe::modes::{Accel, Aov, Builder, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
 use raypipe::scene::animation::ClipChoice;
 use raypipe::scene::is_model_file;
-use raypipe::scene::model::{MeshAs, ModelOptions, Normals};
+use raypipe::scene::model::{Floor, MeshAs, ModelOptions, Normals};
 
 /// What names the scene and how it is traced: the flags `render` and `view` share.
 #[derive(Args)]
@@ -40,6 +40,14 @@ pub struct SceneArgs {
     /// (default 60).
     #[arg(long, value_name = "DEGREES")]
     pub crease: Option<f32>,
+    /// With a model file: what it stands on: a checkered floor just below its lowest point, or
+    /// none. (A glTF with a camera of its own gets none.)
+    #[arg(long, value_parser = choice::<Floor>())]
+    pub floor: Option<Floor>,
+    /// The radiance of rays that escape the scene: linear R,G,B, each finite and not negative
+    /// (default the scene's background).
+    #[arg(long, value_parser = parse_color, value_name = "R,G,B")]
+    pub background: Option<glam::Vec3>,
     #[arg(long)]
     pub width: Option<u32>,
     #[arg(long)]
@@ -109,6 +117,7 @@ impl SceneArgs {
             normals: self.normals,
             crease: self.crease,
             animation: self.animation.as_deref().map(ClipChoice::parse),
+            floor: self.floor.unwrap_or_default(),
         };
         let mut scene = load_scene(&self.spec, &model)?;
         if scene.motion.is_none() && (self.time.is_some() || self.looping) {
@@ -133,6 +142,7 @@ impl SceneArgs {
         settings.width = self.width.unwrap_or(settings.width);
         settings.height = self.height.unwrap_or(settings.height);
         settings.max_depth = self.depth.unwrap_or(settings.max_depth);
+        settings.background = self.background.unwrap_or(settings.background);
         Ok(scene)
     }
 }
@@ -144,7 +154,7 @@ pub const MAX_SPP: u32 = 65_536;
 pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
     if !model.is_default() && !is_model_file(std::path::Path::new(spec)) {
         bail!(
-            "scene '{spec}': --as, --spheres, --rotate, --normals, --crease and --animation apply to model files ({})",
+            "scene '{spec}': --as, --spheres, --rotate, --normals, --crease, --animation and --floor apply to model files ({})",
             raypipe::scene::model_extension_list()
         );
     }
@@ -152,6 +162,18 @@ pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
         bail!("{spec}: --spheres needs --as spheres");
     }
     Ok(Scene::load_with(spec, model)?)
+}
+
+/// `R,G,B`, linear radiance: three finite numbers, none negative.
+pub fn parse_color(text: &str) -> Result<glam::Vec3, String> {
+    let channels: Vec<f32> = text
+        .split(',')
+        .map(|c| c.trim().parse::<f32>().map_err(|_| format!("'{c}' is not a number")))
+        .collect::<Result<_, _>>()?;
+    match channels[..] {
+        [r, g, b] if channels.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok(glam::Vec3::new(r, g, b)),
+        _ => Err("expected three finite, non-negative numbers, as in 0.05,0.05,0.1".into()),
+    }
 }
 
 /// `X,Y,Z` in degrees.

@@ -232,6 +232,58 @@ fn model_flags_on_a_scene_that_is_no_model_are_one_line() {
     }
 }
 
+/// `--floor none` leaves a framed model's floor out and `--background` sets what escaping rays
+/// see: a torus framed without its floor shows the red background around it, and below it.
+#[test]
+fn floor_none_and_background_set_what_a_model_stands_in() {
+    let dir = test_dir("cli-floor");
+    let model = write_in(&dir, "torus.off", &models::off(&models::torus(12, 6)));
+    let out = dir.join("floating.png");
+    let args = |floor: &str| {
+        vec![
+            "render".to_string(),
+            model.to_str().unwrap().to_string(),
+            "--device".into(),
+            "cpu".into(),
+            "--width".into(),
+            "32".into(),
+            "--height".into(),
+            "24".into(),
+            "--background".into(),
+            "1,0,0".into(),
+            "--floor".into(),
+            floor.into(),
+            "-o".into(),
+            out.to_str().unwrap().into(),
+        ]
+    };
+    let bottom_row_red = |floor: &str| {
+        let argv = args(floor);
+        let argv: Vec<&str> = argv.iter().map(String::as_str).collect();
+        let output = raypipe(&argv);
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        let image = io::read(&out).unwrap();
+        let channels = image.channels.len();
+        let row = (image.height - 1) as usize * image.width as usize * channels;
+        image.data[row..row + image.width as usize * channels]
+            .chunks(channels)
+            .all(|p| p[0] > 0.99 && p[1] < 0.01 && p[2] < 0.01)
+    };
+    assert!(
+        bottom_row_red("none"),
+        "without its floor the model floats in the background"
+    );
+    assert!(!bottom_row_red("checker"), "the floor fills the bottom row");
+    assert_clean_error(
+        &raypipe(&["render", "whitted", "--device", "cpu", "--floor", "none"]),
+        &["--floor", "apply to model files"],
+    );
+    for bad in ["1,0", "1,x,0", "-1,0,0", "nan,0,0"] {
+        let output = raypipe(&["render", "whitted", "--device", "cpu", "--background", bad]);
+        assert_eq!(output.status.code(), Some(2), "--background {bad}");
+    }
+}
+
 #[test]
 fn cost_aov_writes_a_heat_map_with_a_legend() {
     let out = temp("cost.png");

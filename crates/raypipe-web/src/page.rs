@@ -12,6 +12,7 @@ use crate::params::{Setting, StartParams, WebBackend};
 use raypipe::Choice;
 use raypipe::gpu::GpuContext;
 use raypipe::scene::Scene;
+use raypipe::scene::model::{Floor, ModelOptions};
 use raypipe_view::{FlyKeys, ModeKey, Modes, Player, Screen, Timings, TracerRequest};
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -37,6 +38,10 @@ struct Page {
     fly: FlyKeys,
     started: Instant,
     first_frame_ms: Option<f64>,
+    /// What a model file opened here stands on.
+    floor: Floor,
+    /// The file the scene was opened from, kept to open it again when the floor changes.
+    opened: Option<OpenedFile>,
 }
 
 /// Starts the viewer on `canvas` with the settings of `query` (the URL's `?...`). Where the page
@@ -196,8 +201,13 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         fly: FlyKeys::default(),
         started: Instant::now(),
         first_frame_ms: None,
+        floor: params.floor,
+        opened: None,
     })
 }
+
+/// A file's name and bytes, as the page was given them.
+type OpenedFile = (String, Rc<Vec<u8>>);
 
 /// The animation-frame callback, which asks for the next frame with itself.
 type FrameCallback = Rc<RefCell<Option<Closure<dyn FnMut()>>>>;
@@ -265,6 +275,7 @@ impl Page {
         set("depth", modes.depth.into());
         set("aov", modes.view.name().into());
         set("paused", modes.paused.into());
+        set("floor", (self.floor != Floor::None).into());
         set("moving", player.scene.motion.is_some().into());
         set("time", player.clock.time.into());
         set("duration", optional(player.duration().map(f64::from)));
@@ -282,7 +293,8 @@ impl Page {
 
     /// Builds the tracer `request` asks for and swaps it in when it is ready (unless a later
     /// request came first); on failure the current one stays and the message shows.
-    fn build(page: &Rc<RefCell<Page>>, request: TracerRequest) {
+    /// `source` is the file a new scene was read from: the page keeps it once the scene is in.
+    fn build(page: &Rc<RefCell<Page>>, request: TracerRequest, source: Option<OpenedFile>) {
         let ctx = {
             let mut this = page.borrow_mut();
             this.busy = true;
@@ -299,13 +311,17 @@ impl Page {
                 return;
             }
             this.busy = false;
+            let new_scene = request.new_scene.is_some();
             this.player.install(request, built);
+            if new_scene && this.player.message.is_none() {
+                this.opened = source;
+            }
             this.publish();
         });
     }
 
     /// A new scene: its size is the canvas's; it replaces the current one once its tracer is built.
-    fn open_scene(page: &Rc<RefCell<Page>>, name: String, loaded: Result<Scene, String>) {
+    fn open_scene(page: &Rc<RefCell<Page>>, name: String, loaded: Result<Scene, String>, source: Option<OpenedFile>) {
         match loaded {
             Ok(mut scene) => {
                 let request = {
@@ -313,7 +329,7 @@ impl Page {
                     (scene.settings.width, scene.settings.height) = this.screen.size();
                     this.player.open(name, scene)
                 };
-                Page::build(page, request);
+                Page::build(page, request, source);
             }
             Err(why) => {
                 let mut this = page.borrow_mut();
@@ -357,7 +373,20 @@ impl Viewer {
         match setting {
             Setting::Scene(name) => {
                 let loaded = builtin_scene(&name).map_err(|why| format!("{name}: {why}"));
-                return Page::open_scene(&self.page, name, loaded);
+                return Page::open_scene(&self.page, name, loaded, None);
+            }
+            Setting::Floor(floor) => {
+                // A model file shows the new floor at once: it is opened again from its bytes.
+                let opened = {
+                    let mut this = self.page.borrow_mut();
+                    this.floor = floor;
+                    this.publish();
+                    this.opened.clone()
+                };
+                if let Some((name, bytes)) = opened {
+                    self.open_bytes(name, bytes);
+                }
+                return;
             }
             Setting::Accel(accel) => asked.accel = accel,
             Setting::Builder(builder) => asked.builder = builder,
@@ -391,7 +420,7 @@ impl Viewer {
     fn set_modes(&self, asked: Modes) {
         let request = self.page.borrow_mut().player.set_modes(asked);
         match request {
-            Some(request) => Page::build(&self.page, request),
+            Some(request) => Page::build(&self.page, request, None),
             None => {
                 let mut this = self.page.borrow_mut();
                 this.player.message = None;
@@ -416,8 +445,17 @@ impl Viewer {
     /// a PLY, OBJ or OFF model, or a glTF, parsed here. A broken one shows its error and the
     /// current scene stays.
     pub fn open_file(&self, name: String, bytes: Vec<u8>) {
-        let loaded = Scene::from_bytes(&name, &bytes).map_err(|e| e.to_string());
-        Page::open_scene(&self.page, name, loaded);
+        self.open_bytes(name, Rc::new(bytes));
+    }
+
+    /// A file's bytes parsed as its name says, a model file on the page's floor.
+    fn open_bytes(&self, name: String, bytes: Rc<Vec<u8>>) {
+        let mut options = ModelOptions::default();
+        if raypipe::scene::is_model_file(std::path::Path::new(&name)) {
+            options.floor = self.page.borrow().floor;
+        }
+        let loaded = Scene::from_bytes_with(&name, &bytes, &options).map_err(|e| e.to_string());
+        Page::open_scene(&self.page, name.clone(), loaded, Some((name, bytes)));
     }
 
     /// A drag of the pointer by (`dx`, `dy`) CSS pixels: orbit with the primary button, pan with

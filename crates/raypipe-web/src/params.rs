@@ -7,6 +7,7 @@ use raypipe::choice::impl_choice;
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::MAX_DEPTH_LIMIT;
+use raypipe::scene::model::Floor;
 
 /// The browser API the page traces through.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -54,6 +55,8 @@ pub enum Setting {
     Depth(u32),
     View(Aov),
     Paused(bool),
+    /// What a model file opened on the page stands on.
+    Floor(Floor),
     /// Seconds into the motion.
     Time(f32),
     /// Scene seconds per second.
@@ -66,8 +69,8 @@ pub enum Setting {
 
 /// The keys, for messages.
 pub const KEYS: &[&str] = &[
-    "scene", "model", "accel", "builder", "memory", "pipeline", "depth", "aov", "paused", "time", "speed", "spp",
-    "width", "height", "backend",
+    "scene", "model", "accel", "builder", "memory", "pipeline", "depth", "aov", "paused", "floor", "time", "speed",
+    "spp", "width", "height", "backend",
 ];
 
 impl Setting {
@@ -92,6 +95,11 @@ impl Setting {
                 _ => Err(format!("{key}={value}: expected a number of seconds in 0..={most}")),
             }
         };
+        let flag = || match value {
+            "true" | "1" => Ok(true),
+            "false" | "0" => Ok(false),
+            _ => Err(format!("{key}={value}: expected true or false")),
+        };
         Ok(match key {
             "scene" if value.is_empty() => return Err("scene=: name a scene".into()),
             "scene" => Setting::Scene(value.to_string()),
@@ -103,11 +111,8 @@ impl Setting {
             "pipeline" => Setting::Pipeline(choice(key, value)?),
             "depth" => Setting::Depth(number(0..=MAX_DEPTH_LIMIT)?),
             "aov" => Setting::View(choice(key, value)?),
-            "paused" => Setting::Paused(match value {
-                "true" | "1" => true,
-                "false" | "0" => false,
-                _ => return Err(format!("{key}={value}: expected true or false")),
-            }),
+            "paused" => Setting::Paused(flag()?),
+            "floor" => Setting::Floor(if flag()? { Floor::Checker } else { Floor::None }),
             "time" => Setting::Time(seconds(MAX_TIME)?),
             "speed" => Setting::Speed(seconds(MAX_SPEED)?),
             "spp" => Setting::Spp(number(1..=MAX_SPP)?),
@@ -138,6 +143,8 @@ pub struct StartParams {
     pub depth: Option<u32>,
     pub view: Aov,
     pub paused: bool,
+    /// What a model file stands on.
+    pub floor: Floor,
     /// Where a moving scene's motion starts, in seconds.
     pub time: f32,
     pub speed: f32,
@@ -160,6 +167,7 @@ impl Default for StartParams {
             depth: None,
             view: Aov::Color,
             paused: false,
+            floor: Floor::Checker,
             time: 0.0,
             speed: 1.0,
             spp: 64,
@@ -196,6 +204,7 @@ impl StartParams {
             Setting::Depth(depth) => self.depth = Some(depth),
             Setting::View(view) => self.view = view,
             Setting::Paused(paused) => self.paused = paused,
+            Setting::Floor(floor) => self.floor = floor,
             Setting::Time(time) => self.time = time,
             Setting::Speed(speed) => self.speed = speed,
             Setting::Spp(spp) => self.spp = spp,
@@ -247,6 +256,7 @@ mod tests {
             ("model", "models/bunny.ply"),
             ("time", "1.5"),
             ("speed", "0.5"),
+            ("floor", "0"),
         ];
         let (params, errors) = StartParams::from_pairs(query);
         assert!(errors.is_empty(), "{errors:?}");
@@ -262,6 +272,7 @@ mod tests {
                 depth: Some(3),
                 view: Aov::Normal,
                 paused: false,
+                floor: Floor::None,
                 time: 1.5,
                 speed: 0.5,
                 spp: 1,
@@ -293,7 +304,7 @@ mod tests {
                 "accel=bvh: expected one of brute, stack, stackless, threaded",
                 "width=0: expected a whole number in 1..=8192",
                 "depth=33: expected a whole number in 0..=32",
-                "unknown setting 'colour' (known: scene, model, accel, builder, memory, pipeline, depth, aov, paused, time, speed, spp, width, height, backend)",
+                "unknown setting 'colour' (known: scene, model, accel, builder, memory, pipeline, depth, aov, paused, floor, time, speed, spp, width, height, backend)",
                 "time=NaN: expected a number of seconds in 0..=86400",
             ]
         );

@@ -89,6 +89,86 @@ fn an_instanced_mesh_appears_at_every_node() {
     );
 }
 
+/// A triangle mesh under a node that EXT_mesh_gpu_instancing places `translations.len()` times, the
+/// second instance turned a quarter about z and the third scaled by 2.
+fn instanced(node: Value) -> GltfBuilder {
+    let mut b = GltfBuilder::default();
+    let mesh = b.mesh(&TRIANGLE, None, &[0, 1, 2], None);
+    let half = std::f32::consts::FRAC_1_SQRT_2;
+    let translation = b.floats(&[0.0, 0.0, 0.0, 10.0, 0.0, 0.0, 0.0, 10.0, 0.0], 3);
+    let rotation = b.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, half, half, 0.0, 0.0, 0.0, 1.0], 4);
+    let scale = b.floats(&[1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0], 3);
+    let mut node = node;
+    node["mesh"] = json!(mesh);
+    node["extensions"] = json!({ "EXT_mesh_gpu_instancing": { "attributes": {
+        "TRANSLATION": translation, "ROTATION": rotation, "SCALE": scale
+    } } });
+    let root = b.node(node);
+    b.roots = vec![root];
+    b.extensions_used.push("EXT_mesh_gpu_instancing");
+    b
+}
+
+/// Every EXT_mesh_gpu_instancing instance is placed: T * R * S of its own, under the node's
+/// transform, as the extension defines it.
+fn gpu_instancing_places_every_instance_under_its_node() {
+    let file = read(&instanced(json!({ "translation": [0, 0, -1] })));
+    assert_eq!(file.primitives.len(), 3);
+    // Instance 0 where it stands; 1 moved by x 10 and turned (x, y) to (-y, x); 2 moved by y 10 and
+    // doubled; all moved by the node's z -1.
+    let expected = [
+        [[0.0, 0.0, -1.0], [1.0, 0.0, -1.0], [0.0, 1.0, -1.0]],
+        [[10.0, 0.0, -1.0], [10.0, 1.0, -1.0], [9.0, 0.0, -1.0]],
+        [[0.0, 10.0, -1.0], [2.0, 10.0, -1.0], [0.0, 12.0, -1.0]],
+    ];
+    for (primitive, expected) in file.primitives.iter().zip(&expected) {
+        assert_positions(&primitive.positions, expected);
+    }
+    let notices = {
+        let mut notices = Vec::new();
+        parse(&instanced(json!({})).gltf(), Files::None, &mut notices).unwrap();
+        notices
+    };
+    assert!(
+        !notices.iter().any(|n| n.contains("EXT_mesh_gpu_instancing")),
+        "{notices:?}"
+    );
+}
+
+/// Instancing accessors of the wrong type, component type or count end in one line naming the node.
+fn bad_instancing_accessors_are_refused() {
+    let error = |b: &GltfBuilder| parse(&b.gltf(), Files::None, &mut Vec::new()).unwrap_err().to_string();
+    let mut b = instanced(json!({}));
+    let two = b.floats(&[0.0, 0.0, 0.0, 1.0, 1.0, 1.0], 3);
+    b.nodes[0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["SCALE"] = json!(two);
+    assert_eq!(
+        error(&b),
+        "node 0: EXT_mesh_gpu_instancing: TRANSLATION has 3 instances and SCALE 2"
+    );
+    let mut b = instanced(json!({}));
+    let vec2 = b.floats(&[0.0; 6], 2);
+    b.nodes[0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = json!(vec2);
+    assert!(
+        error(&b).starts_with("node 0: EXT_mesh_gpu_instancing: TRANSLATION: accessor"),
+        "{}",
+        error(&b)
+    );
+    let mut b = instanced(json!({}));
+    let bytes = b.floats(&[0.0; 9], 3);
+    b.accessors[bytes]["componentType"] = json!(5121);
+    b.nodes[0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = json!(bytes);
+    assert_eq!(
+        error(&b),
+        format!("node 0: EXT_mesh_gpu_instancing: TRANSLATION: accessor {bytes} must be float")
+    );
+    let mut b = instanced(json!({}));
+    b.nodes[0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = json!({});
+    assert_eq!(
+        error(&b),
+        "node 0: EXT_mesh_gpu_instancing: none of TRANSLATION, ROTATION and SCALE"
+    );
+}
+
 fn strips_fans_and_points_by_mode() {
     let mut b = GltfBuilder::default();
     b.mesh(
@@ -177,9 +257,12 @@ fn without_camera_and_lights_a_file_is_framed_as_a_model() {
     b.roots = vec![b.node(json!({ "mesh": mesh }))];
     let scene = Scene::from_bytes("t.gltf", &b.gltf()).unwrap();
     assert_eq!((scene.lights.len(), scene.planes.len()), (2, 1));
-    assert_eq!(
-        scene.planes[0].point.y, 0.0,
-        "the floor touches the model's lowest point"
+    // Just below the model's lowest point (y 0), by a thousandth of its bounding sphere's radius.
+    let radius = (Vec3::new(1.0, 1.0, 0.0) * 0.5).length();
+    let gap = -scene.planes[0].point.y;
+    assert!(
+        gap > 0.0 && gap <= 1.001e-3 * radius,
+        "the floor lies {gap} below the model"
     );
     // The file's one primitive has no material: glTF's default material, after the floor's.
     assert_eq!(scene.triangles[0].material, 3);
@@ -644,6 +727,7 @@ fn generated_files_pass_the_khronos_validator(root: &std::path::Path) {
             hierarchy(json!({ "matrix": [0, 2, 0, 0, -2, 0, 0, 0, 0, 0, 2, 0, 0, 0, -1, 1] })),
         ),
         ("cameras-and-lights", cameras_and_lights()),
+        ("instancing", instanced(json!({ "translation": [0, 0, -1] }))),
         ("materials", glass_and_lamp()),
         ("textured", textured_quad(2.0, [10497, 33071])),
         ("framed", common::gltf_file::framed_textured_quad(2.0, [33648, 10497])),
@@ -680,6 +764,8 @@ fn main() -> std::process::ExitCode {
         plain a_matrix_node_equals_its_trs_twin,
         plain a_mirroring_node_turns_the_winding,
         plain an_instanced_mesh_appears_at_every_node,
+        plain gpu_instancing_places_every_instance_under_its_node,
+        plain bad_instancing_accessors_are_refused,
         plain strips_fans_and_points_by_mode,
         plain the_first_perspective_camera_and_the_lights_come_from_their_nodes,
         plain without_camera_and_lights_a_file_is_framed_as_a_model,

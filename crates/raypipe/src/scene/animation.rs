@@ -290,6 +290,9 @@ pub struct Instance {
     pub node: usize,
     pub skin: Option<usize>,
     pub rest: Arc<RestPrimitive>,
+    /// Where the primitive stands under its node: one of the node's EXT_mesh_gpu_instancing
+    /// transforms, or the identity.
+    pub offset: Mat4,
 }
 
 /// Everything that moves in a file: its nodes, skins and clips, and its primitives, one
@@ -497,7 +500,7 @@ impl Rig {
                 }
             }
             None => {
-                let world = pose.world[instance.node];
+                let world = pose.world[instance.node] * instance.offset;
                 let to_world = normal_matrix(&world);
                 for p in &mut positions {
                     *p = world.transform_point3(*p);
@@ -628,7 +631,7 @@ impl Animated {
                 let instance = &self.rig.instances[placed.instance];
                 let matrices = match instance.skin {
                     Some(skin) => self.rig.joint_matrices(&self.rig.skins[skin], &pose),
-                    None => vec![pose.world[instance.node]],
+                    None => vec![pose.world[instance.node] * instance.offset],
                 };
                 let mut weights = self.rig.morph_weights(instance, &pose).to_vec();
                 weights.resize(instance.rest.targets.len(), 0.0);

@@ -24,11 +24,7 @@ impl Scene {
             return model_scene(path, options);
         }
         if !options.is_default() {
-            return Err(InputError::new(format!(
-                "placement, sphere count and rotation apply to model files ({}) only",
-                model_extension_list()
-            ))
-            .in_origin(spec));
+            return Err(not_a_model().in_origin(spec));
         }
         if let Some(scene) = builtin::by_name(spec)? {
             return Ok(scene);
@@ -58,19 +54,24 @@ impl Scene {
     /// extension picks the format, and every error starts with it. A TOML scene's `[[mesh]]` files
     /// are read relative to the working directory, where there is one.
     pub fn from_bytes(name: &str, bytes: &[u8]) -> Result<Scene, InputError> {
+        Self::from_bytes_with(name, bytes, &ModelOptions::default())
+    }
+
+    /// [`Scene::from_bytes`], with the options that apply to a model file; `options` must be the
+    /// default for a TOML scene.
+    pub fn from_bytes_with(name: &str, bytes: &[u8], options: &ModelOptions) -> Result<Scene, InputError> {
         let path = Path::new(name);
-        let options = ModelOptions::default();
         if gltf::is_gltf_path(path) {
             let mut notices = Vec::new();
             let file = gltf::parse(bytes, gltf::Files::None, &mut notices).map_err(|e| e.in_origin(name))?;
             log_notices(name, notices);
-            return model::gltf_scene(&file, name, &options);
+            return model::gltf_scene(&file, name, options);
         }
         if let Some(format) = mesh::MeshFormat::from_path(path) {
             let mut notices = Vec::new();
             let mesh = mesh::parse(bytes, format, &mut notices).map_err(|e| e.in_origin(name))?;
             log_notices(name, notices);
-            return model::scene_around(mesh, name, &options);
+            return model::scene_around(mesh, name, options);
         }
         if !path.extension().is_some_and(|ext| ext.eq_ignore_ascii_case("toml")) {
             return Err(InputError::new(format!(
@@ -78,6 +79,9 @@ impl Scene {
                 model_extension_list()
             ))
             .in_origin(name));
+        }
+        if !options.is_default() {
+            return Err(not_a_model().in_origin(name));
         }
         if bytes.len() as u64 > crate::input::MAX_SCENE_BYTES {
             return Err(InputError::new(format!(
@@ -103,6 +107,14 @@ fn model_scene(path: &Path, options: &ModelOptions) -> Result<Scene, InputError>
         return model::gltf_scene(&gltf::load(path)?, &shown, options);
     }
     model::scene_around(mesh::load(path)?, &shown, options)
+}
+
+/// Model options given for a scene that is not a model file.
+fn not_a_model() -> InputError {
+    InputError::new(format!(
+        "placement, sphere count, rotation and floor apply to model files ({}) only",
+        model_extension_list()
+    ))
 }
 
 fn log_notices(name: &str, notices: Vec<String>) {

@@ -57,6 +57,28 @@ crate::choice::impl_choice!(
     ]
 );
 
+/// What a framed model stands on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Floor {
+    /// A checkered floor just below its lowest point.
+    #[default]
+    Checker,
+    /// Nothing: the model floats in the background.
+    None,
+}
+
+crate::choice::impl_choice!(
+    Floor,
+    [
+        (
+            Checker,
+            "checker",
+            "a checkered floor just below the model's lowest point"
+        ),
+        (None, "none", "no floor: the model floats in the background"),
+    ]
+);
+
 /// The crease angle's default: edges between faces further apart than this stay sharp.
 pub const DEFAULT_CREASE_DEGREES: f32 = 60.0;
 
@@ -372,6 +394,8 @@ pub struct ModelOptions {
     pub crease: Option<f32>,
     /// For a glTF: the animation that plays, as [`Placement::animation`].
     pub animation: Option<ClipChoice>,
+    /// What the framed model stands on (a glTF with a camera of its own gets no floor).
+    pub floor: Floor,
 }
 
 impl ModelOptions {
@@ -414,7 +438,7 @@ pub fn scene_around(mesh: Mesh, shown: &str, options: &ModelOptions) -> Result<S
     let framing = Framing::of(&scene);
     scene.camera = framing.camera();
     scene.lights = framing.lights();
-    scene.planes.push(framing.floor());
+    scene.planes.extend(framing.floor(options.floor));
     scene.validate().map_err(|e| e.in_origin(shown))?;
     Ok(scene)
 }
@@ -445,7 +469,7 @@ pub fn gltf_scene(gltf: &GltfScene, shown: &str, options: &ModelOptions) -> Resu
         }
         None => {
             scene.camera = framing.camera();
-            scene.planes.push(framing.floor());
+            scene.planes.extend(framing.floor(options.floor));
         }
     }
     scene.lights = gltf
@@ -489,6 +513,9 @@ fn framing_materials() -> Vec<Material> {
         },
     ]
 }
+
+/// The floor's gap below a framed model, in its bounding sphere's radii.
+pub const FLOOR_GAP: f32 = 1e-3;
 
 /// How a lone model is shown: a camera on its bounding sphere, two lights, a checkered floor that
 /// touches it (materials 1 and 2 of [`framing_materials`]).
@@ -535,16 +562,26 @@ impl Framing {
         ]
     }
 
-    fn floor(&self) -> Plane {
-        Plane {
-            point: Vec3::new(0.0, self.bounds.min.y, 0.0),
+    /// The floor, just below the lowest point: a model that rests on its lowest plane (a quad, a
+    /// base) lies apart from it, so the two never fight over a pixel. The gap is small against the
+    /// model, and twice what a ray's origin is moved off a surface where the scene lies far from
+    /// the origin (`RAY_BIAS` times the largest coordinate), so the floor's shadow rays start
+    /// below what rests on it.
+    fn floor(&self, floor: Floor) -> Option<Plane> {
+        if floor == Floor::None {
+            return None;
+        }
+        let reach = self.center.abs().max_element() + 4.0 * self.radius;
+        let gap = (FLOOR_GAP * self.radius).max(2.0 * crate::records::constants::RAY_BIAS * reach);
+        Some(Plane {
+            point: Vec3::new(0.0, self.bounds.min.y - gap, 0.0),
             normal: Vec3::Y,
             material: 1,
             checker: Some(Checker {
                 material: 2,
                 size: self.radius * 0.25,
             }),
-        }
+        })
     }
 }
 
@@ -607,6 +644,33 @@ mod tests {
         add_mesh(&mut scene, tetrahedron(), &on_vertices).unwrap();
         assert_eq!(scene.spheres.len(), 4);
         assert_eq!(scene.spheres[0].radius, 0.1);
+    }
+
+    /// The floor lies just below the model's lowest point, a gap small against the model; with
+    /// `Floor::None` there is none.
+    #[test]
+    fn a_framed_model_stands_just_above_its_floor() {
+        let scene = scene_around(tetrahedron(), "t.off", &ModelOptions::default()).unwrap();
+        let lowest = scene_bounds(&scene).min.y;
+        let radius = Framing::of(&scene).radius;
+        let [floor] = scene.planes[..] else {
+            panic!("one floor: {:?}", scene.planes)
+        };
+        let gap = lowest - floor.point.y;
+        assert!(
+            gap > 0.0 && gap <= 2.0 * FLOOR_GAP * radius,
+            "gap {gap}, radius {radius}"
+        );
+        let floating = ModelOptions {
+            floor: Floor::None,
+            ..ModelOptions::default()
+        };
+        assert!(
+            scene_around(tetrahedron(), "t.off", &floating)
+                .unwrap()
+                .planes
+                .is_empty()
+        );
     }
 
     #[test]

@@ -36,12 +36,16 @@ use std::sync::Arc;
 /// The extensions read. KHR_mesh_quantization only widens the accessor types, which every
 /// attribute reader takes.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
     "KHR_mesh_quantization",
 ];
+
+/// The extension that places a mesh many times under one node.
+const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
 /// Whether `path` names a glTF file by its extension.
 pub fn is_gltf_path(path: &Path) -> bool {
@@ -389,7 +393,20 @@ impl SceneReader<'_> {
                     }
                 }
             }
-            self.place(&local, world, node.index(), skin)?;
+            match self.instancing(node)? {
+                Some(_) if skin.is_some() => {
+                    return Err(format!(
+                        "node {}: EXT_mesh_gpu_instancing on a skinned mesh, which raypipe does not read",
+                        node.index()
+                    ));
+                }
+                Some(offsets) => {
+                    for offset in offsets {
+                        self.place(&local, world, offset, node.index(), skin)?;
+                    }
+                }
+                None => self.place(&local, world, Mat4::IDENTITY, node.index(), skin)?,
+            }
         }
         if let Some(camera) = node.camera()
             && self.camera.is_none()
@@ -444,6 +461,85 @@ impl SceneReader<'_> {
             }
         }
         Ok(())
+    }
+
+    /// The node's EXT_mesh_gpu_instancing transforms, each T * R * S from its TRANSLATION,
+    /// ROTATION and SCALE accessors (float VEC3; float or normalized VEC4; float VEC3; as many
+    /// elements in each, an absent one the identity), or `None` where the node has none.
+    fn instancing(&self, node: &gltf::Node) -> Result<Option<Vec<Mat4>>, String> {
+        let json = &self.root.nodes[node.index()];
+        let Some(extension) = json.extensions.as_ref().and_then(|e| e.others.get(INSTANCING)) else {
+            return Ok(None);
+        };
+        let what = format!("node {}: {INSTANCING}", node.index());
+        let Some(attributes) = extension.get("attributes").and_then(|a| a.as_object()) else {
+            return Err(format!("{what}: no attributes object"));
+        };
+        let read = |name: &str, type_: Type, normalized_ok: bool| -> Result<Option<Vec<f32>>, String> {
+            let Some(value) = attributes.get(name) else {
+                return Ok(None);
+            };
+            let index = value
+                .as_u64()
+                .ok_or_else(|| format!("{what}: {name} is not an accessor index"))? as usize;
+            let accessor = self
+                .root
+                .accessors
+                .get(index)
+                .ok_or_else(|| format!("{what}: {name}: accessor {index} does not exist"))?;
+            use json::accessor::ComponentType::{F32, I8, I16};
+            let component = match &accessor.component_type {
+                json::validation::Checked::Valid(c) => Some(c.0),
+                json::validation::Checked::Invalid => None,
+            };
+            let float = component == Some(F32);
+            let normalized = accessor.normalized && matches!(component, Some(I8 | I16));
+            if !(float || (normalized_ok && normalized)) {
+                return Err(format!(
+                    "{what}: {name}: accessor {index} must be float{}",
+                    if normalized_ok {
+                        " or normalized signed byte or short"
+                    } else {
+                        ""
+                    }
+                ));
+            }
+            read_floats(self.root, self.buffers, index, &[type_])
+                .map(Some)
+                .map_err(|e| format!("{what}: {name}: {e}"))
+        };
+        let translation = read("TRANSLATION", Type::Vec3, false)?;
+        let rotation = read("ROTATION", Type::Vec4, true)?;
+        let scale = read("SCALE", Type::Vec3, false)?;
+        let counts = [
+            ("TRANSLATION", translation.as_ref().map(|v| v.len() / 3)),
+            ("ROTATION", rotation.as_ref().map(|v| v.len() / 4)),
+            ("SCALE", scale.as_ref().map(|v| v.len() / 3)),
+        ];
+        let mut given = counts.iter().filter_map(|&(name, count)| Some((name, count?)));
+        let Some((first, count)) = given.next() else {
+            return Err(format!("{what}: none of TRANSLATION, ROTATION and SCALE"));
+        };
+        if let Some((name, other)) = given.find(|&(_, other)| other != count) {
+            return Err(format!("{what}: {first} has {count} instances and {name} {other}"));
+        }
+        (0..count)
+            .map(|i| {
+                let vec3 = |v: &Option<Vec<f32>>, default: Vec3| {
+                    v.as_ref().map_or(default, |v| Vec3::from_slice(&v[3 * i..3 * i + 3]))
+                };
+                let transform = super::animation::Transform::Decomposed {
+                    translation: vec3(&translation, Vec3::ZERO),
+                    rotation: rotation
+                        .as_ref()
+                        .map_or(glam::Quat::IDENTITY, |r| glam::Quat::from_slice(&r[4 * i..4 * i + 4])),
+                    scale: vec3(&scale, Vec3::ONE),
+                };
+                transform.check().map_err(|e| format!("{what}: instance {i}: {e}"))?;
+                Ok(transform.matrix())
+            })
+            .collect::<Result<Vec<_>, String>>()
+            .map(Some)
     }
 
     fn note_once(&mut self, notice: &str) {
@@ -577,9 +673,18 @@ impl SceneReader<'_> {
         Ok(elements)
     }
 
-    /// Adds a mesh's primitives at `world`: positions by the matrix, normals by its inverse
-    /// transpose, and the winding turned where the matrix mirrors.
-    fn place(&mut self, local: &[LocalPrimitive], world: Mat4, node: usize, skin: Option<usize>) -> Result<(), String> {
+    /// Adds a mesh's primitives at `world` (its node's) times `offset` (an instance's transform
+    /// under the node): positions by the matrix, normals by its inverse transpose, and the winding
+    /// turned where the matrix mirrors.
+    fn place(
+        &mut self,
+        local: &[LocalPrimitive],
+        world: Mat4,
+        offset: Mat4,
+        node: usize,
+        skin: Option<usize>,
+    ) -> Result<(), String> {
+        let world = world * offset;
         let linear = Mat3::from_mat4(world);
         let determinant = linear.determinant();
         let normal_matrix = (determinant != 0.0).then(|| linear.inverse().transpose());
@@ -613,6 +718,7 @@ impl SceneReader<'_> {
                 node,
                 skin,
                 rest: rest.clone(),
+                offset,
             });
         }
         Ok(())
