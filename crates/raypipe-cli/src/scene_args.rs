@@ -166,25 +166,28 @@ pub fn load_scene(spec: &str, model: &ModelOptions) -> anyhow::Result<Scene> {
 
 /// `R,G,B`, linear radiance: three finite numbers, none negative.
 pub fn parse_color(text: &str) -> Result<glam::Vec3, String> {
-    let channels: Vec<f32> = text
-        .split(',')
-        .map(|c| c.trim().parse::<f32>().map_err(|_| format!("'{c}' is not a number")))
-        .collect::<Result<_, _>>()?;
-    match channels[..] {
-        [r, g, b] if channels.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok(glam::Vec3::new(r, g, b)),
-        _ => Err("expected three finite, non-negative numbers, as in 0.05,0.05,0.1".into()),
-    }
+    parse_three(
+        text,
+        |c| c >= 0.0,
+        "three finite, non-negative numbers, as in 0.05,0.05,0.1",
+    )
 }
 
 /// `X,Y,Z` in degrees.
 pub fn parse_angles(text: &str) -> Result<glam::Vec3, String> {
-    let angles: Vec<f32> = text
+    parse_three(text, |_| true, "three finite angles in degrees, as in -90,0,0")
+}
+
+/// Three comma-separated finite numbers that each pass `allowed`; the error names a field that is
+/// no number, or says what was `expected`.
+fn parse_three(text: &str, allowed: fn(f32) -> bool, expected: &str) -> Result<glam::Vec3, String> {
+    let numbers: Vec<f32> = text
         .split(',')
-        .map(|a| a.trim().parse::<f32>().map_err(|_| format!("'{a}' is not a number")))
+        .map(|n| n.trim().parse::<f32>().map_err(|_| format!("'{n}' is not a number")))
         .collect::<Result<_, _>>()?;
-    match angles[..] {
-        [x, y, z] if angles.iter().all(|a| a.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
-        _ => Err("expected three finite angles in degrees, as in -90,0,0".into()),
+    match numbers[..] {
+        [x, y, z] if numbers.iter().all(|&n| n.is_finite() && allowed(n)) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(format!("expected {expected}")),
     }
 }
 
