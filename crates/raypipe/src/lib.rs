@@ -8,6 +8,12 @@
 //!
 //! The library prints nothing and reads no flags: notices go through the `log` crate, errors are
 //! typed ([`error`], [`gpu::GpuError`]), and it builds for `wasm32-unknown-unknown`.
+//!
+//! A program with a wgpu device of its own traces through [`gpu::GpuContext::from_device`]: load
+//! or build a [`scene::Scene`], pack it ([`records::PackedScene`], with its BVH), make a
+//! [`gpu::Renderer`], and read the frame back or record it into the program's encoder;
+//! `examples/offscreen.rs` does so on one page (`cargo run --release --example offscreen --
+//! out.png`).
 
 pub mod bvh;
 pub mod choice;

@@ -124,6 +124,24 @@ impl GpuContext {
         Self::open(adapter).await
     }
 
+    /// A context on a device the caller opened itself (a program with its own wgpu device and
+    /// window). raypipe uses the features the device has (timestamp queries, subgroups) and is
+    /// bound by the limits it was opened with: storage memory needs 8 storage buffers a stage, and
+    /// large scenes the adapter's buffer and texture limits (`adapter.limits()`).
+    pub fn from_device(adapter: wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue) -> Self {
+        let info = adapter.get_info();
+        let features = device.features();
+        let subgroups = !cfg!(target_arch = "wasm32") && features.contains(wgpu::Features::SUBGROUP);
+        Self {
+            timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            subgroups: subgroups.then_some((info.subgroup_min_size, info.subgroup_max_size)),
+            adapter,
+            device,
+            queue,
+            info,
+        }
+    }
+
     /// Opens a device on `adapter` with every limit it offers (large scenes need its real buffer and
     /// texture limits) and timestamp queries where it has them.
     pub async fn open(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
