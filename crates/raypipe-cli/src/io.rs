@@ -83,8 +83,7 @@ pub fn check_writable(path: &Path) -> anyhow::Result<()> {
 
 fn encode_png(image: &FloatImage, path: &Path) -> anyhow::Result<Vec<u8>> {
     let channels = image.channels.len();
-    let to_byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-    let bytes: Vec<u8> = image.data.iter().map(|&v| to_byte(v)).collect();
+    let bytes = image.to_bytes();
     let color = match channels {
         1 => image::ExtendedColorType::L8,
         3 => image::ExtendedColorType::Rgb8,

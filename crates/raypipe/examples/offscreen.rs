@@ -42,12 +42,13 @@ async fn run(path: &str) -> Result<(), Box<dyn Error>> {
 
     // Display-encoded (sRGB) values, rounded to 8 bits as `raypipe render` writes a PNG.
     let display = frame.display();
-    let bytes: Vec<u8> = display
-        .data
-        .iter()
-        .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-        .collect();
-    image::save_buffer(path, &bytes, display.width, display.height, image::ColorType::Rgb8)?;
+    image::save_buffer(
+        path,
+        &display.to_bytes(),
+        display.width,
+        display.height,
+        image::ColorType::Rgb8,
+    )?;
     println!("{path}: {}x{} on {}", display.width, display.height, ctx.describe());
     Ok(())
 }

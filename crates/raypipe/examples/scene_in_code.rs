@@ -119,12 +119,13 @@ fn main() -> Result<(), Box<dyn Error>> {
         None => raypipe::cpu::render(&packed, Accel::Threaded)?,
     };
     let display = frame.display();
-    let bytes: Vec<u8> = display
-        .data
-        .iter()
-        .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-        .collect();
-    image::save_buffer(&path, &bytes, display.width, display.height, image::ColorType::Rgb8)?;
+    image::save_buffer(
+        &path,
+        &display.to_bytes(),
+        display.width,
+        display.height,
+        image::ColorType::Rgb8,
+    )?;
     println!("{path}: {}x{}", display.width, display.height);
     Ok(())
 }

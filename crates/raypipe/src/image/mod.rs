@@ -38,6 +38,15 @@ impl FloatImage {
     pub fn pixel_count(&self) -> usize {
         self.width as usize * self.height as usize
     }
+
+    /// Every value clamped to [0, 1] and rounded to 8 bits, as a PNG holds a display-encoded
+    /// image ([`Frame::display`]).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        self.data
+            .iter()
+            .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+            .collect()
+    }
 }
 
 /// Linear to sRGB-encoded, the transfer function of PNG output.
