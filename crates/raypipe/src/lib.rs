@@ -1,5 +1,28 @@
 //! raypipe: Whitted ray tracing in the fragment shader of the ordinary graphics pipeline.
 //!
+//! On a wgpu device of the program's own (`examples/offscreen.rs` opens one and writes the PNG):
+//!
+//! ```no_run
+//! use raypipe::bvh::morton::MortonBits;
+//! use raypipe::gpu::{GpuContext, Renderer, RendererOptions};
+//! use raypipe::records::PackedScene;
+//! use raypipe::scene::Scene;
+//! # async fn run(adapter: wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue)
+//! #     -> Result<(), Box<dyn std::error::Error>> {
+//! let ctx = GpuContext::from_device(adapter, device, queue);
+//! let mut scene = Scene::load("whitted")?;
+//! (scene.settings.width, scene.settings.height) = (320, 240);
+//! let mut packed = PackedScene::new(&scene)?;
+//! packed.build_bvh(MortonBits::Bits30);
+//! let mut renderer = Renderer::new(&ctx, &packed, RendererOptions::default()).await?;
+//! let frame = renderer.read_frame().await?.frame;
+//! // 320 x 240 RGB bytes, sRGB-encoded: what `raypipe render whitted --width 320 --height 240`
+//! // writes as its PNG.
+//! let rgb = frame.display().to_bytes();
+//! # Ok(())
+//! # }
+//! ```
+//!
 //! Data flows scene → BVH → GPU records → (GPU upload → full-screen triangle → fragment shader) or
 //! (CPU reference tracer, function by function the shader's twin) → frame. Modules depend
 //! downwards only, in this order: `choice`, `rng`, `parallel`, `error` and `modes` at the bottom;

@@ -11,7 +11,7 @@ use std::ops::{BitXor, Not};
 /// with the index (half the sort's memory traffic); 63-bit codes need a u128.
 ///
 /// After the sort, the same type with the sorted position in place of the primitive is what the
-/// hierarchy search compares (see [`shares_more`]).
+/// hierarchy search compares (see `shares_more` in `lbvh.rs`).
 pub trait Key: Copy + Default + Ord + BitXor<Output = Self> + Not<Output = Self> + Send + Sync + 'static {
     /// The widest Morton code the key holds above the index.
     const CODE_BITS: u32;

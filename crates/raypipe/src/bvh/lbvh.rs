@@ -209,7 +209,8 @@ impl<K: Key> LbvhBuilder<K> {
         self
     }
 
-    /// Builds over `boxes`, computing Morton codes of their centroids; the tree is in [`Self::nodes`].
+    /// Builds over `boxes`, computing Morton codes of their centroids; [`Self::to_bvh`] and
+    /// [`Self::into_bvh`] give the tree.
     /// The key must hold codes of `bits` (`u64` for 30-bit codes, `u128` for 63-bit ones).
     pub fn build(&mut self, boxes: &[Aabb], bits: MortonBits) -> BuildTimings {
         Self::check_width(bits);

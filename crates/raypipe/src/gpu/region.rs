@@ -130,8 +130,8 @@ impl BoxCover {
     }
 
     /// The pixels where a primary ray can enter one of the boxes: the tiles that the rectangles of
-    /// a cut through the cover overlap ([`Projection::rect`]), a node's children's replacing its own
-    /// while it spans more than [`REFINE_ABOVE_PIXELS`].
+    /// a cut through the cover overlap (`Projection::rect`), a node's children's replacing its own
+    /// while it spans more than 64 pixels (`REFINE_ABOVE_PIXELS`).
     pub fn traced_pixels(&self, camera: &GpuCamera) -> TracedPixels {
         let (width, height) = (camera.width as u32, camera.height as u32);
         let (columns, rows) = (width.div_ceil(TILE) as usize, height.div_ceil(TILE) as usize);

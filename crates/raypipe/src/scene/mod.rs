@@ -1,6 +1,6 @@
 //! Scenes: what is rendered, independent of how it reaches a tracer.
 //!
-//! A [`Scene`] comes from a TOML file ([`file`]), a built-in generator ([`builtin`]), or a model
+//! A [`Scene`] comes from a TOML file ([`mod@file`]), a built-in generator ([`builtin`]), or a model
 //! file read by [`mesh`](crate::mesh) or [`gltf`] and placed by [`model`]; [`Scene::load`] picks
 //! between them. `records::PackedScene` turns it into the flat records that the GPU shader and the CPU
 //! reference read.

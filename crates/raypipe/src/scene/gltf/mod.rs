@@ -1,14 +1,14 @@
 //! glTF 2.0 scenes: `.gltf` (JSON, with external or `data:` buffers and images) and `.glb`.
 //!
 //! The default scene's node hierarchy is flattened into world-space triangles (a mesh that several
-//! nodes use appears once for each), with the file's materials ([`material`]) and base-colour
+//! nodes use appears once for each), with the file's materials (`material.rs`) and base-colour
 //! textures, its first perspective camera and its KHR_lights_punctual lights. Everything the file
 //! says is checked before it is used: references, every accessor against its buffer view and
 //! buffer, counts before allocating, the node graph for cycles and shared children, and numbers for
 //! NaN. Errors are one line naming the element (`mesh 3 primitive 0: accessor 7: ...`); what is
 //! read but not rendered (points, lines, unused textures) is reported as one notice each.
 //!
-//! Skins, morph targets and animations are read into a [`Rig`] ([`animation`]); the primitives are
+//! Skins, morph targets and animations are read into a [`Rig`] (`animation.rs`); the primitives are
 //! then posed at the first animation's start (or, without one, at rest with skins and weights
 //! applied), and a scene that places the file plays the clip it chooses.
 
