@@ -15,9 +15,13 @@ use std::task::{Context, Poll, Waker};
 /// A backend a caller can ask for; without one, `WGPU_BACKEND` or wgpu's default order decides.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
+    /// Vulkan (lavapipe here).
     Vulkan,
+    /// OpenGL or GLES (llvmpipe through EGL here).
     Gl,
+    /// Metal (Apple).
     Metal,
+    /// Direct3D 12 (Windows).
     Dx12,
 }
 
@@ -32,6 +36,7 @@ impl_choice!(
 );
 
 impl Backend {
+    /// wgpu's flag for the backend.
     pub fn backends(self) -> wgpu::Backends {
         match self {
             Backend::Vulkan => wgpu::Backends::VULKAN,
@@ -83,9 +88,13 @@ fn backend_order(backend: Option<Backend>) -> Vec<wgpu::Backends> {
 /// counted, so a renderer, a rebuild and a readback each hold their own.
 #[derive(Clone, Debug)]
 pub struct GpuContext {
+    /// The adapter the device was opened on.
     pub adapter: wgpu::Adapter,
+    /// The device every raypipe resource is made on.
     pub device: wgpu::Device,
+    /// Its queue, which renderers and rebuilds submit to.
     pub queue: wgpu::Queue,
+    /// The adapter's name, backend, device type and driver.
     pub info: wgpu::AdapterInfo,
     /// Whether passes can be timed with timestamp queries.
     pub timestamps: bool,
@@ -190,6 +199,7 @@ impl GpuContext {
         describe(&self.info)
     }
 
+    /// The limits the device was opened with.
     pub fn limits(&self) -> wgpu::Limits {
         self.device.limits()
     }
@@ -272,6 +282,7 @@ pub fn driver_warning(info: &wgpu::AdapterInfo) -> Option<String> {
     })
 }
 
+/// An adapter in one line: its name, backend, device type and driver.
 pub fn describe(info: &wgpu::AdapterInfo) -> String {
     let driver = [info.driver.as_str(), info.driver_info.as_str()]
         .iter()

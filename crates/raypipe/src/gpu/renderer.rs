@@ -49,8 +49,11 @@ pub(super) fn tracer_stage(pipeline: Pipeline) -> wgpu::ShaderStages {
 /// How a renderer traces.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RendererOptions {
+    /// The stage that traces: the fragment shader of a full-screen triangle, or a compute kernel.
     pub pipeline: Pipeline,
+    /// How the scene's records reach the shader.
     pub memory: MemoryMode,
+    /// Brute force, or one of the BVH walks.
     pub accel: Accel,
     /// What the colour target's fourth channel counts.
     pub count: Count,
@@ -60,9 +63,13 @@ pub struct RendererOptions {
 /// over the samples so far) and surface (xyz first-hit normal, w its distance or `DEPTH_MISS`, of
 /// the centre sample), both f32 bits.
 pub struct FrameTargets {
+    /// Linear radiance and the count, summed over the samples (rgba32uint of f32 bits).
     pub color: wgpu::Texture,
+    /// The centre sample's first-hit normal and distance (rgba32uint of f32 bits).
     pub surface: wgpu::Texture,
+    /// A view of `color`, as the display pass reads it.
     pub color_view: wgpu::TextureView,
+    /// A view of `surface`.
     pub surface_view: wgpu::TextureView,
     /// Samples per pixel summed in the colour target (0 before the first draw).
     samples: u32,
@@ -99,6 +106,7 @@ impl FrameTargets {
         }
     }
 
+    /// Width and height in pixels.
     pub fn size(&self) -> (u32, u32) {
         (self.color.width(), self.color.height())
     }
@@ -151,7 +159,9 @@ impl Accumulation {
 
 /// A frame read back and, where the adapter has timestamp queries, the GPU time of its trace pass.
 pub struct TimedFrame {
+    /// The frame's targets, read back.
     pub frame: Frame,
+    /// The trace pass's GPU time in milliseconds, where the adapter has timestamps.
     pub gpu_ms: Option<f64>,
 }
 
@@ -183,6 +193,8 @@ impl Confinement {
     }
 }
 
+/// The tracer for one scene on one device: its records uploaded, its pipeline built, its frame
+/// targets; it records samples into a caller's encoder ([`Renderer::encode`]) or reads frames back.
 pub struct Renderer {
     ctx: GpuContext,
     options: RendererOptions,
@@ -358,10 +370,12 @@ impl Renderer {
         .await
     }
 
+    /// The modes it traces with.
     pub fn options(&self) -> RendererOptions {
         self.options
     }
 
+    /// The device it was made on.
     pub fn context(&self) -> &GpuContext {
         &self.ctx
     }

@@ -25,8 +25,11 @@ use glam::{Quat, Vec2, Vec3};
 /// `records::GpuCamera` (basis) and `camera_ray` (per pixel), identically on CPU and GPU.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// Where the pinhole is.
     pub eye: Vec3,
+    /// The point the camera looks at: the image's centre.
     pub target: Vec3,
+    /// The image's up direction (need not be perpendicular to the view).
     pub up: Vec3,
     /// Vertical field of view in degrees.
     pub fov_degrees: f32,
@@ -35,10 +38,13 @@ pub struct Camera {
 /// Render settings a scene may carry; command-line flags override them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
     /// Maximum number of bounces (reflection or refraction) after the primary ray.
     pub max_depth: u32,
+    /// The radiance of rays that escape the scene.
     pub background: Vec3,
     /// Ambient light intensity, multiplied by a surface's diffuse colour.
     pub ambient: f32,
@@ -56,9 +62,12 @@ impl Default for RenderSettings {
     }
 }
 
+/// A point light of the paper's model: no falloff, `color` a plain factor.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
+    /// Where the light is.
     pub position: Vec3,
+    /// What a surface facing the light receives, per channel.
     pub color: Vec3,
 }
 
@@ -69,6 +78,7 @@ pub struct Material {
     pub color: Vec3,
     /// Weight of the Phong highlight.
     pub specular: f32,
+    /// The Phong exponent of the highlight.
     pub shininess: f32,
     /// Mirror reflectance, 0..1.
     pub reflect: f32,
@@ -98,34 +108,44 @@ impl Default for Material {
     }
 }
 
+/// A sphere primitive.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
+    /// The centre.
     pub center: Vec3,
+    /// At least [`MIN_RADIUS`].
     pub radius: f32,
+    /// Index into [`Scene::materials`].
     pub material: u32,
 }
 
 /// A triangle, counter-clockwise seen from its outside (the side its geometric normal points to).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Triangle {
+    /// The corners, counter-clockwise seen from outside.
     pub vertices: [Vec3; 3],
     /// Vertex normals to interpolate for shading; `None` shades with the geometric normal.
     pub normals: Option<[Vec3; 3]>,
     /// Texture coordinates of the corners, for a textured material.
     pub uvs: Option<[Vec2; 3]>,
+    /// Index into [`Scene::materials`].
     pub material: u32,
 }
 
 /// An infinite plane, optionally a checkerboard of two materials.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
+    /// A point on the plane.
     pub point: Vec3,
     /// Unit normal.
     pub normal: Vec3,
+    /// Index into [`Scene::materials`]: the whole plane, or the even squares of a checker.
     pub material: u32,
+    /// Squares of a second material, where the plane has them.
     pub checker: Option<Checker>,
 }
 
+/// A plane's checkerboard: squares of `size` alternating between the plane's material and this one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Checker {
     /// The material of the odd squares.
@@ -134,14 +154,24 @@ pub struct Checker {
     pub size: f32,
 }
 
+/// What is rendered: the camera and settings, lights, materials, primitives (spheres and triangles
+/// in the BVH, planes beside it), textures and motion. [`Scene::validate`] checks it before any
+/// tracer reads it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scene {
+    /// The pinhole the primary rays start from.
     pub camera: Camera,
+    /// Size, depth, background, ambient.
     pub settings: RenderSettings,
+    /// Point lights, each casting hard shadows.
     pub lights: Vec<Light>,
+    /// What primitives and planes name by index.
     pub materials: Vec<Material>,
+    /// Sphere primitives, in the BVH.
     pub spheres: Vec<Sphere>,
+    /// Triangle primitives, in the BVH beside the spheres.
     pub triangles: Vec<Triangle>,
+    /// Infinite planes, tested beside the BVH.
     pub planes: Vec<Plane>,
     /// The images materials are textured with.
     pub textures: Vec<Texture>,
@@ -152,16 +182,21 @@ pub struct Scene {
 /// A similarity transform: rotate, scale uniformly, translate; what a placement does to a file.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Similarity {
+    /// Applied first.
     pub rotation: Quat,
+    /// Uniform scale, applied after the rotation.
     pub scale: f32,
+    /// Applied last.
     pub translation: Vec3,
 }
 
 impl Similarity {
+    /// A point carried by the transform.
     pub fn point(&self, p: Vec3) -> Vec3 {
         self.rotation * p * self.scale + self.translation
     }
 
+    /// A direction turned by the rotation alone (normals, view directions).
     pub fn direction(&self, v: Vec3) -> Vec3 {
         self.rotation * v
     }
@@ -354,6 +389,7 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 pub const MAX_DEPTH_LIMIT: u32 = 32;
 
 impl RenderSettings {
+    /// Sizes, depth, background and ambient within what the tracers take.
     pub fn validate(&self) -> Result<(), InputError> {
         for (name, value) in [("width", self.width), ("height", self.height)] {
             if value == 0 || value > MAX_IMAGE_SIDE {
