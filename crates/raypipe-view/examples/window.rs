@@ -10,7 +10,7 @@ use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions};
 use raypipe::modes::Aov;
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
-use raypipe_view::{next_texture, present_format, surface_config};
+use raypipe_view::{next_texture, overlay_pass, present_format, surface_config};
 use std::sync::Arc;
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
@@ -107,22 +107,7 @@ impl App {
         );
         // The program's own pass over it, in the same encoder.
         let (width, height) = (gpu.config.width, gpu.config.height);
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("overlay"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = overlay_pass(&mut encoder, &view, "overlay");
         pass.set_pipeline(&gpu.overlay);
         pass.set_scissor_rect(0, height - height / 8, width, height / 8);
         pass.draw(0..3, 0..1);

@@ -2,7 +2,7 @@
 //! with the panel and presented.
 
 use crate::panel::{self, Playback, Readout};
-use crate::player::{FlyKeys, Player, Screen, Timings};
+use crate::player::{FlyKeys, Player, Screen, Timings, overlay_pass};
 use crate::{Host, ModeKey, Modes, ScreenshotError, Script, Summary, ViewError, ViewerOptions};
 use pollster::block_on;
 use raypipe::gpu::GpuContext;
@@ -360,22 +360,7 @@ fn draw_panel(
     let first = panel
         .renderer
         .update_buffers(&ctx.device, &ctx.queue, encoder, &jobs, &screen);
-    let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("panel"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Load,
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
+    let pass = overlay_pass(encoder, view, "panel");
     panel.renderer.render(&mut pass.forget_lifetime(), &jobs, &screen);
     for id in &output.textures_delta.free {
         panel.renderer.free_texture(id);

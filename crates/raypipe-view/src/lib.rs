@@ -17,7 +17,7 @@ pub mod player;
 pub mod tracer;
 
 pub use camera::CameraControl;
-pub use player::{Clock, FlyKeys, FrameReport, Player, Screen, Timings, TracerRequest, surface_config};
+pub use player::{Clock, FlyKeys, FrameReport, Player, Screen, Timings, TracerRequest, overlay_pass, surface_config};
 pub use tracer::{TraceError, Tracer, next_texture, present_format};
 
 use raypipe::gpu::{Backend, GpuContext, GpuError};

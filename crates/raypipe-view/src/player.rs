@@ -494,6 +494,31 @@ fn log_modes(modes: &Modes) {
     );
 }
 
+/// A render pass into `target` that keeps what is there (the frame the display pass drew), for
+/// what a host draws over it: a panel, an overlay.
+pub fn overlay_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &wgpu::TextureView,
+    label: &str,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
 /// The surface's configuration for a `size` frame in `format`: presented with or without waiting
 /// for the display's refresh, as `vsync` says and the surface allows.
 pub fn surface_config(
