@@ -239,19 +239,6 @@ fn rebuild_for(
     ))?))
 }
 
-/// The renderer a point is timed with: over the scene's tree, or over `rebuild`'s.
-fn timed_renderer(
-    ctx: &GpuContext,
-    packed: &PackedScene,
-    rebuild: Option<&SceneRebuild>,
-    options: RendererOptions,
-) -> anyhow::Result<Renderer> {
-    Ok(match rebuild {
-        Some(rebuild) => block_on(Renderer::with_rebuild(ctx, packed, rebuild, options))?,
-        None => block_on(Renderer::new(ctx, packed, options))?,
-    })
-}
-
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     if args.motion {
         return motion::run(&args);
@@ -304,7 +291,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     reference.check(&ctx, pipeline, accel, memory)
                 };
                 let modes = options(pipeline, memory, accel);
-                let renderer = checked.and_then(|()| timed_renderer(&ctx, &packed, rebuild.as_ref(), modes));
+                let renderer =
+                    checked.and_then(|()| crate::device::build_renderer(&ctx, &packed, rebuild.as_ref(), modes, false));
                 let mut renderer = match renderer {
                     Ok(renderer) => renderer,
                     Err(e) => {

@@ -100,18 +100,19 @@ pub fn progress_bar(show: bool, len: u64, template: &str) -> ProgressBar {
     bar
 }
 
-/// The GPU renderer for `scene`, with a spinner while the driver compiles the tracer (seconds on
-/// llvmpipe).
-fn build_renderer(
+/// The GPU renderer for `scene`, over its own tree or `rebuild`'s, with a spinner where `progress`
+/// says while the driver compiles the tracer (seconds on llvmpipe).
+pub fn build_renderer(
     ctx: &GpuContext,
     scene: &PackedScene,
     rebuild: Option<&SceneRebuild>,
-    options: &RenderOptions,
+    options: RendererOptions,
+    progress: bool,
 ) -> anyhow::Result<Renderer> {
-    let spinner = progress_bar(options.progress, 0, "{spinner} compiling the tracer, {elapsed}");
+    let spinner = progress_bar(progress, 0, "{spinner} compiling the tracer, {elapsed}");
     let renderer = match rebuild {
-        Some(rebuild) => block_on(Renderer::with_rebuild(ctx, scene, rebuild, options.renderer())),
-        None => block_on(Renderer::new(ctx, scene, options.renderer())),
+        Some(rebuild) => block_on(Renderer::with_rebuild(ctx, scene, rebuild, options)),
+        None => block_on(Renderer::new(ctx, scene, options)),
     };
     spinner.finish_and_clear();
     Ok(renderer?)
@@ -132,7 +133,7 @@ fn render_cpu(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Fr
 pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<RenderOutcome> {
     match open_device(options)? {
         Some(ctx) => {
-            let mut renderer = build_renderer(&ctx, scene, None, options)?;
+            let mut renderer = build_renderer(&ctx, scene, None, options.renderer(), options.progress)?;
             if options.warm_up {
                 block_on(renderer.read_frame())?;
             }
@@ -232,7 +233,7 @@ pub fn render_frames(
                 options.accel,
                 MortonBits::Bits30,
             ))?;
-            let mut renderer = build_renderer(&ctx, &packed, Some(&rebuild), options)?;
+            let mut renderer = build_renderer(&ctx, &packed, Some(&rebuild), options.renderer(), options.progress)?;
             bar.set_message("");
             for &(frame, t) in times {
                 // The first frame too: a skinning pass starts at the scene's time 0.
