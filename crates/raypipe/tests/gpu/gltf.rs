@@ -230,6 +230,20 @@ fn glass_and_mirror_match_their_toml_twin(ctx: &GpuContext) {
     assert!(lit > gltf_gpu.color.len() / 4, "the image is dark");
 }
 
+/// `scene`, its BVH built on the CPU, traced by the threaded walk on the GPU in storage and in
+/// texture memory, each frame matching the CPU's (images named `name-MEMORY`); returns how many of
+/// the CPU frame's pixels hit something.
+fn gpu_matches_cpu(ctx: &GpuContext, scene: &Scene, name: &str) -> usize {
+    let mut packed = PackedScene::new(scene).unwrap();
+    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    let cpu = render_cpu(&packed, Accel::Threaded);
+    for memory in [MemoryMode::Storage, MemoryMode::Texture] {
+        let gpu = render_gpu(ctx, &packed, memory, Accel::Threaded);
+        assert_frames_match(&format!("{name}-{memory:?}"), &gpu, &cpu);
+    }
+    cpu.depth().data.iter().filter(|d| d.is_finite()).count()
+}
+
 /// The shared glTF samples (a texture, node animation, skins), posed 40 % into their animation,
 /// on the GPU in storage and texture memory against the CPU.
 fn gltf_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path) {
@@ -246,18 +260,11 @@ fn gltf_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path) {
         let mut scene = loaded.at_time(time).unwrap();
         scene.settings.width = 64;
         scene.settings.height = 48;
-        let mut packed = PackedScene::new(&scene).unwrap();
-        packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
-        let cpu = render_cpu(&packed, Accel::Threaded);
-        let hits = cpu.depth().data.iter().filter(|d| d.is_finite()).count();
+        let hits = gpu_matches_cpu(ctx, &scene, &format!("gltf-sample-{name}"));
         assert!(
             hits > 64 * 48 / 10,
             "{name}: the model is out of view ({hits} pixels hit)"
         );
-        for memory in [MemoryMode::Storage, MemoryMode::Texture] {
-            let gpu = render_gpu(ctx, &packed, memory, Accel::Threaded);
-            assert_frames_match(&format!("gltf-sample-{name}-{memory:?}"), &gpu, &cpu);
-        }
     }
 }
 
@@ -292,13 +299,7 @@ fn khronos_models_on_the_floor_match_the_cpu(ctx: &GpuContext, models: &std::pat
         );
         scene.settings.width = 96;
         scene.settings.height = 72;
-        let mut packed = PackedScene::new(&scene).unwrap();
-        packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
-        let cpu = render_cpu(&packed, Accel::Threaded);
-        for memory in [MemoryMode::Storage, MemoryMode::Texture] {
-            let gpu = render_gpu(ctx, &packed, memory, Accel::Threaded);
-            assert_frames_match(&format!("khronos-{file}-{memory:?}").replace('/', "-"), &gpu, &cpu);
-        }
+        gpu_matches_cpu(ctx, &scene, &format!("khronos-{file}").replace('/', "-"));
     }
 }
 
@@ -346,15 +347,8 @@ fn every_khronos_sample_matches_the_cpu(ctx: &GpuContext, models: &std::path::Pa
         };
         scene.settings.width = 48;
         scene.settings.height = 36;
-        let mut packed = PackedScene::new(&scene).unwrap();
-        packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
-        let cpu = render_cpu(&packed, Accel::Threaded);
-        let hits = cpu.depth().data.iter().filter(|d| d.is_finite()).count();
+        let hits = gpu_matches_cpu(ctx, &scene, &format!("khronos-{name}"));
         assert!(hits > 0, "{name}: nothing in view");
-        for memory in [MemoryMode::Storage, MemoryMode::Texture] {
-            let gpu = render_gpu(ctx, &packed, memory, Accel::Threaded);
-            assert_frames_match(&format!("khronos-{name}-{memory:?}"), &gpu, &cpu);
-        }
     }
 }
 
