@@ -31,10 +31,7 @@ fn scene() -> Result<Scene, Box<dyn Error>> {
             height: 240,
             ..RenderSettings::default()
         },
-        lights: vec![Light {
-            position: Vec3::new(3.0, 5.0, -4.0),
-            color: Vec3::splat(0.9),
-        }],
+        lights: vec![Light::constant(Vec3::new(3.0, 5.0, -4.0), Vec3::splat(0.9))],
         materials: vec![
             material(Vec3::splat(0.8)),
             material(Vec3::splat(0.3)),

@@ -8,7 +8,8 @@ use common::gltf_file::{GltfBuilder, Packing, glb, textured_quad};
 use common::test_dir;
 use glam::Vec3;
 use raypipe::scene::Scene;
-use raypipe::scene::gltf::{Files, GltfLight, GltfScene, parse};
+use raypipe::scene::gltf::{Files, GltfScene, parse};
+use raypipe::scene::{Light, LightKind, TextureMap};
 use serde_json::{Value, json};
 
 const TRIANGLE: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
@@ -227,19 +228,17 @@ fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
     assert!(close(camera.target - camera.eye, Vec3::NEG_X), "{camera:?}");
     assert!(close(camera.up, Vec3::Y), "{camera:?}");
     assert!((camera.fov_degrees - 0.5f32.to_degrees()).abs() < 1e-4);
-    let GltfLight::Point(light) = file.lights[0] else {
-        panic!("{:?}", file.lights)
-    };
     assert_eq!(
-        (light.position, light.color),
-        (Vec3::new(0.0, 3.0, 0.0), Vec3::new(2.0, 1.0, 0.5))
+        file.lights[0],
+        Light {
+            position: Vec3::new(0.0, 3.0, 0.0),
+            color: Vec3::new(2.0, 1.0, 0.5),
+            kind: LightKind::Point { range: None },
+        }
     );
     assert_eq!(
-        file.lights[1],
-        GltfLight::Directional {
-            direction: Vec3::NEG_Z,
-            color: Vec3::splat(0.5)
-        }
+        (file.lights[1].color, file.lights[1].kind),
+        (Vec3::splat(0.5), LightKind::Directional { direction: Vec3::NEG_Z })
     );
 
     let path = b.write(&test_dir("gltf-camera"), "scene", Packing::Glb);
@@ -247,8 +246,8 @@ fn the_first_perspective_camera_and_the_lights_come_from_their_nodes() {
     assert_eq!(scene.camera, camera);
     assert!(scene.planes.is_empty(), "a file with a camera gets no floor");
     assert_eq!(scene.lights.len(), 2);
-    // The sun stands far up its beam, behind the scene's centre.
-    assert!(scene.lights[1].position.z > 100.0, "{:?}", scene.lights[1]);
+    // Truly directional: the light keeps its direction, placed by the file's (identity) rotation.
+    assert_eq!(scene.lights[1].kind, LightKind::Directional { direction: Vec3::NEG_Z });
 }
 
 fn without_camera_and_lights_a_file_is_framed_as_a_model() {
@@ -304,7 +303,7 @@ fn textures_keep_their_texels_and_wrap_modes() {
     // sRGB 255 and 0 decode to exactly 1 and 0.
     assert_eq!(texture.texel(0, 0), [1.0, 0.0, 0.0, 1.0]);
     assert_eq!(texture.texel(1, 1), [1.0, 1.0, 1.0, 1.0]);
-    assert_eq!(file.materials[0].texture, Some(0));
+    assert_eq!(file.materials[0].texture, Some(TextureMap::plain(0)));
     assert_eq!(file.primitives[0].uvs.as_ref().unwrap()[1], glam::Vec2::new(2.0, 2.0));
 }
 

@@ -3,6 +3,7 @@
 //! the fallback where no adapter exists, and a baseline for benchmarks.
 
 pub mod accel;
+pub mod brdf;
 pub mod intersect;
 pub mod shade;
 pub mod trace;
@@ -50,8 +51,7 @@ pub fn render_with(
                     let mut surface = [0.0; 4];
                     for sample in 0..samples {
                         let mut tracer = Tracer::new(scene, accel).expect("checked above");
-                        let position = pixel.as_vec2() + trace::sample_offset(pixel, sample);
-                        let trace = tracer.trace_pixel(tracer.camera_ray(position));
+                        let trace = tracer.trace_sample(pixel, sample);
                         let counted = match count {
                             Count::Rays => trace.rays,
                             Count::Cost => trace.cost,

@@ -1,9 +1,10 @@
-//! Surfaces and Whitted shading: the twin of `shaders/shade.wgsl`.
+//! Surfaces, their materials and maps, lights, and direct light: the twin of `shaders/shade.wgsl`.
 
+use super::brdf::{GltfSurface, gltf_brdf};
 use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
 use crate::bvh::layout::NONE;
-use crate::records::constants::RAY_BIAS;
-use crate::records::{GpuMaterial, GpuTriangle, PackedScene};
+use crate::records::constants::{LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_SPOT, MODEL_GLTF, RAY_BIAS, T_FAR};
+use crate::records::{GpuLight, GpuMaterial, GpuTextureMap, GpuTriangle, PackedScene};
 use crate::scene::Wrap;
 use glam::{IVec2, Vec2, Vec3, Vec4};
 
@@ -117,8 +118,8 @@ pub fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
     i.clamp(0, size - 1)
 }
 
-fn texture_texel(scene: &PackedScene, material: &GpuMaterial, x: i32, y: i32) -> Vec4 {
-    let index = material.texture_offset + y as u32 * material.texture_width + x as u32;
+fn texture_texel(scene: &PackedScene, map: &GpuTextureMap, x: i32, y: i32) -> Vec4 {
+    let index = map.offset + y as u32 * map.width + x as u32;
     Vec4::from_array(scene.texture_pixels.0[index as usize].map(|b| half::f16::from_bits(b).to_f32()))
 }
 
@@ -126,11 +127,14 @@ fn lerp4(a: Vec4, b: Vec4, t: f32) -> Vec4 {
     a * (1.0 - t) + b * t
 }
 
-/// The material's texture at `uv`. Bilinear filtering without mipmaps: the four texels around the
-/// point (texel centres at +0.5), weighted by its distance to them.
-pub fn sample_texture(scene: &PackedScene, material: &GpuMaterial, uv: Vec2) -> Vec4 {
-    let (wrap_u, wrap_v) = (material.texture_wrap & 0xff, material.texture_wrap >> 8);
-    let size = IVec2::new(material.texture_width as i32, material.texture_height as i32);
+/// The map's texture at `uv`, carried there by its transform. Bilinear filtering without
+/// mipmaps: the four texels around the point (texel centres at +0.5), weighted by its distance to
+/// them.
+pub fn sample_texture(scene: &PackedScene, map: &GpuTextureMap, uv: Vec2) -> Vec4 {
+    let point = uv.extend(1.0);
+    let uv = Vec2::new(v3(map.transform_u).dot(point), v3(map.transform_v).dot(point));
+    let (wrap_u, wrap_v) = (map.wrap & 0xff, map.wrap >> 8);
+    let size = IVec2::new(map.width as i32, map.height as i32);
     let p = Vec2::new(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * size.as_vec2() - 0.5;
     let corner = p.floor();
     let f = p - corner;
@@ -139,22 +143,47 @@ pub fn sample_texture(scene: &PackedScene, material: &GpuMaterial, uv: Vec2) -> 
     let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
     let y0 = wrap_texel(i.y, size.y, wrap_v);
     let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
-    let texel = |x, y| texture_texel(scene, material, x, y);
+    let texel = |x, y| texture_texel(scene, map, x, y);
     let near_row = lerp4(texel(x0, y0), texel(x1, y0), f.x);
     let far_row = lerp4(texel(x0, y1), texel(x1, y1), f.x);
     lerp4(near_row, far_row, f.y)
 }
 
-/// The surface's material: its colour times its texture's at the hit, where it has both.
+/// Texture map `index` at `uv`, or `None` where there is no map.
+fn sample_map(scene: &PackedScene, index: u32, uv: Vec2) -> Option<Vec4> {
+    (index != NONE).then(|| sample_texture(scene, &scene.texture_maps[index as usize], uv))
+}
+
+/// The surface's material, its maps applied at the hit (where the primitive has texture
+/// coordinates): the base colour's, and a glTF material's metalness and roughness (blue and green)
+/// and emission.
 pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
     let mut material = scene.materials[surface.material as usize];
-    if material.texture_offset != NONE
-        && let Some(uv) = surface.uv
-    {
-        let texel = sample_texture(scene, &material, uv);
+    let Some(uv) = surface.uv else {
+        return material;
+    };
+    if let Some(texel) = sample_map(scene, material.base_map, uv) {
         material.color = (v3(material.color) * texel.truncate()).to_array();
     }
+    if material.model == MODEL_GLTF {
+        if let Some(texel) = sample_map(scene, material.metallic_roughness_map, uv) {
+            material.roughness *= texel.y;
+            material.metallic *= texel.z;
+        }
+        if let Some(texel) = sample_map(scene, material.emissive_map, uv) {
+            material.emission = (v3(material.emission) * texel.truncate()).to_array();
+        }
+    }
     material
+}
+
+/// The share of ambient light that reaches a glTF surface: 1 blended toward its occlusion map's
+/// red by the map's strength.
+pub fn ambient_share(scene: &PackedScene, surface: &Surface, material: &GpuMaterial) -> f32 {
+    match surface.uv.and_then(|uv| sample_map(scene, material.occlusion_map, uv)) {
+        Some(texel) => 1.0 + material.occlusion_strength * (texel.x - 1.0),
+        None => 1.0,
+    }
 }
 
 /// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's
@@ -173,9 +202,63 @@ fn triangle_shading(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray, norm
     if shading.dot(normal) < 0.0 { -shading } else { shading }
 }
 
+/// How a light reaches a point: the unit direction to it, how far a shadow ray runs, and E, the
+/// irradiance on a surface facing it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightArrival {
+    pub dir: Vec3,
+    pub distance: f32,
+    pub irradiance: Vec3,
+}
+
+/// KHR_lights_punctual's recommended falloff: inverse-square, windowed smoothly to zero at
+/// `range` (none where it is 0).
+pub fn range_attenuation(range: f32, distance: f32) -> f32 {
+    let inverse_square = 1.0 / (distance * distance);
+    if range <= 0.0 {
+        return inverse_square;
+    }
+    let ratio = distance / range;
+    let ratio2 = ratio * ratio;
+    (1.0 - ratio2 * ratio2).clamp(0.0, 1.0) * inverse_square
+}
+
+/// What `light` gives the point `position`, by its kind (`light_arrival`).
+pub fn light_arrival(light: &GpuLight, position: Vec3) -> LightArrival {
+    if light.kind == LIGHT_DIRECTIONAL {
+        return LightArrival {
+            dir: -v3(light.direction),
+            distance: T_FAR,
+            irradiance: v3(light.color),
+        };
+    }
+    let to_light = v3(light.position) - position;
+    let distance = to_light.length();
+    let dir = to_light / distance;
+    let mut irradiance = v3(light.color);
+    if light.kind != LIGHT_CONSTANT {
+        irradiance *= range_attenuation(light.range, distance);
+    }
+    if light.kind == LIGHT_SPOT {
+        let cone = (v3(light.direction).dot(-dir) * light.spot_scale + light.spot_offset).clamp(0.0, 1.0);
+        irradiance *= cone * cone;
+    }
+    LightArrival {
+        dir,
+        distance,
+        irradiance,
+    }
+}
+
+/// Whether a light's shadow ray is worth casting: the paper's lights always are (their ray
+/// counts stay), a glTF light where it gives anything.
+fn lit(light: &GpuLight, arrival: &LightArrival) -> bool {
+    light.kind == LIGHT_CONSTANT || arrival.irradiance.max_element() > 0.0
+}
+
 /// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
-/// Phong. `normal` (geometric) and `shading` face the viewer; `view` points from the surface to
-/// the viewer. `occluded` casts a shadow ray (and counts it).
+/// Phong times the light's E. `normal` (geometric) and `shading` face the viewer; `view` points
+/// from the surface to the viewer. `occluded` casts a shadow ray (and counts it).
 pub fn direct_light(
     scene: &PackedScene,
     surface: &Surface,
@@ -190,14 +273,13 @@ pub fn direct_light(
     let mut color = globals.ambient * albedo;
     let origin = offset_origin(surface, normal);
     for light in &scene.lights {
-        let to_light = v3(light.position) - surface.position;
-        let distance = to_light.length();
-        let l = to_light / distance;
+        let arrival = light_arrival(light, surface.position);
+        let l = arrival.dir;
         let n_dot_l = shading.dot(l);
-        if n_dot_l <= 0.0 {
+        if n_dot_l <= 0.0 || !lit(light, &arrival) {
             continue;
         }
-        if occluded(&Ray::new(origin, l), distance) {
+        if occluded(&Ray::new(origin, l), arrival.distance) {
             continue;
         }
         let mut highlight = 0.0;
@@ -205,7 +287,53 @@ pub fn direct_light(
         if r_dot_v > 0.0 && material.specular > 0.0 {
             highlight = material.specular * r_dot_v.powf(material.shininess);
         }
-        color += v3(light.color) * (albedo * n_dot_l + Vec3::splat(highlight));
+        color += arrival.irradiance * (albedo * n_dot_l + Vec3::splat(highlight));
+    }
+    color
+}
+
+/// A glTF material's parameters, as the BRDF takes them.
+pub fn gltf_surface(material: &GpuMaterial) -> GltfSurface {
+    GltfSurface {
+        base: v3(material.color),
+        metallic: material.metallic,
+        roughness: material.roughness,
+        transmission: material.transmit,
+        ior: material.ior,
+        specular_factor: material.specular_factor,
+        specular_color: v3(material.specular_color),
+    }
+}
+
+/// A glTF surface's direct light: the ambient light on its diffuse share (times `ambient_share`),
+/// plus, for every light that it faces and that nothing blocks, E times the BRDF times the cosine.
+/// Arguments as [`direct_light`]'s.
+#[allow(clippy::too_many_arguments)]
+pub fn gltf_direct_light(
+    scene: &PackedScene,
+    surface: &Surface,
+    normal: Vec3,
+    shading: Vec3,
+    view: Vec3,
+    material: &GpuMaterial,
+    ambient_share: f32,
+    mut occluded: impl FnMut(&Ray, f32) -> bool,
+) -> Vec3 {
+    let s = gltf_surface(material);
+    let diffuse = s.base * ((1.0 - s.metallic) * (1.0 - s.transmission));
+    let mut color = scene.globals.scene.ambient * ambient_share * diffuse;
+    let origin = offset_origin(surface, normal);
+    for light in &scene.lights {
+        let arrival = light_arrival(light, surface.position);
+        let l = arrival.dir;
+        let n_dot_l = shading.dot(l);
+        if n_dot_l <= 0.0 || !lit(light, &arrival) {
+            continue;
+        }
+        if occluded(&Ray::new(origin, l), arrival.distance) {
+            continue;
+        }
+        color += arrival.irradiance * n_dot_l * gltf_brdf(&s, shading, view, l);
     }
     color
 }

@@ -1,10 +1,16 @@
-//! The Whitted tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
+//! The tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
 
 use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
+use super::brdf::sample_specular;
 use super::intersect::{Hit, HitKind, Primitives, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
-use super::shade::{direct_light, fresnel_schlick, offset_origin, reflect, surface_at, surface_material};
+use super::shade::{
+    Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface, offset_origin, reflect,
+    surface_at, surface_material,
+};
 use crate::error::MissingBvh;
 use crate::modes::Accel;
+use crate::records::GpuMaterial;
+use crate::records::constants::MODEL_GLTF;
 pub use crate::records::constants::T_FAR;
 use crate::records::constants::{MIN_WEIGHT, R2_STEP};
 use crate::records::{PackedBvh, PackedScene};
@@ -47,6 +53,9 @@ pub struct Tracer<'a> {
     /// The scene's BVH; the BVH walks need it.
     bvh: Option<&'a PackedBvh>,
     pub ray_count: u32,
+    /// The sample's random sequence: its seed and the draws so far.
+    seed: u32,
+    draws: u32,
 }
 
 impl<'a> Tracer<'a> {
@@ -61,6 +70,8 @@ impl<'a> Tracer<'a> {
             accel,
             bvh,
             ray_count: 0,
+            seed: 0,
+            draws: 0,
         })
     }
 
@@ -147,13 +158,23 @@ impl<'a> Tracer<'a> {
         let shading = if entering { surface.shading } else { -surface.shading };
         let view = -ray.dir;
         let scene = self.scene;
-        let light = direct_light(scene, &surface, normal, shading, view, &material, |ray, t_max| {
+        let gltf = material.model == MODEL_GLTF;
+        let mut occluded = |ray: &Ray, t_max: f32| {
             self.ray_count += 1;
             self.occluded(ray, t_max)
-        });
+        };
+        let light = if gltf {
+            let share = ambient_share(scene, &surface, &material);
+            gltf_direct_light(scene, &surface, normal, shading, view, &material, share, &mut occluded)
+        } else {
+            direct_light(scene, &surface, normal, shading, view, &material, &mut occluded)
+        };
         result.color += task.weight * (light + v3(material.emission));
         if task.depth >= self.scene.max_depth {
             return branches;
+        }
+        if gltf {
+            return self.gltf_branches(task, &surface, normal, shading, view, &material);
         }
 
         // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
@@ -189,6 +210,60 @@ impl<'a> Tracer<'a> {
             depth,
         };
         branches
+    }
+
+    /// A glTF surface's rays (`gltf_branches`): the reflected one weighted by the Fresnel term (drawn
+    /// from the GGX lobe where the surface is rough), and the transmitted one of
+    /// KHR_materials_transmission. Its surfaces are thin walls: the transmitted ray goes on in the
+    /// incoming direction, or, rough, in the reflected ray's mirror image through the surface.
+    fn gltf_branches(
+        &mut self,
+        task: &RayTask,
+        surface: &Surface,
+        normal: Vec3,
+        shading: Vec3,
+        view: Vec3,
+        material: &GpuMaterial,
+    ) -> Branches {
+        let s = gltf_surface(material);
+        let sample = sample_specular(&s, shading, view, self.random_pair());
+        let depth = task.depth + 1;
+        let transmitted = sample.dir - 2.0 * sample.dir.dot(shading) * shading;
+        let transmit_share =
+            (1.0 - s.metallic) * s.transmission * (1.0 - sample.dielectric_fresnel.max_element()) * sample.share;
+        Branches {
+            reflected: RayTask {
+                origin: offset_origin(surface, normal),
+                dir: sample.dir,
+                weight: task.weight * sample.weight,
+                depth,
+            },
+            refracted: RayTask {
+                origin: offset_origin(surface, -normal),
+                dir: transmitted,
+                weight: task.weight * s.base * transmit_share,
+                depth,
+            },
+        }
+    }
+
+    /// The next two uniform numbers in [0, 1) of the sample's sequence (`random_pair`): a hash of
+    /// the sample's seed and the draw's number, the same bits as the shader's.
+    fn random_pair(&mut self) -> [f32; 2] {
+        self.draws += 1;
+        let x = hash_u32(self.seed ^ hash_u32(self.draws));
+        let y = hash_u32(x);
+        [(x >> 8) as f32, (y >> 8) as f32].map(|n| n * (1.0 / 16_777_216.0))
+    }
+
+    /// Traces sample `sample` of `pixel` (the shader's `sample_pixel`): its camera ray, and the
+    /// random numbers of its sampled reflections seeded by both.
+    pub fn trace_sample(&mut self, pixel: UVec2, sample: u32) -> PixelTrace {
+        self.seed = sample_seed(pixel, sample);
+        self.draws = 0;
+        self.ray_count = 0;
+        let position = pixel.as_vec2() + sample_offset(pixel, sample);
+        self.trace_pixel(self.camera_ray(position))
     }
 
     /// A reflected branch is traced next; its refracted sibling waits on the stack.
@@ -256,6 +331,11 @@ pub fn sample_offset(pixel: UVec2, index: u32) -> Vec2 {
     let x = scramble_x.wrapping_add(index.wrapping_mul(R2_STEP[0]));
     let y = scramble_y.wrapping_add(index.wrapping_mul(R2_STEP[1]));
     Vec2::new((x >> 8) as f32, (y >> 8) as f32) * (1.0 / 16_777_216.0)
+}
+
+/// The seed of a pixel's sample's random sequence (`sample_seed`).
+pub fn sample_seed(pixel: UVec2, sample: u32) -> u32 {
+    hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(sample)))
 }
 
 fn worth_tracing(weight: Vec3) -> bool {

@@ -5,8 +5,8 @@
 //! source serves every memory mode and acceleration structure; the pipeline adds its entry points
 //! (a full-screen triangle's vertex and fragment stages, or a compute kernel) around it.
 
-use crate::bvh::layout::NONE;
 use crate::modes::{Accel, MemoryMode, Pipeline};
+use crate::records::constants::MODEL_GLTF;
 use crate::records::packed::{MovedRecords, PackedScene};
 use crate::records::{TexelFormat, constants};
 use std::fmt::Write;
@@ -31,6 +31,7 @@ const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
 const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
 const ACCEL_STACKLESS: &str = include_str!("shaders/accel_stackless.wgsl");
 const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
+const BRDF: &str = include_str!("shaders/brdf.wgsl");
 const SHADE: &str = include_str!("shaders/shade.wgsl");
 const TRACE: &str = include_str!("shaders/trace.wgsl");
 
@@ -43,7 +44,8 @@ pub enum RecordKind {
     TriangleUvs,
     Plane,
     Light,
-    Material,
+    /// The materials' texels, then the texture maps' (`PackedScene::shading`).
+    Shading,
     /// The BVH's build layout (the stackless walk's).
     Node,
     /// The BVH depth-first in 16-byte nodes (the stack and threaded walks').
@@ -58,7 +60,7 @@ impl RecordKind {
         RecordKind::TriangleUvs,
         RecordKind::Plane,
         RecordKind::Light,
-        RecordKind::Material,
+        RecordKind::Shading,
         RecordKind::Node,
         RecordKind::ThreadedNode,
     ];
@@ -81,7 +83,7 @@ impl RecordKind {
             RecordKind::TriangleUvs => "triangle_uvs",
             RecordKind::Plane => "plane",
             RecordKind::Light => "light",
-            RecordKind::Material => "material",
+            RecordKind::Shading => "shading",
             RecordKind::Node => "node",
             RecordKind::ThreadedNode => "threaded_node",
         }
@@ -118,6 +120,8 @@ pub struct SceneFeatures {
     pub planes: bool,
     /// A material with a texture.
     pub textures: bool,
+    /// A glTF (metallic-roughness) material.
+    pub gltf_materials: bool,
     /// A material that reflects or transmits: rays beyond the primary and shadow rays.
     pub secondary_rays: bool,
 }
@@ -129,6 +133,7 @@ impl SceneFeatures {
         triangles: true,
         planes: true,
         textures: true,
+        gltf_materials: true,
         secondary_rays: true,
     };
 
@@ -137,8 +142,13 @@ impl SceneFeatures {
             spheres: !scene.spheres.is_empty(),
             triangles: !scene.triangles.is_empty(),
             planes: !scene.planes.is_empty(),
-            textures: scene.materials.iter().any(|m| m.texture_offset != NONE),
-            secondary_rays: scene.materials.iter().any(|m| m.reflect > 0.0 || m.transmit > 0.0),
+            textures: !scene.texture_maps.is_empty(),
+            gltf_materials: scene.materials.iter().any(|m| m.model == MODEL_GLTF),
+            // A glTF material always reflects some light: its Fresnel term is never zero.
+            secondary_rays: scene
+                .materials
+                .iter()
+                .any(|m| m.model == MODEL_GLTF || m.reflect > 0.0 || m.transmit > 0.0),
         }
     }
 }
@@ -177,6 +187,7 @@ pub fn compose(config: &ShaderConfig) -> String {
     writeln!(w, "const HAS_TRIANGLES: bool = {};", features.triangles).unwrap();
     writeln!(w, "const HAS_PLANES: bool = {};", features.planes).unwrap();
     writeln!(w, "const HAS_TEXTURES: bool = {};", features.textures).unwrap();
+    writeln!(w, "const HAS_GLTF_MATERIALS: bool = {};", features.gltf_materials).unwrap();
     writeln!(w, "const HAS_SECONDARY_RAYS: bool = {};", features.secondary_rays).unwrap();
     writeln!(w, "const BVH_STACK_SIZE: u32 = {}u;", config.bvh_depth.max(1)).unwrap();
     writeln!(w, "const COMPUTE_TILE: u32 = {COMPUTE_TILE}u;").unwrap();
@@ -242,7 +253,7 @@ pub fn compose(config: &ShaderConfig) -> String {
         Pipeline::Fragment => FULLSCREEN,
         Pipeline::Compute => COMPUTE,
     };
-    for part in [TEXELS, INTERSECT, accel, SHADE, TRACE, entry_points] {
+    for part in [TEXELS, INTERSECT, accel, BRDF, SHADE, TRACE, entry_points] {
         source.push('\n');
         source.push_str(part);
     }

@@ -359,7 +359,7 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn Rec
         (RecordKind::TriangleUvs, &scene.triangle_uvs),
         (RecordKind::Plane, &scene.planes),
         (RecordKind::Light, &scene.lights),
-        (RecordKind::Material, &scene.materials),
+        (RecordKind::Shading, &scene.shading),
     ];
     // A scene whose BVH is rebuilt on the GPU has none of its own: its node arrays come shared.
     static NO_NODES: Vec<GpuNode> = Vec::new();

@@ -24,6 +24,20 @@ pub const NO_HIT: f32 = -1.0;
 /// fixed point, so that sample positions are integer arithmetic: the same bits on every device.
 pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
 
+/// `GpuMaterial::model`: the paper's Whitted material.
+pub const MODEL_WHITTED: u32 = 0;
+/// `GpuMaterial::model`: glTF's metallic-roughness material.
+pub const MODEL_GLTF: u32 = 1;
+
+/// `GpuLight::kind` (`scene::LightKind::code`): the paper's light, E its colour everywhere.
+pub const LIGHT_CONSTANT: u32 = 0;
+/// A KHR_lights_punctual point light: candela, inverse-square.
+pub const LIGHT_POINT: u32 = 1;
+/// A point light in a cone.
+pub const LIGHT_SPOT: u32 = 2;
+/// Parallel light in lux.
+pub const LIGHT_DIRECTIONAL: u32 = 3;
+
 /// The constants above as WGSL declarations. Floats print in Rust's shortest round-trip form, so
 /// the shader's literal is the same f32.
 pub fn wgsl() -> String {
@@ -47,6 +61,12 @@ pub fn wgsl() -> String {
         ("LEAF_BIT", LEAF_BIT),
         ("R2_STEP_X", R2_STEP[0]),
         ("R2_STEP_Y", R2_STEP[1]),
+        ("MODEL_WHITTED", MODEL_WHITTED),
+        ("MODEL_GLTF", MODEL_GLTF),
+        ("LIGHT_CONSTANT", LIGHT_CONSTANT),
+        ("LIGHT_POINT", LIGHT_POINT),
+        ("LIGHT_SPOT", LIGHT_SPOT),
+        ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
     ] {
         writeln!(out, "const {name}: u32 = {value:#x}u;").unwrap();
     }

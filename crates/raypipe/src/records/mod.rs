@@ -11,7 +11,7 @@ pub mod packed;
 pub mod texels;
 
 pub use packed::{PackedBvh, PackedScene};
-pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, TexelFormat, TexturePixels};
+pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, ShadingTexel, TexelFormat, TexturePixels};
 
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::GpuNode;
@@ -219,35 +219,75 @@ pub struct GpuPlane {
     pub _pad: f32,
 }
 
+/// A light (`scene::Light`): its irradiance at normal incidence, E, follows from `kind`
+/// (`LightKind::code`, `LIGHT_*` in the preamble).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLight {
+    /// Unused by a directional light.
     pub position: [f32; 3],
-    pub _pad0: f32,
+    pub kind: u32,
+    /// E (constant), candela (point, spot) or lux (directional), per channel.
     pub color: [f32; 3],
-    pub _pad1: f32,
+    /// Where a point or spot light's window reaches zero; 0 for none.
+    pub range: f32,
+    /// Unit: where a spot light points, or where a directional light's light travels.
+    pub direction: [f32; 3],
+    /// A spot's cone as KHR_lights_punctual computes it: the attenuation is
+    /// clamp(cos(angle to the axis) * spot_scale + spot_offset, 0, 1)².
+    pub spot_scale: f32,
+    pub spot_offset: f32,
+    pub _pad: [f32; 3],
 }
 
+/// A material (`scene::Material`): the Whitted fields first, then glTF's metallic-roughness ones,
+/// which `model` says to use (`MODEL_WHITTED`, `MODEL_GLTF`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
+    /// Whitted: diffuse albedo; glTF: base colour.
     pub color: [f32; 3],
     pub specular: f32,
     pub shininess: f32,
     pub reflect: f32,
     pub transmit: f32,
     pub ior: f32,
-    /// Added to the shaded colour.
+    /// Added to the shaded colour (times the emissive map's colour, where there is one).
     pub emission: [f32; 3],
-    /// The base-colour texture: its first texel among all textures' texels (row by row,
-    /// `texture_width` to a row), or `NONE` where the material has none. Travelling in the
-    /// material, a texture needs no array (and binding) of its own.
-    pub texture_offset: u32,
-    pub texture_width: u32,
-    pub texture_height: u32,
-    /// Its wrap modes, `wrap_u | wrap_v << 8` (`Wrap::code`s).
-    pub texture_wrap: u32,
+    pub model: u32,
+    /// glTF: KHR_materials_specular's colour factor.
+    pub specular_color: [f32; 3],
+    pub metallic: f32,
+    pub roughness: f32,
+    /// glTF: KHR_materials_specular's strength.
+    pub specular_factor: f32,
+    pub occlusion_strength: f32,
+    /// The maps, each an index into the texture maps or `NONE`: base colour (both models), then
+    /// glTF's metallic-roughness, occlusion and emissive maps.
+    pub base_map: u32,
+    pub metallic_roughness_map: u32,
+    pub occlusion_map: u32,
+    pub emissive_map: u32,
     pub _pad: u32,
+}
+
+/// A texture as a material maps it (`scene::TextureMap`): where its texels are and how texture
+/// coordinates reach them. Travelling in their own small array, a texture's size and wrap need no
+/// room in every material.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTextureMap {
+    /// The texture's first texel among all textures' texels (row by row, `width` to a row).
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    /// The wrap modes, `wrap_u | wrap_v << 8` (`Wrap::code`s).
+    pub wrap: u32,
+    /// The texture transform's rows: (u', v') = (dot(transform_u, (u, v, 1)), dot(transform_v, (u, v, 1))).
+    pub transform_u: [f32; 3],
+    pub _pad0: f32,
+    pub transform_v: [f32; 3],
+    pub _pad1: f32,
 }
 
 /// One host struct's layout, for the naga layout test.
@@ -285,11 +325,12 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuTriangleNormals, "TriangleNormals", [n0, n1, n2]),
     struct_layout!(GpuTriangleUvs, "TriangleUvs", [uv01, uv2]),
     struct_layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
-    struct_layout!(GpuLight, "Light", [position, color]),
+    struct_layout!(GpuLight, "Light", [position, kind, color, range, direction, spot_scale, spot_offset]),
     struct_layout!(GpuMaterial, "Material", [
-        color, specular, shininess, reflect, transmit, ior, emission, texture_offset, texture_width, texture_height,
-        texture_wrap,
+        color, specular, shininess, reflect, transmit, ior, emission, model, specular_color, metallic, roughness,
+        specular_factor, occlusion_strength, base_map, metallic_roughness_map, occlusion_map, emissive_map,
     ]),
+    struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, transform_v]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
     struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
 ];

@@ -1,8 +1,8 @@
 //! A scene packed into records: what both tracers read.
 
 use super::{
-    GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere, GpuTriangle,
-    GpuTriangleNormals, GpuTriangleUvs, MAX_TEXEL_INTEGER, TexturePixels,
+    GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere, GpuTextureMap,
+    GpuTriangle, GpuTriangleNormals, GpuTriangleUvs, MAX_TEXEL_INTEGER, ShadingTexel, TexturePixels,
 };
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::{GpuNode, NONE};
@@ -11,7 +11,11 @@ use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree, thr
 use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
 use crate::modes::Builder;
-use crate::scene::{Camera, Moved, Plane, Scene, Sphere, Triangle};
+use crate::records::constants::{
+    LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MODEL_GLTF, MODEL_WHITTED,
+};
+use crate::records::texels::GpuRecord;
+use crate::scene::{Camera, Light, LightKind, Moved, Plane, Scene, Sphere, TextureMap, Triangle};
 use glam::Vec3;
 
 /// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
@@ -79,7 +83,13 @@ pub struct PackedScene {
     pub planes: Vec<GpuPlane>,
     pub lights: Vec<GpuLight>,
     pub materials: Vec<GpuMaterial>,
-    /// The textures' texels, one texture after another; materials say where theirs start.
+    /// The textures as materials map them.
+    pub texture_maps: Vec<GpuTextureMap>,
+    /// The materials' texels, then the texture maps': the one array the shader reads both from
+    /// (`load_shading`), so that they take one binding (storage memory has 8 a stage). Made with
+    /// the two above by [`PackedScene::new`].
+    pub shading: Vec<ShadingTexel>,
+    /// The textures' texels, one texture after another; texture maps say where theirs start.
     pub texture_pixels: TexturePixels,
     /// The BVH, once [`PackedScene::build_bvh`] or [`PackedScene::set_bvh`] made it.
     pub bvh: Option<PackedBvh>,
@@ -126,17 +136,12 @@ impl PackedScene {
         let spheres = scene.spheres.iter().map(pack_sphere).collect();
         let (triangles, triangle_normals, triangle_uvs) = pack_triangles(&scene.triangles);
         let planes = scene.planes.iter().map(pack_plane).collect();
-        let lights = scene
-            .lights
-            .iter()
-            .map(|l| GpuLight {
-                position: l.position.to_array(),
-                _pad0: 0.0,
-                color: l.color.to_array(),
-                _pad1: 0.0,
-            })
-            .collect();
-        let (materials, texture_pixels) = pack_materials(scene);
+        let lights = scene.lights.iter().map(pack_light).collect();
+        let (materials, texture_maps, texture_pixels) = pack_materials(scene);
+        let mut shading = Vec::new();
+        materials.iter().for_each(|m| m.push_texels(&mut shading));
+        texture_maps.iter().for_each(|m| m.push_texels(&mut shading));
+        let shading = shading.into_iter().map(ShadingTexel).collect();
         Ok(Self {
             globals,
             max_depth: s.max_depth,
@@ -147,6 +152,8 @@ impl PackedScene {
             planes,
             lights,
             materials,
+            texture_maps,
+            shading,
             texture_pixels,
             bvh: None,
         })
@@ -312,9 +319,43 @@ fn pack_plane(p: &Plane) -> GpuPlane {
     }
 }
 
-/// Materials' records, and every texture's texels one after another (each material says where its
-/// texture's start).
-fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, TexturePixels) {
+fn pack_light(light: &Light) -> GpuLight {
+    let (direction, range, cone) = match light.kind {
+        LightKind::Constant => (Vec3::ZERO, None, None),
+        LightKind::Point { range } => (Vec3::ZERO, range, None),
+        LightKind::Spot {
+            direction,
+            inner_cone,
+            outer_cone,
+            range,
+        } => (direction, range, Some((inner_cone, outer_cone))),
+        LightKind::Directional { direction } => (direction, None, None),
+    };
+    // KHR_lights_punctual's own form of the smooth cone step.
+    let (spot_scale, spot_offset) = cone.map_or((0.0, 0.0), |(inner, outer)| {
+        let scale = 1.0 / (inner.cos() - outer.cos()).max(0.001);
+        (scale, -outer.cos() * scale)
+    });
+    GpuLight {
+        position: light.position.to_array(),
+        kind: match light.kind {
+            LightKind::Constant => LIGHT_CONSTANT,
+            LightKind::Point { .. } => LIGHT_POINT,
+            LightKind::Spot { .. } => LIGHT_SPOT,
+            LightKind::Directional { .. } => LIGHT_DIRECTIONAL,
+        },
+        color: light.color.to_array(),
+        range: range.unwrap_or(0.0),
+        direction: direction.to_array(),
+        spot_scale,
+        spot_offset,
+        _pad: [0.0; 3],
+    }
+}
+
+/// Materials' records, the texture maps they name, and every texture's texels one after another
+/// (each map says where its texture's start).
+fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, TexturePixels) {
     // Every texture's texels, one after another: where each starts.
     let mut texture_pixels = Vec::new();
     let texture_offsets: Vec<u32> = scene
@@ -326,13 +367,28 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, TexturePixels) {
             offset
         })
         .collect();
+    let mut maps = Vec::new();
+    let mut map_index = |map: Option<TextureMap>| {
+        let Some(map) = map else { return NONE };
+        let texture = &scene.textures[map.texture as usize];
+        let [transform_u, transform_v] = map.transform.rows();
+        maps.push(GpuTextureMap {
+            offset: texture_offsets[map.texture as usize],
+            width: texture.width,
+            height: texture.height,
+            wrap: texture.wrap[0].code() | texture.wrap[1].code() << 8,
+            transform_u,
+            _pad0: 0.0,
+            transform_v,
+            _pad1: 0.0,
+        });
+        maps.len() as u32 - 1
+    };
     let materials = scene
         .materials
         .iter()
         .map(|m| {
-            let texture = m
-                .texture
-                .map(|t| (texture_offsets[t as usize], &scene.textures[t as usize]));
+            let pbr = m.pbr.unwrap_or_default();
             GpuMaterial {
                 color: m.color.to_array(),
                 specular: m.specular,
@@ -341,13 +397,19 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, TexturePixels) {
                 transmit: m.transmit,
                 ior: m.ior,
                 emission: m.emission.to_array(),
-                texture_offset: texture.map_or(NONE, |(offset, _)| offset),
-                texture_width: texture.map_or(0, |(_, t)| t.width),
-                texture_height: texture.map_or(0, |(_, t)| t.height),
-                texture_wrap: texture.map_or(0, |(_, t)| t.wrap[0].code() | t.wrap[1].code() << 8),
+                model: if m.pbr.is_some() { MODEL_GLTF } else { MODEL_WHITTED },
+                specular_color: pbr.specular_color.to_array(),
+                metallic: pbr.metallic,
+                roughness: pbr.roughness,
+                specular_factor: pbr.specular_factor,
+                occlusion_strength: pbr.occlusion_strength,
+                base_map: map_index(m.texture),
+                metallic_roughness_map: map_index(pbr.metallic_roughness_texture),
+                occlusion_map: map_index(pbr.occlusion_texture),
+                emissive_map: map_index(pbr.emissive_texture),
                 _pad: 0,
             }
         })
         .collect();
-    (materials, TexturePixels(texture_pixels))
+    (materials, maps, TexturePixels(texture_pixels))
 }

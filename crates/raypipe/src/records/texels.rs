@@ -1,7 +1,9 @@
 //! The texture memory route: every record as rgba32float or rgba32uint texels, decoded by
 //! `texels.wgsl`.
 
-use super::{GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTriangle, GpuTriangleNormals, GpuTriangleUvs};
+use super::{
+    GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTextureMap, GpuTriangle, GpuTriangleNormals, GpuTriangleUvs,
+};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
 use bytemuck::Pod;
@@ -67,8 +69,21 @@ impl GpuRecord for GpuTriangleUvs {
     }
 }
 
+/// One texel of the materials-and-texture-maps array (`PackedScene::shading`): rgba32float bits,
+/// as `GpuRecord::push_texels` writes them, in every memory mode.
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShadingTexel(pub [u32; 4]);
+
+impl GpuRecord for ShadingTexel {
+    const WGSL_TYPE: &'static str = "vec4<f32>";
+    fn push_texels(&self, out: &mut Vec<[u32; 4]>) {
+        out.push(self.0);
+    }
+}
+
 /// Every texture's texels, one after another, as the GPU's rgba16float texture holds them (half
-/// floats' bits): the pixels `GpuMaterial::texture_offset` points into.
+/// floats' bits): the pixels `GpuTextureMap::offset` points into.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TexturePixels(pub Vec<[u16; 4]>);
 
@@ -100,8 +115,11 @@ impl GpuRecord for GpuLight {
     fn push_texels(&self, out: &mut Vec<[u32; 4]>) {
         let [px, py, pz] = self.position;
         let [r, g, b] = self.color;
-        out.push(floats([px, py, pz, 0.0]));
-        out.push(floats([r, g, b, 0.0]));
+        let [dx, dy, dz] = self.direction;
+        out.push(floats([px, py, pz, self.kind as f32]));
+        out.push(floats([r, g, b, self.range]));
+        out.push(floats([dx, dy, dz, self.spot_scale]));
+        out.push(floats([self.spot_offset, 0.0, 0.0, 0.0]));
     }
 }
 
@@ -110,13 +128,37 @@ impl GpuRecord for GpuMaterial {
     fn push_texels(&self, out: &mut Vec<[u32; 4]>) {
         let [r, g, b] = self.color;
         let [er, eg, eb] = self.emission;
+        let [sr, sg, sb] = self.specular_color;
         out.push(floats([r, g, b, self.specular]));
         out.push(floats([self.shininess, self.reflect, self.transmit, self.ior]));
-        out.push(floats([er, eg, eb, link_texel(self.texture_offset)]));
+        out.push(floats([er, eg, eb, self.model as f32]));
+        out.push(floats([sr, sg, sb, self.metallic]));
+        out.push(floats([
+            self.roughness,
+            self.specular_factor,
+            self.occlusion_strength,
+            link_texel(self.base_map),
+        ]));
+        out.push(floats([
+            link_texel(self.metallic_roughness_map),
+            link_texel(self.occlusion_map),
+            link_texel(self.emissive_map),
+            0.0,
+        ]));
+    }
+}
+
+impl GpuRecord for GpuTextureMap {
+    const WGSL_TYPE: &'static str = "TextureMap";
+    fn push_texels(&self, out: &mut Vec<[u32; 4]>) {
+        let [ua, ub, uc] = self.transform_u;
+        let [va, vb, vc] = self.transform_v;
         // The offset stays below MAX_TEXEL_INTEGER (`scene::texture::MAX_TEXELS`), so it is exact.
         out.push(floats(
-            [self.texture_width, self.texture_height, self.texture_wrap, 0].map(|n| n as f32),
+            [self.offset, self.width, self.height, self.wrap].map(|n| n as f32),
         ));
+        out.push(floats([ua, ub, uc, 0.0]));
+        out.push(floats([va, vb, vc, 0.0]));
     }
 }
 

@@ -142,14 +142,8 @@ pub fn whitted() -> Scene {
             ..RenderSettings::default()
         },
         lights: vec![
-            Light {
-                position: Vec3::new(5.0, 8.0, -6.0),
-                color: Vec3::splat(0.9),
-            },
-            Light {
-                position: Vec3::new(-6.0, 5.0, -2.0),
-                color: Vec3::splat(0.35),
-            },
+            Light::constant(Vec3::new(5.0, 8.0, -6.0), Vec3::splat(0.9)),
+            Light::constant(Vec3::new(-6.0, 5.0, -2.0), Vec3::splat(0.35)),
         ],
         materials: vec![
             diffuse(Vec3::new(0.85, 0.15, 0.1)),
@@ -210,14 +204,8 @@ fn cloud_scene(spheres: Vec<Sphere>, floor_y: f32) -> Scene {
         },
         settings: RenderSettings::default(),
         lights: vec![
-            Light {
-                position: Vec3::new(4.0, 6.0, -5.0),
-                color: Vec3::splat(0.8),
-            },
-            Light {
-                position: Vec3::new(-5.0, 3.0, -2.0),
-                color: Vec3::splat(0.3),
-            },
+            Light::constant(Vec3::new(4.0, 6.0, -5.0), Vec3::splat(0.8)),
+            Light::constant(Vec3::new(-5.0, 3.0, -2.0), Vec3::splat(0.3)),
         ],
         materials: cloud_materials(),
         spheres,

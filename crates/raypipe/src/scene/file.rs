@@ -192,10 +192,10 @@ fn set_view(scene: &mut Scene, def: &SceneDef) {
     }
 
     for l in &def.light {
-        scene.lights.push(Light {
-            position: vec3(l.get_ref().position),
-            color: l.get_ref().color.map_or(Vec3::ONE, vec3),
-        });
+        scene.lights.push(Light::constant(
+            vec3(l.get_ref().position),
+            l.get_ref().color.map_or(Vec3::ONE, vec3),
+        ));
     }
 }
 

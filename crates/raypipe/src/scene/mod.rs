@@ -9,17 +9,22 @@ pub mod animation;
 pub mod builtin;
 pub mod file;
 pub mod gltf;
+pub mod light;
 mod load;
+pub mod material;
 pub mod model;
 pub mod motion;
 pub mod texture;
 
+pub use light::{Light, LightKind};
 pub use load::{is_model_file, model_extension_list};
+pub use material::{Material, Pbr, TextureMap, TextureTransform};
 pub use motion::{Bounce, Motion, Moved};
 pub use texture::{Texture, Wrap};
 
 use crate::error::{Element, InputError};
 use glam::{Quat, Vec2, Vec3};
+use material::validate_material;
 
 /// A pinhole camera. The ray convention is documented in `docs/scene-format.md` and implemented in
 /// `records::GpuCamera` (basis) and `camera_ray` (per pixel), identically on CPU and GPU.
@@ -58,52 +63,6 @@ impl Default for RenderSettings {
             max_depth: 5,
             background: Vec3::new(0.05, 0.05, 0.1),
             ambient: 0.1,
-        }
-    }
-}
-
-/// A point light of the paper's model: no falloff, `color` a plain factor.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Light {
-    /// Where the light is.
-    pub position: Vec3,
-    /// What a surface facing the light receives, per channel.
-    pub color: Vec3,
-}
-
-/// A Whitted material: Phong local shading plus mirror reflection and Fresnel-weighted refraction.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Material {
-    /// Diffuse albedo.
-    pub color: Vec3,
-    /// Weight of the Phong highlight.
-    pub specular: f32,
-    /// The Phong exponent of the highlight.
-    pub shininess: f32,
-    /// Mirror reflectance, 0..1.
-    pub reflect: f32,
-    /// Transmittance, 0..1; split between reflection and refraction by Schlick's Fresnel term.
-    pub transmit: f32,
-    /// Index of refraction of the inside of the surface (the outside is vacuum, 1.0).
-    pub ior: f32,
-    /// Light the surface gives off itself, added to its shaded colour.
-    pub emission: Vec3,
-    /// A texture of the scene's whose colour, at the hit's texture coordinates, multiplies `color`
-    /// (on triangles that have coordinates).
-    pub texture: Option<u32>,
-}
-
-impl Default for Material {
-    fn default() -> Self {
-        Self {
-            color: Vec3::splat(0.8),
-            specular: 0.0,
-            shininess: 32.0,
-            reflect: 0.0,
-            transmit: 0.0,
-            ior: 1.5,
-            emission: Vec3::ZERO,
-            texture: None,
         }
     }
 }
@@ -257,6 +216,10 @@ impl Scene {
             if !within_reach(light.position) {
                 return Err(InputError::of(Element::Light(i), out_of_reach("position")));
             }
+            light
+                .kind
+                .check()
+                .map_err(|msg| InputError::of(Element::Light(i), msg))?;
         }
         for (i, texture) in self.textures.iter().enumerate() {
             texture.validate().map_err(|e| e.with_element(Element::Texture(i)))?;
@@ -416,37 +379,4 @@ impl RenderSettings {
         }
         Ok(())
     }
-}
-
-pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<(), String> {
-    if !finite_vec(m.color) {
-        return Err("color must be finite".into());
-    }
-    if !(finite_vec(m.emission) && m.emission.min_element() >= 0.0) {
-        return Err("emission must be finite and not negative".into());
-    }
-    if let Some(texture) = m.texture
-        && texture as usize >= texture_count
-    {
-        return Err(format!(
-            "texture index {texture} out of range ({texture_count} textures)"
-        ));
-    }
-    for (name, value) in [
-        ("specular", m.specular),
-        ("shininess", m.shininess),
-        ("reflect", m.reflect),
-        ("transmit", m.transmit),
-    ] {
-        if !(value.is_finite() && value >= 0.0) {
-            return Err(format!("{name} must be finite and not negative (got {value})"));
-        }
-    }
-    if m.reflect > 1.0 || m.transmit > 1.0 {
-        return Err("reflect and transmit must be at most 1".into());
-    }
-    if !(m.ior.is_finite() && m.ior > 0.0) {
-        return Err(format!("ior must be positive and finite (got {})", m.ior));
-    }
-    Ok(())
 }

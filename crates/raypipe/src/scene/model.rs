@@ -2,8 +2,10 @@
 //! on its surface; and the scene `raypipe render MODEL` gets, which frames one model.
 
 use super::animation::{Animated, ClipChoice, CornerNormals, PlacedInstance};
-use super::gltf::{GltfLight, GltfScene};
-use super::{Camera, Checker, Light, Material, Motion, Plane, RenderSettings, Scene, Similarity, Sphere, Triangle};
+use super::gltf::GltfScene;
+use super::{
+    Camera, Checker, Light, LightKind, Material, Motion, Plane, RenderSettings, Scene, Similarity, Sphere, Triangle,
+};
 use crate::bvh::aabb::Aabb;
 use crate::error::InputError;
 use crate::mesh::{self, Mesh};
@@ -324,10 +326,9 @@ fn add_gltf_triangles(
     }
     let material_base = scene.materials.len() as u32;
     let texture_base = scene.textures.len() as u32;
-    scene.materials.extend(gltf.materials.iter().map(|m| Material {
-        texture: m.texture.map(|t| t + texture_base),
-        ..*m
-    }));
+    scene
+        .materials
+        .extend(gltf.materials.iter().map(|m| m.with_textures_from(texture_base)));
     scene.textures.extend(gltf.textures.iter().cloned());
     let mut starts = Vec::with_capacity(gltf.primitives.len());
     for primitive in &gltf.primitives {
@@ -472,26 +473,47 @@ pub fn gltf_scene(gltf: &GltfScene, shown: &str, options: &ModelOptions) -> Resu
             scene.planes.extend(framing.floor(options.floor));
         }
     }
-    scene.lights = gltf
-        .lights
-        .iter()
-        .map(|light| match *light {
-            GltfLight::Point(light) => Light {
-                position: place.point(light.position),
-                ..light
-            },
-            // Far enough that the scene sees nearly parallel light, and well within reach.
-            GltfLight::Directional { direction, color } => Light {
-                position: framing.center - place.direction(direction) * framing.radius.max(1e-3) * 1000.0,
-                color,
-            },
-        })
-        .collect();
+    scene.lights = gltf.lights.iter().map(|light| place_light(light, &place)).collect();
     if scene.lights.is_empty() {
-        scene.lights = framing.lights();
+        // A glTF material answers E with its BRDF, a white diffuse one with E / pi: lights pi
+        // times a model's show a glTF model as bright as a model file's clay.
+        scene.lights = framing
+            .lights()
+            .into_iter()
+            .map(|light| Light {
+                color: light.color * std::f32::consts::PI,
+                ..light
+            })
+            .collect();
     }
     scene.validate().map_err(|e| e.in_origin(shown))?;
     Ok(scene)
+}
+
+/// A file's light carried by the placement (a rotation: distances, and so the units, stay).
+fn place_light(light: &Light, place: &Similarity) -> Light {
+    let kind = match light.kind {
+        LightKind::Spot {
+            direction,
+            inner_cone,
+            outer_cone,
+            range,
+        } => LightKind::Spot {
+            direction: place.direction(direction),
+            inner_cone,
+            outer_cone,
+            range,
+        },
+        LightKind::Directional { direction } => LightKind::Directional {
+            direction: place.direction(direction),
+        },
+        kind => kind,
+    };
+    Light {
+        position: place.point(light.position),
+        kind,
+        ..*light
+    }
 }
 
 /// A framed model's materials: clay for the model (material 0), then the floor's two squares.
@@ -551,14 +573,8 @@ impl Framing {
 
     fn lights(&self) -> Vec<Light> {
         vec![
-            Light {
-                position: self.center + Vec3::new(3.0, 5.0, 4.0) * self.radius,
-                color: Vec3::splat(0.8),
-            },
-            Light {
-                position: self.center + Vec3::new(-4.0, 2.0, 1.0) * self.radius,
-                color: Vec3::splat(0.3),
-            },
+            Light::constant(self.center + Vec3::new(3.0, 5.0, 4.0) * self.radius, Vec3::splat(0.8)),
+            Light::constant(self.center + Vec3::new(-4.0, 2.0, 1.0) * self.radius, Vec3::splat(0.3)),
         ]
     }
 

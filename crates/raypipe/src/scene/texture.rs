@@ -77,6 +77,20 @@ impl Texture {
         }
     }
 
+    /// A texture from 8-bit RGBA that is data, not colour (metalness and roughness, occlusion):
+    /// each value over 255, with no transfer curve.
+    pub fn from_data8(width: u32, height: u32, rgba: &[u8], wrap: [Wrap; 2]) -> Texture {
+        Texture {
+            width,
+            height,
+            texels: rgba
+                .chunks_exact(4)
+                .map(|p| [p[0], p[1], p[2], p[3]].map(|c| f16::from_f32(c as f32 / 255.0).to_bits()))
+                .collect(),
+            wrap,
+        }
+    }
+
     /// A texture from linear RGBA values, rounded to half precision.
     pub fn from_linear(width: u32, height: u32, rgba: &[[f32; 4]], wrap: [Wrap; 2]) -> Texture {
         Texture {

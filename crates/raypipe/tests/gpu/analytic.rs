@@ -94,10 +94,7 @@ fn one_quad(accel: Accel) -> PackedScene {
             up: Vec3::Y,
             fov_degrees: FOV_DEGREES,
         },
-        lights: vec![Light {
-            position: Vec3::new(0.0, 5.0, -5.0),
-            color: Vec3::ONE,
-        }],
+        lights: vec![Light::constant(Vec3::new(0.0, 5.0, -5.0), Vec3::ONE)],
         materials: vec![Material::default()],
         // Clockwise seen from +z, so counter-clockwise seen from the camera: the normal is -z.
         triangles: vec![triangle(0, 2, 1), triangle(0, 3, 2)],

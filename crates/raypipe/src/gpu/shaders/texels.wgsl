@@ -27,13 +27,23 @@ fn plane_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>)
     return Plane(t0.xyz, u32(t0.w), t1.xyz, u32(t1.w), t2.xyz, t2.w, t3.xyz);
 }
 
-fn light_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> Light {
-    return Light(t0.xyz, t1.xyz);
+fn light_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>) -> Light {
+    return Light(t0.xyz, u32(t0.w), t1.xyz, t1.w, t2.xyz, t2.w, t3.x);
 }
 
-fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>) -> Material {
-    let texture = vec3<u32>(t3.xyz);
-    return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w, t2.xyz, link_from_texel(t2.w), texture.x, texture.y, texture.z);
+// The materials-and-maps array is texels already, in every memory mode.
+fn shading_from_texels(t0: vec4<f32>) -> vec4<f32> {
+    return t0;
+}
+
+fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>, t4: vec4<f32>, t5: vec4<f32>) -> Material {
+    return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w, t2.xyz, u32(t2.w), t3.xyz, t3.w, t4.x, t4.y, t4.z,
+        link_from_texel(t4.w), link_from_texel(t5.x), link_from_texel(t5.y), link_from_texel(t5.z));
+}
+
+fn texture_map_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> TextureMap {
+    let size = vec4<u32>(t0);
+    return TextureMap(size.x, size.y, size.z, size.w, t1.xyz, t2.xyz);
 }
 
 // Node links travel as exact floats, with NONE and LEAF as -1.

@@ -1,4 +1,4 @@
-// The Whitted tracer, one pixel per fragment. Shaders cannot recurse, so the tree of rays is walked
+// The tracer, one pixel per fragment. Shaders cannot recurse, so the tree of rays is walked
 // depth-first by hand: a reflected branch is traced next, and its refracted sibling waits on an
 // explicit stack of RAY_STACK_SIZE = MAX_DEPTH + 1 entries (at most one waits per level). Mirrored
 // by src/cpu/trace.rs.
@@ -13,6 +13,9 @@ var<private> ray_count: u32;
 // (WRITE_COST) writes instead of the ray count.
 var<private> box_tests: u32;
 var<private> primary_cost: u32;
+// The sample's random sequence (sampled glossy reflections): its seed and the draws so far.
+var<private> sample_seed_value: u32;
+var<private> random_draws: u32;
 
 struct RayTask {
     origin: vec3<f32>,
@@ -34,6 +37,20 @@ fn hash_u32(value: u32) -> u32 {
     let state = value * 747796405u + 2891336453u;
     let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
     return (word >> 22u) ^ word;
+}
+
+// The seed of a pixel's sample's random sequence.
+fn sample_seed(pixel: vec2<u32>, sample: u32) -> u32 {
+    return hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(sample)));
+}
+
+// The next two uniform numbers in [0, 1) of the sample's sequence: a hash of its seed and the
+// draw's number, integer arithmetic that every device computes alike.
+fn random_pair() -> vec2<f32> {
+    random_draws += 1u;
+    let x = hash_u32(sample_seed_value ^ hash_u32(random_draws));
+    let y = hash_u32(x);
+    return vec2<f32>(vec2<u32>(x, y) >> vec2<u32>(8u)) * (1.0 / 16777216.0);
 }
 
 // Where in its pixel sample `index` looks, in [0, 1)^2. Sample 0 is the centre, so one sample is the
@@ -102,9 +119,19 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     let normal = select(-surface.normal, surface.normal, entering);
     let shading = select(-surface.shading, surface.shading, entering);
     let view = -ray.dir;
-    (*result).color += task.weight * (direct_light(surface, normal, shading, view, material) + material.emission);
+    let gltf = HAS_GLTF_MATERIALS && material.model == MODEL_GLTF;
+    var light: vec3<f32>;
+    if (gltf) {
+        light = gltf_direct_light(surface, normal, shading, view, material, ambient_share(surface, material));
+    } else {
+        light = direct_light(surface, normal, shading, view, material);
+    }
+    (*result).color += task.weight * (light + material.emission);
     if (!HAS_SECONDARY_RAYS || task.depth >= MAX_DEPTH) {
         return branches;
+    }
+    if (gltf) {
+        return gltf_branches(task, surface, normal, shading, view, material);
     }
 
     // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
@@ -130,6 +157,22 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     branches.refracted = RayTask(offset_origin(surface, -normal), refracted, task.weight * transmit_share, depth);
     branches.reflected = RayTask(offset_origin(surface, normal), reflect(ray.dir, shading), task.weight * reflect_share, depth);
     return branches;
+}
+
+// A glTF surface's rays: the reflected one weighted by the Fresnel term (drawn from the GGX lobe
+// where the surface is rough), and the transmitted one of KHR_materials_transmission. Its surfaces
+// are thin walls: the transmitted ray goes on in the incoming direction, or, rough, in the
+// reflected ray's mirror image through the surface.
+fn gltf_branches(task: RayTask, surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material) -> Branches {
+    let s = gltf_surface(material);
+    let sample = sample_specular(s, shading, view, random_pair());
+    let depth = task.depth + 1u;
+    let transmitted = sample.dir - 2.0 * dot(sample.dir, shading) * shading;
+    let transmit_share = (1.0 - s.metallic) * s.transmission * (1.0 - max3(sample.dielectric_fresnel)) * sample.share;
+    return Branches(
+        RayTask(offset_origin(surface, normal), sample.dir, task.weight * sample.weight, depth),
+        RayTask(offset_origin(surface, -normal), transmitted, task.weight * s.base * transmit_share, depth),
+    );
 }
 
 fn trace_pixel(primary: Ray) -> PixelTrace {
@@ -188,6 +231,8 @@ fn sample_pixel(pixel: vec2<u32>) -> PixelSums {
     ray_count = 0u;
     box_tests = 0u;
     let sample = globals.camera.sample;
+    sample_seed_value = sample_seed(pixel, sample);
+    random_draws = 0u;
     let traced = trace_pixel(camera_ray(vec2<f32>(pixel) + sample_offset(pixel, sample)));
     let count = select(ray_count, primary_cost, WRITE_COST);
     return summed(pixel, vec4<f32>(traced.color, f32(count)), vec4<f32>(traced.normal, traced.depth));

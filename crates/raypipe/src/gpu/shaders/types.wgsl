@@ -78,11 +78,20 @@ struct Plane {
     bitangent: vec3<f32>,
 }
 
+// E, the irradiance at normal incidence, follows from kind (LIGHT_* from the preamble).
 struct Light {
     position: vec3<f32>,
+    kind: u32,
     color: vec3<f32>,
+    // 0: no range.
+    range: f32,
+    direction: vec3<f32>,
+    spot_scale: f32,
+    spot_offset: f32,
 }
 
+// The Whitted fields, then glTF's metallic-roughness ones, which model (MODEL_* from the
+// preamble) says to use.
 struct Material {
     color: vec3<f32>,
     specular: f32,
@@ -91,12 +100,28 @@ struct Material {
     transmit: f32,
     ior: f32,
     emission: vec3<f32>,
-    // The base-colour texture: its first texel among all textures' (row by row), or NONE; its
-    // size; its wrap modes (u's | v's << 8; WRAP_* from the preamble).
-    texture_offset: u32,
-    texture_width: u32,
-    texture_height: u32,
-    texture_wrap: u32,
+    model: u32,
+    specular_color: vec3<f32>,
+    metallic: f32,
+    roughness: f32,
+    specular_factor: f32,
+    occlusion_strength: f32,
+    // Indices of texture maps, or NONE.
+    base_map: u32,
+    metallic_roughness_map: u32,
+    occlusion_map: u32,
+    emissive_map: u32,
+}
+
+// A texture as a material maps it: its first texel among all textures' (row by row), its size, its
+// wrap modes (u's | v's << 8; WRAP_* from the preamble), and the texture transform's two rows.
+struct TextureMap {
+    offset: u32,
+    width: u32,
+    height: u32,
+    wrap: u32,
+    transform_u: vec3<f32>,
+    transform_v: vec3<f32>,
 }
 
 // A BVH node (src/bvh/layout.rs): internal nodes first, then leaves; the root is node 0.

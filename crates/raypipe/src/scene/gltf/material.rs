@@ -1,21 +1,47 @@
-//! glTF materials as Whitted materials, and their base-colour images as textures.
+//! glTF materials, read as the specification defines them, and the images they map.
 //!
-//! The mapping (docs/scene-format.md, "glTF"):
-//! - colour: baseColorFactor's RGB, times the base-colour texture (sRGB, decoded to linear);
-//! - smoothness s = (1 - roughness)^2; mirror reflectance = metallic x s, and the diffuse colour
-//!   keeps the rest, (1 - reflectance);
-//! - highlight weight = s / 2, with the Phong exponent 2 / roughness^4 - 2 (the Blinn-Phong
-//!   exponent of the same lobe width as GGX's alpha = roughness^2), between 1 and 10,000;
-//! - KHR_materials_transmission's factor is the transmittance, taken from the diffuse colour's
-//!   share, with KHR_materials_ior's index (1.5 without it);
-//! - emissiveFactor, times KHR_materials_emissive_strength, is the emission.
+//! Every glTF material is a metallic-roughness one ([`Pbr`]): base colour (factor times texture,
+//! sRGB decoded to linear), metalness and roughness (factors times the texture's blue and green),
+//! occlusion (its texture's red, by `strength`), emission (`emissiveFactor` times
+//! KHR_materials_emissive_strength times the emissive texture), KHR_materials_transmission,
+//! KHR_materials_ior and KHR_materials_specular's factors. Every map may carry a
+//! KHR_texture_transform. What is not read yet is named in one notice each: normal maps, maps on
+//! TEXCOORD_1, the specular extension's textures, alpha.
 
 use super::data::{Files, MAX_IMAGE_BYTES, read_uri, view_bytes};
 use crate::scene::texture::{MAX_TEXELS, MAX_TEXTURE_SIDE};
-use crate::scene::{Material, Texture, Wrap};
-use glam::Vec3;
+use crate::scene::{Material, Pbr, Texture, TextureMap, TextureTransform, Wrap};
+use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
+
+/// How an image's values are read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Encoding {
+    /// sRGB-encoded colour (base colour, emission), decoded to linear.
+    Srgb,
+    /// Linear data (metalness and roughness, occlusion).
+    Data,
+}
+
+/// A map as a textureInfo names it: the texture, the coordinate set, and the transform.
+struct MapInfo<'a> {
+    texture: gltf::Texture<'a>,
+    tex_coord: u32,
+    transform: Option<&'a gltf::json::Value>,
+}
+
+impl<'a> MapInfo<'a> {
+    fn of(info: &'a gltf::texture::Info<'a>) -> Self {
+        Self {
+            texture: info.texture(),
+            tex_coord: info.tex_coord(),
+            transform: info.extension_value(TEXTURE_TRANSFORM),
+        }
+    }
+}
+
+const TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
 /// The document's materials and the textures they use, built once each.
 pub struct Materials {
@@ -24,8 +50,10 @@ pub struct Materials {
     /// The material of primitives without one (glTF's default material), added on first use.
     default: Option<u32>,
     texels: u64,
-    /// (image, wrap) to texture index.
-    by_image: HashMap<(usize, [Wrap; 2]), u32>,
+    /// (image, wrap, encoding) to texture index.
+    by_image: HashMap<(usize, [Wrap; 2], Encoding), u32>,
+    /// What the materials hold that is not drawn, said once each.
+    left_out: BTreeSet<&'static str>,
 }
 
 impl Materials {
@@ -36,6 +64,7 @@ impl Materials {
             default: None,
             texels: 0,
             by_image: HashMap::new(),
+            left_out: BTreeSet::new(),
         }
     }
 
@@ -47,53 +76,113 @@ impl Materials {
         files: Files,
         notices: &mut Vec<String>,
     ) -> Result<(), String> {
-        let mut ignored_maps = false;
-        let mut alpha = false;
         for material in document.materials() {
             let what = format!("material {}", material.index().unwrap_or(0));
-            let pbr = material.pbr_metallic_roughness();
-            let [r, g, b, _] = pbr.base_color_factor();
-            let texture = match pbr.base_color_texture() {
-                Some(info) if info.tex_coord() != 0 => {
-                    notices.push(format!(
-                        "{what}: base-colour texture on TEXCOORD_{}: only TEXCOORD_0 is read, so it is left out",
-                        info.tex_coord()
-                    ));
-                    None
-                }
-                Some(info) => Some(
-                    self.texture(document.as_json(), &info.texture(), buffers, files)
-                        .map_err(|e| format!("{what}: {e}"))?,
-                ),
-                None => None,
-            };
-            ignored_maps |= material.normal_texture().is_some()
-                || material.occlusion_texture().is_some()
-                || material.emissive_texture().is_some()
-                || pbr.metallic_roughness_texture().is_some();
-            alpha |= material.alpha_mode() != gltf::material::AlphaMode::Opaque;
-            let emission = Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
-            let transmission = material.transmission().map_or(0.0, |t| t.transmission_factor());
-            let ior = material.ior().unwrap_or(1.5);
-            let mapped = whitted(
-                Vec3::new(r, g, b),
-                pbr.metallic_factor(),
-                pbr.roughness_factor(),
-                transmission,
-                ior,
-                emission,
-                texture,
-            );
-            crate::scene::validate_material(&mapped, self.textures.len()).map_err(|e| format!("{what}: {e}"))?;
-            self.materials.push(mapped);
+            let read = self
+                .material(document.as_json(), &material, buffers, files)
+                .map_err(|e| format!("{what}: {e}"))?;
+            crate::scene::material::validate_material(&read, self.textures.len())
+                .map_err(|e| format!("{what}: {e}"))?;
+            self.materials.push(read);
         }
-        if ignored_maps {
-            notices.push("normal, occlusion, emissive and metallic-roughness textures are not used".into());
-        }
-        if alpha {
-            notices.push("alpha modes BLEND and MASK are rendered opaque".into());
-        }
+        notices.extend(self.left_out.iter().map(|s| s.to_string()));
         Ok(())
+    }
+
+    /// One material with its maps.
+    fn material(
+        &mut self,
+        root: &gltf::json::Root,
+        material: &gltf::Material,
+        buffers: &[Vec<u8>],
+        files: Files,
+    ) -> Result<Material, String> {
+        let pbr = material.pbr_metallic_roughness();
+        let [r, g, b, _] = pbr.base_color_factor();
+        let map = |info: Option<MapInfo>, encoding: Encoding, this: &mut Self| -> Result<Option<TextureMap>, String> {
+            let Some(info) = info else { return Ok(None) };
+            this.map(root, &info, encoding, buffers, files)
+        };
+        let base = map(pbr.base_color_texture().as_ref().map(MapInfo::of), Encoding::Srgb, self)?;
+        let metallic_roughness = map(
+            pbr.metallic_roughness_texture().as_ref().map(MapInfo::of),
+            Encoding::Data,
+            self,
+        )?;
+        let emissive = map(
+            material.emissive_texture().as_ref().map(MapInfo::of),
+            Encoding::Srgb,
+            self,
+        )?;
+        let occlusion = material.occlusion_texture();
+        let occlusion_map = map(
+            occlusion.as_ref().map(|o| MapInfo {
+                texture: o.texture(),
+                tex_coord: o.tex_coord(),
+                transform: o.extension_value(TEXTURE_TRANSFORM),
+            }),
+            Encoding::Data,
+            self,
+        )?;
+        if material.normal_texture().is_some() {
+            self.left_out
+                .insert("normal maps are not applied yet: surfaces shade with their vertex normals");
+        }
+        if material.alpha_mode() != gltf::material::AlphaMode::Opaque {
+            self.left_out.insert("alpha modes BLEND and MASK are rendered opaque");
+        }
+        let specular = material.specular();
+        if specular
+            .as_ref()
+            .is_some_and(|s| s.specular_texture().is_some() || s.specular_color_texture().is_some())
+        {
+            self.left_out
+                .insert("KHR_materials_specular's textures are not applied (its factors are)");
+        }
+        let emission = Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
+        Ok(Material {
+            color: Vec3::new(r, g, b),
+            transmit: material
+                .transmission()
+                .map_or(0.0, |t| t.transmission_factor())
+                .clamp(0.0, 1.0),
+            ior: material.ior().unwrap_or(1.5),
+            emission,
+            texture: base,
+            pbr: Some(Pbr {
+                metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+                roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+                specular_factor: specular.as_ref().map_or(1.0, |s| s.specular_factor()).clamp(0.0, 1.0),
+                specular_color: specular
+                    .as_ref()
+                    .map_or(Vec3::ONE, |s| Vec3::from(s.specular_color_factor())),
+                metallic_roughness_texture: metallic_roughness,
+                occlusion_texture: occlusion_map,
+                occlusion_strength: occlusion.as_ref().map_or(1.0, |o| o.strength()).clamp(0.0, 1.0),
+                emissive_texture: emissive,
+            }),
+            ..Material::default()
+        })
+    }
+
+    /// A map of the material's: its texture (decoded once per image, wrap and encoding) and
+    /// transform; `None`, with a notice, where it reads coordinates the tracers do not carry.
+    fn map(
+        &mut self,
+        root: &gltf::json::Root,
+        info: &MapInfo,
+        encoding: Encoding,
+        buffers: &[Vec<u8>],
+        files: Files,
+    ) -> Result<Option<TextureMap>, String> {
+        let (transform, tex_coord) = texture_transform(info.transform, info.tex_coord)?;
+        if tex_coord != 0 {
+            self.left_out
+                .insert("maps on TEXCOORD_1 and above are left out: only TEXCOORD_0 is read");
+            return Ok(None);
+        }
+        let texture = self.texture(root, &info.texture, encoding, buffers, files)?;
+        Ok(Some(TextureMap { texture, transform }))
     }
 
     /// The index of a primitive's material: the document's, or the default material.
@@ -101,8 +190,11 @@ impl Materials {
         match material {
             Some(index) => index as u32,
             None => *self.default.get_or_insert_with(|| {
-                self.materials
-                    .push(whitted(Vec3::ONE, 1.0, 1.0, 0.0, 1.5, Vec3::ZERO, None));
+                self.materials.push(Material {
+                    color: Vec3::ONE,
+                    pbr: Some(Pbr::default()),
+                    ..Material::default()
+                });
                 self.materials.len() as u32 - 1
             }),
         }
@@ -112,6 +204,7 @@ impl Materials {
         &mut self,
         root: &gltf::json::Root,
         texture: &gltf::Texture,
+        encoding: Encoding,
         buffers: &[Vec<u8>],
         files: Files,
     ) -> Result<u32, String> {
@@ -122,7 +215,7 @@ impl Materials {
             WrappingMode::MirroredRepeat => Wrap::Mirror,
         });
         let image = texture.source().index();
-        if let Some(&index) = self.by_image.get(&(image, wrap)) {
+        if let Some(&index) = self.by_image.get(&(image, wrap, encoding)) {
             return Ok(index);
         }
         let what = format!("image {image}");
@@ -140,40 +233,60 @@ impl Materials {
         let budget = MAX_TEXELS - self.texels;
         let (width, height, rgba) = decode_image(&bytes, mime, budget).map_err(|e| format!("{what}: {e}"))?;
         self.texels += width as u64 * height as u64;
-        self.textures.push(Texture::from_srgb8(width, height, &rgba, wrap));
+        self.textures.push(match encoding {
+            Encoding::Srgb => Texture::from_srgb8(width, height, &rgba, wrap),
+            Encoding::Data => Texture::from_data8(width, height, &rgba, wrap),
+        });
         let index = self.textures.len() as u32 - 1;
-        self.by_image.insert((image, wrap), index);
+        self.by_image.insert((image, wrap, encoding), index);
         Ok(index)
     }
 }
 
-/// A metallic-roughness material as a Whitted one (the module's comment gives the mapping).
-pub fn whitted(
-    base: Vec3,
-    metallic: f32,
-    roughness: f32,
-    transmission: f32,
-    ior: f32,
-    emission: Vec3,
-    texture: Option<u32>,
-) -> Material {
-    let metallic = metallic.clamp(0.0, 1.0);
-    let roughness = roughness.clamp(0.0, 1.0);
-    let transmission = transmission.clamp(0.0, 1.0);
-    let smoothness = (1.0 - roughness) * (1.0 - roughness);
-    let reflect = metallic * smoothness;
-    let transmit = transmission * (1.0 - reflect);
-    let alpha_squared = (roughness * roughness * roughness * roughness).max(1e-12);
-    Material {
-        color: base * (1.0 - reflect - transmit),
-        specular: smoothness * 0.5,
-        shininess: (2.0 / alpha_squared - 2.0).clamp(1.0, 10_000.0),
-        reflect,
-        transmit,
-        ior,
-        emission,
-        texture,
+/// A KHR_texture_transform object's transform and texture coordinate set (`texCoord` overrides
+/// the textureInfo's `tex_coord`); the identity where there is none.
+fn texture_transform(json: Option<&gltf::json::Value>, tex_coord: u32) -> Result<(TextureTransform, u32), String> {
+    let mut transform = TextureTransform::default();
+    let Some(json) = json else {
+        return Ok((transform, tex_coord));
+    };
+    let fail = |what: &str| format!("{TEXTURE_TRANSFORM}: {what} must be finite numbers");
+    let pair = |name: &str, default: Vec2| -> Result<Vec2, String> {
+        match json.get(name) {
+            None => Ok(default),
+            Some(value) => {
+                let numbers: Option<Vec<f32>> = value
+                    .as_array()
+                    .map(|a| {
+                        a.iter()
+                            .map(|n| n.as_f64().map(|n| n as f32))
+                            .collect::<Option<Vec<f32>>>()
+                    })
+                    .unwrap_or(None);
+                match numbers.as_deref() {
+                    Some(&[x, y]) if x.is_finite() && y.is_finite() => Ok(Vec2::new(x, y)),
+                    _ => Err(fail(&format!("{name}: two"))),
+                }
+            }
+        }
+    };
+    transform.offset = pair("offset", Vec2::ZERO)?;
+    transform.scale = pair("scale", Vec2::ONE)?;
+    if let Some(rotation) = json.get("rotation") {
+        transform.rotation = rotation
+            .as_f64()
+            .map(|r| r as f32)
+            .filter(|r| r.is_finite())
+            .ok_or_else(|| fail("rotation: one"))?;
     }
+    let tex_coord = match json.get("texCoord") {
+        None => tex_coord,
+        Some(set) => set
+            .as_u64()
+            .and_then(|s| u32::try_from(s).ok())
+            .ok_or_else(|| format!("{TEXTURE_TRANSFORM}: texCoord must be a set index"))?,
+    };
+    Ok((transform, tex_coord))
 }
 
 /// An image file's pixels as 8-bit RGBA, by its MIME type or, without one, its first bytes. Its
@@ -258,17 +371,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn rough_dielectrics_are_diffuse_and_smooth_metals_mirrors() {
-        let clay = whitted(Vec3::new(0.8, 0.5, 0.2), 0.0, 1.0, 0.0, 1.5, Vec3::ZERO, None);
-        assert_eq!((clay.reflect, clay.transmit, clay.specular), (0.0, 0.0, 0.0));
-        assert_eq!(clay.color, Vec3::new(0.8, 0.5, 0.2));
-        let chrome = whitted(Vec3::ONE, 1.0, 0.0, 0.0, 1.5, Vec3::ZERO, None);
-        assert_eq!((chrome.reflect, chrome.color), (1.0, Vec3::ZERO));
-        assert_eq!(chrome.shininess, 10_000.0);
-        let glass = whitted(Vec3::ONE, 0.0, 0.0, 1.0, 1.45, Vec3::ZERO, None);
-        assert_eq!((glass.transmit, glass.ior, glass.color), (1.0, 1.45, Vec3::ZERO));
-        // Half rough: the exponent of alpha = 0.25, 2 / 0.0625 - 2 = 30.
-        assert_eq!(whitted(Vec3::ONE, 0.0, 0.5, 0.0, 1.5, Vec3::ZERO, None).shininess, 30.0);
+    fn texture_transforms_are_read_with_their_defaults_and_texcoord_override() {
+        let json: gltf::json::Value =
+            serde_json::from_str(r#"{"offset": [0.5, 0.25], "rotation": 1.5, "texCoord": 1}"#).unwrap();
+        let (transform, set) = texture_transform(Some(&json), 0).unwrap();
+        assert_eq!(
+            (transform.offset, transform.rotation, transform.scale, set),
+            (Vec2::new(0.5, 0.25), 1.5, Vec2::ONE, 1)
+        );
+        assert_eq!(texture_transform(None, 0).unwrap(), (TextureTransform::default(), 0));
+        let bad: gltf::json::Value = serde_json::from_str(r#"{"scale": [1]}"#).unwrap();
+        assert!(texture_transform(Some(&bad), 0).unwrap_err().contains("scale"));
     }
 
     #[test]

@@ -17,10 +17,9 @@ mod data;
 mod material;
 
 pub use data::Files;
-pub use material::whitted;
 
 use super::animation::{Instance, RestPrimitive, Rig};
-use super::{Camera, Light, Material, Texture};
+use super::{Camera, Light, LightKind, Material, Texture};
 use crate::error::InputError;
 use crate::mesh::Mesh;
 use data::{read_floats, read_indices};
@@ -41,7 +40,9 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
+    "KHR_materials_specular",
     "KHR_mesh_quantization",
+    "KHR_texture_transform",
 ];
 
 /// The extension that places a mesh many times under one node.
@@ -67,17 +68,6 @@ pub struct Primitive {
     pub material: u32,
 }
 
-/// A light of the file: a point (spot lights become points at their place), or a direction.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum GltfLight {
-    Point(Light),
-    /// Light arriving along `direction` (unit) from far away; placed once the scene's size is known.
-    Directional {
-        direction: Vec3,
-        color: Vec3,
-    },
-}
-
 /// What a glTF file's default scene holds, in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GltfScene {
@@ -86,7 +76,7 @@ pub struct GltfScene {
     pub textures: Vec<Texture>,
     /// The first perspective camera met in the node hierarchy.
     pub camera: Option<Camera>,
-    pub lights: Vec<GltfLight>,
+    pub lights: Vec<Light>,
     /// Where the file has skins, morph targets or animations: what moves, with one instance per
     /// primitive.
     pub rig: Option<Arc<Rig>>,
@@ -367,7 +357,7 @@ struct SceneReader<'a> {
     triangles: usize,
     skipped_modes: usize,
     camera: Option<Camera>,
-    lights: Vec<GltfLight>,
+    lights: Vec<Light>,
     notices: &'a mut Vec<String>,
 }
 
@@ -436,29 +426,8 @@ impl SceneReader<'_> {
         }
         if let Some(light) = node.light() {
             let what = format!("node {}: light {}", node.index(), light.index());
-            let color = Vec3::from(light.color()) * light.intensity();
-            if !(color.is_finite() && color.min_element() >= 0.0) {
-                return Err(format!(
-                    "{what}: colour times intensity must be finite and not negative"
-                ));
-            }
-            match light.kind() {
-                gltf::khr_lights_punctual::Kind::Directional => {
-                    let Some(direction) = crate::scene::unit_vector(world.transform_vector3(Vec3::NEG_Z)) else {
-                        return Err(format!("{what}: its node's transform collapses its direction"));
-                    };
-                    self.lights.push(GltfLight::Directional { direction, color });
-                }
-                kind => {
-                    if matches!(kind, gltf::khr_lights_punctual::Kind::Spot { .. }) {
-                        self.note_once("spot lights are drawn as point lights: their cones are not applied");
-                    }
-                    self.lights.push(GltfLight::Point(Light {
-                        position: world.transform_point3(Vec3::ZERO),
-                        color,
-                    }));
-                }
-            }
+            self.lights
+                .push(punctual_light(&light, world).map_err(|e| format!("{what}: {e}"))?);
         }
         Ok(())
     }
@@ -772,6 +741,48 @@ impl GltfScene {
     pub fn triangle_count(&self) -> usize {
         self.primitives.iter().map(|p| p.triangles.len()).sum()
     }
+}
+
+/// A KHR_lights_punctual light where its node puts it: at the node's origin, pointing along the
+/// node's -z, in the extension's units (candela for point and spot, lux for directional).
+fn punctual_light(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> Result<Light, String> {
+    use gltf::khr_lights_punctual::Kind;
+    let color = Vec3::from(light.color()) * light.intensity();
+    if !(color.is_finite() && color.min_element() >= 0.0) {
+        return Err("colour times intensity must be finite and not negative".into());
+    }
+    let range = light.range();
+    if range.is_some_and(|r| !(r > 0.0 && r.is_finite())) {
+        return Err(format!(
+            "range must be positive and finite (got {})",
+            range.unwrap_or(0.0)
+        ));
+    }
+    let direction = || {
+        crate::scene::unit_vector(world.transform_vector3(Vec3::NEG_Z))
+            .ok_or_else(|| "its node's transform collapses its direction".to_string())
+    };
+    let kind = match light.kind() {
+        Kind::Directional => LightKind::Directional {
+            direction: direction()?,
+        },
+        Kind::Point => LightKind::Point { range },
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => LightKind::Spot {
+            direction: direction()?,
+            inner_cone: inner_cone_angle,
+            outer_cone: outer_cone_angle,
+            range,
+        },
+    };
+    kind.check()?;
+    Ok(Light {
+        position: world.transform_point3(Vec3::ZERO),
+        color,
+        kind,
+    })
 }
 
 #[cfg(test)]

@@ -1,0 +1,231 @@
+//! Materials: the paper's Whitted model, and glTF's metallic-roughness model beside it.
+
+use glam::{Vec2, Vec3};
+
+/// How a surface answers light. Two models share the record: the paper's Whitted material (Phong
+/// direct light, a mirror share, a Fresnel-split transmitted share), and, where `pbr` is set,
+/// glTF's metallic-roughness BRDF (docs/scene-format.md, "Materials").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Whitted: the diffuse albedo. glTF: the base colour (`baseColorFactor`'s RGB), linear.
+    pub color: Vec3,
+    /// Whitted: the weight of the Phong highlight. Unused by glTF materials.
+    pub specular: f32,
+    /// Whitted: the Phong exponent of the highlight. Unused by glTF materials.
+    pub shininess: f32,
+    /// Whitted: the mirror reflectance, 0..1. Unused by glTF materials, whose reflection follows
+    /// from their Fresnel term.
+    pub reflect: f32,
+    /// Whitted: the transmittance, 0..1, split between reflection and refraction by Schlick's
+    /// Fresnel term. glTF: KHR_materials_transmission's factor.
+    pub transmit: f32,
+    /// Index of refraction of the inside of the surface (the outside is vacuum, 1.0); glTF's
+    /// KHR_materials_ior, 1.5 without it.
+    pub ior: f32,
+    /// Light the surface gives off itself, added to its shaded colour. glTF: `emissiveFactor`
+    /// times KHR_materials_emissive_strength, times the emissive texture where there is one.
+    pub emission: Vec3,
+    /// A texture whose colour, at the hit's texture coordinates, multiplies `color` (on
+    /// triangles that have coordinates).
+    pub texture: Option<TextureMap>,
+    /// glTF's metallic-roughness parameters; `None` for a Whitted material.
+    pub pbr: Option<Pbr>,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            color: Vec3::splat(0.8),
+            specular: 0.0,
+            shininess: 32.0,
+            reflect: 0.0,
+            transmit: 0.0,
+            ior: 1.5,
+            emission: Vec3::ZERO,
+            texture: None,
+            pbr: None,
+        }
+    }
+}
+
+impl Material {
+    /// The material with its maps' texture indices moved by `base`: its textures placed after
+    /// `base` others in a scene's list.
+    pub fn with_textures_from(&self, base: u32) -> Material {
+        let shift = |map: Option<TextureMap>| {
+            map.map(|m| TextureMap {
+                texture: m.texture + base,
+                ..m
+            })
+        };
+        Material {
+            texture: shift(self.texture),
+            pbr: self.pbr.map(|p| Pbr {
+                metallic_roughness_texture: shift(p.metallic_roughness_texture),
+                occlusion_texture: shift(p.occlusion_texture),
+                emissive_texture: shift(p.emissive_texture),
+                ..p
+            }),
+            ..*self
+        }
+    }
+}
+
+/// The parameters of glTF's metallic-roughness material (the specification's Appendix B) beyond
+/// what it shares with a Whitted one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pbr {
+    /// 0 (dielectric) to 1 (metal).
+    pub metallic: f32,
+    /// 0 (a mirror) to 1; the GGX distribution's alpha is its square.
+    pub roughness: f32,
+    /// KHR_materials_specular's `specularFactor`: the strength of a dielectric's specular layer,
+    /// 0..1 (1 without the extension).
+    pub specular_factor: f32,
+    /// KHR_materials_specular's `specularColorFactor`, which tints a dielectric's reflectance at
+    /// normal incidence (white without the extension).
+    pub specular_color: Vec3,
+    /// Linear data: blue multiplies `metallic`, green `roughness`.
+    pub metallic_roughness_texture: Option<TextureMap>,
+    /// Linear data: red is the share of ambient light that reaches the surface.
+    pub occlusion_texture: Option<TextureMap>,
+    /// How much of the occlusion texture applies, 0..1.
+    pub occlusion_strength: f32,
+    /// sRGB colour multiplying `emission`.
+    pub emissive_texture: Option<TextureMap>,
+}
+
+impl Default for Pbr {
+    /// glTF's defaults: a rough metal, as a material without `pbrMetallicRoughness` is.
+    fn default() -> Self {
+        Self {
+            metallic: 1.0,
+            roughness: 1.0,
+            specular_factor: 1.0,
+            specular_color: Vec3::ONE,
+            metallic_roughness_texture: None,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
+            emissive_texture: None,
+        }
+    }
+}
+
+impl Pbr {
+    /// The textures the material reads besides its base colour's.
+    pub fn maps(&self) -> [Option<TextureMap>; 3] {
+        [
+            self.metallic_roughness_texture,
+            self.occlusion_texture,
+            self.emissive_texture,
+        ]
+    }
+}
+
+/// A texture as a material maps it: which of the scene's textures, and how the surface's texture
+/// coordinates are carried to it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureMap {
+    /// Index into `Scene::textures`.
+    pub texture: u32,
+    pub transform: TextureTransform,
+}
+
+impl TextureMap {
+    /// The texture with coordinates used as they are.
+    pub fn plain(texture: u32) -> TextureMap {
+        TextureMap {
+            texture,
+            transform: TextureTransform::default(),
+        }
+    }
+}
+
+/// KHR_texture_transform: coordinates scaled, then rotated about the origin, then offset.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureTransform {
+    pub offset: Vec2,
+    /// Radians, turning coordinates counter-clockwise (the image clockwise).
+    pub rotation: f32,
+    pub scale: Vec2,
+}
+
+impl Default for TextureTransform {
+    fn default() -> Self {
+        Self {
+            offset: Vec2::ZERO,
+            rotation: 0.0,
+            scale: Vec2::ONE,
+        }
+    }
+}
+
+impl TextureTransform {
+    /// The two rows of the 2x3 matrix T R S: (u', v') = rows · (u, v, 1).
+    pub fn rows(&self) -> [[f32; 3]; 2] {
+        let (sin, cos) = self.rotation.sin_cos();
+        let Vec2 { x: sx, y: sy } = self.scale;
+        [
+            [cos * sx, -sin * sy, self.offset.x],
+            [sin * sx, cos * sy, self.offset.y],
+        ]
+    }
+
+    fn is_finite(&self) -> bool {
+        self.offset.is_finite() && self.rotation.is_finite() && self.scale.is_finite()
+    }
+}
+
+/// The checks `Scene::validate` makes of one material, with `texture_count` textures to name.
+pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<(), String> {
+    if !m.color.is_finite() {
+        return Err("color must be finite".into());
+    }
+    if !(m.emission.is_finite() && m.emission.min_element() >= 0.0) {
+        return Err("emission must be finite and not negative".into());
+    }
+    let maps = m.pbr.as_ref().map_or([None; 3], Pbr::maps);
+    for map in std::iter::once(m.texture).chain(maps).flatten() {
+        if map.texture as usize >= texture_count {
+            return Err(format!(
+                "texture index {} out of range ({texture_count} textures)",
+                map.texture
+            ));
+        }
+        if !map.transform.is_finite() {
+            return Err("texture transform must be finite".into());
+        }
+    }
+    for (name, value) in [
+        ("specular", m.specular),
+        ("shininess", m.shininess),
+        ("reflect", m.reflect),
+        ("transmit", m.transmit),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(format!("{name} must be finite and not negative (got {value})"));
+        }
+    }
+    if m.reflect > 1.0 || m.transmit > 1.0 {
+        return Err("reflect and transmit must be at most 1".into());
+    }
+    if !(m.ior.is_finite() && m.ior > 0.0) {
+        return Err(format!("ior must be positive and finite (got {})", m.ior));
+    }
+    if let Some(pbr) = &m.pbr {
+        for (name, value) in [
+            ("metallic", pbr.metallic),
+            ("roughness", pbr.roughness),
+            ("specular factor", pbr.specular_factor),
+            ("occlusion strength", pbr.occlusion_strength),
+        ] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(format!("{name} must be in 0..=1 (got {value})"));
+            }
+        }
+        if !(pbr.specular_color.is_finite() && pbr.specular_color.min_element() >= 0.0) {
+            return Err("specular colour must be finite and not negative".into());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,265 @@
+//! glTF materials and lights on the CPU reference against formulas written out here, not taken
+//! from the library: the Appendix B BRDF for a dielectric, a metal and a mix; inverse-square
+//! falloff and the range window; the spot cone's smooth edge; directional light and its parallel
+//! shadow rays; a texture transform's texel. The GPU matches the CPU in tests/gpu/.
+
+mod common;
+
+use common::render_cpu;
+use glam::{Quat, Vec2, Vec3};
+use raypipe::modes::Accel;
+use raypipe::records::PackedScene;
+use raypipe::scene::{
+    Camera, Light, LightKind, Material, Pbr, RenderSettings, Scene, Texture, TextureMap, TextureTransform, Triangle,
+    Wrap,
+};
+use std::f64::consts::PI;
+
+/// A 9x9 image whose centre pixel's ray runs down -z onto the plane z = 0 at the origin: view
+/// direction (0, 0, 1), normal (0, 0, 1).
+const SIZE: u32 = 9;
+
+/// The plane z = 0 (a big quad facing +z) in `material`, seen from (0, 0, 5), with `lights`, no
+/// ambient light, a black background and no bounces: a pixel is direct light alone.
+fn plane_scene(material: Material, lights: Vec<Light>) -> Scene {
+    let corners = [(-50.0, -50.0), (50.0, -50.0), (50.0, 50.0), (-50.0, 50.0)].map(|(x, y)| Vec3::new(x, y, 0.0));
+    let uv = |p: Vec3| Vec2::new(p.x, p.y);
+    let triangles = [[0, 1, 2], [0, 2, 3]]
+        .map(|[a, b, c]| Triangle {
+            vertices: [corners[a], corners[b], corners[c]],
+            normals: None,
+            uvs: Some([uv(corners[a]), uv(corners[b]), uv(corners[c])]),
+            material: 0,
+        })
+        .to_vec();
+    Scene {
+        camera: Camera {
+            eye: Vec3::new(0.0, 0.0, 5.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_degrees: 20.0,
+        },
+        settings: RenderSettings {
+            width: SIZE,
+            height: SIZE,
+            max_depth: 0,
+            background: Vec3::ZERO,
+            ambient: 0.0,
+        },
+        lights,
+        materials: vec![material],
+        triangles,
+        ..Scene::default()
+    }
+}
+
+/// The centre pixel's radiance.
+fn centre(scene: &Scene) -> Vec3 {
+    let mut packed = PackedScene::new(scene).unwrap();
+    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    let frame = render_cpu(&packed, Accel::Threaded);
+    let [r, g, b, _] = frame.color[(SIZE / 2 * SIZE + SIZE / 2) as usize];
+    Vec3::new(r, g, b)
+}
+
+fn gltf_material(base: Vec3, metallic: f32, roughness: f32) -> Material {
+    Material {
+        color: base,
+        pbr: Some(Pbr {
+            metallic,
+            roughness,
+            ..Pbr::default()
+        }),
+        ..Material::default()
+    }
+}
+
+fn point(position: Vec3, candela: f32, range: Option<f32>) -> Light {
+    Light {
+        position,
+        color: Vec3::splat(candela),
+        kind: LightKind::Point { range },
+    }
+}
+
+/// The glTF BRDF (the specification's Appendix B) for n = v = +z, written out in f64:
+/// f = (1 - metallic) [(1 - F) c / pi + F D V] + metallic [F_metal D V].
+fn brdf_formula(base: [f64; 3], metallic: f64, roughness: f64, l: [f64; 3]) -> [f64; 3] {
+    let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+    let l = l.map(|c| c / norm);
+    let (n_dot_l, n_dot_v) = (l[2], 1.0);
+    // h = (l + v) / |l + v|
+    let h = [l[0], l[1], l[2] + 1.0];
+    let h_norm = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
+    let (n_dot_h, v_dot_h) = (h[2] / h_norm, h[2] / h_norm);
+    let alpha: f64 = roughness * roughness;
+    let a2 = alpha * alpha;
+    let d = a2 / (PI * (n_dot_h * n_dot_h * (a2 - 1.0) + 1.0).powi(2));
+    let vis = 0.5
+        / (n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt()
+            + n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt());
+    let f0 = 0.04; // ((1.5 - 1) / (1.5 + 1))^2
+    let schlick = |f0: f64| f0 + (1.0 - f0) * (1.0 - v_dot_h).powi(5);
+    base.map(|c| {
+        let dielectric = (1.0 - schlick(f0)) * c / PI + schlick(f0) * d * vis;
+        let metal = schlick(c) * d * vis;
+        (1.0 - metallic) * dielectric + metallic * metal
+    })
+}
+
+fn assert_close(got: Vec3, expected: [f64; 3], what: &str) {
+    for c in 0..3 {
+        let e = expected[c] as f32;
+        assert!(
+            (got[c] - e).abs() <= 1e-4 * e.abs().max(0.1),
+            "{what}: channel {c} is {}, the formula says {e}",
+            got[c]
+        );
+    }
+}
+
+#[test]
+fn a_lit_plane_shows_the_gltf_brdf_for_dielectrics_metals_and_mixes() {
+    let light_at = Vec3::new(1.5, 0.5, 2.0);
+    let candela = 12.0;
+    let d2 = light_at.length_squared() as f64;
+    let cos = (light_at.z / light_at.length()) as f64;
+    let base = [0.8, 0.4, 0.2];
+    for (metallic, roughness) in [(0.0, 0.5), (1.0, 0.3), (0.5, 0.7), (0.0, 1.0)] {
+        let material = gltf_material(
+            Vec3::from_array(base.map(|c| c as f32)),
+            metallic as f32,
+            roughness as f32,
+        );
+        let got = centre(&plane_scene(material, vec![point(light_at, candela, None)]));
+        let f = brdf_formula(base, metallic, roughness, light_at.to_array().map(|c| c as f64));
+        let expected = f.map(|f| candela as f64 / d2 * cos * f);
+        assert_close(got, expected, &format!("metallic {metallic}, roughness {roughness}"));
+    }
+}
+
+#[test]
+fn point_lights_fall_off_with_the_inverse_square_and_end_at_their_range() {
+    let white = gltf_material(Vec3::ONE, 0.0, 1.0);
+    let at = |d: f32, range| centre(&plane_scene(white, vec![point(Vec3::new(0.0, 0.0, d), 10.0, range)]));
+    let (one, two, four) = (at(1.0, None), at(2.0, None), at(4.0, None));
+    assert!(
+        (one.x / two.x - 4.0).abs() < 1e-4 && (one.x / four.x - 16.0).abs() < 1e-3,
+        "{one} {two} {four}"
+    );
+    // Straight above, h = n = v = l, alpha = 1: f = (1 - 0.04) / pi + 0.04 D V with
+    // D = alpha² / (pi alpha⁴) = 1 / pi and V = 0.5 / (1 + 1).
+    let f = 0.96 / PI + 0.04 / PI * 0.25;
+    assert_close(one, [10.0 * f; 3], "1 m");
+    // The window: clamp(1 - (d / range)^4, 0, 1) / d².
+    let window = 1.0 - (2.0f64 / 3.0).powi(4);
+    assert_close(at(2.0, Some(3.0)), [10.0 / 4.0 * window * f; 3], "range 3 at 2 m");
+    assert_eq!(at(2.0, Some(1.9)), Vec3::ZERO, "beyond its range a light gives nothing");
+}
+
+#[test]
+fn a_spot_is_full_inside_its_inner_cone_dark_beyond_its_outer_and_smooth_between() {
+    let white = gltf_material(Vec3::ONE, 0.0, 1.0);
+    let (inner, outer) = (0.2f32, 0.5f32);
+    let lit_at = |angle: f32| {
+        // The spot straight above the hit, its axis turned `angle` off the way down to it.
+        let direction = Quat::from_rotation_x(angle) * Vec3::NEG_Z;
+        let spot = Light {
+            position: Vec3::new(0.0, 0.0, 2.0),
+            color: Vec3::splat(8.0),
+            kind: LightKind::Spot {
+                direction,
+                inner_cone: inner,
+                outer_cone: outer,
+                range: None,
+            },
+        };
+        centre(&plane_scene(white, vec![spot])).x as f64
+    };
+    let full = lit_at(0.0);
+    assert!(
+        (lit_at(inner * 0.9) - full).abs() < 1e-6 * full,
+        "inside the inner cone"
+    );
+    assert_eq!(lit_at(outer * 1.02), 0.0, "beyond the outer cone");
+    for angle in [0.25f32, 0.35, 0.45] {
+        let (c, ci, co) = (angle.cos() as f64, inner.cos() as f64, outer.cos() as f64);
+        let step = ((c - co) / (ci - co)).clamp(0.0, 1.0);
+        let expected = full * step * step;
+        assert!(
+            (lit_at(angle) - expected).abs() < 2e-4 * full,
+            "at {angle} rad: {} where the cone says {expected}",
+            lit_at(angle)
+        );
+    }
+}
+
+#[test]
+fn directional_light_is_parallel_and_its_shadows_reach_to_infinity() {
+    let white = gltf_material(Vec3::ONE, 0.0, 1.0);
+    let travel = Vec3::new(-0.6, 0.0, -0.8);
+    let sun = Light {
+        position: Vec3::ZERO,
+        color: Vec3::splat(3.0),
+        kind: LightKind::Directional { direction: travel },
+    };
+    let mut scene = plane_scene(white, vec![sun]);
+    let f = brdf_formula([1.0; 3], 0.0, 1.0, [0.6, 0.0, 0.8]);
+    assert_close(centre(&scene), f.map(|f| 3.0 * 0.8 * f), "lux times cosine times BRDF");
+    // A small triangle far up the beam, beyond where any point light would stand, still shades
+    // the hit.
+    let far = -travel * 1e4;
+    scene.triangles.push(Triangle {
+        vertices: [
+            far + Vec3::new(-5.0, -5.0, 0.0),
+            far + Vec3::new(5.0, -5.0, 0.0),
+            far + Vec3::new(0.0, 5.0, 0.0),
+        ],
+        normals: None,
+        uvs: None,
+        material: 0,
+    });
+    assert_eq!(centre(&scene), Vec3::ZERO);
+}
+
+#[test]
+fn emission_and_the_texture_transform_pick_the_texel_the_extension_says() {
+    // A 2x2 emissive texture (red, green / blue, white); no lights, so a pixel is its emission.
+    let texels = [
+        [1.0, 0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0, 1.0],
+        [1.0, 1.0, 1.0, 1.0],
+    ];
+    let texture = Texture::from_linear(2, 2, &texels, [Wrap::Repeat; 2]);
+    let emissive = |transform| {
+        let mut material = gltf_material(Vec3::ZERO, 0.0, 1.0);
+        material.emission = Vec3::ONE;
+        material.pbr.as_mut().unwrap().emissive_texture = Some(TextureMap { texture: 0, transform });
+        let mut scene = plane_scene(material, Vec::new());
+        scene.textures = vec![texture.clone()];
+        centre(&scene)
+    };
+    // The hit's coordinates are (0, 0); u' = cos r sx u - sin r sy v + ox, v' = sin r sx u + cos r sy v + oy.
+    // Offset to texel (1, 0)'s centre: green.
+    let offset = TextureTransform {
+        offset: Vec2::new(0.75, 0.25),
+        ..TextureTransform::default()
+    };
+    assert_close(emissive(offset), [0.0, 1.0, 0.0], "offset");
+    // The surface's (0, 0) carried to (0.25, 0.75) by offset alone, whatever the rotation and scale
+    // do to it: blue.
+    let turned = TextureTransform {
+        offset: Vec2::new(0.25, 0.75),
+        rotation: 1.0,
+        scale: Vec2::new(3.0, 2.0),
+    };
+    assert_close(emissive(turned), [0.0, 0.0, 1.0], "offset with rotation and scale");
+    // The rows: (1, 0) turned a quarter counter-clockwise is (0, 1).
+    let quarter = TextureTransform {
+        rotation: std::f32::consts::FRAC_PI_2,
+        ..TextureTransform::default()
+    };
+    let [u, v] = quarter.rows();
+    assert!(u[0].abs() < 1e-7 && (v[0] - 1.0).abs() < 1e-7, "{u:?} {v:?}");
+}
