@@ -1,8 +1,10 @@
 // The peer benchmark's scene as one binary glTF that both tracers read: a model's triangles in its
 // own units with smooth vertex normals (both tracers interpolate them, and a shadow ray leaves only
-// where the interpolated normal faces the light), one grey diffuse material, a pinhole camera that
-// frames its bounding sphere, and one point light (KHR_lights_punctual). A file with a camera gets
-// no floor in raypipe, so the workload is the model alone.
+// where the interpolated normal faces the light), one grey diffuse material (Lambert alone: its
+// KHR_materials_specular factor 0 turns off the specular lobe, so raypipe traces no reflected
+// ray either, as the peer does not), a pinhole camera that frames its bounding sphere, and one
+// point light (KHR_lights_punctual). A file with a camera gets no floor in raypipe, so the workload
+// is the model alone.
 import fs from "node:fs";
 import path from "node:path";
 import { Box3, Matrix4, Quaternion, Sphere, Vector3 } from "three";
@@ -72,7 +74,7 @@ export function sceneGlb({ positions, normals, indices }, width, height, skew = 
 
   const json = {
     asset: { version: "2.0", generator: "raypipe web/peer/scene.mjs" },
-    extensionsUsed: ["KHR_lights_punctual"],
+    extensionsUsed: ["KHR_lights_punctual", "KHR_materials_specular"],
     extensions: { KHR_lights_punctual: { lights: [{ type: "point", color: [1, 1, 1], intensity: 1 }] } },
     scene: 0,
     scenes: [{ nodes: [0, 1, 2] }],
@@ -83,7 +85,10 @@ export function sceneGlb({ positions, normals, indices }, width, height, skew = 
     ],
     cameras: [{ type: "perspective", perspective: { yfov: FOV_Y, aspectRatio: aspect, znear: distance * 1e-3 } }],
     meshes: [{ primitives: [{ attributes: { POSITION: 1, NORMAL: 2 }, indices: 0, material: 0 }] }],
-    materials: [{ pbrMetallicRoughness: { baseColorFactor: [0.7, 0.7, 0.7, 1], metallicFactor: 0, roughnessFactor: 1 } }],
+    materials: [{
+      pbrMetallicRoughness: { baseColorFactor: [0.7, 0.7, 0.7, 1], metallicFactor: 0, roughnessFactor: 1 },
+      extensions: { KHR_materials_specular: { specularFactor: 0 } },
+    }],
     accessors: [
       { bufferView: 0, componentType: 5125, count: indices.length, type: "SCALAR", min: [0], max: [maxIndex] },
       { bufferView: 1, componentType: 5126, count: vertexCount, type: "VEC3", min: box.min.toArray(), max: box.max.toArray() },

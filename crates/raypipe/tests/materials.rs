@@ -240,7 +240,7 @@ fn emission_and_the_texture_transform_pick_the_texel_the_extension_says() {
         scene.textures = vec![texture.clone()];
         centre(&scene)
     };
-    // The hit's coordinates are (0, 0); u' = cos r sx u - sin r sy v + ox, v' = sin r sx u + cos r sy v + oy.
+    // The hit's coordinates are (0, 0); u' = cos r sx u + sin r sy v + ox, v' = -sin r sx u + cos r sy v + oy.
     // Offset to texel (1, 0)'s centre: green.
     let offset = TextureTransform {
         offset: Vec2::new(0.75, 0.25),
@@ -255,11 +255,26 @@ fn emission_and_the_texture_transform_pick_the_texel_the_extension_says() {
         scale: Vec2::new(3.0, 2.0),
     };
     assert_close(emissive(turned), [0.0, 0.0, 1.0], "offset with rotation and scale");
-    // The rows: (1, 0) turned a quarter counter-clockwise is (0, 1).
+    // The rows: (1, 0) turned a quarter counter-clockwise as the image is seen (v down) is (0, -1).
     let quarter = TextureTransform {
         rotation: std::f32::consts::FRAC_PI_2,
         ..TextureTransform::default()
     };
     let [u, v] = quarter.rows();
-    assert!(u[0].abs() < 1e-7 && (v[0] - 1.0).abs() < 1e-7, "{u:?} {v:?}");
+    assert!(u[0].abs() < 1e-7 && (v[0] + 1.0).abs() < 1e-7, "{u:?} {v:?}");
+    // Seen in the image: the hit's coordinates moved to (0.25, 0) and turned a quarter land at
+    // (0, -0.25), which repeats to (0, 0.75): halfway between texels (1, 1) and (0, 1), blue and
+    // white. Turned the other way they would land on the first row, red and green.
+    let turned_at = |transform| {
+        let mut material = gltf_material(Vec3::ZERO, 0.0, 1.0);
+        material.emission = Vec3::ONE;
+        material.pbr.as_mut().unwrap().emissive_texture = Some(TextureMap { texture: 0, transform });
+        let mut scene = plane_scene(material, Vec::new());
+        scene.textures = vec![texture.clone()];
+        for t in &mut scene.triangles {
+            t.uvs = t.uvs.map(|uvs| uvs.map(|uv| uv + Vec2::new(0.25, 0.0)));
+        }
+        centre(&scene)
+    };
+    assert_close(turned_at(quarter), [0.5, 0.5, 1.0], "a quarter turn");
 }

@@ -161,13 +161,16 @@ impl Default for TextureTransform {
 }
 
 impl TextureTransform {
-    /// The two rows of the 2x3 matrix T R S: (u', v') = rows · (u, v, 1).
+    /// The two rows of the 2x3 matrix T R S: (u', v') = rows · (u, v, 1). R turns counter-clockwise
+    /// as one sees the image, whose v runs down: (u, v) to (cos u + sin v, -sin u + cos v), the
+    /// matrix of KHR_texture_transform's errata (KhronosGroup/glTF#1563) that the Sample Viewer,
+    /// Babylon.js and Blender use, not the README's listing.
     pub fn rows(&self) -> [[f32; 3]; 2] {
         let (sin, cos) = self.rotation.sin_cos();
         let Vec2 { x: sx, y: sy } = self.scale;
         [
-            [cos * sx, -sin * sy, self.offset.x],
-            [sin * sx, cos * sy, self.offset.y],
+            [cos * sx, sin * sy, self.offset.x],
+            [-sin * sx, cos * sy, self.offset.y],
         ]
     }
 
