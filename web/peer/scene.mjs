@@ -3,8 +3,9 @@
 // where the interpolated normal faces the light), one grey diffuse material (Lambert alone: its
 // KHR_materials_specular factor 0 turns off the specular lobe, so raypipe traces no reflected
 // ray either, as the peer does not), a pinhole camera that frames its bounding sphere, and one
-// point light (KHR_lights_punctual). A file with a camera gets no floor in raypipe, so the workload
-// is the model alone.
+// point light (KHR_lights_punctual). The material is double-sided, as the peer's walk meets both
+// sides of a triangle. A file with a camera gets no floor in raypipe, so the workload is the model
+// alone.
 import fs from "node:fs";
 import path from "node:path";
 import { Box3, Matrix4, Quaternion, Sphere, Vector3 } from "three";
@@ -87,6 +88,7 @@ export function sceneGlb({ positions, normals, indices }, width, height, skew = 
     meshes: [{ primitives: [{ attributes: { POSITION: 1, NORMAL: 2 }, indices: 0, material: 0 }] }],
     materials: [{
       pbrMetallicRoughness: { baseColorFactor: [0.7, 0.7, 0.7, 1], metallicFactor: 0, roughnessFactor: 1 },
+      doubleSided: true,
       extensions: { KHR_materials_specular: { specularFactor: 0 } },
     }],
     accessors: [

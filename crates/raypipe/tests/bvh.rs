@@ -10,7 +10,8 @@ use raypipe::bvh::sah::{build_binned_sah, sah_cost};
 use raypipe::bvh::threaded::{self, GpuThreadedNode, threaded_nodes};
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
-use raypipe::cpu::intersect::{Hit, HitKind, Primitives, Ray};
+use raypipe::cpu::admit::Primitives;
+use raypipe::cpu::intersect::{Hit, HitKind, Ray};
 use raypipe::records::packed::primitive_boxes;
 use raypipe::records::{GpuSphere, GpuTriangle, PackedBvh};
 use raypipe::rng::SplitMix64;
@@ -337,6 +338,7 @@ fn traversals_equal_brute_force() {
     let primitives = Primitives {
         spheres: &spheres,
         triangles: &triangles,
+        query: None,
     };
     let (bvh, _) = Bvh::build_lbvh(&primitive_boxes(&spheres, &triangles), MortonBits::Bits30);
     let trees = PackedBvh::new(bvh);
@@ -405,6 +407,7 @@ fn traversals_equal_brute_force_in_coarse_and_far_frames() {
         let primitives = Primitives {
             spheres: &spheres,
             triangles: &[],
+            query: None,
         };
         let mut hits = 0;
         for _ in 0..3000 {
@@ -442,6 +445,7 @@ fn traversals_handle_one_and_two_spheres() {
         let primitives = Primitives {
             spheres: &spheres,
             triangles: &[],
+            query: None,
         };
         for x in [-3.0f32, 0.0, 0.5, 3.0, 6.0] {
             let ray = Ray::new(Vec3::new(x, 0.2, -5.0), Vec3::Z);

@@ -1,9 +1,10 @@
 //! Acceleration modes: the twins of `shaders/accel_*.wgsl`. Each answers the closest primitive hit and
 //! whether anything blocks a shadow ray.
 
+use super::admit::{Primitives, hit_primitive};
 use super::intersect::{
-    Hit, HitKind, Primitives, Ray, closer_primitive, count_box_tests, hit_primitive, intersect_box, intersect_sphere,
-    intersect_triangle, safe_inverse, v3,
+    Hit, HitKind, Ray, closer_primitive, count_box_tests, intersect_box, intersect_sphere, intersect_triangle,
+    safe_inverse, v3,
 };
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::{GpuThreadedNode, LEAF_BIT, QuantizationFrame, ThreadedTree};
@@ -27,7 +28,7 @@ pub fn brute_closest(primitives: &Primitives, ray: &Ray, best: Hit) -> Hit {
     for (i, triangle) in primitives.triangles.iter().enumerate() {
         let t = intersect_triangle(triangle, ray, hit.t);
         let index = (primitives.spheres.len() + i) as u32;
-        if closer_primitive(t, index, &hit) {
+        if closer_primitive(t, index, &hit) && primitives.stops_ray(index, ray) {
             hit = Hit {
                 t,
                 kind: HitKind::Primitive,
@@ -44,10 +45,10 @@ pub fn brute_occluded(primitives: &Primitives, ray: &Ray, t_max: f32) -> bool {
         .spheres
         .iter()
         .any(|s| blocks(intersect_sphere(s, ray, t_max)))
-        || primitives
-            .triangles
-            .iter()
-            .any(|t| blocks(intersect_triangle(t, ray, t_max)))
+        || primitives.triangles.iter().enumerate().any(|(i, t)| {
+            blocks(intersect_triangle(t, ray, t_max))
+                && primitives.stops_ray((primitives.spheres.len() + i) as u32, ray)
+        })
 }
 
 /// The closest primitive hit that beats `best`; with `shadow`, the first hit nearer than best.t

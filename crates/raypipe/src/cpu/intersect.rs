@@ -194,27 +194,6 @@ pub fn intersect_triangle(triangle: &GpuTriangle, ray: &Ray, t_max: f32) -> f32 
     if t > 0.0 && t <= t_max { t } else { NO_HIT }
 }
 
-/// The primitives in the BVH's order: spheres, then triangles.
-#[derive(Clone, Copy)]
-pub struct Primitives<'a> {
-    pub spheres: &'a [GpuSphere],
-    pub triangles: &'a [GpuTriangle],
-}
-
-impl Primitives<'_> {
-    pub fn count(&self) -> usize {
-        self.spheres.len() + self.triangles.len()
-    }
-
-    /// Primitive `index`'s hit in (0, t_max], or [`NO_HIT`] (`intersect_primitive`).
-    pub fn intersect(&self, index: u32, ray: &Ray, t_max: f32) -> f32 {
-        match self.spheres.get(index as usize) {
-            Some(sphere) => intersect_sphere(sphere, ray, t_max),
-            None => intersect_triangle(&self.triangles[index as usize - self.spheres.len()], ray, t_max),
-        }
-    }
-}
-
 /// Whether primitive `index`, met at t (or [`NO_HIT`]), beats the best hit: nearer, or as near with
 /// a lower index, so that coincident primitives resolve the same whatever order a traversal visits
 /// them in.
@@ -262,22 +241,6 @@ fn larger(a: f32, b: f32) -> f32 {
 /// The smaller of two numbers that are not NaN (`smaller` in the shader).
 fn smaller(a: f32, b: f32) -> f32 {
     if b < a { b } else { a }
-}
-
-/// Tests a primitive of the BVH; when it beats the best hit, it becomes the best hit and this says
-/// so (`hit_primitive`).
-pub fn hit_primitive(primitives: &Primitives, index: u32, ray: &Ray, hit: &mut Hit) -> bool {
-    count_box_tests(1);
-    let t = primitives.intersect(index, ray, hit.t);
-    if closer_primitive(t, index, hit) {
-        *hit = Hit {
-            t,
-            kind: HitKind::Primitive,
-            index,
-        };
-        return true;
-    }
-    false
 }
 
 /// Planes are unbounded, so they stay outside any acceleration structure and are always tested.

@@ -3,8 +3,10 @@
 //! the fallback where no adapter exists, and a baseline for benchmarks.
 
 pub mod accel;
+pub mod admit;
 pub mod brdf;
 pub mod intersect;
+pub mod maps;
 pub mod shade;
 pub mod trace;
 

@@ -2,11 +2,14 @@
 
 use super::brdf::{GltfSurface, gltf_brdf};
 use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
+use super::maps::sample_map;
 use crate::bvh::layout::NONE;
-use crate::records::constants::{LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_SPOT, MODEL_GLTF, RAY_BIAS, T_FAR};
-use crate::records::{GpuLight, GpuMaterial, GpuTextureMap, GpuTriangle, PackedScene};
-use crate::scene::Wrap;
-use glam::{IVec2, Vec2, Vec3, Vec4};
+use crate::records::constants::{
+    LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, RAY_BIAS, T_FAR,
+    TRIANGLE_ALPHA_BLEND,
+};
+use crate::records::{GpuLight, GpuMaterial, GpuTriangle, PackedScene};
+use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {
@@ -23,6 +26,8 @@ pub struct Surface {
     pub reach: f32,
     /// Texture coordinates at the hit, where the primitive has them.
     pub uv: Option<Vec2>,
+    /// A triangle with alpha BLEND: it covers its alpha of the ray.
+    pub blend: bool,
 }
 
 pub fn max_abs(v: Vec3) -> f32 {
@@ -53,6 +58,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
                 material: sphere.material,
                 reach,
                 uv: None,
+                blend: false,
             };
         }
         let triangle = &scene.triangles[hit.index as usize - scene.spheres.len()];
@@ -62,9 +68,10 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
             position,
             normal,
             shading: triangle_shading(scene, triangle, ray, normal),
-            material: triangle.material,
+            material: triangle.material & MATERIAL_INDEX_MASK,
             reach,
             uv: (triangle.uvs != NONE).then(|| triangle_uv(scene, triangle, ray)),
+            blend: triangle.material & TRIANGLE_ALPHA_BLEND != 0,
         };
     }
     let plane = &scene.planes[hit.index as usize];
@@ -82,81 +89,21 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
         material,
         reach,
         uv: None,
+        blend: false,
     }
 }
 
 /// A textured triangle's corner texture coordinates interpolated at the hit.
-fn triangle_uv(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray) -> Vec2 {
+pub fn triangle_uv(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray) -> Vec2 {
     let uvt = triangle_uvt(triangle, ray);
     let uvs = &scene.triangle_uvs[triangle.uvs as usize];
     let [u0, v0, u1, v1] = uvs.uv01;
     (1.0 - uvt.x - uvt.y) * Vec2::new(u0, v0) + uvt.x * Vec2::new(u1, v1) + uvt.y * Vec2::from_array(uvs.uv2)
 }
 
-/// A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
-/// clamp, [0, 2] for mirror (the second copy mirrored).
-pub fn fold_coordinate(c: f32, wrap: u32) -> f32 {
-    if wrap == Wrap::Repeat.code() {
-        return c - c.floor();
-    }
-    if wrap == Wrap::Mirror.code() {
-        return c - 2.0 * (c * 0.5).floor();
-    }
-    c.clamp(0.0, 1.0)
-}
-
-/// Column or row `i` of an axis of `size` texels, where `i` may lie one outside the folded period.
-pub fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
-    if wrap == Wrap::Repeat.code() {
-        return (i + size) % size;
-    }
-    if wrap == Wrap::Mirror.code() {
-        let period = 2 * size;
-        let m = (i + period) % period;
-        return if m >= size { period - 1 - m } else { m };
-    }
-    i.clamp(0, size - 1)
-}
-
-fn texture_texel(scene: &PackedScene, map: &GpuTextureMap, x: i32, y: i32) -> Vec4 {
-    let index = map.offset + y as u32 * map.width + x as u32;
-    Vec4::from_array(scene.texture_pixels.0[index as usize].map(|b| half::f16::from_bits(b).to_f32()))
-}
-
-fn lerp4(a: Vec4, b: Vec4, t: f32) -> Vec4 {
-    a * (1.0 - t) + b * t
-}
-
-/// The map's texture at `uv`, carried there by its transform. Bilinear filtering without
-/// mipmaps: the four texels around the point (texel centres at +0.5), weighted by its distance to
-/// them.
-pub fn sample_texture(scene: &PackedScene, map: &GpuTextureMap, uv: Vec2) -> Vec4 {
-    let point = uv.extend(1.0);
-    let uv = Vec2::new(v3(map.transform_u).dot(point), v3(map.transform_v).dot(point));
-    let (wrap_u, wrap_v) = (map.wrap & 0xff, map.wrap >> 8);
-    let size = IVec2::new(map.width as i32, map.height as i32);
-    let p = Vec2::new(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * size.as_vec2() - 0.5;
-    let corner = p.floor();
-    let f = p - corner;
-    let i = corner.as_ivec2();
-    let x0 = wrap_texel(i.x, size.x, wrap_u);
-    let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
-    let y0 = wrap_texel(i.y, size.y, wrap_v);
-    let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
-    let texel = |x, y| texture_texel(scene, map, x, y);
-    let near_row = lerp4(texel(x0, y0), texel(x1, y0), f.x);
-    let far_row = lerp4(texel(x0, y1), texel(x1, y1), f.x);
-    lerp4(near_row, far_row, f.y)
-}
-
-/// Texture map `index` at `uv`, or `None` where there is no map.
-fn sample_map(scene: &PackedScene, index: u32, uv: Vec2) -> Option<Vec4> {
-    (index != NONE).then(|| sample_texture(scene, &scene.texture_maps[index as usize], uv))
-}
-
 /// The surface's material, its maps applied at the hit (where the primitive has texture
-/// coordinates): the base colour's, and a glTF material's metalness and roughness (blue and green)
-/// and emission.
+/// coordinates): the base colour's (alpha too), and a glTF material's metalness and roughness (blue
+/// and green) and emission.
 pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
     let mut material = scene.materials[surface.material as usize];
     let Some(uv) = surface.uv else {
@@ -164,6 +111,7 @@ pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
     };
     if let Some(texel) = sample_map(scene, material.base_map, uv) {
         material.color = (v3(material.color) * texel.truncate()).to_array();
+        material.alpha *= texel.w;
     }
     if material.model == MODEL_GLTF {
         if let Some(texel) = sample_map(scene, material.metallic_roughness_map, uv) {
@@ -258,7 +206,8 @@ fn lit(light: &GpuLight, arrival: &LightArrival) -> bool {
 
 /// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
 /// Phong times the light's E. `normal` (geometric) and `shading` face the viewer; `view` points
-/// from the surface to the viewer. `occluded` casts a shadow ray (and counts it).
+/// from the surface to the viewer. `shadow_ray` casts a shadow ray (and counts it): `None` where something blocks it, else the
+/// share of the light that blended triangles let through (`occluded` and `shadowed`).
 pub fn direct_light(
     scene: &PackedScene,
     surface: &Surface,
@@ -266,7 +215,7 @@ pub fn direct_light(
     shading: Vec3,
     view: Vec3,
     material: &GpuMaterial,
-    mut occluded: impl FnMut(&Ray, f32) -> bool,
+    mut shadow_ray: impl FnMut(&Ray, f32) -> Option<f32>,
 ) -> Vec3 {
     let globals = &scene.globals.scene;
     let albedo = v3(material.color);
@@ -279,15 +228,16 @@ pub fn direct_light(
         if n_dot_l <= 0.0 || !lit(light, &arrival) {
             continue;
         }
-        if occluded(&Ray::new(origin, l), arrival.distance) {
+        let Some(share) = shadow_ray(&Ray::new(origin, l), arrival.distance) else {
             continue;
-        }
+        };
+        let irradiance = arrival.irradiance * share;
         let mut highlight = 0.0;
         let r_dot_v = reflect(-l, shading).dot(view);
         if r_dot_v > 0.0 && material.specular > 0.0 {
             highlight = material.specular * r_dot_v.powf(material.shininess);
         }
-        color += arrival.irradiance * (albedo * n_dot_l + Vec3::splat(highlight));
+        color += irradiance * (albedo * n_dot_l + Vec3::splat(highlight));
     }
     color
 }
@@ -317,7 +267,7 @@ pub fn gltf_direct_light(
     view: Vec3,
     material: &GpuMaterial,
     ambient_share: f32,
-    mut occluded: impl FnMut(&Ray, f32) -> bool,
+    mut shadow_ray: impl FnMut(&Ray, f32) -> Option<f32>,
 ) -> Vec3 {
     let s = gltf_surface(material);
     let diffuse = s.base * ((1.0 - s.metallic) * (1.0 - s.transmission));
@@ -330,10 +280,11 @@ pub fn gltf_direct_light(
         if n_dot_l <= 0.0 || !lit(light, &arrival) {
             continue;
         }
-        if occluded(&Ray::new(origin, l), arrival.distance) {
+        let Some(share) = shadow_ray(&Ray::new(origin, l), arrival.distance) else {
             continue;
-        }
-        color += arrival.irradiance * n_dot_l * gltf_brdf(&s, shading, view, l);
+        };
+        let irradiance = arrival.irradiance * share;
+        color += irradiance * n_dot_l * gltf_brdf(&s, shading, view, l);
     }
     color
 }

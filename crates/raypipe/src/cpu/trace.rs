@@ -1,8 +1,9 @@
 //! The tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
 
 use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
+use super::admit::{Primitives, RayQuery};
 use super::brdf::sample_specular;
-use super::intersect::{Hit, HitKind, Primitives, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
+use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
 use super::shade::{
     Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface, offset_origin, reflect,
     surface_at, surface_material,
@@ -12,9 +13,10 @@ use crate::modes::Accel;
 use crate::records::GpuMaterial;
 use crate::records::constants::MODEL_GLTF;
 pub use crate::records::constants::T_FAR;
-use crate::records::constants::{MIN_WEIGHT, R2_STEP};
+use crate::records::constants::{MAX_BLEND_LAYERS, MIN_WEIGHT, R2_STEP, ray_stack_size};
 use crate::records::{PackedBvh, PackedScene};
 use glam::{UVec2, Vec2, Vec3};
+use std::cell::Cell;
 
 #[derive(Clone, Copy, Debug, Default)]
 struct RayTask {
@@ -22,13 +24,18 @@ struct RayTask {
     dir: Vec3,
     weight: Vec3,
     depth: u32,
+    /// Whether single-sided triangles hide their backs from the ray: camera and reflected rays,
+    /// not rays transmitted through a surface (which may be inside a volume).
+    culls: bool,
 }
 
-/// The rays a hit sends on; a weight that is not worth tracing means none.
+/// The rays a hit sends on; a weight that is not worth tracing means none. `through` goes on
+/// behind a blended surface: not a bounce, at the same depth.
 #[derive(Clone, Copy, Debug, Default)]
 struct Branches {
     reflected: RayTask,
     refracted: RayTask,
+    through: RayTask,
 }
 
 /// What one pixel's trace yields: the fragment shader's two outputs.
@@ -56,6 +63,8 @@ pub struct Tracer<'a> {
     /// The sample's random sequence: its seed and the draws so far.
     seed: u32,
     draws: u32,
+    /// Surfaces of blended triangles the pixel's rays went on behind, at most MAX_BLEND_LAYERS.
+    blend_layers: u32,
 }
 
 impl<'a> Tracer<'a> {
@@ -72,20 +81,26 @@ impl<'a> Tracer<'a> {
             ray_count: 0,
             seed: 0,
             draws: 0,
+            blend_layers: 0,
         })
     }
 
-    /// The primitives in the BVH's order.
-    pub fn primitives(&self) -> Primitives<'a> {
+    /// The primitives in the BVH's order, as a ray that asks `query` of them meets them.
+    pub fn primitives(&self, query: RayQuery<'a>) -> Primitives<'a> {
         Primitives {
             spheres: &self.scene.spheres,
             triangles: &self.scene.triangles,
+            query: Some(query),
         }
     }
 
     /// The acceleration mode's closest primitive hit (the shader's `accel_closest`).
-    fn accel_closest(&self, ray: &Ray, best: Hit) -> Hit {
-        let primitives = self.primitives();
+    fn accel_closest(&self, ray: &Ray, best: Hit, culls: bool) -> Hit {
+        let primitives = self.primitives(RayQuery {
+            scene: self.scene,
+            culls_back_faces: culls,
+            shadow_light: None,
+        });
         let Some(bvh) = self.bvh.filter(|_| self.accel.uses_bvh()) else {
             // Brute force, or a BVH walk over no primitives.
             return brute_closest(&primitives, ray, best);
@@ -98,9 +113,14 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// The acceleration mode's shadow query (the shader's `accel_occluded`).
-    fn accel_occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        let primitives = self.primitives();
+    /// The acceleration mode's shadow query (the shader's `accel_occluded`); `shadow_light` keeps
+    /// the share of light that blended triangles let through.
+    fn accel_occluded(&self, ray: &Ray, t_max: f32, shadow_light: &Cell<f32>) -> bool {
+        let primitives = self.primitives(RayQuery {
+            scene: self.scene,
+            culls_back_faces: false,
+            shadow_light: Some(shadow_light),
+        });
         let Some(bvh) = self.bvh.filter(|_| self.accel.uses_bvh()) else {
             return brute_occluded(&primitives, ray, t_max);
         };
@@ -123,13 +143,19 @@ impl<'a> Tracer<'a> {
         Ray::new(v3(g.eye), dir)
     }
 
-    pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Hit {
+    /// The closest hit, single-sided triangles hiding their backs where `culls` says so.
+    pub fn closest_hit(&self, ray: &Ray, t_max: f32, culls: bool) -> Hit {
         let planes = closest_plane(&self.scene.planes, ray, Hit::none(t_max));
-        self.accel_closest(ray, planes)
+        self.accel_closest(ray, planes, culls)
     }
 
-    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        any_plane(&self.scene.planes, ray, t_max) || self.accel_occluded(ray, t_max)
+    /// A shadow ray (`occluded`, then `shadowed`): `None` where something blocks it before t_max,
+    /// else the share of the light that its blended triangles let through. Shadow rays see both
+    /// sides of triangles.
+    pub fn shadow_ray(&self, ray: &Ray, t_max: f32) -> Option<f32> {
+        let shadow_light = Cell::new(1.0);
+        let blocked = any_plane(&self.scene.planes, ray, t_max) || self.accel_occluded(ray, t_max, &shadow_light);
+        (!blocked).then(|| shadow_light.get())
     }
 
     /// Traces one ray of the tree (`trace_task`): adds its light to the pixel and says where it
@@ -138,7 +164,7 @@ impl<'a> Tracer<'a> {
         let mut branches = Branches::default();
         let ray = Ray::new(task.origin, task.dir);
         self.ray_count += 1;
-        let hit = self.closest_hit(&ray, T_FAR);
+        let hit = self.closest_hit(&ray, T_FAR, task.culls);
         if task.depth == 0 {
             result.cost = box_tests();
         }
@@ -147,7 +173,8 @@ impl<'a> Tracer<'a> {
             return branches;
         }
         let surface = surface_at(self.scene, &ray, &hit);
-        if task.depth == 0 {
+        // The first surface the camera ray meets, blended or not.
+        if task.depth == 0 && result.depth.is_none() {
             result.normal = surface.shading;
             result.depth = Some(hit.t);
         }
@@ -157,24 +184,51 @@ impl<'a> Tracer<'a> {
         let normal = if entering { surface.normal } else { -surface.normal };
         let shading = if entering { surface.shading } else { -surface.shading };
         let view = -ray.dir;
+        // A blended surface covers its alpha of the ray; the rest goes on behind it.
+        let mut covered = *task;
+        if surface.blend {
+            covered.weight *= material.alpha;
+            if self.blend_layers < MAX_BLEND_LAYERS {
+                self.blend_layers += 1;
+                branches.through = RayTask {
+                    origin: offset_origin(&surface, -normal),
+                    dir: ray.dir,
+                    weight: task.weight * (1.0 - material.alpha),
+                    ..*task
+                };
+            }
+        }
         let scene = self.scene;
         let gltf = material.model == MODEL_GLTF;
-        let mut occluded = |ray: &Ray, t_max: f32| {
+        let mut shadow_ray = |ray: &Ray, t_max: f32| {
             self.ray_count += 1;
-            self.occluded(ray, t_max)
+            self.shadow_ray(ray, t_max)
         };
         let light = if gltf {
             let share = ambient_share(scene, &surface, &material);
-            gltf_direct_light(scene, &surface, normal, shading, view, &material, share, &mut occluded)
+            gltf_direct_light(
+                scene,
+                &surface,
+                normal,
+                shading,
+                view,
+                &material,
+                share,
+                &mut shadow_ray,
+            )
         } else {
-            direct_light(scene, &surface, normal, shading, view, &material, &mut occluded)
+            direct_light(scene, &surface, normal, shading, view, &material, &mut shadow_ray)
         };
-        result.color += task.weight * (light + v3(material.emission));
+        result.color += covered.weight * (light + v3(material.emission));
         if task.depth >= self.scene.max_depth {
             return branches;
         }
         if gltf {
-            return self.gltf_branches(task, &surface, normal, shading, view, &material);
+            let sent = self.gltf_branches(&covered, &surface, normal, shading, view, &material);
+            return Branches {
+                through: branches.through,
+                ..sent
+            };
         }
 
         // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
@@ -200,14 +254,16 @@ impl<'a> Tracer<'a> {
         branches.refracted = RayTask {
             origin: offset_origin(&surface, -normal),
             dir: refracted,
-            weight: task.weight * transmit_share,
+            weight: covered.weight * transmit_share,
             depth,
+            culls: false,
         };
         branches.reflected = RayTask {
             origin: offset_origin(&surface, normal),
             dir: reflect(ray.dir, shading),
-            weight: task.weight * reflect_share,
+            weight: covered.weight * reflect_share,
             depth,
+            culls: true,
         };
         branches
     }
@@ -237,13 +293,16 @@ impl<'a> Tracer<'a> {
                 dir: sample.dir,
                 weight: task.weight * sample.weight,
                 depth,
+                culls: true,
             },
             refracted: RayTask {
                 origin: offset_origin(surface, -normal),
                 dir: transmitted,
                 weight: task.weight * s.base * transmit_share,
                 depth,
+                culls: false,
             },
+            through: RayTask::default(),
         }
     }
 
@@ -261,14 +320,18 @@ impl<'a> Tracer<'a> {
     pub fn trace_sample(&mut self, pixel: UVec2, sample: u32) -> PixelTrace {
         self.seed = sample_seed(pixel, sample);
         self.draws = 0;
+        self.blend_layers = 0;
         self.ray_count = 0;
         let position = pixel.as_vec2() + sample_offset(pixel, sample);
         self.trace_pixel(self.camera_ray(position))
     }
 
-    /// A reflected branch is traced next; its refracted sibling waits on the stack.
+    /// A reflected branch is traced next; its refracted sibling waits on the stack. A ray that goes
+    /// on behind a blended surface is traced next, and both the surface's branches wait.
     pub fn trace_pixel(&mut self, primary: Ray) -> PixelTrace {
-        let stack_size = self.scene.max_depth as usize + 1;
+        // The shader's RAY_STACK_SIZE in a scene with blended triangles: without them the stack
+        // never holds more than max_depth + 1, so the room is the same for every scene.
+        let stack_size = ray_stack_size(self.scene.max_depth, true) as usize;
         let mut result = PixelTrace {
             color: Vec3::ZERO,
             normal: Vec3::ZERO,
@@ -282,11 +345,22 @@ impl<'a> Tracer<'a> {
             dir: primary.dir,
             weight: Vec3::ONE,
             depth: 0,
+            culls: true,
         };
         let mut waiting = Vec::with_capacity(stack_size);
         loop {
             let branches = self.trace_task(&task, &mut result);
             let reflects = worth_tracing(branches.reflected.weight);
+            if worth_tracing(branches.through.weight) {
+                // The ray goes on behind the blended surface; the surface's own branches wait.
+                for branch in [branches.refracted, branches.reflected] {
+                    if worth_tracing(branch.weight) && waiting.len() < stack_size {
+                        waiting.push(branch);
+                    }
+                }
+                task = branches.through;
+                continue;
+            }
             if worth_tracing(branches.refracted.weight) {
                 if !reflects {
                     task = branches.refracted;

@@ -6,7 +6,9 @@
 //! (a full-screen triangle's vertex and fragment stages, or a compute kernel) around it.
 
 use crate::modes::{Accel, MemoryMode, Pipeline};
-use crate::records::constants::MODEL_GLTF;
+use crate::records::constants::{
+    MODEL_GLTF, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED, ray_stack_size,
+};
 use crate::records::packed::{MovedRecords, PackedScene};
 use crate::records::{TexelFormat, constants};
 use std::fmt::Write;
@@ -31,6 +33,8 @@ const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
 const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
 const ACCEL_STACKLESS: &str = include_str!("shaders/accel_stackless.wgsl");
 const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
+const ADMIT: &str = include_str!("shaders/admit.wgsl");
+const MAPS: &str = include_str!("shaders/maps.wgsl");
 const BRDF: &str = include_str!("shaders/brdf.wgsl");
 const SHADE: &str = include_str!("shaders/shade.wgsl");
 const TRACE: &str = include_str!("shaders/trace.wgsl");
@@ -124,6 +128,12 @@ pub struct SceneFeatures {
     pub gltf_materials: bool,
     /// A material that reflects or transmits: rays beyond the primary and shadow rays.
     pub secondary_rays: bool,
+    /// A single-sided triangle (`TRIANGLE_SINGLE_SIDED`).
+    pub one_sided: bool,
+    /// A triangle with alpha MASK.
+    pub alpha_mask: bool,
+    /// A triangle with alpha BLEND: rays that go on behind a surface.
+    pub alpha_blend: bool,
 }
 
 impl SceneFeatures {
@@ -135,10 +145,17 @@ impl SceneFeatures {
         textures: true,
         gltf_materials: true,
         secondary_rays: true,
+        one_sided: true,
+        alpha_mask: true,
+        alpha_blend: true,
     };
 
     pub fn of(scene: &PackedScene) -> SceneFeatures {
+        let flags = scene.triangle_flags();
         SceneFeatures {
+            one_sided: flags & TRIANGLE_SINGLE_SIDED != 0,
+            alpha_mask: flags & TRIANGLE_ALPHA_MASK != 0,
+            alpha_blend: flags & TRIANGLE_ALPHA_BLEND != 0,
             spheres: !scene.spheres.is_empty(),
             triangles: !scene.triangles.is_empty(),
             planes: !scene.planes.is_empty(),
@@ -178,8 +195,12 @@ pub fn compose(config: &ShaderConfig) -> String {
     )
     .unwrap();
     writeln!(w, "const MAX_DEPTH: u32 = {}u;", config.max_depth).unwrap();
-    // Depth-first with two branches keeps at most one waiting sibling per level, plus the pair just pushed.
-    writeln!(w, "const RAY_STACK_SIZE: u32 = {}u;", config.max_depth + 1).unwrap();
+    writeln!(
+        w,
+        "const RAY_STACK_SIZE: u32 = {}u;",
+        ray_stack_size(config.max_depth, config.features.alpha_blend)
+    )
+    .unwrap();
     writeln!(w, "const TEXELS_PER_ROW: u32 = {}u;", config.texels_per_row).unwrap();
     writeln!(w, "const WRITE_COST: bool = {};", config.write_cost).unwrap();
     let features = config.features;
@@ -189,6 +210,9 @@ pub fn compose(config: &ShaderConfig) -> String {
     writeln!(w, "const HAS_TEXTURES: bool = {};", features.textures).unwrap();
     writeln!(w, "const HAS_GLTF_MATERIALS: bool = {};", features.gltf_materials).unwrap();
     writeln!(w, "const HAS_SECONDARY_RAYS: bool = {};", features.secondary_rays).unwrap();
+    writeln!(w, "const HAS_ONE_SIDED: bool = {};", features.one_sided).unwrap();
+    writeln!(w, "const HAS_ALPHA_MASK: bool = {};", features.alpha_mask).unwrap();
+    writeln!(w, "const HAS_ALPHA_BLEND: bool = {};", features.alpha_blend).unwrap();
     writeln!(w, "const BVH_STACK_SIZE: u32 = {}u;", config.bvh_depth.max(1)).unwrap();
     writeln!(w, "const COMPUTE_TILE: u32 = {COMPUTE_TILE}u;").unwrap();
     writeln!(w, "@group(0) @binding(0) var<uniform> globals: Globals;").unwrap();
@@ -253,7 +277,7 @@ pub fn compose(config: &ShaderConfig) -> String {
         Pipeline::Fragment => FULLSCREEN,
         Pipeline::Compute => COMPUTE,
     };
-    for part in [TEXELS, INTERSECT, accel, BRDF, SHADE, TRACE, entry_points] {
+    for part in [TEXELS, INTERSECT, MAPS, ADMIT, accel, BRDF, SHADE, TRACE, entry_points] {
         source.push('\n');
         source.push_str(part);
     }

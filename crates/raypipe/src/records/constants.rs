@@ -29,6 +29,32 @@ pub const MODEL_WHITTED: u32 = 0;
 /// `GpuMaterial::model`: glTF's metallic-roughness material.
 pub const MODEL_GLTF: u32 = 1;
 
+/// `GpuTriangle::material`: the material's index is its low bits, at most this many; the flags
+/// above them say what the walks' hit test must know of the material without loading it. All
+/// stay below 2^24, exact in texture memory's float texels.
+pub const MATERIAL_INDEX_MASK: u32 = (1 << 21) - 1;
+/// The triangle's back (seen against its geometric normal) is invisible to camera and reflected
+/// rays.
+pub const TRIANGLE_SINGLE_SIDED: u32 = 1 << 21;
+/// Alpha MASK: the triangle is cut away where its alpha is below the material's cutoff.
+pub const TRIANGLE_ALPHA_MASK: u32 = 1 << 22;
+/// Alpha BLEND: the triangle covers its alpha of a ray; shadow rays pass the rest.
+pub const TRIANGLE_ALPHA_BLEND: u32 = 1 << 23;
+/// The most surfaces a ray passes through for blended triangles before the rest of its weight is
+/// dropped: what keeps a pixel's work bounded whatever the scene.
+pub const MAX_BLEND_LAYERS: u32 = 32;
+/// Room on the ray stack for branches that wait while a ray goes on through blended surfaces,
+/// beyond the one per level of depth.
+pub const BLEND_STACK_ROOM: u32 = 8;
+
+/// The tracer's ray stack (`RAY_STACK_SIZE`): depth-first with two branches keeps at most one
+/// waiting sibling per level, plus the pair just pushed; where a ray goes on behind blended
+/// surfaces, their branches wait too, in BLEND_STACK_ROOM more (a branch that finds the stack full
+/// is dropped, alike on both tracers).
+pub fn ray_stack_size(max_depth: u32, blend: bool) -> u32 {
+    max_depth + 1 + if blend { BLEND_STACK_ROOM } else { 0 }
+}
+
 /// `GpuLight::kind` (`scene::LightKind::code`): the paper's light, E its colour everywhere.
 pub const LIGHT_CONSTANT: u32 = 0;
 /// A KHR_lights_punctual point light: candela, inverse-square.
@@ -67,6 +93,12 @@ pub fn wgsl() -> String {
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_SPOT", LIGHT_SPOT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+        ("MATERIAL_INDEX_MASK", MATERIAL_INDEX_MASK),
+        ("TRIANGLE_SINGLE_SIDED", TRIANGLE_SINGLE_SIDED),
+        ("TRIANGLE_ALPHA_MASK", TRIANGLE_ALPHA_MASK),
+        ("TRIANGLE_ALPHA_BLEND", TRIANGLE_ALPHA_BLEND),
+        ("MAX_BLEND_LAYERS", MAX_BLEND_LAYERS),
+        ("BLEND_STACK_ROOM", BLEND_STACK_ROOM),
     ] {
         writeln!(out, "const {name}: u32 = {value:#x}u;").unwrap();
     }

@@ -150,6 +150,8 @@ pub struct GpuSphere {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTriangle {
     pub v0: [f32; 3],
+    /// The material's index (`& MATERIAL_INDEX_MASK`) and, above it, what the walks' hit test needs
+    /// of the material: `TRIANGLE_SINGLE_SIDED`, `TRIANGLE_ALPHA_MASK`, `TRIANGLE_ALPHA_BLEND`.
     pub material: u32,
     pub v1: [f32; 3],
     /// Index of the triangle's vertex normals in the normal records, or `NONE` to shade flat.
@@ -268,7 +270,12 @@ pub struct GpuMaterial {
     pub metallic_roughness_map: u32,
     pub occlusion_map: u32,
     pub emissive_map: u32,
-    pub _pad: u32,
+    /// The base colour's alpha (times the base map's, at a hit); used by triangles whose
+    /// `material` word says MASK or BLEND.
+    pub alpha: f32,
+    /// MASK's cutoff: alpha below it cuts the surface away.
+    pub alpha_cutoff: f32,
+    pub _pad: [u32; 3],
 }
 
 /// A texture as a material maps it (`scene::TextureMap`): where its texels are and how texture
@@ -328,7 +335,8 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuLight, "Light", [position, kind, color, range, direction, spot_scale, spot_offset]),
     struct_layout!(GpuMaterial, "Material", [
         color, specular, shininess, reflect, transmit, ior, emission, model, specular_color, metallic, roughness,
-        specular_factor, occlusion_strength, base_map, metallic_roughness_map, occlusion_map, emissive_map,
+        specular_factor, occlusion_strength, base_map, metallic_roughness_map, occlusion_map, emissive_map, alpha,
+        alpha_cutoff,
     ]),
     struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, transform_v]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),

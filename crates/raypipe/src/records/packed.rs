@@ -12,10 +12,11 @@ use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
 use crate::modes::Builder;
 use crate::records::constants::{
-    LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MODEL_GLTF, MODEL_WHITTED,
+    LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, MODEL_WHITTED,
+    TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
 };
 use crate::records::texels::GpuRecord;
-use crate::scene::{Camera, Light, LightKind, Moved, Plane, Scene, Sphere, TextureMap, Triangle};
+use crate::scene::{AlphaMode, Camera, Light, LightKind, Material, Moved, Plane, Scene, Sphere, TextureMap, Triangle};
 use glam::Vec3;
 
 /// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
@@ -103,6 +104,16 @@ impl PackedScene {
     /// Packs a validated scene with its render settings.
     pub fn new(scene: &Scene) -> Result<Self, InputError> {
         scene.validate()?;
+        let material_limit = MATERIAL_INDEX_MASK as usize;
+        if scene.materials.len() > material_limit {
+            return Err(InputError::of(
+                Element::Scene,
+                format!(
+                    "{} materials: a render takes at most {material_limit} (what a triangle's material word holds)",
+                    scene.materials.len()
+                ),
+            ));
+        }
         for (what, count) in [
             ("primitives", scene.spheres.len() + scene.triangles.len()),
             ("planes", scene.planes.len()),
@@ -134,7 +145,7 @@ impl PackedScene {
             bvh_frame: GpuBvhFrame::default(),
         };
         let spheres = scene.spheres.iter().map(pack_sphere).collect();
-        let (triangles, triangle_normals, triangle_uvs) = pack_triangles(&scene.triangles);
+        let (triangles, triangle_normals, triangle_uvs) = pack_triangles(&scene.triangles, &scene.materials);
         let planes = scene.planes.iter().map(pack_plane).collect();
         let lights = scene.lights.iter().map(pack_light).collect();
         let (materials, texture_maps, texture_pixels) = pack_materials(scene);
@@ -188,6 +199,14 @@ impl PackedScene {
                 MovedRecords::Triangles
             }
         }
+    }
+
+    /// The flags of every triangle's material word together (`TRIANGLE_*`): what sides and alpha
+    /// modes the walks meet.
+    pub fn triangle_flags(&self) -> u32 {
+        self.triangles
+            .iter()
+            .fold(0, |flags, t| flags | (t.material & !MATERIAL_INDEX_MASK))
     }
 
     /// Spheres and triangles: the primitives the BVH is built over, in its index order.
@@ -252,9 +271,27 @@ fn pack_sphere(s: &Sphere) -> GpuSphere {
     }
 }
 
+/// A triangle's material word: the index, and the flags of the material's side and alpha mode.
+fn triangle_material_word(index: u32, material: &Material) -> u32 {
+    let sides = if material.double_sided {
+        0
+    } else {
+        TRIANGLE_SINGLE_SIDED
+    };
+    let alpha = match material.alpha_mode {
+        AlphaMode::Opaque => 0,
+        AlphaMode::Mask { .. } => TRIANGLE_ALPHA_MASK,
+        AlphaMode::Blend => TRIANGLE_ALPHA_BLEND,
+    };
+    index | sides | alpha
+}
+
 /// Triangles' records, with the vertex normals and texture coordinates of those that have them in
 /// their own records (a triangle links to its own, or holds NONE).
-fn pack_triangles(triangles: &[Triangle]) -> (Vec<GpuTriangle>, Vec<GpuTriangleNormals>, Vec<GpuTriangleUvs>) {
+fn pack_triangles(
+    triangles: &[Triangle],
+    materials: &[Material],
+) -> (Vec<GpuTriangle>, Vec<GpuTriangleNormals>, Vec<GpuTriangleUvs>) {
     let mut triangle_normals = Vec::new();
     let mut triangle_uvs = Vec::new();
     let triangles = triangles
@@ -286,7 +323,7 @@ fn pack_triangles(triangles: &[Triangle]) -> (Vec<GpuTriangle>, Vec<GpuTriangleN
             };
             GpuTriangle {
                 v0: v0.to_array(),
-                material: t.material,
+                material: triangle_material_word(t.material, &materials[t.material as usize]),
                 v1: v1.to_array(),
                 normals,
                 v2: v2.to_array(),
@@ -407,7 +444,12 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, Textu
                 metallic_roughness_map: map_index(pbr.metallic_roughness_texture),
                 occlusion_map: map_index(pbr.occlusion_texture),
                 emissive_map: map_index(pbr.emissive_texture),
-                _pad: 0,
+                alpha: m.alpha,
+                alpha_cutoff: match m.alpha_mode {
+                    AlphaMode::Mask { cutoff } => cutoff,
+                    _ => 0.0,
+                },
+                _pad: [0; 3],
             }
         })
         .collect();

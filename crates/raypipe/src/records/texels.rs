@@ -143,8 +143,9 @@ impl GpuRecord for GpuMaterial {
             link_texel(self.metallic_roughness_map),
             link_texel(self.occlusion_map),
             link_texel(self.emissive_map),
-            0.0,
+            self.alpha,
         ]));
+        out.push(floats([self.alpha_cutoff, 0.0, 0.0, 0.0]));
     }
 }
 

@@ -30,6 +30,29 @@ pub struct Material {
     pub texture: Option<TextureMap>,
     /// glTF's metallic-roughness parameters; `None` for a Whitted material.
     pub pbr: Option<Pbr>,
+    /// The coverage of the surface, 0..1 (`baseColorFactor`'s alpha), times the base colour
+    /// texture's alpha where there is one; what it does follows from `alpha_mode`.
+    pub alpha: f32,
+    pub alpha_mode: AlphaMode,
+    /// Whether the back of a triangle with this material is seen (glTF's `doubleSided`); a
+    /// single-sided triangle is invisible from behind to camera and reflected rays
+    /// (docs/scene-format.md, "Alpha and sides"). Spheres and planes are always seen from both.
+    pub double_sided: bool,
+}
+
+/// How a triangle's alpha covers what lies behind it (glTF's `alphaMode`). Spheres and planes
+/// are always opaque.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    #[default]
+    Opaque,
+    /// The surface is cut away where alpha is below `cutoff`, for every ray (shadow rays too), and
+    /// fully there elsewhere.
+    Mask { cutoff: f32 },
+    /// The surface covers `alpha` of every ray that meets it; the rest goes on behind it, shadow
+    /// rays too.
+    Blend,
 }
 
 impl Default for Material {
@@ -44,11 +67,26 @@ impl Default for Material {
             emission: Vec3::ZERO,
             texture: None,
             pbr: None,
+            alpha: 1.0,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: true,
         }
     }
 }
 
 impl Material {
+    /// What of the material only triangles carry: a single side or an alpha mode other than
+    /// opaque, named for a message; `None` where a sphere or plane can wear it.
+    pub fn triangle_only_part(&self) -> Option<&'static str> {
+        if !self.double_sided {
+            Some("one side")
+        } else if self.alpha_mode != AlphaMode::Opaque {
+            Some("an alpha mode other than opaque")
+        } else {
+            None
+        }
+    }
+
     /// The material with its maps' texture indices moved by `base`: its textures placed after
     /// `base` others in a scene's list.
     pub fn with_textures_from(&self, base: u32) -> Material {
@@ -211,6 +249,14 @@ pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<()
     }
     if m.reflect > 1.0 || m.transmit > 1.0 {
         return Err("reflect and transmit must be at most 1".into());
+    }
+    if !(0.0..=1.0).contains(&m.alpha) {
+        return Err(format!("alpha must be in 0..=1 (got {})", m.alpha));
+    }
+    if let AlphaMode::Mask { cutoff } = m.alpha_mode
+        && !(cutoff.is_finite() && cutoff >= 0.0)
+    {
+        return Err(format!("alpha cutoff must be finite and not negative (got {cutoff})"));
     }
     if !(m.ior.is_finite() && m.ior > 0.0) {
         return Err(format!("ior must be positive and finite (got {})", m.ior));

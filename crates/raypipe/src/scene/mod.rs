@@ -18,7 +18,7 @@ pub mod texture;
 
 pub use light::{Light, LightKind};
 pub use load::{is_model_file, model_extension_list};
-pub use material::{Material, Pbr, TextureMap, TextureTransform};
+pub use material::{AlphaMode, Material, Pbr, TextureMap, TextureTransform};
 pub use motion::{Bounce, Motion, Moved};
 pub use texture::{Texture, Wrap};
 
@@ -248,6 +248,18 @@ impl Scene {
                 Ok(())
             }
         };
+        // Spheres and planes are tested without their material; only triangles carry its sides
+        // and alpha into the walks.
+        let check_whole_material = |element: &dyn Fn() -> Element, index: u32| {
+            check_material(element, index)?;
+            match self.materials[index as usize].triangle_only_part() {
+                Some(part) => Err(InputError::of(
+                    element(),
+                    format!("material {index} has {part}, which only triangles can have"),
+                )),
+                None => Ok(()),
+            }
+        };
         for (i, s) in self.spheres.iter().enumerate() {
             let element = || Element::Sphere(i);
             if !finite_vec(s.center) {
@@ -262,7 +274,7 @@ impl Scene {
             if !within_reach(s.center.abs() + s.radius) {
                 return Err(InputError::of(element(), out_of_reach("the sphere")));
             }
-            check_material(&element, s.material)?;
+            check_whole_material(&element, s.material)?;
         }
         for (i, t) in self.triangles.iter().enumerate() {
             let element = || Element::Triangle(i);
@@ -295,9 +307,9 @@ impl Scene {
             if (p.normal.length() - 1.0).abs() > 1e-4 {
                 return Err(InputError::of(element(), "normal must have unit length"));
             }
-            check_material(&element, p.material)?;
+            check_whole_material(&element, p.material)?;
             if let Some(checker) = p.checker {
-                check_material(&element, checker.material)?;
+                check_whole_material(&element, checker.material)?;
                 if !(checker.size > 0.0 && checker.size.is_finite()) {
                     return Err(InputError::of(
                         element(),

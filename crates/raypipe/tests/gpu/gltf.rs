@@ -3,7 +3,7 @@
 //! and pipeline, and the same file packed three ways renders the same image.
 
 use crate::common::gltf_file::{
-    CHECKER, CLAMP_TO_EDGE, GltfBuilder, MIRRORED_REPEAT, Packing, REPEAT, framed_textured_quad,
+    CHECKER, CLAMP_TO_EDGE, GltfBuilder, MIRRORED_REPEAT, Packing, REPEAT, framed_textured_quad, quad,
 };
 use crate::common::harness::Test;
 use crate::common::*;
@@ -287,6 +287,106 @@ fn khronos_models_on_the_floor_match_the_cpu(ctx: &GpuContext, models: &std::pat
     }
 }
 
+/// A glTF scene of alpha and sides: a masked quad whose texture has holes, a blended quad, a
+/// single-sided quad turned away from the camera, over a glossy floor (whose reflected rays cull back
+/// faces too), lit by a point and a directional light. What its materials read back, and its image
+/// in every memory mode, walk and pipeline against the CPU's; the CPU's own answers are worked out
+/// in tests/alpha.rs.
+fn alpha_and_sides_match_the_cpu(ctx: &GpuContext) {
+    use serde_json::json;
+    let mut b = GltfBuilder::default();
+    // The checker with its green and blue texels transparent.
+    let mut texels = CHECKER;
+    texels[1][3] = 0;
+    texels[2][3] = 0;
+    let texture = b.texture(texels.as_flattened(), 2, 2, [REPEAT; 2]);
+    let masked = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": texture }, "metallicFactor": 0 },
+        "alphaMode": "MASK", "alphaCutoff": 0.4
+    }));
+    let blended = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.2, 0.1, 0.35], "metallicFactor": 0 },
+        "alphaMode": "BLEND", "doubleSided": true
+    }));
+    let one_sided = b.material(json!({ "pbrMetallicRoughness": { "metallicFactor": 0 } }));
+    let floor = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [0.6, 0.6, 0.6, 1], "metallicFactor": 0.5, "roughnessFactor": 0.15 },
+        "doubleSided": true
+    }));
+    let (positions, uvs, indices) = quad(3.0);
+    let quad_mesh = |b: &mut GltfBuilder, material, flip: bool| {
+        let indices = if flip { [0, 2, 1, 0, 3, 2] } else { indices };
+        b.mesh(&positions, Some(&uvs), &indices, Some(material))
+    };
+    let meshes = [
+        (quad_mesh(&mut b, masked, false), [-1.7, 0.3, 0.0]),
+        (quad_mesh(&mut b, blended, false), [-0.5, 0.2, 0.6]),
+        (quad_mesh(&mut b, one_sided, true), [0.7, 0.3, 0.2]),
+    ];
+    for (mesh, translation) in meshes {
+        let node = b.node(json!({ "mesh": mesh, "translation": translation }));
+        b.roots.push(node);
+    }
+    // The floor: the unit quad turned to face +y, stretched under the others.
+    let floor_mesh = b.mesh(&positions, Some(&uvs), &indices, Some(floor));
+    // A quarter turn about -x: (sin 45°, cos 45°).
+    let sin_45 = std::f32::consts::FRAC_1_SQRT_2;
+    let floor_node = b.node(json!({
+        "mesh": floor_mesh, "translation": [-4, -0.2, 4], "scale": [8, 8, 1],
+        "rotation": [-sin_45, 0, 0, sin_45]
+    }));
+    b.roots.push(floor_node);
+    b.cameras = vec![json!({ "type": "perspective", "perspective": { "yfov": 0.9, "znear": 0.01 } })];
+    // At (0.2, 1.6, 4), looking down 20 degrees toward -z.
+    let camera =
+        b.node(json!({ "camera": 0, "translation": [0.2, 1.6, 4], "rotation": [-0.17364818, 0, 0, 0.98480775] }));
+    b.lights = vec![
+        json!({ "type": "point", "intensity": 25 }),
+        json!({ "type": "directional", "intensity": 1.5 }),
+    ];
+    let point = b.node(json!({ "translation": [1, 3, 2], "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+    let sun = b.node(json!({
+        "rotation": [-0.5, 0.3, 0.1, 0.8], "extensions": { "KHR_lights_punctual": { "light": 1 } }
+    }));
+    b.roots.extend([camera, point, sun]);
+    b.extensions_used = vec!["KHR_lights_punctual"];
+    let file = parse(&b.gltf(), Files::None, &mut Vec::new()).unwrap();
+    let mut scene = gltf_scene(&file, "alpha.gltf", &ModelOptions::default()).unwrap();
+    use raypipe::scene::AlphaMode;
+    let modes: Vec<_> = scene.materials.iter().map(|m| (m.alpha_mode, m.double_sided)).collect();
+    // The file's four, after those of the placement.
+    assert_eq!(
+        modes[modes.len() - 4..],
+        [
+            (AlphaMode::Mask { cutoff: 0.4 }, false),
+            (AlphaMode::Blend, true),
+            (AlphaMode::Opaque, false),
+            (AlphaMode::Opaque, true),
+        ]
+    );
+    assert_eq!(scene.materials[modes.len() - 3].alpha, 0.35);
+    scene.settings.width = 64;
+    scene.settings.height = 48;
+    scene.settings.max_depth = 3;
+    let mut packed = PackedScene::new(&scene).unwrap();
+    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    let cpu = render_cpu(&packed, Accel::Brute);
+    for &accel in Accel::ALL {
+        let walked = render_cpu(&packed, accel);
+        assert_frames_match(&format!("alpha-cpu-{accel:?}"), &walked, &cpu);
+        for memory in ctx.memory_modes() {
+            let gpu = render_gpu(ctx, &packed, memory, accel);
+            assert_frames_match(&format!("alpha-{accel:?}-{memory:?}"), &gpu, &cpu);
+        }
+    }
+    let options = RendererOptions {
+        pipeline: Pipeline::Compute,
+        ..Default::default()
+    };
+    let compute = pollster::block_on(renderer(ctx, &packed, options).read_frame()).unwrap();
+    assert_frames_match("alpha-compute", &compute.frame, &cpu);
+}
+
 /// The Khronos samples that require an extension raypipe does not read, with it.
 const REFUSED_KHRONOS: [(&str, &str); 3] = [
     ("ClearCoatCarPaint", "KHR_materials_clearcoat"),
@@ -353,6 +453,7 @@ pub fn tests() -> Vec<Test> {
         gpu the_file_camera_gives_the_pinhole_depth,
         gpu every_packing_renders_the_same_image,
         gpu gltf_materials_match_the_cpu,
+        gpu alpha_and_sides_match_the_cpu,
         gpu_models gltf_samples_match_the_cpu,
         gpu_models khronos_models_on_the_floor_match_the_cpu,
         gpu_models every_khronos_sample_matches_the_cpu,

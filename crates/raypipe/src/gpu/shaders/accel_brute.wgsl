@@ -14,7 +14,7 @@ fn accel_closest(ray: Ray, best: Hit) -> Hit {
     for (var i = 0u; i < globals.scene.triangle_count; i++) {
         let t = intersect_triangle(load_triangle(i), ray, hit.t);
         let index = globals.scene.sphere_count + i;
-        if (closer_primitive(t, index, hit)) {
+        if (closer_primitive(t, index, hit) && primitive_stops_ray(index, ray)) {
             hit = Hit(t, HIT_PRIMITIVE, index);
         }
     }
@@ -30,7 +30,7 @@ fn accel_occluded(ray: Ray, t_max: f32) -> bool {
     }
     for (var i = 0u; i < globals.scene.triangle_count; i++) {
         let t = intersect_triangle(load_triangle(i), ray, t_max);
-        if (t > 0.0 && t < t_max) {
+        if (t > 0.0 && t < t_max && primitive_stops_ray(globals.scene.sphere_count + i, ray)) {
             return true;
         }
     }

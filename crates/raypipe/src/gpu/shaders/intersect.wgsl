@@ -202,17 +202,6 @@ fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<
     return NO_HIT;
 }
 
-// Tests a primitive of the BVH; when it beats the best hit, it becomes the best hit and this says so.
-fn hit_primitive(index: u32, ray: Ray, hit: ptr<function, Hit>) -> bool {
-    box_tests += 1u;
-    let t = intersect_primitive(index, ray, (*hit).t);
-    if (closer_primitive(t, index, *hit)) {
-        *hit = Hit(t, HIT_PRIMITIVE, index);
-        return true;
-    }
-    return false;
-}
-
 // Planes are unbounded, so they stay outside any acceleration structure and are always tested.
 fn closest_plane(ray: Ray, best: Hit) -> Hit {
     var hit = best;

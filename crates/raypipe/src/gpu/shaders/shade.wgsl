@@ -19,6 +19,8 @@ struct Surface {
     // Texture coordinates at the hit, where the primitive has them (has_uv).
     uv: vec2<f32>,
     has_uv: bool,
+    // A triangle with alpha BLEND: it covers its alpha of the ray.
+    blend: bool,
 }
 
 fn max_abs(v: vec3<f32>) -> f32 {
@@ -60,15 +62,17 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         if (is_sphere(hit.index)) {
             let sphere = load_sphere(hit.index);
             let normal = normalize(position - sphere.center);
-            return Surface(position, normal, normal, sphere.material, reach, vec2<f32>(0.0), false);
+            return Surface(position, normal, normal, sphere.material, reach, vec2<f32>(0.0), false, false);
         }
         let triangle = load_triangle(hit.index - globals.scene.sphere_count);
         let normal = normalize_scaled(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
         let shading = triangle_shading(triangle, ray, normal);
+        let material = triangle.material & MATERIAL_INDEX_MASK;
+        let blend = HAS_ALPHA_BLEND && (triangle.material & TRIANGLE_ALPHA_BLEND) != 0u;
         if (!HAS_TEXTURES || triangle.uvs == NONE) {
-            return Surface(position, normal, shading, triangle.material, reach, vec2<f32>(0.0), false);
+            return Surface(position, normal, shading, material, reach, vec2<f32>(0.0), false, blend);
         }
-        return Surface(position, normal, shading, triangle.material, reach, triangle_uv(triangle, ray), true);
+        return Surface(position, normal, shading, material, reach, triangle_uv(triangle, ray), true, blend);
     }
     let plane = load_plane(hit.index);
     let local = position - plane.point;
@@ -78,95 +82,21 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     if (cell - 2.0 * floor(cell * 0.5) != 0.0) {
         material = plane.checker_material;
     }
-    return Surface(position, plane.normal, plane.normal, material, reach, vec2<f32>(0.0), false);
-}
-
-// A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
-// clamp, [0, 2] for mirror (the second copy mirrored). Done in floats, so that no coordinate is
-// too big for an integer.
-fn fold_coordinate(c: f32, wrap: u32) -> f32 {
-    if (wrap == WRAP_REPEAT) {
-        return c - floor(c);
-    }
-    if (wrap == WRAP_MIRROR) {
-        return c - 2.0 * floor(c * 0.5);
-    }
-    return clamp(c, 0.0, 1.0);
-}
-
-// Column or row i of an axis of `size` texels, where i may lie one outside the folded period.
-fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
-    if (wrap == WRAP_REPEAT) {
-        return (i + size) % size;
-    }
-    if (wrap == WRAP_MIRROR) {
-        let period = 2 * size;
-        let m = (i + period) % period;
-        return select(m, period - 1 - m, m >= size);
-    }
-    return clamp(i, 0, size - 1);
-}
-
-// The materials' records and then the texture maps', texel by texel in one array (its binding is
-// `shading`): MATERIAL_TEXELS and TEXTURE_MAP_TEXELS texels each.
-const MATERIAL_TEXELS: u32 = 6u;
-const TEXTURE_MAP_TEXELS: u32 = 3u;
-
-fn load_material(i: u32) -> Material {
-    let b = i * MATERIAL_TEXELS;
-    return material_from_texels(load_shading(b), load_shading(b + 1u), load_shading(b + 2u), load_shading(b + 3u),
-        load_shading(b + 4u), load_shading(b + 5u));
-}
-
-fn load_texture_map(i: u32) -> TextureMap {
-    let b = globals.scene.material_count * MATERIAL_TEXELS + i * TEXTURE_MAP_TEXELS;
-    return texture_map_from_texels(load_shading(b), load_shading(b + 1u), load_shading(b + 2u));
-}
-
-fn texture_texel(map: TextureMap, x: i32, y: i32) -> vec4<f32> {
-    let index = map.offset + u32(y) * map.width + u32(x);
-    return textureLoad(texture_pixels, texel_coord(index), 0);
-}
-
-fn lerp4(a: vec4<f32>, b: vec4<f32>, t: f32) -> vec4<f32> {
-    return a * (1.0 - t) + b * t;
-}
-
-// The map's texture at uv, carried there by its transform. Bilinear filtering without mipmaps:
-// the four texels around the point (texel centres at +0.5), weighted by its distance to them.
-fn sample_texture(map: TextureMap, surface_uv: vec2<f32>) -> vec4<f32> {
-    let point = vec3<f32>(surface_uv, 1.0);
-    let uv = vec2<f32>(dot(map.transform_u, point), dot(map.transform_v, point));
-    let wrap_u = map.wrap & 0xffu;
-    let wrap_v = map.wrap >> 8u;
-    let size = vec2<i32>(i32(map.width), i32(map.height));
-    let p = vec2<f32>(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * vec2<f32>(size) - 0.5;
-    let corner = floor(p);
-    let f = p - corner;
-    let i = vec2<i32>(corner);
-    let x0 = wrap_texel(i.x, size.x, wrap_u);
-    let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
-    let y0 = wrap_texel(i.y, size.y, wrap_v);
-    let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
-    let near_row = lerp4(texture_texel(map, x0, y0), texture_texel(map, x1, y0), f.x);
-    let far_row = lerp4(texture_texel(map, x0, y1), texture_texel(map, x1, y1), f.x);
-    return lerp4(near_row, far_row, f.y);
-}
-
-fn sample_map(index: u32, uv: vec2<f32>) -> vec4<f32> {
-    return sample_texture(load_texture_map(index), uv);
+    return Surface(position, plane.normal, plane.normal, material, reach, vec2<f32>(0.0), false, false);
 }
 
 // The surface's material, its maps applied at the hit (where the primitive has texture
-// coordinates): the base colour's, and a glTF material's metalness and roughness (blue and green)
-// and emission.
+// coordinates): the base colour's (alpha too), and a glTF material's metalness and roughness (blue
+// and green) and emission.
 fn surface_material(surface: Surface) -> Material {
     var material = load_material(surface.material);
     if (!HAS_TEXTURES || !surface.has_uv) {
         return material;
     }
     if (material.base_map != NONE) {
-        material.color *= sample_map(material.base_map, surface.uv).rgb;
+        let texel = sample_map(material.base_map, surface.uv);
+        material.color *= texel.rgb;
+        material.alpha *= texel.a;
     }
     if (HAS_GLTF_MATERIALS && material.model == MODEL_GLTF) {
         if (material.metallic_roughness_map != NONE) {
@@ -244,6 +174,15 @@ fn light_arrival(light: Light, position: vec3<f32>) -> LightArrival {
     return LightArrival(dir, distance, irradiance);
 }
 
+// A light's irradiance past the blended triangles its shadow ray went through (occluded leaves
+// their share in shadow_light).
+fn shadowed(irradiance: vec3<f32>) -> vec3<f32> {
+    if (!HAS_ALPHA_BLEND) {
+        return irradiance;
+    }
+    return irradiance * shadow_light;
+}
+
 // Whether a light's shadow ray is worth casting: the paper's lights always are (their ray counts
 // stay), a glTF light where it gives anything.
 fn lit(light: Light, arrival: LightArrival) -> bool {
@@ -268,12 +207,13 @@ fn direct_light(surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: v
         if (occluded(make_ray(origin, l), arrival.distance)) {
             continue;
         }
+        let irradiance = shadowed(arrival.irradiance);
         var highlight = 0.0;
         let r_dot_v = dot(reflect(-l, shading), view);
         if (r_dot_v > 0.0 && material.specular > 0.0) {
             highlight = material.specular * pow(r_dot_v, material.shininess);
         }
-        color += arrival.irradiance * (material.color * n_dot_l + vec3<f32>(highlight));
+        color += irradiance * (material.color * n_dot_l + vec3<f32>(highlight));
     }
     return color;
 }
@@ -302,7 +242,7 @@ fn gltf_direct_light(surface: Surface, normal: vec3<f32>, shading: vec3<f32>, vi
         if (occluded(make_ray(origin, l), arrival.distance)) {
             continue;
         }
-        color += arrival.irradiance * n_dot_l * gltf_brdf(s, shading, view, l);
+        color += shadowed(arrival.irradiance) * n_dot_l * gltf_brdf(s, shading, view, l);
     }
     return color;
 }

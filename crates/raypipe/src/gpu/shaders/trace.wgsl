@@ -1,7 +1,7 @@
 // The tracer, one pixel per fragment. Shaders cannot recurse, so the tree of rays is walked
 // depth-first by hand: a reflected branch is traced next, and its refracted sibling waits on an
-// explicit stack of RAY_STACK_SIZE = MAX_DEPTH + 1 entries (at most one waits per level). Mirrored
-// by src/cpu/trace.rs.
+// explicit stack of RAY_STACK_SIZE entries (MAX_DEPTH + 1: at most one waits per level; more where
+// rays go on behind blended surfaces). Mirrored by src/cpu/trace.rs.
 
 // T_FAR, MIN_WEIGHT (the weight below which a branch cannot change an 8-bit pixel) and DEPTH_MISS
 // (the depth where the primary ray hits nothing; the host reads it as +inf) come from the preamble.
@@ -16,12 +16,17 @@ var<private> primary_cost: u32;
 // The sample's random sequence (sampled glossy reflections): its seed and the draws so far.
 var<private> sample_seed_value: u32;
 var<private> random_draws: u32;
+// Surfaces of blended triangles the pixel's rays went on behind, at most MAX_BLEND_LAYERS.
+var<private> blend_layers: u32;
 
 struct RayTask {
     origin: vec3<f32>,
     dir: vec3<f32>,
     weight: vec3<f32>,
     depth: u32,
+    // Whether single-sided triangles hide their backs from the ray: camera and reflected rays,
+    // not rays transmitted through a surface (which may be inside a volume).
+    culls: bool,
 }
 
 struct PixelTrace {
@@ -75,23 +80,33 @@ fn camera_ray(pixel: vec2<f32>) -> Ray {
     return make_ray(globals.camera.eye, dir);
 }
 
-fn closest_hit(ray: Ray, t_max: f32) -> Hit {
+fn closest_hit(ray: Ray, t_max: f32, culls: bool) -> Hit {
+    ray_culls_back_faces = culls;
     let planes = closest_plane(ray, Hit(t_max, HIT_NONE, 0u));
     return accel_closest(ray, planes);
 }
 
+// Whether something blocks the shadow ray before t_max; where nothing does, shadow_light holds the
+// share of light that its blended triangles let through. Shadow rays see both sides of triangles.
 fn occluded(ray: Ray, t_max: f32) -> bool {
-    return any_plane(ray, t_max) || accel_occluded(ray, t_max);
+    ray_culls_back_faces = false;
+    ray_is_shadow = true;
+    shadow_light = 1.0;
+    let blocked = any_plane(ray, t_max) || accel_occluded(ray, t_max);
+    ray_is_shadow = false;
+    return blocked;
 }
 
 fn worth_tracing(weight: vec3<f32>) -> bool {
     return max(weight.x, max(weight.y, weight.z)) >= MIN_WEIGHT;
 }
 
-// The rays a hit sends on; a weight that is not worth_tracing means none.
+// The rays a hit sends on; a weight that is not worth_tracing means none. `through` goes on behind
+// a blended surface: not a bounce, at the same depth.
 struct Branches {
     reflected: RayTask,
     refracted: RayTask,
+    through: RayTask,
 }
 
 // Traces one ray of the tree: adds its light to the pixel and says where it branches.
@@ -100,7 +115,7 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     var branches = Branches();
     let ray = make_ray(task.origin, task.dir);
     ray_count += 1u;
-    let hit = closest_hit(ray, T_FAR);
+    let hit = closest_hit(ray, T_FAR, task.culls);
     if (task.depth == 0u) {
         primary_cost = box_tests;
     }
@@ -109,7 +124,8 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
         return branches;
     }
     let surface = surface_at(ray, hit);
-    if (task.depth == 0u) {
+    // The first surface the camera ray meets, blended or not.
+    if (task.depth == 0u && (*result).depth == DEPTH_MISS) {
         (*result).normal = surface.shading;
         (*result).depth = hit.t;
     }
@@ -119,6 +135,16 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     let normal = select(-surface.normal, surface.normal, entering);
     let shading = select(-surface.shading, surface.shading, entering);
     let view = -ray.dir;
+    // A blended surface covers its alpha of the ray; the rest goes on behind it.
+    var covered = task;
+    if (HAS_ALPHA_BLEND && surface.blend) {
+        covered.weight *= material.alpha;
+        if (blend_layers < MAX_BLEND_LAYERS) {
+            blend_layers += 1u;
+            branches.through = RayTask(offset_origin(surface, -normal), ray.dir, task.weight * (1.0 - material.alpha),
+                task.depth, task.culls);
+        }
+    }
     let gltf = HAS_GLTF_MATERIALS && material.model == MODEL_GLTF;
     var light: vec3<f32>;
     if (gltf) {
@@ -126,12 +152,15 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     } else {
         light = direct_light(surface, normal, shading, view, material);
     }
-    (*result).color += task.weight * (light + material.emission);
+    (*result).color += covered.weight * (light + material.emission);
     if (!HAS_SECONDARY_RAYS || task.depth >= MAX_DEPTH) {
         return branches;
     }
     if (gltf) {
-        return gltf_branches(task, surface, normal, shading, view, material);
+        let sent = gltf_branches(covered, surface, normal, shading, view, material);
+        branches.reflected = sent.reflected;
+        branches.refracted = sent.refracted;
+        return branches;
     }
 
     // Split the transmitted share by Fresnel; all of it reflects past the critical angle.
@@ -154,8 +183,9 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
         }
     }
     let depth = task.depth + 1u;
-    branches.refracted = RayTask(offset_origin(surface, -normal), refracted, task.weight * transmit_share, depth);
-    branches.reflected = RayTask(offset_origin(surface, normal), reflect(ray.dir, shading), task.weight * reflect_share, depth);
+    branches.refracted = RayTask(offset_origin(surface, -normal), refracted, covered.weight * transmit_share, depth, false);
+    branches.reflected = RayTask(offset_origin(surface, normal), reflect(ray.dir, shading), covered.weight * reflect_share,
+        depth, true);
     return branches;
 }
 
@@ -169,25 +199,39 @@ fn gltf_branches(task: RayTask, surface: Surface, normal: vec3<f32>, shading: ve
     let depth = task.depth + 1u;
     let transmitted = sample.dir - 2.0 * dot(sample.dir, shading) * shading;
     let transmit_share = (1.0 - s.metallic) * s.transmission * (1.0 - max3(sample.dielectric_fresnel)) * sample.share;
-    return Branches(
-        RayTask(offset_origin(surface, normal), sample.dir, task.weight * sample.weight, depth),
-        RayTask(offset_origin(surface, -normal), transmitted, task.weight * s.base * transmit_share, depth),
-    );
+    var branches = Branches();
+    branches.reflected = RayTask(offset_origin(surface, normal), sample.dir, task.weight * sample.weight, depth, true);
+    branches.refracted = RayTask(offset_origin(surface, -normal), transmitted, task.weight * s.base * transmit_share, depth,
+        false);
+    return branches;
 }
 
 fn trace_pixel(primary: Ray) -> PixelTrace {
     var result = PixelTrace(vec3<f32>(0.0), vec3<f32>(0.0), DEPTH_MISS);
     // The ray being traced stays out of the stack, which a scene without mirrors or glass never
     // touches.
-    var task = RayTask(primary.origin, primary.dir, vec3<f32>(1.0), 0u);
+    var task = RayTask(primary.origin, primary.dir, vec3<f32>(1.0), 0u, true);
     var waiting: array<RayTask, RAY_STACK_SIZE>;
     var top = 0u;
     loop {
         let branches = trace_task(task, &result);
-        if (!HAS_SECONDARY_RAYS) {
+        if (!HAS_SECONDARY_RAYS && !HAS_ALPHA_BLEND) {
             break;
         }
         let reflects = worth_tracing(branches.reflected.weight);
+        if (HAS_ALPHA_BLEND && worth_tracing(branches.through.weight)) {
+            // The ray goes on behind the blended surface; the surface's own branches wait.
+            if (worth_tracing(branches.refracted.weight) && top < RAY_STACK_SIZE) {
+                waiting[top] = branches.refracted;
+                top += 1u;
+            }
+            if (reflects && top < RAY_STACK_SIZE) {
+                waiting[top] = branches.reflected;
+                top += 1u;
+            }
+            task = branches.through;
+            continue;
+        }
         if (worth_tracing(branches.refracted.weight)) {
             if (!reflects) {
                 task = branches.refracted;
@@ -233,6 +277,7 @@ fn sample_pixel(pixel: vec2<u32>) -> PixelSums {
     let sample = globals.camera.sample;
     sample_seed_value = sample_seed(pixel, sample);
     random_draws = 0u;
+    blend_layers = 0u;
     let traced = trace_pixel(camera_ray(vec2<f32>(pixel) + sample_offset(pixel, sample)));
     let count = select(ray_count, primary_cost, WRITE_COST);
     return summed(pixel, vec4<f32>(traced.color, f32(count)), vec4<f32>(traced.normal, traced.depth));

@@ -47,6 +47,7 @@ struct Sphere {
 // The three corners, as the watertight test reads them. BVH primitive sphere_count + i.
 struct Triangle {
     v0: vec3<f32>,
+    // The material's index (& MATERIAL_INDEX_MASK) and the TRIANGLE_* flags above it.
     material: u32,
     v1: vec3<f32>,
     // Index of the vertex normals, or NONE to shade with the geometric normal.
@@ -111,6 +112,9 @@ struct Material {
     metallic_roughness_map: u32,
     occlusion_map: u32,
     emissive_map: u32,
+    // The base colour's alpha, and MASK's cutoff.
+    alpha: f32,
+    alpha_cutoff: f32,
 }
 
 // A texture as a material maps it: its first texel among all textures' (row by row), its size, its

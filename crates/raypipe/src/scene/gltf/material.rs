@@ -5,12 +5,12 @@
 //! occlusion (its texture's red, by `strength`), emission (`emissiveFactor` times
 //! KHR_materials_emissive_strength times the emissive texture), KHR_materials_transmission,
 //! KHR_materials_ior and KHR_materials_specular's factors. Every map may carry a
-//! KHR_texture_transform. What is not read yet is named in one notice each: normal maps, maps on
-//! TEXCOORD_1, the specular extension's textures, alpha.
+//! KHR_texture_transform; the alpha mode, cutoff and sides. What is not read yet is named in one
+//! notice each: normal maps, maps on TEXCOORD_1, the specular extension's textures.
 
 use super::data::{Files, MAX_IMAGE_BYTES, read_uri, view_bytes};
 use crate::scene::texture::{MAX_TEXELS, MAX_TEXTURE_SIDE};
-use crate::scene::{Material, Pbr, Texture, TextureMap, TextureTransform, Wrap};
+use crate::scene::{AlphaMode, Material, Pbr, Texture, TextureMap, TextureTransform, Wrap};
 use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
 use std::collections::{BTreeSet, HashMap};
@@ -98,7 +98,7 @@ impl Materials {
         files: Files,
     ) -> Result<Material, String> {
         let pbr = material.pbr_metallic_roughness();
-        let [r, g, b, _] = pbr.base_color_factor();
+        let [r, g, b, alpha] = pbr.base_color_factor();
         let map = |info: Option<MapInfo>, encoding: Encoding, this: &mut Self| -> Result<Option<TextureMap>, String> {
             let Some(info) = info else { return Ok(None) };
             this.map(root, &info, encoding, buffers, files)
@@ -127,9 +127,6 @@ impl Materials {
         if material.normal_texture().is_some() {
             self.left_out
                 .insert("normal maps are not applied yet: surfaces shade with their vertex normals");
-        }
-        if material.alpha_mode() != gltf::material::AlphaMode::Opaque {
-            self.left_out.insert("alpha modes BLEND and MASK are rendered opaque");
         }
         let specular = material.specular();
         if specular
@@ -161,6 +158,15 @@ impl Materials {
                 occlusion_strength: occlusion.as_ref().map_or(1.0, |o| o.strength()).clamp(0.0, 1.0),
                 emissive_texture: emissive,
             }),
+            alpha: alpha.clamp(0.0, 1.0),
+            alpha_mode: match material.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+                gltf::material::AlphaMode::Mask => AlphaMode::Mask {
+                    cutoff: material.alpha_cutoff().unwrap_or(0.5),
+                },
+                gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+            },
+            double_sided: material.double_sided(),
             ..Material::default()
         })
     }
@@ -190,9 +196,11 @@ impl Materials {
         match material {
             Some(index) => index as u32,
             None => *self.default.get_or_insert_with(|| {
+                // glTF's default material: white, a rough metal, opaque, single-sided.
                 self.materials.push(Material {
                     color: Vec3::ONE,
                     pbr: Some(Pbr::default()),
+                    double_sided: false,
                     ..Material::default()
                 });
                 self.materials.len() as u32 - 1

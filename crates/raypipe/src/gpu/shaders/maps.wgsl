@@ -1,0 +1,78 @@
+// The materials' and texture maps' records, and textures sampled through a map: what shading
+// and the walks' alpha test (admit.wgsl) read. Mirrored by src/cpu/maps.rs.
+
+// A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
+// clamp, [0, 2] for mirror (the second copy mirrored). Done in floats, so that no coordinate is
+// too big for an integer.
+fn fold_coordinate(c: f32, wrap: u32) -> f32 {
+    if (wrap == WRAP_REPEAT) {
+        return c - floor(c);
+    }
+    if (wrap == WRAP_MIRROR) {
+        return c - 2.0 * floor(c * 0.5);
+    }
+    return clamp(c, 0.0, 1.0);
+}
+
+// Column or row i of an axis of `size` texels, where i may lie one outside the folded period.
+fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
+    if (wrap == WRAP_REPEAT) {
+        return (i + size) % size;
+    }
+    if (wrap == WRAP_MIRROR) {
+        let period = 2 * size;
+        let m = (i + period) % period;
+        return select(m, period - 1 - m, m >= size);
+    }
+    return clamp(i, 0, size - 1);
+}
+
+// The materials' records and then the texture maps', texel by texel in one array (its binding is
+// `shading`): MATERIAL_TEXELS and TEXTURE_MAP_TEXELS texels each.
+const MATERIAL_TEXELS: u32 = 7u;
+const TEXTURE_MAP_TEXELS: u32 = 3u;
+
+fn load_material(i: u32) -> Material {
+    let b = i * MATERIAL_TEXELS;
+    return material_from_texels(load_shading(b), load_shading(b + 1u), load_shading(b + 2u), load_shading(b + 3u),
+        load_shading(b + 4u), load_shading(b + 5u), load_shading(b + 6u));
+}
+
+fn load_texture_map(i: u32) -> TextureMap {
+    let b = globals.scene.material_count * MATERIAL_TEXELS + i * TEXTURE_MAP_TEXELS;
+    return texture_map_from_texels(load_shading(b), load_shading(b + 1u), load_shading(b + 2u));
+}
+
+fn texture_texel(map: TextureMap, x: i32, y: i32) -> vec4<f32> {
+    let index = map.offset + u32(y) * map.width + u32(x);
+    return textureLoad(texture_pixels, texel_coord(index), 0);
+}
+
+fn lerp4(a: vec4<f32>, b: vec4<f32>, t: f32) -> vec4<f32> {
+    return a * (1.0 - t) + b * t;
+}
+
+// The map's texture at uv, carried there by its transform. Bilinear filtering without mipmaps:
+// the four texels around the point (texel centres at +0.5), weighted by its distance to them.
+fn sample_texture(map: TextureMap, surface_uv: vec2<f32>) -> vec4<f32> {
+    let point = vec3<f32>(surface_uv, 1.0);
+    let uv = vec2<f32>(dot(map.transform_u, point), dot(map.transform_v, point));
+    let wrap_u = map.wrap & 0xffu;
+    let wrap_v = map.wrap >> 8u;
+    let size = vec2<i32>(i32(map.width), i32(map.height));
+    let p = vec2<f32>(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * vec2<f32>(size) - 0.5;
+    let corner = floor(p);
+    let f = p - corner;
+    let i = vec2<i32>(corner);
+    let x0 = wrap_texel(i.x, size.x, wrap_u);
+    let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
+    let y0 = wrap_texel(i.y, size.y, wrap_v);
+    let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
+    let near_row = lerp4(texture_texel(map, x0, y0), texture_texel(map, x1, y0), f.x);
+    let far_row = lerp4(texture_texel(map, x0, y1), texture_texel(map, x1, y1), f.x);
+    return lerp4(near_row, far_row, f.y);
+}
+
+fn sample_map(index: u32, uv: vec2<f32>) -> vec4<f32> {
+    return sample_texture(load_texture_map(index), uv);
+}
