@@ -278,3 +278,21 @@ fn emission_and_the_texture_transform_pick_the_texel_the_extension_says() {
     };
     assert_close(turned_at(quarter), [0.5, 0.5, 1.0], "a quarter turn");
 }
+
+#[test]
+fn an_unlit_surface_shows_its_base_colour_whatever_the_light() {
+    // KHR_materials_unlit: base colour times its map, here a 1x1 texture of (0.5, 1, 0.25); the
+    // point light, the emission and the metal's reflection leave it as it is.
+    let texture = Texture::from_linear(1, 1, &[[0.5, 1.0, 0.25, 1.0]], [Wrap::Repeat; 2]);
+    let mut material = gltf_material(Vec3::new(0.8, 0.6, 0.4), 1.0, 0.0);
+    material.texture = Some(TextureMap::plain(0));
+    material.emission = Vec3::ONE;
+    material.pbr.as_mut().unwrap().unlit = true;
+    let mut scene = plane_scene(material, vec![point(Vec3::new(0.0, 0.0, 2.0), 50.0, None)]);
+    scene.textures = vec![texture];
+    scene.settings.max_depth = 3;
+    assert_close(centre(&scene), [0.4, 0.6, 0.1], "unlit");
+    // Lit, the same material shows the light and its emission.
+    scene.materials[0].pbr.as_mut().unwrap().unlit = false;
+    assert!(centre(&scene).x > 1.0, "the lit material");
+}

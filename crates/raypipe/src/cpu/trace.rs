@@ -11,9 +11,9 @@ use super::shade::{
 use crate::error::MissingBvh;
 use crate::modes::Accel;
 use crate::records::GpuMaterial;
-use crate::records::constants::MODEL_GLTF;
 pub use crate::records::constants::T_FAR;
 use crate::records::constants::{MAX_BLEND_LAYERS, MIN_WEIGHT, R2_STEP, ray_stack_size};
+use crate::records::constants::{MODEL_GLTF, MODEL_UNLIT};
 use crate::records::{PackedBvh, PackedScene};
 use glam::{UVec2, Vec2, Vec3};
 use std::cell::Cell;
@@ -197,6 +197,11 @@ impl<'a> Tracer<'a> {
                     ..*task
                 };
             }
+        }
+        // KHR_materials_unlit: the base colour is what the surface shows, and all it sends on.
+        if material.model == MODEL_UNLIT {
+            result.color += covered.weight * v3(material.color);
+            return branches;
         }
         let scene = self.scene;
         let gltf = material.model == MODEL_GLTF;

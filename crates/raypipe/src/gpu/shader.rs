@@ -7,7 +7,7 @@
 
 use crate::modes::{Accel, MemoryMode, Pipeline};
 use crate::records::constants::{
-    MODEL_GLTF, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED, ray_stack_size,
+    MODEL_GLTF, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED, ray_stack_size,
 };
 use crate::records::packed::{MovedRecords, PackedScene};
 use crate::records::{TexelFormat, constants};
@@ -124,7 +124,7 @@ pub struct SceneFeatures {
     pub planes: bool,
     /// A material with a texture.
     pub textures: bool,
-    /// A glTF (metallic-roughness) material.
+    /// A glTF material (metallic-roughness or unlit).
     pub gltf_materials: bool,
     /// A material that reflects or transmits: rays beyond the primary and shadow rays.
     pub secondary_rays: bool,
@@ -160,7 +160,7 @@ impl SceneFeatures {
             triangles: !scene.triangles.is_empty(),
             planes: !scene.planes.is_empty(),
             textures: !scene.texture_maps.is_empty(),
-            gltf_materials: scene.materials.iter().any(|m| m.model == MODEL_GLTF),
+            gltf_materials: scene.materials.iter().any(|m| m.model != MODEL_WHITTED),
             // A glTF material always reflects some light: its Fresnel term is never zero.
             secondary_rays: scene
                 .materials

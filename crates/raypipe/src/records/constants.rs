@@ -28,6 +28,8 @@ pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
 pub const MODEL_WHITTED: u32 = 0;
 /// `GpuMaterial::model`: glTF's metallic-roughness material.
 pub const MODEL_GLTF: u32 = 1;
+/// `GpuMaterial::model`: a glTF material with KHR_materials_unlit, its base colour its radiance.
+pub const MODEL_UNLIT: u32 = 2;
 
 /// `GpuTriangle::material`: the material's index is its low bits, at most this many; the flags
 /// above them say what the walks' hit test must know of the material without loading it. All
@@ -89,6 +91,7 @@ pub fn wgsl() -> String {
         ("R2_STEP_Y", R2_STEP[1]),
         ("MODEL_WHITTED", MODEL_WHITTED),
         ("MODEL_GLTF", MODEL_GLTF),
+        ("MODEL_UNLIT", MODEL_UNLIT),
         ("LIGHT_CONSTANT", LIGHT_CONSTANT),
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_SPOT", LIGHT_SPOT),

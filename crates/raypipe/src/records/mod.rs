@@ -243,7 +243,7 @@ pub struct GpuLight {
 }
 
 /// A material (`scene::Material`): the Whitted fields first, then glTF's metallic-roughness ones,
-/// which `model` says to use (`MODEL_WHITTED`, `MODEL_GLTF`).
+/// which `model` says to use (`MODEL_WHITTED`, `MODEL_GLTF`, `MODEL_UNLIT`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {

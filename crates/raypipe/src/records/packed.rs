@@ -12,11 +12,13 @@ use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
 use crate::modes::Builder;
 use crate::records::constants::{
-    LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, MODEL_WHITTED,
-    TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
+    LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, MODEL_UNLIT,
+    MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
 };
 use crate::records::texels::GpuRecord;
-use crate::scene::{AlphaMode, Camera, Light, LightKind, Material, Moved, Plane, Scene, Sphere, TextureMap, Triangle};
+use crate::scene::{
+    AlphaMode, Camera, Light, LightKind, Material, Moved, Pbr, Plane, Scene, Sphere, TextureMap, Triangle,
+};
 use glam::Vec3;
 
 /// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
@@ -434,7 +436,11 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, Textu
                 transmit: m.transmit,
                 ior: m.ior,
                 emission: m.emission.to_array(),
-                model: if m.pbr.is_some() { MODEL_GLTF } else { MODEL_WHITTED },
+                model: match m.pbr {
+                    None => MODEL_WHITTED,
+                    Some(Pbr { unlit: true, .. }) => MODEL_UNLIT,
+                    Some(_) => MODEL_GLTF,
+                },
                 specular_color: pbr.specular_color.to_array(),
                 metallic: pbr.metallic,
                 roughness: pbr.roughness,

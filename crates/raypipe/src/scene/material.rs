@@ -131,6 +131,9 @@ pub struct Pbr {
     pub occlusion_strength: f32,
     /// sRGB colour multiplying `emission`.
     pub emissive_texture: Option<TextureMap>,
+    /// KHR_materials_unlit: the base colour (times its map) is the surface's radiance; lights,
+    /// reflections, transmission and emission are left out.
+    pub unlit: bool,
 }
 
 impl Default for Pbr {
@@ -145,6 +148,7 @@ impl Default for Pbr {
             occlusion_texture: None,
             occlusion_strength: 1.0,
             emissive_texture: None,
+            unlit: false,
         }
     }
 }

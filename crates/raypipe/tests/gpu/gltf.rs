@@ -388,10 +388,9 @@ fn alpha_and_sides_match_the_cpu(ctx: &GpuContext) {
 }
 
 /// The Khronos samples that require an extension raypipe does not read, with it.
-const REFUSED_KHRONOS: [(&str, &str); 3] = [
+const REFUSED_KHRONOS: [(&str, &str); 2] = [
     ("ClearCoatCarPaint", "KHR_materials_clearcoat"),
     ("IridescenceSuzanne", "KHR_materials_iridescence"),
-    ("UnlitTest", "KHR_materials_unlit"),
 ];
 
 /// The Khronos samples whose shared copy lacks files they name (the folder of EnvironmentTest's
@@ -399,7 +398,7 @@ const REFUSED_KHRONOS: [(&str, &str); 3] = [
 const INCOMPLETE_KHRONOS: [(&str, &str); 1] = [("EnvironmentTest", "EnvironmentTest_images/roughness_metallic_0.jpg")];
 
 /// Every Khronos sample in `../shared/models/khronos/` (its .glb, else its .gltf) renders on the
-/// GPU, in storage and texture memory, as on the CPU, with something of it in view; the three that
+/// GPU, in storage and texture memory, as on the CPU, with something of it in view; the two that
 /// require an extension raypipe does not read are refused with the line naming it.
 fn every_khronos_sample_matches_the_cpu(ctx: &GpuContext, models: &std::path::Path) {
     let mut folders: Vec<_> = std::fs::read_dir(models.join("khronos"))

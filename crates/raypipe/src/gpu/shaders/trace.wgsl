@@ -145,6 +145,11 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
                 task.depth, task.culls);
         }
     }
+    // KHR_materials_unlit: the base colour is what the surface shows, and all it sends on.
+    if (HAS_GLTF_MATERIALS && material.model == MODEL_UNLIT) {
+        (*result).color += covered.weight * material.color;
+        return branches;
+    }
     let gltf = HAS_GLTF_MATERIALS && material.model == MODEL_GLTF;
     var light: vec3<f32>;
     if (gltf) {

@@ -4,7 +4,7 @@
 //! sRGB decoded to linear), metalness and roughness (factors times the texture's blue and green),
 //! occlusion (its texture's red, by `strength`), emission (`emissiveFactor` times
 //! KHR_materials_emissive_strength times the emissive texture), KHR_materials_transmission,
-//! KHR_materials_ior and KHR_materials_specular's factors. Every map may carry a
+//! KHR_materials_ior, KHR_materials_specular's factors and KHR_materials_unlit. Every map may carry a
 //! KHR_texture_transform; the alpha mode, cutoff and sides. What is not read yet is named in one
 //! notice each: normal maps, maps on TEXCOORD_1, the specular extension's textures.
 
@@ -157,6 +157,7 @@ impl Materials {
                 occlusion_texture: occlusion_map,
                 occlusion_strength: occlusion.as_ref().map_or(1.0, |o| o.strength()).clamp(0.0, 1.0),
                 emissive_texture: emissive,
+                unlit: material.unlit(),
             }),
             alpha: alpha.clamp(0.0, 1.0),
             alpha_mode: match material.alpha_mode() {
