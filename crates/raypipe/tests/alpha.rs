@@ -39,6 +39,7 @@ fn quad_over_floor(quad: Material, texels: [[f32; 4]; 2], facing_up: bool) -> Sc
             normals: None,
             uvs: Some([uv(corners[a]), uv(corners[b]), uv(corners[c])]),
             material,
+            ..Default::default()
         })
     };
     let floor = Material {

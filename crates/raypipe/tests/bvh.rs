@@ -302,7 +302,7 @@ fn random_triangle(rng: &mut SplitMix64, material: u32) -> GpuTriangle {
         v1: (v0 + e1).to_array(),
         normals: u32::MAX,
         v2: (v0 + e2).to_array(),
-        uvs: u32::MAX,
+        attributes: u32::MAX,
     }
 }
 

@@ -307,6 +307,49 @@ fn textures_keep_their_texels_and_wrap_modes() {
     assert_eq!(file.primitives[0].uvs.as_ref().unwrap()[1], glam::Vec2::new(2.0, 2.0));
 }
 
+fn colours_second_coordinates_and_tangents_are_read() {
+    use common::gltf_file::attribute_quad;
+    let file = read(&attribute_quad());
+    let primitive = &file.primitives[0];
+    let colors = primitive.colors.as_ref().unwrap();
+    // Normalized bytes: 255 is 1, 64 is 64 / 255; alpha 128 / 255.
+    assert_eq!(colors[0], glam::Vec4::new(1.0, 64.0 / 255.0, 64.0 / 255.0, 1.0));
+    assert_eq!(colors[3].w, 128.0 / 255.0);
+    assert_eq!(primitive.uvs1.as_ref().unwrap()[0], glam::Vec2::new(1.0, 1.0));
+    let material = file.materials[0];
+    assert_eq!(material.texture.unwrap().tex_coord, 1);
+    let pbr = material.pbr.unwrap();
+    assert_eq!((pbr.normal_texture.unwrap().tex_coord, pbr.normal_scale), (0, 0.8));
+    // MikkTSpace's tangents: along +x (u) with v running down the image (quad's UVs), so the
+    // bitangent's sign is -1.
+    let tangents = primitive.tangents.as_ref().unwrap();
+    assert_eq!(tangents.len(), 2);
+    for t in tangents.iter().flatten() {
+        assert!((t.truncate() - Vec3::X).length() < 1e-5 && t.w == -1.0, "{t}");
+    }
+    // A map on a set the primitive lacks, a normal map without normals: one line each.
+    let mut b = attribute_quad();
+    b.meshes[0]["primitives"][0]["attributes"]
+        .as_object_mut()
+        .unwrap()
+        .remove("TEXCOORD_1");
+    let err = parse(&b.gltf(), Files::None, &mut Vec::new()).unwrap_err().to_string();
+    assert!(
+        err.contains("material 0 reads TEXCOORD_1, which the primitive lacks"),
+        "{err}"
+    );
+    let mut b = attribute_quad();
+    b.meshes[0]["primitives"][0]["attributes"]
+        .as_object_mut()
+        .unwrap()
+        .remove("NORMAL");
+    let err = parse(&b.gltf(), Files::None, &mut Vec::new()).unwrap_err().to_string();
+    assert!(
+        err.contains("material 0 has a normal map, and the primitive has no NORMAL"),
+        "{err}"
+    );
+}
+
 fn every_packing_gives_the_same_scene() {
     let dir = test_dir("gltf-packings");
     let b = textured_quad(3.0, [10497, 33071]);
@@ -732,6 +775,7 @@ fn generated_files_pass_the_khronos_validator(root: &std::path::Path) {
         ("framed", common::gltf_file::framed_textured_quad(2.0, [33648, 10497])),
         ("skinned", common::gltf_file::skinned_cylinder(6).0),
         ("morphing", common::gltf_file::morphing_quad(0.5)),
+        ("attributes", common::gltf_file::attribute_quad()),
     ];
     for (stem, builder) in &builders {
         for packing in [Packing::DataUris, Packing::ExternalFiles, Packing::Glb] {
@@ -770,6 +814,7 @@ fn main() -> std::process::ExitCode {
         plain without_camera_and_lights_a_file_is_framed_as_a_model,
         plain materials_map_to_whitted_ones,
         plain textures_keep_their_texels_and_wrap_modes,
+        plain colours_second_coordinates_and_tangents_are_read,
         plain every_packing_gives_the_same_scene,
         plain a_gltf_mesh_table_places_the_file_after_its_own_transforms,
         plain hostile_documents_end_in_one_line_naming_the_element,

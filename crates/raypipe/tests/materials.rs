@@ -30,6 +30,7 @@ fn plane_scene(material: Material, lights: Vec<Light>) -> Scene {
             normals: None,
             uvs: Some([uv(corners[a]), uv(corners[b]), uv(corners[c])]),
             material: 0,
+            ..Default::default()
         })
         .to_vec();
     Scene {
@@ -218,6 +219,7 @@ fn directional_light_is_parallel_and_its_shadows_reach_to_infinity() {
         normals: None,
         uvs: None,
         material: 0,
+        ..Default::default()
     });
     assert_eq!(centre(&scene), Vec3::ZERO);
 }
@@ -235,7 +237,10 @@ fn emission_and_the_texture_transform_pick_the_texel_the_extension_says() {
     let emissive = |transform| {
         let mut material = gltf_material(Vec3::ZERO, 0.0, 1.0);
         material.emission = Vec3::ONE;
-        material.pbr.as_mut().unwrap().emissive_texture = Some(TextureMap { texture: 0, transform });
+        material.pbr.as_mut().unwrap().emissive_texture = Some(TextureMap {
+            transform,
+            ..TextureMap::plain(0)
+        });
         let mut scene = plane_scene(material, Vec::new());
         scene.textures = vec![texture.clone()];
         centre(&scene)
@@ -268,7 +273,10 @@ fn emission_and_the_texture_transform_pick_the_texel_the_extension_says() {
     let turned_at = |transform| {
         let mut material = gltf_material(Vec3::ZERO, 0.0, 1.0);
         material.emission = Vec3::ONE;
-        material.pbr.as_mut().unwrap().emissive_texture = Some(TextureMap { texture: 0, transform });
+        material.pbr.as_mut().unwrap().emissive_texture = Some(TextureMap {
+            transform,
+            ..TextureMap::plain(0)
+        });
         let mut scene = plane_scene(material, Vec::new());
         scene.textures = vec![texture.clone()];
         for t in &mut scene.triangles {
@@ -295,4 +303,105 @@ fn an_unlit_surface_shows_its_base_colour_whatever_the_light() {
     // Lit, the same material shows the light and its emission.
     scene.materials[0].pbr.as_mut().unwrap().unlit = false;
     assert!(centre(&scene).x > 1.0, "the lit material");
+}
+
+/// `plane_scene` with `corners` on every corner of its two triangles.
+fn with_corners(mut scene: Scene, set: impl Fn(&mut Triangle)) -> Scene {
+    scene.triangles.iter_mut().for_each(set);
+    scene
+}
+
+#[test]
+fn vertex_colours_multiply_the_base_colour() {
+    // Unlit, so the pixel is the base colour itself.
+    let mut material = gltf_material(Vec3::splat(0.8), 0.0, 1.0);
+    material.pbr.as_mut().unwrap().unlit = true;
+    let plain = plane_scene(material, Vec::new());
+    assert_close(centre(&plain), [0.8, 0.8, 0.8], "without colours");
+    let coloured = with_corners(plain, |t| t.colors = Some([glam::Vec4::new(0.5, 0.25, 1.0, 1.0); 3]));
+    assert_close(centre(&coloured), [0.4, 0.2, 0.8], "COLOR_0");
+}
+
+#[test]
+fn a_map_on_the_second_coordinate_set_reads_it() {
+    // A 2x1 texture, red then green; set 0 looks at red's centre, set 1 at green's.
+    let texture = Texture::from_linear(2, 1, &[[1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0]], [Wrap::Clamp; 2]);
+    let unlit_on = |set: u32| {
+        let mut material = gltf_material(Vec3::ONE, 0.0, 1.0);
+        material.pbr.as_mut().unwrap().unlit = true;
+        material.texture = Some(TextureMap {
+            tex_coord: set,
+            ..TextureMap::plain(0)
+        });
+        let mut scene = with_corners(plane_scene(material, Vec::new()), |t| {
+            t.uvs = Some([Vec2::new(0.25, 0.5); 3]);
+            t.uvs1 = Some([Vec2::new(0.75, 0.5); 3]);
+        });
+        scene.textures = vec![texture.clone()];
+        centre(&scene)
+    };
+    assert_close(unlit_on(0), [1.0, 0.0, 0.0], "set 0");
+    assert_close(unlit_on(1), [0.0, 1.0, 0.0], "set 1");
+}
+
+#[test]
+fn a_normal_map_tilts_the_normal_along_its_tangent_frame() {
+    // A Lambert surface (no specular layer) under parallel light coming down from +y at 45 degrees:
+    // the pixel is E (n . l) c / pi. Its normal map tilts n toward the bitangent (texel green above
+    // one half): with the tangent along +x and w = 1 the bitangent is cross(z, x) = +y, toward
+    // the light; with w = -1, away from it.
+    let light_dir = Vec3::new(0.0, -1.0, -1.0).normalize();
+    let sun = Light {
+        position: Vec3::ZERO,
+        color: Vec3::splat(3.0),
+        kind: LightKind::Directional { direction: light_dir },
+    };
+    // The normal (0, 0.6, 0.8) encoded as (n + 1) / 2, as a normal map holds it.
+    let texel = [0.5, 0.8, 0.9, 1.0];
+    let render = |w: Option<f32>, scale: f32| {
+        let mut material = gltf_material(Vec3::ONE, 0.0, 1.0);
+        let pbr = material.pbr.as_mut().unwrap();
+        pbr.specular_factor = 0.0;
+        pbr.normal_scale = scale;
+        pbr.normal_texture = w.map(|_| TextureMap::plain(0));
+        let mut scene = with_corners(plane_scene(material, vec![sun]), |t| {
+            t.normals = Some([Vec3::Z; 3]);
+            t.tangents = w.map(|w| [glam::Vec4::new(1.0, 0.0, 0.0, w); 3]);
+        });
+        scene.textures = vec![Texture::from_linear(1, 1, &[texel], [Wrap::Repeat; 2])];
+        centre(&scene).x as f64
+    };
+    // The texel as the texture holds it (half floats), decoded: 2 x - 1.
+    let decode = |x: f64| 2.0 * half_float(x) - 1.0;
+    let lambert = |n: [f64; 3]| {
+        let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let l = [0.0, 1.0 / 2f64.sqrt(), 1.0 / 2f64.sqrt()];
+        3.0 * (n[1] * l[1] + n[2] * l[2]) / length / PI
+    };
+    let (y, z) = (decode(0.8), decode(0.9));
+    let close = |got: f64, expected: f64, what: &str| {
+        assert!(
+            (got - expected).abs() <= 1e-5 * expected,
+            "{what}: {got}, the formula says {expected}"
+        );
+    };
+    close(render(None, 1.0), lambert([0.0, 0.0, 1.0]), "no map");
+    close(render(Some(1.0), 1.0), lambert([0.0, y, z]), "toward the light");
+    close(
+        render(Some(-1.0), 1.0),
+        lambert([0.0, -y, z]),
+        "away from the light (w = -1)",
+    );
+    close(
+        render(Some(1.0), 0.5),
+        lambert([0.0, 0.5 * y, z]),
+        "normalTexture.scale 0.5",
+    );
+}
+
+/// `x` rounded to the nearest half float, as textures hold texels.
+fn half_float(x: f64) -> f64 {
+    // Half floats in [0.5, 1) are multiples of 2^-11.
+    assert!((0.5..1.0).contains(&x));
+    (x * 2048.0).round() / 2048.0
 }

@@ -3,13 +3,12 @@
 //! is never the closest hit and never blocks a shadow ray.
 
 use super::intersect::{Hit, HitKind, Ray, closer_primitive, count_box_tests, intersect_sphere, intersect_triangle};
-use super::maps::sample_map;
-use super::shade::{normalize_scaled, triangle_uv};
-use crate::bvh::layout::NONE;
+use super::maps::{surface_alpha, triangle_attributes};
+use super::shade::normalize_scaled;
 use crate::records::constants::{
     MATERIAL_INDEX_MASK, MIN_WEIGHT, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
 };
-use crate::records::{GpuMaterial, GpuSphere, GpuTriangle, PackedScene};
+use crate::records::{GpuSphere, GpuTriangle, PackedScene};
 use std::cell::Cell;
 
 /// The primitives in the BVH's order (spheres, then triangles), and what the ray being walked asks
@@ -60,16 +59,6 @@ impl Primitives<'_> {
     }
 }
 
-/// A MASK or BLEND triangle's alpha where the ray meets it: the material's, times its base colour
-/// map's at the hit (as `surface_material` computes it for shading).
-fn triangle_alpha(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray, material: &GpuMaterial) -> f32 {
-    if triangle.uvs == NONE || material.base_map == NONE {
-        return material.alpha;
-    }
-    let texel = sample_map(scene, material.base_map, triangle_uv(scene, triangle, ray));
-    material.alpha * texel.map_or(1.0, |t| t.w)
-}
-
 /// Whether the ray takes its hit of the triangle (`triangle_stops_ray`): not where it sees the back
 /// of a single-sided triangle and culls back faces, not where alpha MASK cuts the triangle away. A
 /// shadow ray passes a BLEND triangle, keeping (1 - alpha) of its light, until too little is left.
@@ -88,7 +77,7 @@ fn triangle_stops_ray(query: &RayQuery, triangle: &GpuTriangle, ray: &Ray) -> bo
         return true;
     }
     let material = &query.scene.materials[(triangle.material & MATERIAL_INDEX_MASK) as usize];
-    let alpha = triangle_alpha(query.scene, triangle, ray, material);
+    let alpha = surface_alpha(query.scene, material, &triangle_attributes(query.scene, triangle, ray));
     if flags & TRIANGLE_ALPHA_MASK != 0 {
         return alpha >= material.alpha_cutoff;
     }

@@ -1,11 +1,12 @@
-//! Textures sampled through a material's maps: the twin of `shaders/maps.wgsl`, read by shading
-//! and by the walks' alpha test (`admit`).
+//! A triangle's attributes at a hit, and textures sampled through a material's maps: the twin of
+//! `shaders/maps.wgsl`, read by shading and by the walks' alpha test (`admit`).
 
-use super::intersect::v3;
+use super::intersect::{Ray, triangle_uvt, v3};
 use crate::bvh::layout::NONE;
-use crate::records::{GpuTextureMap, PackedScene};
+use crate::records::constants::{ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, ATTRIBUTE_UV0, ATTRIBUTE_UV1};
+use crate::records::{AttributeTexel, GpuMaterial, GpuTextureMap, GpuTriangle, PackedScene};
 use crate::scene::Wrap;
-use glam::{IVec2, Vec2, Vec4};
+use glam::{IVec2, Vec2, Vec3, Vec4};
 
 /// A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
 /// clamp, [0, 2] for mirror (the second copy mirrored).
@@ -63,7 +64,108 @@ pub fn sample_texture(scene: &PackedScene, map: &GpuTextureMap, uv: Vec2) -> Vec
     lerp4(near_row, far_row, f.y)
 }
 
-/// Texture map `index` at `uv`, or `None` where there is no map.
-pub fn sample_map(scene: &PackedScene, index: u32, uv: Vec2) -> Option<Vec4> {
-    (index != NONE).then(|| sample_texture(scene, &scene.texture_maps[index as usize], uv))
+/// Whether the attributes hold the coordinate set the map reads (`has_coordinates`).
+pub fn has_coordinates(map: &GpuTextureMap, attributes: &Attributes) -> bool {
+    let set = if map.tex_coord == 1 {
+        ATTRIBUTE_UV1
+    } else {
+        ATTRIBUTE_UV0
+    };
+    attributes.present & set != 0
+}
+
+/// The coordinates the map reads.
+pub fn map_coordinates(map: &GpuTextureMap, attributes: &Attributes) -> Vec2 {
+    if map.tex_coord == 1 {
+        attributes.uv1
+    } else {
+        attributes.uv0
+    }
+}
+
+/// Texture map `index` at the hit, through the coordinate set it reads; white where the triangle
+/// lacks that set (`sample_map`), `None` where there is no map.
+pub fn sample_map(scene: &PackedScene, index: u32, attributes: &Attributes) -> Option<Vec4> {
+    if index == NONE {
+        return None;
+    }
+    let map = &scene.texture_maps[index as usize];
+    if !has_coordinates(map, attributes) {
+        return Some(Vec4::ONE);
+    }
+    Some(sample_texture(scene, map, map_coordinates(map, attributes)))
+}
+
+/// The alpha of a material's surface at the hit (`surface_alpha`): its own, times the vertex
+/// colour's, times the base colour map's (`surface_material` multiplies them in this order).
+pub fn surface_alpha(scene: &PackedScene, material: &GpuMaterial, attributes: &Attributes) -> f32 {
+    let mut alpha = material.alpha;
+    if attributes.present & ATTRIBUTE_COLOR != 0 {
+        alpha *= attributes.color.w;
+    }
+    if attributes.present != 0
+        && let Some(texel) = sample_map(scene, material.base_map, attributes)
+    {
+        alpha *= texel.w;
+    }
+    alpha
+}
+
+/// What a triangle carries at a hit besides its position and normals, from its attribute block:
+/// `present` says which (`ATTRIBUTE_*` bits; 0 for none).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attributes {
+    pub present: u32,
+    pub uv0: Vec2,
+    pub uv1: Vec2,
+    /// Linear RGBA; white without vertex colours.
+    pub color: Vec4,
+    /// Interpolated, not unit; w is the bitangent's sign.
+    pub tangent: Vec4,
+}
+
+impl Attributes {
+    pub const NONE: Attributes = Attributes {
+        present: 0,
+        uv0: Vec2::ZERO,
+        uv1: Vec2::ZERO,
+        color: Vec4::ONE,
+        tangent: Vec4::ZERO,
+    };
+}
+
+/// Three corners' coordinates (the first two in t0, the third in t1's x and y) blended by the
+/// hit's barycentric weights (`blend_coordinates`).
+fn blend_coordinates(uvt: Vec3, t0: [f32; 4], t1: [f32; 4]) -> Vec2 {
+    (1.0 - uvt.x - uvt.y) * Vec2::new(t0[0], t0[1]) + uvt.x * Vec2::new(t0[2], t0[3]) + uvt.y * Vec2::new(t1[0], t1[1])
+}
+
+fn blend_corners(uvt: Vec3, corners: &[AttributeTexel]) -> Vec4 {
+    let [a, b, c] = [0, 1, 2].map(|k| Vec4::from_array(corners[k].0));
+    (1.0 - uvt.x - uvt.y) * a + uvt.x * b + uvt.y * c
+}
+
+/// The triangle's attributes where the ray meets it (`triangle_attributes`).
+pub fn triangle_attributes(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray) -> Attributes {
+    let mut a = Attributes::NONE;
+    if triangle.attributes == NONE {
+        return a;
+    }
+    let uvt = triangle_uvt(triangle, ray);
+    let block = &scene.triangle_attributes[triangle.attributes as usize..];
+    a.present = block[1].0[2] as u32;
+    a.uv0 = blend_coordinates(uvt, block[0].0, block[1].0);
+    let mut at = 2;
+    if a.present & ATTRIBUTE_UV1 != 0 {
+        a.uv1 = blend_coordinates(uvt, block[at].0, block[at + 1].0);
+        at += 2;
+    }
+    if a.present & ATTRIBUTE_COLOR != 0 {
+        a.color = blend_corners(uvt, &block[at..]);
+        at += 3;
+    }
+    if a.present & ATTRIBUTE_TANGENT != 0 {
+        a.tangent = blend_corners(uvt, &block[at..]);
+    }
+    a
 }

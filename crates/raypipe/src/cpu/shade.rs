@@ -2,11 +2,11 @@
 
 use super::brdf::{GltfSurface, gltf_brdf};
 use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
-use super::maps::sample_map;
+use super::maps::{Attributes, has_coordinates, map_coordinates, sample_map, sample_texture, triangle_attributes};
 use crate::bvh::layout::NONE;
 use crate::records::constants::{
-    LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, RAY_BIAS, T_FAR,
-    TRIANGLE_ALPHA_BLEND,
+    ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF,
+    RAY_BIAS, T_FAR, TRIANGLE_ALPHA_BLEND,
 };
 use crate::records::{GpuLight, GpuMaterial, GpuTriangle, PackedScene};
 use glam::{Vec2, Vec3};
@@ -24,8 +24,8 @@ pub struct Surface {
     /// The largest coordinate of the ray's origin and of the hit: the position's rounding error is
     /// a few float steps of it.
     pub reach: f32,
-    /// Texture coordinates at the hit, where the primitive has them.
-    pub uv: Option<Vec2>,
+    /// Texture coordinates, vertex colour and tangent at the hit, where the triangle has them.
+    pub attributes: Attributes,
     /// A triangle with alpha BLEND: it covers its alpha of the ray.
     pub blend: bool,
 }
@@ -57,7 +57,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
                 shading: normal,
                 material: sphere.material,
                 reach,
-                uv: None,
+                attributes: Attributes::NONE,
                 blend: false,
             };
         }
@@ -70,7 +70,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
             shading: triangle_shading(scene, triangle, ray, normal),
             material: triangle.material & MATERIAL_INDEX_MASK,
             reach,
-            uv: (triangle.uvs != NONE).then(|| triangle_uv(scene, triangle, ray)),
+            attributes: triangle_attributes(scene, triangle, ray),
             blend: triangle.material & TRIANGLE_ALPHA_BLEND != 0,
         };
     }
@@ -88,37 +88,34 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
         shading: v3(plane.normal),
         material,
         reach,
-        uv: None,
+        attributes: Attributes::NONE,
         blend: false,
     }
 }
 
-/// A textured triangle's corner texture coordinates interpolated at the hit.
-pub fn triangle_uv(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray) -> Vec2 {
-    let uvt = triangle_uvt(triangle, ray);
-    let uvs = &scene.triangle_uvs[triangle.uvs as usize];
-    let [u0, v0, u1, v1] = uvs.uv01;
-    (1.0 - uvt.x - uvt.y) * Vec2::new(u0, v0) + uvt.x * Vec2::new(u1, v1) + uvt.y * Vec2::from_array(uvs.uv2)
-}
-
-/// The surface's material, its maps applied at the hit (where the primitive has texture
-/// coordinates): the base colour's (alpha too), and a glTF material's metalness and roughness (blue
-/// and green) and emission.
+/// The surface's material, its vertex colour and maps applied at the hit (`surface_material`): the
+/// base colour's (alpha too, as `surface_alpha` computes it), and a glTF material's metalness and
+/// roughness (blue and green) and emission.
 pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
     let mut material = scene.materials[surface.material as usize];
-    let Some(uv) = surface.uv else {
+    let a = &surface.attributes;
+    if a.present & ATTRIBUTE_COLOR != 0 {
+        material.color = (v3(material.color) * a.color.truncate()).to_array();
+        material.alpha *= a.color.w;
+    }
+    if a.present == 0 {
         return material;
-    };
-    if let Some(texel) = sample_map(scene, material.base_map, uv) {
+    }
+    if let Some(texel) = sample_map(scene, material.base_map, a) {
         material.color = (v3(material.color) * texel.truncate()).to_array();
         material.alpha *= texel.w;
     }
     if material.model == MODEL_GLTF {
-        if let Some(texel) = sample_map(scene, material.metallic_roughness_map, uv) {
+        if let Some(texel) = sample_map(scene, material.metallic_roughness_map, a) {
             material.roughness *= texel.y;
             material.metallic *= texel.z;
         }
-        if let Some(texel) = sample_map(scene, material.emissive_map, uv) {
+        if let Some(texel) = sample_map(scene, material.emissive_map, a) {
             material.emission = (v3(material.emission) * texel.truncate()).to_array();
         }
     }
@@ -128,10 +125,40 @@ pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
 /// The share of ambient light that reaches a glTF surface: 1 blended toward its occlusion map's
 /// red by the map's strength.
 pub fn ambient_share(scene: &PackedScene, surface: &Surface, material: &GpuMaterial) -> f32 {
-    match surface.uv.and_then(|uv| sample_map(scene, material.occlusion_map, uv)) {
+    if surface.attributes.present == 0 {
+        return 1.0;
+    }
+    match sample_map(scene, material.occlusion_map, &surface.attributes) {
         Some(texel) => 1.0 + material.occlusion_strength * (texel.x - 1.0),
         None => 1.0,
     }
+}
+
+/// The shading normal bent by the material's normal map (`normal_mapped`), in the frame of the
+/// triangle's tangent (made perpendicular to the shading normal n), its bitangent w cross(n,
+/// tangent) and n; n itself where the triangle lacks the map's coordinates or tangents, or where
+/// the bent normal would turn away from the geometric one.
+pub fn normal_mapped(scene: &PackedScene, surface: &Surface, material: &GpuMaterial) -> Vec3 {
+    let n = surface.shading;
+    let a = &surface.attributes;
+    if material.normal_map == NONE || a.present & ATTRIBUTE_TANGENT == 0 {
+        return n;
+    }
+    let map = &scene.texture_maps[material.normal_map as usize];
+    let along = a.tangent.truncate() - a.tangent.truncate().dot(n) * n;
+    if !has_coordinates(map, a) || along.dot(along) == 0.0 {
+        return n;
+    }
+    let tangent = along.normalize();
+    let sign = if a.tangent.w >= 0.0 { 1.0 } else { -1.0 };
+    let bitangent = sign * n.cross(tangent);
+    let texel = sample_texture(scene, map, map_coordinates(map, a));
+    let xy = (2.0 * Vec2::new(texel.x, texel.y) - 1.0) * material.normal_scale;
+    let bent = xy.x * tangent + xy.y * bitangent + (2.0 * texel.z - 1.0) * n;
+    if bent.dot(surface.normal) <= 0.0 {
+        return n;
+    }
+    bent.normalize()
 }
 
 /// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's

@@ -5,8 +5,8 @@ use super::admit::{Primitives, RayQuery};
 use super::brdf::sample_specular;
 use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
 use super::shade::{
-    Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface, offset_origin, reflect,
-    surface_at, surface_material,
+    Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface, normal_mapped,
+    offset_origin, reflect, surface_at, surface_material,
 };
 use crate::error::MissingBvh;
 use crate::modes::Accel;
@@ -172,13 +172,14 @@ impl<'a> Tracer<'a> {
             result.color += task.weight * v3(self.scene.globals.scene.background);
             return branches;
         }
-        let surface = surface_at(self.scene, &ray, &hit);
+        let mut surface = surface_at(self.scene, &ray, &hit);
+        let material = surface_material(self.scene, &surface);
+        surface.shading = normal_mapped(self.scene, &surface, &material);
         // The first surface the camera ray meets, blended or not.
         if task.depth == 0 && result.depth.is_none() {
             result.normal = surface.shading;
             result.depth = Some(hit.t);
         }
-        let material = surface_material(self.scene, &surface);
         let entering = surface.normal.dot(ray.dir) < 0.0;
         // The geometric normal picks the side new rays start on; the shading normal bends them.
         let normal = if entering { surface.normal } else { -surface.normal };

@@ -5,6 +5,7 @@
 //! source serves every memory mode and acceleration structure; the pipeline adds its entry points
 //! (a full-screen triangle's vertex and fragment stages, or a compute kernel) around it.
 
+use crate::bvh::layout::NONE;
 use crate::modes::{Accel, MemoryMode, Pipeline};
 use crate::records::constants::{
     MODEL_GLTF, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED, ray_stack_size,
@@ -45,7 +46,8 @@ pub enum RecordKind {
     Sphere,
     Triangle,
     TriangleNormals,
-    TriangleUvs,
+    /// The triangles' attribute blocks (texture coordinates, colours, tangents), texel by texel.
+    TriangleAttributes,
     Plane,
     Light,
     /// The materials' texels, then the texture maps' (`PackedScene::shading`).
@@ -61,7 +63,7 @@ impl RecordKind {
         RecordKind::Sphere,
         RecordKind::Triangle,
         RecordKind::TriangleNormals,
-        RecordKind::TriangleUvs,
+        RecordKind::TriangleAttributes,
         RecordKind::Plane,
         RecordKind::Light,
         RecordKind::Shading,
@@ -84,7 +86,7 @@ impl RecordKind {
             RecordKind::Sphere => "sphere",
             RecordKind::Triangle => "triangle",
             RecordKind::TriangleNormals => "triangle_normals",
-            RecordKind::TriangleUvs => "triangle_uvs",
+            RecordKind::TriangleAttributes => "triangle_attributes",
             RecordKind::Plane => "plane",
             RecordKind::Light => "light",
             RecordKind::Shading => "shading",
@@ -124,6 +126,10 @@ pub struct SceneFeatures {
     pub planes: bool,
     /// A material with a texture.
     pub textures: bool,
+    /// A triangle with an attribute block (texture coordinates, vertex colours or tangents).
+    pub attributes: bool,
+    /// A material with a normal map.
+    pub normal_maps: bool,
     /// A glTF material (metallic-roughness or unlit).
     pub gltf_materials: bool,
     /// A material that reflects or transmits: rays beyond the primary and shadow rays.
@@ -143,6 +149,8 @@ impl SceneFeatures {
         triangles: true,
         planes: true,
         textures: true,
+        attributes: true,
+        normal_maps: true,
         gltf_materials: true,
         secondary_rays: true,
         one_sided: true,
@@ -160,6 +168,8 @@ impl SceneFeatures {
             triangles: !scene.triangles.is_empty(),
             planes: !scene.planes.is_empty(),
             textures: !scene.texture_maps.is_empty(),
+            attributes: !scene.triangle_attributes.is_empty(),
+            normal_maps: scene.materials.iter().any(|m| m.normal_map != NONE),
             gltf_materials: scene.materials.iter().any(|m| m.model != MODEL_WHITTED),
             // A glTF material always reflects some light: its Fresnel term is never zero.
             secondary_rays: scene
@@ -208,6 +218,8 @@ pub fn compose(config: &ShaderConfig) -> String {
     writeln!(w, "const HAS_TRIANGLES: bool = {};", features.triangles).unwrap();
     writeln!(w, "const HAS_PLANES: bool = {};", features.planes).unwrap();
     writeln!(w, "const HAS_TEXTURES: bool = {};", features.textures).unwrap();
+    writeln!(w, "const HAS_ATTRIBUTES: bool = {};", features.attributes).unwrap();
+    writeln!(w, "const HAS_NORMAL_MAPS: bool = {};", features.normal_maps).unwrap();
     writeln!(w, "const HAS_GLTF_MATERIALS: bool = {};", features.gltf_materials).unwrap();
     writeln!(w, "const HAS_SECONDARY_RAYS: bool = {};", features.secondary_rays).unwrap();
     writeln!(w, "const HAS_ONE_SIDED: bool = {};", features.one_sided).unwrap();

@@ -356,7 +356,7 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn Rec
         (RecordKind::Sphere, &scene.spheres),
         (RecordKind::Triangle, &scene.triangles),
         (RecordKind::TriangleNormals, &scene.triangle_normals),
-        (RecordKind::TriangleUvs, &scene.triangle_uvs),
+        (RecordKind::TriangleAttributes, &scene.triangle_attributes),
         (RecordKind::Plane, &scene.planes),
         (RecordKind::Light, &scene.lights),
         (RecordKind::Shading, &scene.shading),

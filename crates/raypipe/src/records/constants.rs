@@ -57,6 +57,13 @@ pub fn ray_stack_size(max_depth: u32, blend: bool) -> u32 {
     max_depth + 1 + if blend { BLEND_STACK_ROOM } else { 0 }
 }
 
+/// The layout bits of a triangle's attribute block (`PackedScene::triangle_attributes`): which
+/// attributes follow its first two texels.
+pub const ATTRIBUTE_UV0: u32 = 1;
+pub const ATTRIBUTE_UV1: u32 = 2;
+pub const ATTRIBUTE_COLOR: u32 = 4;
+pub const ATTRIBUTE_TANGENT: u32 = 8;
+
 /// `GpuLight::kind` (`scene::LightKind::code`): the paper's light, E its colour everywhere.
 pub const LIGHT_CONSTANT: u32 = 0;
 /// A KHR_lights_punctual point light: candela, inverse-square.
@@ -97,6 +104,10 @@ pub fn wgsl() -> String {
         ("LIGHT_SPOT", LIGHT_SPOT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
         ("MATERIAL_INDEX_MASK", MATERIAL_INDEX_MASK),
+        ("ATTRIBUTE_UV0", ATTRIBUTE_UV0),
+        ("ATTRIBUTE_UV1", ATTRIBUTE_UV1),
+        ("ATTRIBUTE_COLOR", ATTRIBUTE_COLOR),
+        ("ATTRIBUTE_TANGENT", ATTRIBUTE_TANGENT),
         ("TRIANGLE_SINGLE_SIDED", TRIANGLE_SINGLE_SIDED),
         ("TRIANGLE_ALPHA_MASK", TRIANGLE_ALPHA_MASK),
         ("TRIANGLE_ALPHA_BLEND", TRIANGLE_ALPHA_BLEND),

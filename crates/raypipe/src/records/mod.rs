@@ -157,8 +157,8 @@ pub struct GpuTriangle {
     /// Index of the triangle's vertex normals in the normal records, or `NONE` to shade flat.
     pub normals: u32,
     pub v2: [f32; 3],
-    /// Index of the corners' texture coordinates in the UV records, or `NONE`.
-    pub uvs: u32,
+    /// The first texel of the triangle's attribute block, or `NONE` (`PackedScene::triangle_attributes`).
+    pub attributes: u32,
 }
 
 impl GpuSphere {
@@ -191,15 +191,11 @@ pub struct GpuTriangleNormals {
     pub _pad2: f32,
 }
 
-/// A textured triangle's corner texture coordinates, interpolated by barycentric coordinates.
-#[repr(C)]
+/// One texel of the triangles' attribute blocks (`PackedScene::triangle_attributes`): texture
+/// coordinates, vertex colours and tangents, as many texels a triangle as it has attributes.
+#[repr(transparent)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuTriangleUvs {
-    /// The first two corners' (u, v).
-    pub uv01: [f32; 4],
-    pub uv2: [f32; 2],
-    pub _pad: [f32; 2],
-}
+pub struct AttributeTexel(pub [f32; 4]);
 
 /// An infinite plane with its checkerboard frame precomputed, so no basis is derived in the shader.
 #[repr(C)]
@@ -275,7 +271,10 @@ pub struct GpuMaterial {
     pub alpha: f32,
     /// MASK's cutoff: alpha below it cuts the surface away.
     pub alpha_cutoff: f32,
-    pub _pad: [u32; 3],
+    /// glTF: the normal map (an index into the texture maps, or `NONE`) and its scale.
+    pub normal_map: u32,
+    pub normal_scale: f32,
+    pub _pad: u32,
 }
 
 /// A texture as a material maps it (`scene::TextureMap`): where its texels are and how texture
@@ -292,7 +291,8 @@ pub struct GpuTextureMap {
     pub wrap: u32,
     /// The texture transform's rows: (u', v') = (dot(transform_u, (u, v, 1)), dot(transform_v, (u, v, 1))).
     pub transform_u: [f32; 3],
-    pub _pad0: f32,
+    /// Which texture coordinate set the map reads, 0 or 1.
+    pub tex_coord: u32,
     pub transform_v: [f32; 3],
     pub _pad1: f32,
 }
@@ -328,17 +328,16 @@ pub const LAYOUTS: &[StructLayout] = &[
     ]),
     struct_layout!(GpuBvhFrame, "BvhFrame", [origin, quantum, inverse_quantum]),
     struct_layout!(GpuSphere, "Sphere", [center, radius, material]),
-    struct_layout!(GpuTriangle, "Triangle", [v0, material, v1, normals, v2, uvs]),
+    struct_layout!(GpuTriangle, "Triangle", [v0, material, v1, normals, v2, attributes]),
     struct_layout!(GpuTriangleNormals, "TriangleNormals", [n0, n1, n2]),
-    struct_layout!(GpuTriangleUvs, "TriangleUvs", [uv01, uv2]),
     struct_layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
     struct_layout!(GpuLight, "Light", [position, kind, color, range, direction, spot_scale, spot_offset]),
     struct_layout!(GpuMaterial, "Material", [
         color, specular, shininess, reflect, transmit, ior, emission, model, specular_color, metallic, roughness,
         specular_factor, occlusion_strength, base_map, metallic_roughness_map, occlusion_map, emissive_map, alpha,
-        alpha_cutoff,
+        alpha_cutoff, normal_map, normal_scale,
     ]),
-    struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, transform_v]),
+    struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, tex_coord, transform_v]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
     struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
 ];

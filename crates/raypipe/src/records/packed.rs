@@ -1,8 +1,8 @@
 //! A scene packed into records: what both tracers read.
 
 use super::{
-    GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere, GpuTextureMap,
-    GpuTriangle, GpuTriangleNormals, GpuTriangleUvs, MAX_TEXEL_INTEGER, ShadingTexel, TexturePixels,
+    AttributeTexel, GpuBvhFrame, GpuCamera, GpuGlobals, GpuLight, GpuMaterial, GpuPlane, GpuSceneInfo, GpuSphere,
+    GpuTextureMap, GpuTriangle, GpuTriangleNormals, MAX_TEXEL_INTEGER, ShadingTexel, TexturePixels,
 };
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::{GpuNode, NONE};
@@ -12,14 +12,15 @@ use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
 use crate::modes::Builder;
 use crate::records::constants::{
-    LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, MODEL_UNLIT,
-    MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
+    ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, ATTRIBUTE_UV0, ATTRIBUTE_UV1, LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT,
+    LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, MODEL_UNLIT, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK,
+    TRIANGLE_SINGLE_SIDED,
 };
 use crate::records::texels::GpuRecord;
 use crate::scene::{
     AlphaMode, Camera, Light, LightKind, Material, Moved, Pbr, Plane, Scene, Sphere, TextureMap, Triangle,
 };
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
 /// read.
@@ -81,8 +82,11 @@ pub struct PackedScene {
     pub triangles: Vec<GpuTriangle>,
     /// The vertex normals of the smooth triangles.
     pub triangle_normals: Vec<GpuTriangleNormals>,
-    /// The corner texture coordinates of the triangles that have them.
-    pub triangle_uvs: Vec<GpuTriangleUvs>,
+    /// The attribute blocks of the triangles that have texture coordinates, vertex colours or
+    /// tangents, texel by texel; a triangle's `attributes` names its first. A block is (u0, v0, u1,
+    /// v1) and (u2, v2, present, 0) of set 0, then, as the `ATTRIBUTE_*` bits of `present` say, set 1's
+    /// two texels alike, three corners' RGBA colours, three corners' tangents (xyz, w the sign).
+    pub triangle_attributes: Vec<AttributeTexel>,
     pub planes: Vec<GpuPlane>,
     pub lights: Vec<GpuLight>,
     pub materials: Vec<GpuMaterial>,
@@ -147,7 +151,16 @@ impl PackedScene {
             bvh_frame: GpuBvhFrame::default(),
         };
         let spheres = scene.spheres.iter().map(pack_sphere).collect();
-        let (triangles, triangle_normals, triangle_uvs) = pack_triangles(&scene.triangles, &scene.materials);
+        let (triangles, triangle_normals, triangle_attributes) = pack_triangles(&scene.triangles, &scene.materials);
+        if triangle_attributes.len() >= MAX_TEXEL_INTEGER as usize {
+            return Err(InputError::of(
+                Element::Scene,
+                format!(
+                    "the triangles' texture coordinates, colours and tangents take {} texels: a render takes fewer than {MAX_TEXEL_INTEGER}",
+                    triangle_attributes.len()
+                ),
+            ));
+        }
         let planes = scene.planes.iter().map(pack_plane).collect();
         let lights = scene.lights.iter().map(pack_light).collect();
         let (materials, texture_maps, texture_pixels) = pack_materials(scene);
@@ -161,7 +174,7 @@ impl PackedScene {
             spheres,
             triangles,
             triangle_normals,
-            triangle_uvs,
+            triangle_attributes,
             planes,
             lights,
             materials,
@@ -288,14 +301,45 @@ fn triangle_material_word(index: u32, material: &Material) -> u32 {
     index | sides | alpha
 }
 
-/// Triangles' records, with the vertex normals and texture coordinates of those that have them in
+/// A triangle's attribute block (`PackedScene::triangle_attributes`), or nothing where it has no
+/// attributes.
+fn attribute_block(t: &Triangle) -> Vec<AttributeTexel> {
+    let mut present = 0;
+    for (bit, has) in [
+        (ATTRIBUTE_UV0, t.uvs.is_some()),
+        (ATTRIBUTE_UV1, t.uvs1.is_some()),
+        (ATTRIBUTE_COLOR, t.colors.is_some()),
+        (ATTRIBUTE_TANGENT, t.tangents.is_some()),
+    ] {
+        if has {
+            present |= bit;
+        }
+    }
+    if present == 0 {
+        return Vec::new();
+    }
+    let coordinates = |uvs: Option<[Vec2; 3]>, bits: f32| {
+        let [a, b, c] = uvs.unwrap_or_default();
+        [[a.x, a.y, b.x, b.y], [c.x, c.y, bits, 0.0]]
+    };
+    let mut block = coordinates(t.uvs, present as f32).to_vec();
+    if t.uvs1.is_some() {
+        block.extend(coordinates(t.uvs1, 0.0));
+    }
+    for corners in [t.colors, t.tangents].into_iter().flatten() {
+        block.extend(corners.map(|c| c.to_array()));
+    }
+    block.into_iter().map(AttributeTexel).collect()
+}
+
+/// Triangles' records, with the vertex normals and attribute blocks of those that have them in
 /// their own records (a triangle links to its own, or holds NONE).
 fn pack_triangles(
     triangles: &[Triangle],
     materials: &[Material],
-) -> (Vec<GpuTriangle>, Vec<GpuTriangleNormals>, Vec<GpuTriangleUvs>) {
+) -> (Vec<GpuTriangle>, Vec<GpuTriangleNormals>, Vec<AttributeTexel>) {
     let mut triangle_normals = Vec::new();
-    let mut triangle_uvs = Vec::new();
+    let mut triangle_attributes = Vec::new();
     let triangles = triangles
         .iter()
         .map(|t| {
@@ -312,16 +356,13 @@ fn pack_triangles(
                 }
                 None => NONE,
             };
-            let uvs = match t.uvs {
-                Some([a, b, c]) => {
-                    triangle_uvs.push(GpuTriangleUvs {
-                        uv01: [a.x, a.y, b.x, b.y],
-                        uv2: c.to_array(),
-                        _pad: [0.0; 2],
-                    });
-                    triangle_uvs.len() as u32 - 1
-                }
-                None => NONE,
+            let block = attribute_block(t);
+            let attributes = if block.is_empty() {
+                NONE
+            } else {
+                let first = triangle_attributes.len() as u32;
+                triangle_attributes.extend(block);
+                first
             };
             GpuTriangle {
                 v0: v0.to_array(),
@@ -329,11 +370,11 @@ fn pack_triangles(
                 v1: v1.to_array(),
                 normals,
                 v2: v2.to_array(),
-                uvs,
+                attributes,
             }
         })
         .collect();
-    (triangles, triangle_normals, triangle_uvs)
+    (triangles, triangle_normals, triangle_attributes)
 }
 
 /// A plane with the axes its checker squares follow.
@@ -417,7 +458,7 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, Textu
             height: texture.height,
             wrap: texture.wrap[0].code() | texture.wrap[1].code() << 8,
             transform_u,
-            _pad0: 0.0,
+            tex_coord: map.tex_coord,
             transform_v,
             _pad1: 0.0,
         });
@@ -450,12 +491,14 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, Textu
                 metallic_roughness_map: map_index(pbr.metallic_roughness_texture),
                 occlusion_map: map_index(pbr.occlusion_texture),
                 emissive_map: map_index(pbr.emissive_texture),
+                normal_map: map_index(pbr.normal_texture),
+                normal_scale: pbr.normal_scale,
                 alpha: m.alpha,
                 alpha_cutoff: match m.alpha_mode {
                     AlphaMode::Mask { cutoff } => cutoff,
                     _ => 0.0,
                 },
-                _pad: [0; 3],
+                _pad: 0,
             }
         })
         .collect();

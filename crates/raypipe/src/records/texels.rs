@@ -2,7 +2,7 @@
 //! `texels.wgsl`.
 
 use super::{
-    GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTextureMap, GpuTriangle, GpuTriangleNormals, GpuTriangleUvs,
+    AttributeTexel, GpuLight, GpuMaterial, GpuPlane, GpuSphere, GpuTextureMap, GpuTriangle, GpuTriangleNormals,
 };
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
@@ -56,16 +56,14 @@ impl GpuRecord for GpuTriangle {
         let [cx, cy, cz] = self.v2;
         out.push(floats([ax, ay, az, self.material as f32]));
         out.push(floats([bx, by, bz, link_texel(self.normals)]));
-        out.push(floats([cx, cy, cz, link_texel(self.uvs)]));
+        out.push(floats([cx, cy, cz, link_texel(self.attributes)]));
     }
 }
 
-impl GpuRecord for GpuTriangleUvs {
-    const WGSL_TYPE: &'static str = "TriangleUvs";
+impl GpuRecord for AttributeTexel {
+    const WGSL_TYPE: &'static str = "vec4<f32>";
     fn push_texels(&self, out: &mut Vec<[u32; 4]>) {
-        let [u2, v2] = self.uv2;
-        out.push(floats(self.uv01));
-        out.push(floats([u2, v2, 0.0, 0.0]));
+        out.push(floats(self.0));
     }
 }
 
@@ -145,7 +143,12 @@ impl GpuRecord for GpuMaterial {
             link_texel(self.emissive_map),
             self.alpha,
         ]));
-        out.push(floats([self.alpha_cutoff, 0.0, 0.0, 0.0]));
+        out.push(floats([
+            self.alpha_cutoff,
+            link_texel(self.normal_map),
+            self.normal_scale,
+            0.0,
+        ]));
     }
 }
 
@@ -158,7 +161,7 @@ impl GpuRecord for GpuTextureMap {
         out.push(floats(
             [self.offset, self.width, self.height, self.wrap].map(|n| n as f32),
         ));
-        out.push(floats([ua, ub, uc, 0.0]));
+        out.push(floats([ua, ub, uc, self.tex_coord as f32]));
         out.push(floats([va, vb, vc, 0.0]));
     }
 }

@@ -102,6 +102,7 @@ impl Material {
                 metallic_roughness_texture: shift(p.metallic_roughness_texture),
                 occlusion_texture: shift(p.occlusion_texture),
                 emissive_texture: shift(p.emissive_texture),
+                normal_texture: shift(p.normal_texture),
                 ..p
             }),
             ..*self
@@ -131,6 +132,11 @@ pub struct Pbr {
     pub occlusion_strength: f32,
     /// sRGB colour multiplying `emission`.
     pub emissive_texture: Option<TextureMap>,
+    /// Linear data: a tangent-space normal (x along the tangent, y along the bitangent, z along
+    /// the vertex normal), each in 2 · value - 1, x and y scaled by `normal_scale`; on triangles
+    /// with tangents.
+    pub normal_texture: Option<TextureMap>,
+    pub normal_scale: f32,
     /// KHR_materials_unlit: the base colour (times its map) is the surface's radiance; lights,
     /// reflections, transmission and emission are left out.
     pub unlit: bool,
@@ -148,6 +154,8 @@ impl Default for Pbr {
             occlusion_texture: None,
             occlusion_strength: 1.0,
             emissive_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
             unlit: false,
         }
     }
@@ -155,11 +163,12 @@ impl Default for Pbr {
 
 impl Pbr {
     /// The textures the material reads besides its base colour's.
-    pub fn maps(&self) -> [Option<TextureMap>; 3] {
+    pub fn maps(&self) -> [Option<TextureMap>; 4] {
         [
             self.metallic_roughness_texture,
             self.occlusion_texture,
             self.emissive_texture,
+            self.normal_texture,
         ]
     }
 }
@@ -171,6 +180,9 @@ pub struct TextureMap {
     /// Index into `Scene::textures`.
     pub texture: u32,
     pub transform: TextureTransform,
+    /// Which of a triangle's texture coordinate sets it reads: 0 (`Triangle::uvs`) or 1
+    /// (`Triangle::uvs1`).
+    pub tex_coord: u32,
 }
 
 impl TextureMap {
@@ -179,6 +191,7 @@ impl TextureMap {
         TextureMap {
             texture,
             transform: TextureTransform::default(),
+            tex_coord: 0,
         }
     }
 }
@@ -229,7 +242,7 @@ pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<()
     if !(m.emission.is_finite() && m.emission.min_element() >= 0.0) {
         return Err("emission must be finite and not negative".into());
     }
-    let maps = m.pbr.as_ref().map_or([None; 3], Pbr::maps);
+    let maps = m.pbr.as_ref().map_or([None; 4], Pbr::maps);
     for map in std::iter::once(m.texture).chain(maps).flatten() {
         if map.texture as usize >= texture_count {
             return Err(format!(
@@ -239,6 +252,12 @@ pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<()
         }
         if !map.transform.is_finite() {
             return Err("texture transform must be finite".into());
+        }
+        if map.tex_coord > 1 {
+            return Err(format!(
+                "texture coordinate set {} (sets 0 and 1 are read)",
+                map.tex_coord
+            ));
         }
     }
     for (name, value) in [
@@ -275,6 +294,9 @@ pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<()
             if !(0.0..=1.0).contains(&value) {
                 return Err(format!("{name} must be in 0..=1 (got {value})"));
             }
+        }
+        if !pbr.normal_scale.is_finite() {
+            return Err("normal scale must be finite".into());
         }
         if !(pbr.specular_color.is_finite() && pbr.specular_color.min_element() >= 0.0) {
             return Err("specular colour must be finite and not negative".into());

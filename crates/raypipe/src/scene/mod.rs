@@ -23,7 +23,7 @@ pub use motion::{Bounce, Motion, Moved};
 pub use texture::{Texture, Wrap};
 
 use crate::error::{Element, InputError};
-use glam::{Quat, Vec2, Vec3};
+use glam::{Quat, Vec2, Vec3, Vec4};
 use material::validate_material;
 
 /// A pinhole camera. The ray convention is documented in `docs/scene-format.md` and implemented in
@@ -79,16 +79,24 @@ pub struct Sphere {
 }
 
 /// A triangle, counter-clockwise seen from its outside (the side its geometric normal points to).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Triangle {
     /// The corners, counter-clockwise seen from outside.
     pub vertices: [Vec3; 3],
     /// Vertex normals to interpolate for shading; `None` shades with the geometric normal.
     pub normals: Option<[Vec3; 3]>,
-    /// Texture coordinates of the corners, for a textured material.
+    /// Texture coordinates of the corners, for a textured material (glTF's TEXCOORD_0).
     pub uvs: Option<[Vec2; 3]>,
     /// Index into [`Scene::materials`].
     pub material: u32,
+    /// A second set of texture coordinates (glTF's TEXCOORD_1), for maps that name set 1.
+    pub uvs1: Option<[Vec2; 3]>,
+    /// Linear RGBA vertex colours (glTF's COLOR_0), multiplying the base colour and its alpha.
+    pub colors: Option<[Vec4; 3]>,
+    /// Unit tangents along increasing u of the normal map's coordinates, w (±1) the bitangent's
+    /// sign: bitangent = w · cross(normal, tangent) (glTF's TANGENT, or MikkTSpace's). A normal map
+    /// needs them.
+    pub tangents: Option<[Vec4; 3]>,
 }
 
 /// An infinite plane, optionally a checkerboard of two materials.
@@ -289,10 +297,11 @@ impl Scene {
             {
                 return Err(InputError::of(element(), "normals must be finite"));
             }
-            if let Some(uvs) = t.uvs
-                && !uvs.iter().all(|uv| uv.is_finite())
-            {
+            if !(t.uvs.iter().chain(&t.uvs1).flatten().all(|uv| uv.is_finite())) {
                 return Err(InputError::of(element(), "texture coordinates must be finite"));
+            }
+            if !(t.colors.iter().chain(&t.tangents).flatten().all(|c| c.is_finite())) {
+                return Err(InputError::of(element(), "colours and tangents must be finite"));
             }
             check_material(&element, t.material)?;
         }

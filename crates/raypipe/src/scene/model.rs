@@ -213,8 +213,8 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
                 scene.triangles.push(Triangle {
                     vertices: mesh.corners(t),
                     normals: corner_normals.as_ref().map(|n| n[f]),
-                    uvs: None,
                     material,
+                    ..Triangle::default()
                 });
             }
         }
@@ -266,6 +266,7 @@ pub fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) ->
         MeshAs::Triangles => {
             let starts = add_gltf_triangles(scene, gltf, placement, &place)?;
             if let Some(animated) = clip.and_then(|clip| animated_part(gltf, clip, placement.time, &place, &starts)) {
+                drop_moving_tangents(scene, &animated);
                 let animated = Arc::new(animated);
                 match &mut scene.motion {
                     None => scene.motion = Some(Motion::Animations(vec![animated])),
@@ -284,6 +285,22 @@ pub fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) ->
         }
     }
     Ok(place)
+}
+
+/// Leaves the tangents out of the triangles that move: a moving mesh's tangents would stay as the
+/// rest pose has them, so its normal maps are not applied (a notice says so).
+fn drop_moving_tangents(scene: &mut Scene, animated: &Animated) {
+    let mut dropped = false;
+    for placed in &animated.placed {
+        let triangles = &mut scene.triangles[placed.first_triangle..][..placed.triangles.len()];
+        for triangle in triangles.iter_mut().filter(|t| t.tangents.is_some()) {
+            triangle.tangents = None;
+            dropped = true;
+        }
+    }
+    if dropped {
+        log::info!("normal maps on moving meshes are not applied yet: they shade with their vertex normals");
+    }
 }
 
 /// The placement's transform of a glTF: its rotation, then (with `normalize`) the box centred at
@@ -347,6 +364,13 @@ fn add_gltf_triangles(
                 normals: corner_normals.as_ref().map(|n| n[f]),
                 uvs: primitive.uvs.as_ref().map(|uvs| t.map(|i| uvs[i as usize])),
                 material: material_base + primitive.material,
+                uvs1: primitive.uvs1.as_ref().map(|uvs| t.map(|i| uvs[i as usize])),
+                colors: primitive.colors.as_ref().map(|colors| t.map(|i| colors[i as usize])),
+                // The placement turns tangents as it turns normals (its scale is uniform).
+                tangents: primitive
+                    .tangents
+                    .as_ref()
+                    .map(|tangents| tangents[f].map(|t| (place.rotation * t.truncate()).extend(t.w))),
             });
         }
     }

@@ -37,6 +37,9 @@ impl Wrap {
 /// The most texels a scene's textures hold together: 2^24, so that a texel's index is exact in
 /// the f32 records of texture memory (a 4096 x 4096 image, or sixteen of 1024 x 1024).
 pub const MAX_TEXELS: u64 = 1 << 24;
+/// The most texels a file's images may decode to together: what [`shrink_to_fit`] brings down
+/// to MAX_TEXELS.
+pub const MAX_DECODED_TEXELS: u64 = 4 * MAX_TEXELS;
 /// The longest side of a texture.
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
 
@@ -101,6 +104,35 @@ impl Texture {
         }
     }
 
+    /// The texture at half its size each way (an odd side rounds up, a side of 1 stays), each
+    /// texel the mean of the linear values of the texels it covers.
+    pub fn halved(&self) -> Texture {
+        let (width, height) = (self.width.div_ceil(2), self.height.div_ceil(2));
+        let mut texels = Vec::with_capacity(width as usize * height as usize);
+        for y in 0..height {
+            for x in 0..width {
+                let columns = (2 * x)..(2 * x + 2).min(self.width);
+                let rows = (2 * y)..(2 * y + 2).min(self.height);
+                let mut sum = [0.0f32; 4];
+                let mut count = 0.0;
+                for row in rows {
+                    for column in columns.clone() {
+                        let texel = self.texel(column, row);
+                        sum.iter_mut().zip(texel).for_each(|(s, t)| *s += t);
+                        count += 1.0;
+                    }
+                }
+                texels.push(sum.map(|s| f16::from_f32(s / count).to_bits()));
+            }
+        }
+        Texture {
+            width,
+            height,
+            texels,
+            wrap: self.wrap,
+        }
+    }
+
     /// The texel at column `x`, row `y`, as f32 (exact: every half is an f32).
     pub fn texel(&self, x: u32, y: u32) -> [f32; 4] {
         self.texels[(y * self.width + x) as usize].map(|bits| f16::from_bits(bits).to_f32())
@@ -131,6 +163,25 @@ impl Texture {
     }
 }
 
+/// Halves the largest of `textures` until they hold at most [`MAX_TEXELS`] together (a texture
+/// of one texel cannot shrink, and with a million of them the sum cannot exceed the limit).
+/// Returns how many halvings it took.
+pub fn shrink_to_fit(textures: &mut [Texture]) -> usize {
+    let size = |t: &Texture| t.width as u64 * t.height as u64;
+    let mut total: u64 = textures.iter().map(size).sum();
+    let mut halvings = 0;
+    while total > MAX_TEXELS {
+        let Some(largest) = textures.iter_mut().filter(|t| size(t) > 1).max_by_key(|t| size(t)) else {
+            break;
+        };
+        let before = size(largest);
+        *largest = largest.halved();
+        total -= before - size(largest);
+        halvings += 1;
+    }
+    halvings
+}
+
 /// The sRGB transfer function's inverse (IEC 61966-2-1): an 8-bit encoded value to linear light.
 pub fn srgb_to_linear(encoded: u8) -> f32 {
     let c = encoded as f32 / 255.0;
@@ -156,6 +207,28 @@ mod tests {
         assert_eq!((r, b), (1.0, 0.0));
         assert!((g - 0.2158).abs() < 1e-3 && (a - 0.2).abs() < 1e-3, "{g} {a}");
         texture.validate().unwrap();
+    }
+
+    #[test]
+    fn halving_averages_blocks_and_shrinking_stops_at_the_limit() {
+        // 3x1: an odd side keeps its last texel alone.
+        let texture = Texture::from_linear(3, 1, &[[0.0; 4], [1.0; 4], [0.5, 0.25, 0.0, 1.0]], [Wrap::Clamp; 2]);
+        let half = texture.halved();
+        assert_eq!((half.width, half.height), (2, 1));
+        assert_eq!(half.texel(0, 0), [0.5; 4]);
+        assert_eq!(half.texel(1, 0), [0.5, 0.25, 0.0, 1.0]);
+        // Two 4096 x 4096 textures (twice the limit) and a small one: the big ones halve once each.
+        let big = Texture {
+            width: 4096,
+            height: 4096,
+            texels: vec![[0; 4]; 4096 * 4096],
+            wrap: [Wrap::Repeat; 2],
+        };
+        let small = Texture::from_linear(2, 2, &[[1.0; 4]; 4], [Wrap::Repeat; 2]);
+        let mut textures = vec![big.clone(), big, small.clone()];
+        assert_eq!(shrink_to_fit(&mut textures), 2);
+        assert_eq!([textures[0].width, textures[1].width], [2048, 2048]);
+        assert_eq!(textures[2], small);
     }
 
     #[test]

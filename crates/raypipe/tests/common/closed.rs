@@ -139,6 +139,7 @@ pub fn seen_from_inside(
             normals: None,
             uvs: None,
             material: 0,
+            ..Default::default()
         })
         .collect();
     scene.settings.width = size;

@@ -109,6 +109,16 @@ impl GltfBuilder {
         }));
     }
 
+    /// An accessor of normalized unsigned bytes, `width` to an element (COLOR_0 as "VEC4").
+    pub fn unorm8(&mut self, values: &[u8], width: usize) -> usize {
+        let view = self.view(values);
+        let type_ = ["SCALAR", "VEC2", "VEC3", "VEC4"][width - 1];
+        self.accessors.push(json!({
+            "bufferView": view, "componentType": 5121, "normalized": true, "count": values.len() / width, "type": type_
+        }));
+        self.accessors.len() - 1
+    }
+
     pub fn indices(&mut self, indices: &[u16]) -> usize {
         let bytes: Vec<u8> = indices.iter().flat_map(|v| v.to_le_bytes()).collect();
         let view = self.view(&bytes);
@@ -433,5 +443,42 @@ pub fn morphing_quad(lift: f32) -> GltfBuilder {
     let node = b.node(json!({ "mesh": 0 }));
     b.roots = vec![node];
     b.animate(node, "weights", "LINEAR", &[0.0, 1.0], &[0.0, 1.0], 1);
+    b
+}
+
+/// The unit quad with every attribute a material can read: NORMAL (+z), TEXCOORD_0, TEXCOORD_1 (the
+/// square turned a quarter), COLOR_0 (normalized bytes, a different colour at each corner); its
+/// material's base colour map (the checker) reads set 1, its normal map (one texel tilting the
+/// normal toward +v) set 0, and the file has no TANGENT, so MikkTSpace makes them. A camera looks at
+/// it from +z, a point light shines from above one corner.
+pub fn attribute_quad() -> GltfBuilder {
+    let mut b = GltfBuilder::default();
+    let checker = b.texture(CHECKER.as_flattened(), 2, 2, [REPEAT; 2]);
+    let tilt = b.texture(&[128, 200, 230, 255], 1, 1, [REPEAT; 2]);
+    let material = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorTexture": { "index": checker, "texCoord": 1 }, "metallicFactor": 0, "roughnessFactor": 0.5 },
+        "normalTexture": { "index": tilt, "scale": 0.8 },
+    }));
+    let (positions, uvs, indices) = quad(1.0);
+    let mesh = b.mesh(&positions, Some(&uvs), &indices, Some(material));
+    let normals = b.floats(&[0.0, 0.0, 1.0].repeat(4), 3);
+    let turned: Vec<f32> = uvs.iter().flat_map(|[u, v]| [*v, 1.0 - u]).collect();
+    let uvs1 = b.floats(&turned, 2);
+    let colors = b.unorm8(
+        &[255, 64, 64, 255, 64, 255, 64, 255, 64, 64, 255, 255, 255, 255, 255, 128],
+        4,
+    );
+    let attributes = &mut b.meshes[mesh]["primitives"][0]["attributes"];
+    attributes["NORMAL"] = json!(normals);
+    attributes["TEXCOORD_1"] = json!(uvs1);
+    attributes["COLOR_0"] = json!(colors);
+    b.roots = vec![b.node(json!({ "mesh": mesh }))];
+    b.cameras = vec![json!({ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.01 } })];
+    let camera = b.node(json!({ "camera": 0, "translation": [0.5, 0.5, 1.2] }));
+    b.lights = vec![json!({ "type": "point", "intensity": 3 })];
+    let light =
+        b.node(json!({ "translation": [1.2, 1.4, 0.8], "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+    b.roots.extend([camera, light]);
+    b.extensions_used = vec!["KHR_lights_punctual"];
     b
 }

@@ -34,6 +34,7 @@ pub fn whitted_with_quad(width: u32, height: u32) -> Scene {
             normals: None,
             uvs: None,
             material: 1,
+            ..Default::default()
         });
     }
     scene

@@ -86,6 +86,7 @@ fn one_quad(accel: Accel) -> PackedScene {
         normals: None,
         uvs: None,
         material: 0,
+        ..Default::default()
     };
     let mut scene = Scene {
         camera: Camera {

@@ -3,7 +3,7 @@
 //! and pipeline, and the same file packed three ways renders the same image.
 
 use crate::common::gltf_file::{
-    CHECKER, CLAMP_TO_EDGE, GltfBuilder, MIRRORED_REPEAT, Packing, REPEAT, framed_textured_quad, quad,
+    CHECKER, CLAMP_TO_EDGE, GltfBuilder, MIRRORED_REPEAT, Packing, REPEAT, attribute_quad, framed_textured_quad, quad,
 };
 use crate::common::harness::Test;
 use crate::common::*;
@@ -387,6 +387,18 @@ fn alpha_and_sides_match_the_cpu(ctx: &GpuContext) {
     assert_frames_match("alpha-compute", &compute.frame, &cpu);
 }
 
+/// A quad with vertex colours, a base colour map on its second coordinate set and a normal map
+/// on MikkTSpace's tangents, lit by a point light: GPU against CPU (the CPU's answers for each
+/// are worked out in tests/materials.rs).
+fn vertex_attributes_match_the_cpu(ctx: &GpuContext) {
+    let file = parse(&attribute_quad().gltf(), Files::None, &mut Vec::new()).unwrap();
+    let mut scene = gltf_scene(&file, "attributes.gltf", &ModelOptions::default()).unwrap();
+    scene.settings.width = 48;
+    scene.settings.height = 48;
+    let hits = gpu_matches_cpu(ctx, &scene, "vertex-attributes");
+    assert!(hits > 48 * 48 / 2, "the quad fills the view ({hits} pixels hit)");
+}
+
 /// The Khronos samples that require an extension raypipe does not read, with it.
 const REFUSED_KHRONOS: [(&str, &str); 2] = [
     ("ClearCoatCarPaint", "KHR_materials_clearcoat"),
@@ -453,6 +465,7 @@ pub fn tests() -> Vec<Test> {
         gpu every_packing_renders_the_same_image,
         gpu gltf_materials_match_the_cpu,
         gpu alpha_and_sides_match_the_cpu,
+        gpu vertex_attributes_match_the_cpu,
         gpu_models gltf_samples_match_the_cpu,
         gpu_models khronos_models_on_the_floor_match_the_cpu,
         gpu_models every_khronos_sample_matches_the_cpu,

@@ -9,15 +9,6 @@ var<private> ray_is_shadow: bool;
 // The share of a shadow ray's light that the blended triangles it passed let through.
 var<private> shadow_light: f32;
 
-// A MASK or BLEND triangle's alpha where the ray meets it: the material's, times its base
-// colour map's at the hit (as surface_material computes it for shading).
-fn triangle_alpha(triangle: Triangle, ray: Ray, material: Material) -> f32 {
-    if (!HAS_TEXTURES || triangle.uvs == NONE || material.base_map == NONE) {
-        return material.alpha;
-    }
-    return material.alpha * sample_map(material.base_map, triangle_uv(triangle, ray)).a;
-}
-
 // Whether the ray takes its hit of triangle i (among the triangles): not where it sees the back of
 // a single-sided triangle and culls back faces, not where alpha MASK cuts the triangle away. A
 // shadow ray passes a BLEND triangle, keeping (1 - alpha) of its light, until too little is left.
@@ -37,7 +28,7 @@ fn triangle_stops_ray(i: u32, ray: Ray) -> bool {
         return true;
     }
     let material = load_material(triangle.material & MATERIAL_INDEX_MASK);
-    let alpha = triangle_alpha(triangle, ray, material);
+    let alpha = surface_alpha(material, triangle_attributes(triangle, ray));
     if ((flags & TRIANGLE_ALPHA_MASK) != 0u) {
         return alpha >= material.alpha_cutoff;
     }

@@ -1,5 +1,60 @@
-// The materials' and texture maps' records, and textures sampled through a map: what shading
-// and the walks' alpha test (admit.wgsl) read. Mirrored by src/cpu/maps.rs.
+// The materials' and texture maps' records, a triangle's attributes at a hit, and textures sampled
+// through a map: what shading and the walks' alpha test (admit.wgsl) read. Mirrored by
+// src/cpu/maps.rs.
+
+// What a triangle carries at a hit besides its position and normals, from its attribute block
+// (src/records/packed.rs): `present` says which (ATTRIBUTE_* bits; 0 for none).
+struct Attributes {
+    present: u32,
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    // Linear RGBA; white without vertex colours.
+    color: vec4<f32>,
+    // Interpolated, not unit; w is the bitangent's sign.
+    tangent: vec4<f32>,
+}
+
+fn no_attributes() -> Attributes {
+    return Attributes(0u, vec2<f32>(0.0), vec2<f32>(0.0), vec4<f32>(1.0), vec4<f32>(0.0));
+}
+
+// Three corners' coordinates (the first two in t0, the third in t1.xy) blended by the hit's
+// barycentric weights.
+fn blend_coordinates(uvt: vec3<f32>, t0: vec4<f32>, t1: vec4<f32>) -> vec2<f32> {
+    return (1.0 - uvt.x - uvt.y) * t0.xy + uvt.x * t0.zw + uvt.y * t1.xy;
+}
+
+fn blend_corners(uvt: vec3<f32>, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>) -> vec4<f32> {
+    return (1.0 - uvt.x - uvt.y) * a + uvt.x * b + uvt.y * c;
+}
+
+// The triangle's attributes where the ray meets it.
+fn triangle_attributes(triangle: Triangle, ray: Ray) -> Attributes {
+    var a = no_attributes();
+    if (!HAS_ATTRIBUTES || triangle.attributes == NONE) {
+        return a;
+    }
+    let uvt = triangle_uvt(triangle, ray);
+    var at = triangle.attributes;
+    let set0_last = load_triangle_attributes(at + 1u);
+    a.present = u32(set0_last.z);
+    a.uv0 = blend_coordinates(uvt, load_triangle_attributes(at), set0_last);
+    at += 2u;
+    if ((a.present & ATTRIBUTE_UV1) != 0u) {
+        a.uv1 = blend_coordinates(uvt, load_triangle_attributes(at), load_triangle_attributes(at + 1u));
+        at += 2u;
+    }
+    if ((a.present & ATTRIBUTE_COLOR) != 0u) {
+        a.color = blend_corners(uvt, load_triangle_attributes(at), load_triangle_attributes(at + 1u),
+            load_triangle_attributes(at + 2u));
+        at += 3u;
+    }
+    if ((a.present & ATTRIBUTE_TANGENT) != 0u) {
+        a.tangent = blend_corners(uvt, load_triangle_attributes(at), load_triangle_attributes(at + 1u),
+            load_triangle_attributes(at + 2u));
+    }
+    return a;
+}
 
 // A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
 // clamp, [0, 2] for mirror (the second copy mirrored). Done in floats, so that no coordinate is
@@ -73,6 +128,30 @@ fn sample_texture(map: TextureMap, surface_uv: vec2<f32>) -> vec4<f32> {
     return lerp4(near_row, far_row, f.y);
 }
 
-fn sample_map(index: u32, uv: vec2<f32>) -> vec4<f32> {
-    return sample_texture(load_texture_map(index), uv);
+// Whether the attributes hold the coordinate set the map reads.
+fn has_coordinates(map: TextureMap, attributes: Attributes) -> bool {
+    return (attributes.present & select(ATTRIBUTE_UV0, ATTRIBUTE_UV1, map.tex_coord == 1u)) != 0u;
+}
+
+// The map's texture at the hit, through the coordinate set it reads; white where the triangle
+// lacks that set.
+fn sample_map(index: u32, attributes: Attributes) -> vec4<f32> {
+    let map = load_texture_map(index);
+    if (!has_coordinates(map, attributes)) {
+        return vec4<f32>(1.0);
+    }
+    return sample_texture(map, select(attributes.uv0, attributes.uv1, map.tex_coord == 1u));
+}
+
+// The alpha of a material's surface at the hit: its own, times the vertex colour's, times the base
+// colour map's (surface_material multiplies them in this order).
+fn surface_alpha(material: Material, attributes: Attributes) -> f32 {
+    var alpha = material.alpha;
+    if ((attributes.present & ATTRIBUTE_COLOR) != 0u) {
+        alpha *= attributes.color.a;
+    }
+    if (HAS_TEXTURES && attributes.present != 0u && material.base_map != NONE) {
+        alpha *= sample_map(material.base_map, attributes).a;
+    }
+    return alpha;
 }

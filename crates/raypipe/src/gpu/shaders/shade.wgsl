@@ -16,9 +16,8 @@ struct Surface {
     // The largest coordinate of the ray's origin and of the hit: the position's rounding error is a
     // few float steps of it.
     reach: f32,
-    // Texture coordinates at the hit, where the primitive has them (has_uv).
-    uv: vec2<f32>,
-    has_uv: bool,
+    // Texture coordinates, vertex colour and tangent at the hit, where the triangle has them.
+    attributes: Attributes,
     // A triangle with alpha BLEND: it covers its alpha of the ray.
     blend: bool,
 }
@@ -48,13 +47,6 @@ fn triangle_shading(triangle: Triangle, ray: Ray, normal: vec3<f32>) -> vec3<f32
     return select(shading, -shading, dot(shading, normal) < 0.0);
 }
 
-// A textured triangle's corner texture coordinates interpolated at the hit.
-fn triangle_uv(triangle: Triangle, ray: Ray) -> vec2<f32> {
-    let uvt = triangle_uvt(triangle, ray);
-    let uvs = load_triangle_uvs(triangle.uvs);
-    return (1.0 - uvt.x - uvt.y) * uvs.uv01.xy + uvt.x * uvs.uv01.zw + uvt.y * uvs.uv2;
-}
-
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let position = ray.origin + hit.t * ray.dir;
     let reach = max(max_abs(ray.origin), max_abs(position));
@@ -62,17 +54,14 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         if (is_sphere(hit.index)) {
             let sphere = load_sphere(hit.index);
             let normal = normalize(position - sphere.center);
-            return Surface(position, normal, normal, sphere.material, reach, vec2<f32>(0.0), false, false);
+            return Surface(position, normal, normal, sphere.material, reach, no_attributes(), false);
         }
         let triangle = load_triangle(hit.index - globals.scene.sphere_count);
         let normal = normalize_scaled(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
         let shading = triangle_shading(triangle, ray, normal);
         let material = triangle.material & MATERIAL_INDEX_MASK;
         let blend = HAS_ALPHA_BLEND && (triangle.material & TRIANGLE_ALPHA_BLEND) != 0u;
-        if (!HAS_TEXTURES || triangle.uvs == NONE) {
-            return Surface(position, normal, shading, material, reach, vec2<f32>(0.0), false, blend);
-        }
-        return Surface(position, normal, shading, material, reach, triangle_uv(triangle, ray), true, blend);
+        return Surface(position, normal, shading, material, reach, triangle_attributes(triangle, ray), blend);
     }
     let plane = load_plane(hit.index);
     let local = position - plane.point;
@@ -82,30 +71,35 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     if (cell - 2.0 * floor(cell * 0.5) != 0.0) {
         material = plane.checker_material;
     }
-    return Surface(position, plane.normal, plane.normal, material, reach, vec2<f32>(0.0), false, false);
+    return Surface(position, plane.normal, plane.normal, material, reach, no_attributes(), false);
 }
 
-// The surface's material, its maps applied at the hit (where the primitive has texture
-// coordinates): the base colour's (alpha too), and a glTF material's metalness and roughness (blue
-// and green) and emission.
+// The surface's material, its vertex colour and maps applied at the hit: the base colour's (alpha
+// too, as surface_alpha computes it), and a glTF material's metalness and roughness (blue and
+// green) and emission.
 fn surface_material(surface: Surface) -> Material {
     var material = load_material(surface.material);
-    if (!HAS_TEXTURES || !surface.has_uv) {
+    let a = surface.attributes;
+    if ((a.present & ATTRIBUTE_COLOR) != 0u) {
+        material.color *= a.color.rgb;
+        material.alpha *= a.color.a;
+    }
+    if (!HAS_TEXTURES || a.present == 0u) {
         return material;
     }
     if (material.base_map != NONE) {
-        let texel = sample_map(material.base_map, surface.uv);
+        let texel = sample_map(material.base_map, a);
         material.color *= texel.rgb;
         material.alpha *= texel.a;
     }
     if (HAS_GLTF_MATERIALS && material.model == MODEL_GLTF) {
         if (material.metallic_roughness_map != NONE) {
-            let texel = sample_map(material.metallic_roughness_map, surface.uv);
+            let texel = sample_map(material.metallic_roughness_map, a);
             material.roughness *= texel.y;
             material.metallic *= texel.z;
         }
         if (material.emissive_map != NONE) {
-            material.emission *= sample_map(material.emissive_map, surface.uv).rgb;
+            material.emission *= sample_map(material.emissive_map, a).rgb;
         }
     }
     return material;
@@ -114,10 +108,36 @@ fn surface_material(surface: Surface) -> Material {
 // The share of ambient light that reaches a glTF surface: 1 blended toward its occlusion map's red
 // by the map's strength.
 fn ambient_share(surface: Surface, material: Material) -> f32 {
-    if (!HAS_TEXTURES || !surface.has_uv || material.occlusion_map == NONE) {
+    if (!HAS_TEXTURES || surface.attributes.present == 0u || material.occlusion_map == NONE) {
         return 1.0;
     }
-    return 1.0 + material.occlusion_strength * (sample_map(material.occlusion_map, surface.uv).x - 1.0);
+    return 1.0 + material.occlusion_strength * (sample_map(material.occlusion_map, surface.attributes).x - 1.0);
+}
+
+// The shading normal bent by the material's normal map, in the frame of the triangle's tangent
+// (made perpendicular to the shading normal n), its bitangent w cross(n, tangent) and n; n itself
+// where the triangle lacks the map's coordinates or tangents, or where the bent normal would turn
+// away from the geometric one.
+fn normal_mapped(surface: Surface, material: Material) -> vec3<f32> {
+    let n = surface.shading;
+    let a = surface.attributes;
+    if (!HAS_NORMAL_MAPS || material.normal_map == NONE || (a.present & ATTRIBUTE_TANGENT) == 0u) {
+        return n;
+    }
+    let map = load_texture_map(material.normal_map);
+    let along = a.tangent.xyz - dot(a.tangent.xyz, n) * n;
+    if (!has_coordinates(map, a) || dot(along, along) == 0.0) {
+        return n;
+    }
+    let tangent = normalize(along);
+    let bitangent = select(-1.0, 1.0, a.tangent.w >= 0.0) * cross(n, tangent);
+    let texel = sample_texture(map, select(a.uv0, a.uv1, map.tex_coord == 1u));
+    let local = vec3<f32>((2.0 * texel.xy - 1.0) * material.normal_scale, 2.0 * texel.z - 1.0);
+    let bent = local.x * tangent + local.y * bitangent + local.z * n;
+    if (dot(bent, surface.normal) <= 0.0) {
+        return n;
+    }
+    return normalize(bent);
 }
 
 // `side` points to where the new ray goes: the facing normal for reflection and shadows, its

@@ -14,8 +14,9 @@ fn triangle_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> Triangle
     return Triangle(t0.xyz, u32(t0.w), t1.xyz, link_from_texel(t1.w), t2.xyz, link_from_texel(t2.w));
 }
 
-fn triangle_uvs_from_texels(t0: vec4<f32>, t1: vec4<f32>) -> TriangleUvs {
-    return TriangleUvs(t0, t1.xy);
+// The attribute blocks are texels already, in every memory mode.
+fn triangle_attributes_from_texels(t0: vec4<f32>) -> vec4<f32> {
+    return t0;
 }
 
 
@@ -38,12 +39,13 @@ fn shading_from_texels(t0: vec4<f32>) -> vec4<f32> {
 
 fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>, t4: vec4<f32>, t5: vec4<f32>, t6: vec4<f32>) -> Material {
     return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w, t2.xyz, u32(t2.w), t3.xyz, t3.w, t4.x, t4.y, t4.z,
-        link_from_texel(t4.w), link_from_texel(t5.x), link_from_texel(t5.y), link_from_texel(t5.z), t5.w, t6.x);
+        link_from_texel(t4.w), link_from_texel(t5.x), link_from_texel(t5.y), link_from_texel(t5.z), t5.w, t6.x,
+        link_from_texel(t6.y), t6.z);
 }
 
 fn texture_map_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> TextureMap {
     let size = vec4<u32>(t0);
-    return TextureMap(size.x, size.y, size.z, size.w, t1.xyz, t2.xyz);
+    return TextureMap(size.x, size.y, size.z, size.w, t1.xyz, u32(t1.w), t2.xyz);
 }
 
 // Node links travel as exact floats, with NONE and LEAF as -1.

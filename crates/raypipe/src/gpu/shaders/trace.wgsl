@@ -123,13 +123,14 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
         (*result).color += task.weight * globals.scene.background;
         return branches;
     }
-    let surface = surface_at(ray, hit);
+    var surface = surface_at(ray, hit);
+    let material = surface_material(surface);
+    surface.shading = normal_mapped(surface, material);
     // The first surface the camera ray meets, blended or not.
     if (task.depth == 0u && (*result).depth == DEPTH_MISS) {
         (*result).normal = surface.shading;
         (*result).depth = hit.t;
     }
-    let material = surface_material(surface);
     let entering = dot(surface.normal, ray.dir) < 0.0;
     // The geometric normal picks the side new rays start on; the shading normal bends them.
     let normal = select(-surface.normal, surface.normal, entering);

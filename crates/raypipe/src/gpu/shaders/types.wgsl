@@ -53,20 +53,14 @@ struct Triangle {
     // Index of the vertex normals, or NONE to shade with the geometric normal.
     normals: u32,
     v2: vec3<f32>,
-    // Index of the corners' texture coordinates, or NONE.
-    uvs: u32,
+    // The first texel of the triangle's attribute block, or NONE (triangle_attributes in shade.wgsl).
+    attributes: u32,
 }
 
 struct TriangleNormals {
     n0: vec3<f32>,
     n1: vec3<f32>,
     n2: vec3<f32>,
-}
-
-struct TriangleUvs {
-    // The first two corners' (u, v).
-    uv01: vec4<f32>,
-    uv2: vec2<f32>,
 }
 
 struct Plane {
@@ -115,16 +109,21 @@ struct Material {
     // The base colour's alpha, and MASK's cutoff.
     alpha: f32,
     alpha_cutoff: f32,
+    // A texture map's index, or NONE, and its scale.
+    normal_map: u32,
+    normal_scale: f32,
 }
 
 // A texture as a material maps it: its first texel among all textures' (row by row), its size, its
-// wrap modes (u's | v's << 8; WRAP_* from the preamble), and the texture transform's two rows.
+// wrap modes (u's | v's << 8; WRAP_* from the preamble), the texture transform's two rows and the
+// texture coordinate set it reads (0 or 1).
 struct TextureMap {
     offset: u32,
     width: u32,
     height: u32,
     wrap: u32,
     transform_u: vec3<f32>,
+    tex_coord: u32,
     transform_v: vec3<f32>,
 }
 

@@ -190,7 +190,7 @@ fn component(bytes: &[u8], component: ComponentType, normalized: bool) -> f32 {
 }
 
 /// An accessor and its component and element types, by index.
-fn lookup(root: &json::Root, index: usize) -> Result<(&json::Accessor, ComponentType, Type), String> {
+pub(crate) fn lookup(root: &json::Root, index: usize) -> Result<(&json::Accessor, ComponentType, Type), String> {
     let accessor = root
         .accessors
         .get(index)

@@ -5,11 +5,12 @@
 //! occlusion (its texture's red, by `strength`), emission (`emissiveFactor` times
 //! KHR_materials_emissive_strength times the emissive texture), KHR_materials_transmission,
 //! KHR_materials_ior, KHR_materials_specular's factors and KHR_materials_unlit. Every map may carry a
-//! KHR_texture_transform; the alpha mode, cutoff and sides. What is not read yet is named in one
-//! notice each: normal maps, maps on TEXCOORD_1, the specular extension's textures.
+//! KHR_texture_transform, on TEXCOORD_0 or TEXCOORD_1; normal maps; the alpha mode, cutoff and
+//! sides. What is not read yet is named in one notice each: maps on TEXCOORD_2 and above, the
+//! specular extension's textures.
 
 use super::data::{Files, MAX_IMAGE_BYTES, read_uri, view_bytes};
-use crate::scene::texture::{MAX_TEXELS, MAX_TEXTURE_SIDE};
+use crate::scene::texture::{MAX_DECODED_TEXELS, MAX_TEXELS, MAX_TEXTURE_SIDE, shrink_to_fit};
 use crate::scene::{AlphaMode, Material, Pbr, Texture, TextureMap, TextureTransform, Wrap};
 use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
@@ -85,6 +86,12 @@ impl Materials {
                 .map_err(|e| format!("{what}: {e}"))?;
             self.materials.push(read);
         }
+        let halvings = shrink_to_fit(&mut self.textures);
+        if halvings > 0 {
+            notices.push(format!(
+                "textures halved {halvings} times to fit the {MAX_TEXELS} texels a render holds"
+            ));
+        }
         notices.extend(self.left_out.iter().map(|s| s.to_string()));
         Ok(())
     }
@@ -124,10 +131,16 @@ impl Materials {
             Encoding::Data,
             self,
         )?;
-        if material.normal_texture().is_some() {
-            self.left_out
-                .insert("normal maps are not applied yet: surfaces shade with their vertex normals");
-        }
+        let normal = material.normal_texture();
+        let normal_map = map(
+            normal.as_ref().map(|n| MapInfo {
+                texture: n.texture(),
+                tex_coord: n.tex_coord(),
+                transform: n.extension_value(TEXTURE_TRANSFORM),
+            }),
+            Encoding::Data,
+            self,
+        )?;
         let specular = material.specular();
         if specular
             .as_ref()
@@ -157,6 +170,8 @@ impl Materials {
                 occlusion_texture: occlusion_map,
                 occlusion_strength: occlusion.as_ref().map_or(1.0, |o| o.strength()).clamp(0.0, 1.0),
                 emissive_texture: emissive,
+                normal_texture: normal_map,
+                normal_scale: normal.as_ref().map_or(1.0, |n| n.scale()),
                 unlit: material.unlit(),
             }),
             alpha: alpha.clamp(0.0, 1.0),
@@ -183,13 +198,46 @@ impl Materials {
         files: Files,
     ) -> Result<Option<TextureMap>, String> {
         let (transform, tex_coord) = texture_transform(info.transform, info.tex_coord)?;
-        if tex_coord != 0 {
+        if tex_coord > 1 {
             self.left_out
-                .insert("maps on TEXCOORD_1 and above are left out: only TEXCOORD_0 is read");
+                .insert("maps on TEXCOORD_2 and above are left out: TEXCOORD_0 and TEXCOORD_1 are read");
             return Ok(None);
         }
         let texture = self.texture(root, &info.texture, encoding, buffers, files)?;
-        Ok(Some(TextureMap { texture, transform }))
+        Ok(Some(TextureMap {
+            texture,
+            transform,
+            tex_coord,
+        }))
+    }
+
+    /// Checks that a primitive with material `index` has what its maps read: the coordinate set
+    /// of each (`sets`: whether it has TEXCOORD_0 and TEXCOORD_1), and for a normal map its
+    /// normals. Says whether the primitive needs tangents (its material has a normal map).
+    pub fn check_attributes(&self, index: u32, sets: [bool; 2], has_normals: bool) -> Result<bool, String> {
+        let material = &self.materials[index as usize];
+        let pbr = material.pbr.unwrap_or_default();
+        let maps = std::iter::once(material.texture).chain(pbr.maps()).flatten();
+        for map in maps {
+            if !sets[map.tex_coord as usize] {
+                return Err(format!(
+                    "material {index} reads TEXCOORD_{}, which the primitive lacks",
+                    map.tex_coord
+                ));
+            }
+        }
+        if pbr.normal_texture.is_some() && !has_normals {
+            return Err(format!(
+                "material {index} has a normal map, and the primitive has no NORMAL"
+            ));
+        }
+        Ok(pbr.normal_texture.is_some())
+    }
+
+    /// The coordinate set material `index`'s normal map reads.
+    pub fn normal_map_set(&self, index: u32) -> u32 {
+        let pbr = self.materials[index as usize].pbr.unwrap_or_default();
+        pbr.normal_texture.map_or(0, |map| map.tex_coord)
     }
 
     /// The index of a primitive's material: the document's, or the default material.
@@ -239,7 +287,7 @@ impl Materials {
             (None, Some(uri)) => read_uri(uri, files, MAX_IMAGE_BYTES, &what)?,
             (None, None) => return Err(format!("{what}: neither a bufferView nor a uri")),
         };
-        let budget = MAX_TEXELS - self.texels;
+        let budget = MAX_DECODED_TEXELS - self.texels;
         let (width, height, rgba) = decode_image(&bytes, mime, budget).map_err(|e| format!("{what}: {e}"))?;
         self.texels += width as u64 * height as u64;
         self.textures.push(match encoding {
@@ -318,7 +366,7 @@ fn decode_image(bytes: &[u8], mime: Option<&str>, budget: u64) -> Result<(u32, u
         }
         if width as u64 * height as u64 > budget {
             return Err(format!(
-                "{width}x{height} pixels: the scene's textures would hold more than {MAX_TEXELS} texels"
+                "{width}x{height} pixels: the file's images would decode to more than {MAX_DECODED_TEXELS} texels"
             ));
         }
         Ok(())

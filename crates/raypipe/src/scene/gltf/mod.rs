@@ -15,6 +15,7 @@
 mod animation;
 mod data;
 mod material;
+mod tangents;
 
 pub use data::Files;
 
@@ -23,7 +24,7 @@ use super::{Camera, Light, LightKind, Material, Texture};
 use crate::error::InputError;
 use crate::mesh::Mesh;
 use data::{read_floats, read_indices};
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::json;
 use gltf::json::accessor::Type;
 use gltf::mesh::Mode;
@@ -31,6 +32,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::rc::Rc;
 use std::sync::Arc;
+use tangents::mikktspace_tangents;
 
 /// The extensions read. KHR_mesh_quantization only widens the accessor types, which every
 /// attribute reader takes.
@@ -64,6 +66,13 @@ pub struct Primitive {
     pub normals: Option<Vec<Vec3>>,
     /// TEXCOORD_0, where the file has it.
     pub uvs: Option<Vec<Vec2>>,
+    /// TEXCOORD_1, where the file has it.
+    pub uvs1: Option<Vec<Vec2>>,
+    /// COLOR_0 as linear RGBA (alpha 1 where the file gives RGB), where the file has it.
+    pub colors: Option<Vec<Vec4>>,
+    /// Each triangle's corners' tangents (xyz unit, w the bitangent's sign): TANGENT's, or
+    /// MikkTSpace's where the material has a normal map and the file no TANGENT.
+    pub tangents: Option<Vec<[Vec4; 3]>>,
     pub triangles: Vec<[u32; 3]>,
     /// Index into [`GltfScene::materials`].
     pub material: u32,
@@ -340,6 +349,10 @@ struct LocalPrimitive {
     /// Positions, normals, and what deforms them.
     rest: Arc<RestPrimitive>,
     uvs: Option<Vec<Vec2>>,
+    uvs1: Option<Vec<Vec2>>,
+    colors: Option<Vec<Vec4>>,
+    /// Per triangle corner, in the mesh's space.
+    tangents: Option<Vec<[Vec4; 3]>>,
     triangles: Vec<[u32; 3]>,
     material: u32,
     /// The highest joint index its vertices name, where it has JOINTS_0.
@@ -561,10 +574,20 @@ impl SceneReader<'_> {
             .map(|index| self.vectors::<3>(index, Type::Vec3, vertex_count, "normal"))
             .transpose()?
             .map(|normals| normals.into_iter().map(Vec3::from).collect());
-        let uvs = attribute(gltf::Semantic::TexCoords(0))
-            .map(|index| self.vectors::<2>(index, Type::Vec2, vertex_count, "texture coordinate"))
-            .transpose()?
-            .map(|uvs| uvs.into_iter().map(Vec2::from).collect());
+        let coordinates = |set: u32| -> Result<Option<Vec<Vec2>>, String> {
+            Ok(attribute(gltf::Semantic::TexCoords(set))
+                .map(|index| self.vectors::<2>(index, Type::Vec2, vertex_count, "texture coordinate"))
+                .transpose()?
+                .map(|uvs| uvs.into_iter().map(Vec2::from).collect()))
+        };
+        let uvs = coordinates(0)?;
+        let uvs1 = coordinates(1)?;
+        let colors = attribute(gltf::Semantic::Colors(0))
+            .map(|index| self.colors(index, positions.len()))
+            .transpose()?;
+        let file_tangents = attribute(gltf::Semantic::Tangents)
+            .map(|index| self.vectors::<4>(index, Type::Vec4, vertex_count, "tangent"))
+            .transpose()?;
         let vertex_count = positions.len();
         let indices = match primitive.indices() {
             Some(accessor) => read_indices(self.root, self.buffers, accessor.index(), vertex_count)?,
@@ -572,6 +595,22 @@ impl SceneReader<'_> {
         };
         let triangles = assemble(mode, &indices);
         let material = self.materials.index_of(primitive.material().index());
+        let sets = [uvs.is_some(), uvs1.is_some()];
+        let needs_tangents = self.materials.check_attributes(material, sets, normals.is_some())?;
+        let tangents = match &file_tangents {
+            _ if !needs_tangents => None,
+            Some(tangents) => Some(
+                triangles
+                    .iter()
+                    .map(|t| t.map(|i| Vec4::from(tangents[i as usize])))
+                    .collect(),
+            ),
+            None => {
+                let set = self.materials.normal_map_set(material);
+                let coordinates = if set == 1 { &uvs1 } else { &uvs };
+                mikktspace_tangents(&positions, normals.as_deref(), coordinates.as_deref(), &triangles)
+            }
+        };
         let json = &self.root.meshes[mesh].primitives[primitive.index()];
         let targets = animation::read_targets(self.root, self.buffers, json, vertex_count)?;
         if !mesh_weights.is_empty() && mesh_weights.len() != targets.len() {
@@ -609,10 +648,26 @@ impl SceneReader<'_> {
                 weights,
             }),
             uvs,
+            uvs1,
+            colors,
+            tangents,
             triangles,
             material,
             max_joint,
         }))
+    }
+
+    /// COLOR_0: VEC3 or VEC4 of floats or normalized unsigned bytes or shorts, as linear RGBA.
+    fn colors(&self, index: usize, vertex_count: usize) -> Result<Vec<Vec4>, String> {
+        let (_, _, type_) = data::lookup(self.root, index)?;
+        let colors: Vec<Vec4> = if type_ == Type::Vec3 {
+            let rgb = self.vectors::<3>(index, Type::Vec3, Some(vertex_count), "colour")?;
+            rgb.into_iter().map(|c| Vec3::from(c).extend(1.0)).collect()
+        } else {
+            let rgba = self.vectors::<4>(index, Type::Vec4, Some(vertex_count), "colour")?;
+            rgba.into_iter().map(Vec4::from).collect()
+        };
+        Ok(colors)
     }
 
     /// A vertex attribute's elements of `N` floats, every one finite, and as many as POSITION's
@@ -672,15 +727,37 @@ impl SceneReader<'_> {
                 (Some(normals), Some(m)) => Some(normals.iter().map(|&n| m * n).collect()),
                 _ => None,
             };
-            let triangles = if determinant < 0.0 {
+            let mirrored = determinant < 0.0;
+            let triangles = if mirrored {
                 primitive.triangles.iter().map(|&[a, b, c]| [a, c, b]).collect()
             } else {
                 primitive.triangles.clone()
             };
+            // Tangents turn with the surface (the linear part, not the normals' matrix); the
+            // corners' order follows the winding, and a mirror flips the bitangent.
+            let tangents = primitive.tangents.as_ref().map(|tangents| {
+                tangents
+                    .iter()
+                    .map(|corners| {
+                        let placed = corners.map(|t| {
+                            let along = (linear * t.truncate()).normalize_or_zero();
+                            along.extend(if mirrored { -t.w } else { t.w })
+                        });
+                        if mirrored {
+                            [placed[0], placed[2], placed[1]]
+                        } else {
+                            placed
+                        }
+                    })
+                    .collect()
+            });
             self.primitives.push(Primitive {
                 positions,
                 normals,
                 uvs: primitive.uvs.clone(),
+                uvs1: primitive.uvs1.clone(),
+                colors: primitive.colors.clone(),
+                tangents,
                 triangles,
                 material: primitive.material,
             });
