@@ -328,26 +328,19 @@ fn colours_second_coordinates_and_tangents_are_read() {
         assert!((t.truncate() - Vec3::X).length() < 1e-5 && t.w == -1.0, "{t}");
     }
     // A map on a set the primitive lacks, a normal map without normals: one line each.
-    let mut b = attribute_quad();
-    b.meshes[0]["primitives"][0]["attributes"]
-        .as_object_mut()
-        .unwrap()
-        .remove("TEXCOORD_1");
-    let err = parse(&b.gltf(), Files::None, &mut Vec::new()).unwrap_err().to_string();
-    assert!(
-        err.contains("material 0 reads TEXCOORD_1, which the primitive lacks"),
-        "{err}"
-    );
-    let mut b = attribute_quad();
-    b.meshes[0]["primitives"][0]["attributes"]
-        .as_object_mut()
-        .unwrap()
-        .remove("NORMAL");
-    let err = parse(&b.gltf(), Files::None, &mut Vec::new()).unwrap_err().to_string();
-    assert!(
-        err.contains("material 0 has a normal map, and the primitive has no NORMAL"),
-        "{err}"
-    );
+    let without = |attribute: &str| {
+        let mut b = attribute_quad();
+        let attributes = b.meshes[0]["primitives"][0]["attributes"].as_object_mut().unwrap();
+        attributes.remove(attribute);
+        parse(&b.gltf(), Files::None, &mut Vec::new()).unwrap_err().to_string()
+    };
+    for (attribute, expected) in [
+        ("TEXCOORD_1", "material 0 reads TEXCOORD_1, which the primitive lacks"),
+        ("NORMAL", "material 0 has a normal map, and the primitive has no NORMAL"),
+    ] {
+        let err = without(attribute);
+        assert!(err.contains(expected), "{err}");
+    }
 }
 
 fn every_packing_gives_the_same_scene() {

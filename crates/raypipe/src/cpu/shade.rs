@@ -322,6 +322,15 @@ pub fn offset_origin(surface: &Surface, side: Vec3) -> Vec3 {
     surface.position + side * (RAY_BIAS * surface.reach)
 }
 
+/// The unit direction of a ray along `i` refracted into the medium across `n` (unit, on i's side)
+/// with `eta` the ratio of indices (from over to); `None` past the critical angle
+/// (`refracted_direction`).
+pub fn refracted_direction(i: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = -n.dot(i);
+    let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    (k >= 0.0).then(|| (eta * i + (eta * cos_i - k.sqrt()) * n).normalize())
+}
+
 /// Schlick's approximation of the Fresnel reflectance; cos_theta is taken on the less dense side.
 pub fn fresnel_schlick(cos_theta: f32, ior: f32) -> f32 {
     let r = (1.0 - ior) / (1.0 + ior);

@@ -6,7 +6,7 @@ use super::brdf::sample_specular;
 use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
 use super::shade::{
     Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface, normal_mapped,
-    offset_origin, reflect, surface_at, surface_material,
+    offset_origin, reflect, refracted_direction, surface_at, surface_material,
 };
 use crate::error::MissingBvh;
 use crate::modes::Accel;
@@ -185,8 +185,14 @@ impl<'a> Tracer<'a> {
         let normal = if entering { surface.normal } else { -surface.normal };
         let shading = if entering { surface.shading } else { -surface.shading };
         let view = -ray.dir;
+        // A ray that leaves a volume lost light on its way through it (Beer-Lambert).
+        let mut arrived = *task;
+        if material.model == MODEL_GLTF && material.volume != 0 && !entering {
+            let optical_depth = -v3(material.absorption) * hit.t;
+            arrived.weight *= Vec3::new(optical_depth.x.exp(), optical_depth.y.exp(), optical_depth.z.exp());
+        }
         // A blended surface covers its alpha of the ray; the rest goes on behind it.
-        let mut covered = *task;
+        let mut covered = arrived;
         if surface.blend {
             covered.weight *= material.alpha;
             if self.blend_layers < MAX_BLEND_LAYERS {
@@ -194,7 +200,7 @@ impl<'a> Tracer<'a> {
                 branches.through = RayTask {
                     origin: offset_origin(&surface, -normal),
                     dir: ray.dir,
-                    weight: task.weight * (1.0 - material.alpha),
+                    weight: arrived.weight * (1.0 - material.alpha),
                     ..*task
                 };
             }
@@ -230,7 +236,7 @@ impl<'a> Tracer<'a> {
             return branches;
         }
         if gltf {
-            let sent = self.gltf_branches(&covered, &surface, normal, shading, view, &material);
+            let sent = self.gltf_branches(&covered, &surface, [normal, shading, view], &material, entering);
             return Branches {
                 through: branches.through,
                 ..sent
@@ -276,21 +282,36 @@ impl<'a> Tracer<'a> {
 
     /// A glTF surface's rays (`gltf_branches`): the reflected one weighted by the Fresnel term (drawn
     /// from the GGX lobe where the surface is rough), and the transmitted one of
-    /// KHR_materials_transmission. Its surfaces are thin walls: the transmitted ray goes on in the
-    /// incoming direction, or, rough, in the reflected ray's mirror image through the surface.
+    /// KHR_materials_transmission. A thin wall's transmitted ray goes on in the incoming direction,
+    /// or, rough, in the reflected ray's mirror image through the surface; across a volume's
+    /// surface (KHR_materials_volume) it refracts about the sampled microfacet normal, and reflects
+    /// where it cannot (total internal reflection). A ray inside a volume sees the back faces of
+    /// single-sided triangles. `frame` is the facing geometric normal, the facing shading normal
+    /// and the view direction.
     fn gltf_branches(
         &mut self,
         task: &RayTask,
         surface: &Surface,
-        normal: Vec3,
-        shading: Vec3,
-        view: Vec3,
+        [normal, shading, view]: [Vec3; 3],
         material: &GpuMaterial,
+        entering: bool,
     ) -> Branches {
         let s = gltf_surface(material);
         let sample = sample_specular(&s, shading, view, self.random_pair());
         let depth = task.depth + 1;
-        let transmitted = sample.dir - 2.0 * sample.dir.dot(shading) * shading;
+        let mut transmitted = sample.dir - 2.0 * sample.dir.dot(shading) * shading;
+        let mut transmit_side = -normal;
+        let mut transmit_culls = false;
+        let volume = material.volume != 0;
+        if volume {
+            let eta = if entering { 1.0 / s.ior } else { s.ior };
+            let bent = refracted_direction(-view, (sample.dir + view).normalize(), eta);
+            transmitted = bent.unwrap_or(sample.dir);
+            transmit_side = if bent.is_some() { -normal } else { normal };
+            // Outside after it, where back faces hide again: leaving and refracted, or reflected
+            // from outside.
+            transmit_culls = entering != bent.is_some();
+        }
         let transmit_share =
             (1.0 - s.metallic) * s.transmission * (1.0 - sample.dielectric_fresnel.max_element()) * sample.share;
         Branches {
@@ -299,14 +320,14 @@ impl<'a> Tracer<'a> {
                 dir: sample.dir,
                 weight: task.weight * sample.weight,
                 depth,
-                culls: true,
+                culls: !volume || entering,
             },
             refracted: RayTask {
-                origin: offset_origin(surface, -normal),
+                origin: offset_origin(surface, transmit_side),
                 dir: transmitted,
                 weight: task.weight * s.base * transmit_share,
                 depth,
-                culls: false,
+                culls: transmit_culls,
             },
             through: RayTask::default(),
         }

@@ -130,6 +130,8 @@ pub struct SceneFeatures {
     pub attributes: bool,
     /// A material with a normal map.
     pub normal_maps: bool,
+    /// A glTF material that bounds a volume (KHR_materials_volume).
+    pub volumes: bool,
     /// A glTF material (metallic-roughness or unlit).
     pub gltf_materials: bool,
     /// A material that reflects or transmits: rays beyond the primary and shadow rays.
@@ -151,6 +153,7 @@ impl SceneFeatures {
         textures: true,
         attributes: true,
         normal_maps: true,
+        volumes: true,
         gltf_materials: true,
         secondary_rays: true,
         one_sided: true,
@@ -170,6 +173,7 @@ impl SceneFeatures {
             textures: !scene.texture_maps.is_empty(),
             attributes: !scene.triangle_attributes.is_empty(),
             normal_maps: scene.materials.iter().any(|m| m.normal_map != NONE),
+            volumes: scene.materials.iter().any(|m| m.volume != 0),
             gltf_materials: scene.materials.iter().any(|m| m.model != MODEL_WHITTED),
             // A glTF material always reflects some light: its Fresnel term is never zero.
             secondary_rays: scene
@@ -220,6 +224,7 @@ pub fn compose(config: &ShaderConfig) -> String {
     writeln!(w, "const HAS_TEXTURES: bool = {};", features.textures).unwrap();
     writeln!(w, "const HAS_ATTRIBUTES: bool = {};", features.attributes).unwrap();
     writeln!(w, "const HAS_NORMAL_MAPS: bool = {};", features.normal_maps).unwrap();
+    writeln!(w, "const HAS_VOLUMES: bool = {};", features.volumes).unwrap();
     writeln!(w, "const HAS_GLTF_MATERIALS: bool = {};", features.gltf_materials).unwrap();
     writeln!(w, "const HAS_SECONDARY_RAYS: bool = {};", features.secondary_rays).unwrap();
     writeln!(w, "const HAS_ONE_SIDED: bool = {};", features.one_sided).unwrap();

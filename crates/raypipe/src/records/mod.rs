@@ -275,6 +275,11 @@ pub struct GpuMaterial {
     pub normal_map: u32,
     pub normal_scale: f32,
     pub _pad: u32,
+    /// The volume's absorption per unit length (`scene::Volume::absorption`).
+    pub absorption: [f32; 3],
+    /// glTF with KHR_materials_volume: 1 where the surface bounds a volume (rays refract across
+    /// it), 0 for a thin wall.
+    pub volume: u32,
 }
 
 /// A texture as a material maps it (`scene::TextureMap`): where its texels are and how texture
@@ -335,7 +340,7 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuMaterial, "Material", [
         color, specular, shininess, reflect, transmit, ior, emission, model, specular_color, metallic, roughness,
         specular_factor, occlusion_strength, base_map, metallic_roughness_map, occlusion_map, emissive_map, alpha,
-        alpha_cutoff, normal_map, normal_scale,
+        alpha_cutoff, normal_map, normal_scale, absorption, volume,
     ]),
     struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, tex_coord, transform_v]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),

@@ -493,12 +493,14 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, Textu
                 emissive_map: map_index(pbr.emissive_texture),
                 normal_map: map_index(pbr.normal_texture),
                 normal_scale: pbr.normal_scale,
+                _pad: 0,
+                absorption: pbr.volume.map_or(Vec3::ZERO, |v| v.absorption()).to_array(),
+                volume: pbr.volume.is_some() as u32,
                 alpha: m.alpha,
                 alpha_cutoff: match m.alpha_mode {
                     AlphaMode::Mask { cutoff } => cutoff,
                     _ => 0.0,
                 },
-                _pad: 0,
             }
         })
         .collect();

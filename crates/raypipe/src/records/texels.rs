@@ -149,6 +149,8 @@ impl GpuRecord for GpuMaterial {
             self.normal_scale,
             0.0,
         ]));
+        let [ar, ag, ab] = self.absorption;
+        out.push(floats([ar, ag, ab, self.volume as f32]));
     }
 }
 

@@ -137,6 +137,9 @@ pub struct Pbr {
     /// with tangents.
     pub normal_texture: Option<TextureMap>,
     pub normal_scale: f32,
+    /// KHR_materials_volume (with a thickness above 0): the surface bounds a volume of the
+    /// transmissive medium, not a thin wall; `None`: a thin wall.
+    pub volume: Option<Volume>,
     /// KHR_materials_unlit: the base colour (times its map) is the surface's radiance; lights,
     /// reflections, transmission and emission are left out.
     pub unlit: bool,
@@ -156,6 +159,7 @@ impl Default for Pbr {
             emissive_texture: None,
             normal_texture: None,
             normal_scale: 1.0,
+            volume: None,
             unlit: false,
         }
     }
@@ -170,6 +174,26 @@ impl Pbr {
             self.emissive_texture,
             self.normal_texture,
         ]
+    }
+}
+
+/// The medium inside a KHR_materials_volume surface: rays refract where they cross the surface
+/// and lose light inside by Beer-Lambert's law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Volume {
+    /// The colour white light takes after `attenuation_distance` inside, linear, each channel
+    /// in 0..=1.
+    pub attenuation_color: Vec3,
+    /// Positive; infinity for a clear medium.
+    pub attenuation_distance: f32,
+}
+
+impl Volume {
+    /// The absorption coefficient per unit length, -ln(colour) / distance per channel (a colour
+    /// channel of 0 absorbs as one of 1e-6 does).
+    pub fn absorption(&self) -> Vec3 {
+        let color = self.attenuation_color.max(Vec3::splat(1e-6));
+        -Vec3::new(color.x.ln(), color.y.ln(), color.z.ln()) / self.attenuation_distance
     }
 }
 
@@ -293,6 +317,18 @@ pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<()
         ] {
             if !(0.0..=1.0).contains(&value) {
                 return Err(format!("{name} must be in 0..=1 (got {value})"));
+            }
+        }
+        if let Some(volume) = pbr.volume {
+            let color = volume.attenuation_color;
+            if !(color.is_finite() && color.min_element() >= 0.0 && color.max_element() <= 1.0) {
+                return Err("attenuation colour must be in 0..=1".into());
+            }
+            if volume.attenuation_distance.is_nan() || volume.attenuation_distance <= 0.0 {
+                return Err(format!(
+                    "attenuation distance must be positive (got {})",
+                    volume.attenuation_distance
+                ));
             }
         }
         if !pbr.normal_scale.is_finite() {

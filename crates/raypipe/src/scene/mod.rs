@@ -18,7 +18,7 @@ pub mod texture;
 
 pub use light::{Light, LightKind};
 pub use load::{is_model_file, model_extension_list};
-pub use material::{AlphaMode, Material, Pbr, TextureMap, TextureTransform};
+pub use material::{AlphaMode, Material, Pbr, TextureMap, TextureTransform, Volume};
 pub use motion::{Bounce, Motion, Moved};
 pub use texture::{Texture, Wrap};
 

@@ -157,24 +157,43 @@ fn gltf_materials_match_the_cpu(ctx: &GpuContext) {
     use serde_json::json;
     let mut b = GltfBuilder::default();
     let glass = b.material(json!({
+        "doubleSided": true,
         "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0 },
         "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1 }, "KHR_materials_ior": { "ior": 1.5 } }
     }));
     let mirror = b.material(json!({
+        "doubleSided": true,
         "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 1, "roughnessFactor": 0 }
     }));
     let gold = b.material(json!({
+        "doubleSided": true,
         "pbrMetallicRoughness": { "baseColorFactor": [1, 0.78, 0.34, 1], "metallicFactor": 1, "roughnessFactor": 0.4 }
     }));
     let red = b.material(json!({
+        "doubleSided": true,
         "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.1, 0.1, 1], "metallicFactor": 0, "roughnessFactor": 0.6 }
     }));
-    b.extensions_used = vec!["KHR_materials_transmission", "KHR_materials_ior", "KHR_lights_punctual"];
+    // Tinted glass that bounds a volume: rays refract in and out, and are absorbed inside.
+    let tinted = b.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0.05 },
+        "extensions": {
+            "KHR_materials_transmission": { "transmissionFactor": 1 },
+            "KHR_materials_volume": { "thicknessFactor": 1, "attenuationDistance": 0.5, "attenuationColor": [0.2, 0.8, 0.5] }
+        }
+    }));
+    b.extensions_used = vec![
+        "KHR_materials_transmission",
+        "KHR_materials_ior",
+        "KHR_materials_volume",
+        "KHR_lights_punctual",
+    ];
+    let cube = closed_cube(&mut b, tinted, [0.2, -0.9, -1.6], 0.8);
     let quad = |b: &mut GltfBuilder, material, x0: f32, z: f32| {
         let positions = [[x0, -1.0, z], [x0 + 1.5, -1.0, z], [x0 + 1.5, 1.0, z], [x0, 1.0, z]];
         b.mesh(&positions, None, &[0, 1, 2, 0, 2, 3], Some(material))
     };
     let meshes = [
+        cube,
         quad(&mut b, glass, -1.6, 0.0),
         quad(&mut b, mirror, 0.1, 0.5),
         quad(&mut b, gold, 1.8, 0.2),
@@ -209,9 +228,43 @@ fn gltf_materials_match_the_cpu(ctx: &GpuContext) {
     let mut packed = PackedScene::new(&scene).unwrap();
     packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
     let frame = render_cpu(&packed, Accel::Threaded);
-    // The glass shows the red quad behind it, and the mirror the scene before it: neither is black.
-    let lit = frame.color.iter().filter(|c| c[0] + c[1] + c[2] > 0.05).count();
-    assert!(lit > frame.color.len() / 4, "the image is dark");
+    // The quads (double-sided: the camera sees their backs) and the cube show in an eighth of the
+    // view and more (the mirror shows much of the background): the glass shows the red quad
+    // behind it, and the mirror the scene before it.
+    let background = glam::Vec3::from(scene.settings.background);
+    let hit = frame
+        .color
+        .iter()
+        .filter(|c| (glam::Vec3::new(c[0], c[1], c[2]) - background).abs().max_element() > 0.01)
+        .count();
+    assert!(hit > frame.color.len() / 8, "only {hit} pixels show something");
+}
+
+/// A cube of side `size` with its lowest corner at `corner`, its triangles wound to face out.
+fn closed_cube(b: &mut GltfBuilder, material: usize, corner: [f32; 3], size: f32) -> usize {
+    let positions: Vec<[f32; 3]> = (0..8)
+        .map(|i| [0, 1, 2].map(|axis| corner[axis] + size * ((i >> axis) & 1) as f32))
+        .collect();
+    let centre = glam::Vec3::from(corner) + glam::Vec3::splat(size / 2.0);
+    let mut indices = Vec::new();
+    // Each face: the corners with one axis fixed, in a loop around it.
+    for axis in 0..3 {
+        for side in [0, 1] {
+            let (a, b2) = ((axis + 1) % 3, (axis + 2) % 3);
+            let corner_at = |i: u16, j: u16| (side << axis) | (i << a) | (j << b2);
+            let quad = [corner_at(0, 0), corner_at(1, 0), corner_at(1, 1), corner_at(0, 1)];
+            let p = |k: u16| glam::Vec3::from(positions[k as usize]);
+            let normal = (p(quad[1]) - p(quad[0])).cross(p(quad[2]) - p(quad[0]));
+            let outward = normal.dot(p(quad[0]) - centre) > 0.0;
+            let order = if outward {
+                [0, 1, 2, 0, 2, 3]
+            } else {
+                [0, 2, 1, 0, 3, 2]
+            };
+            indices.extend(order.map(|k| quad[k]));
+        }
+    }
+    b.mesh(&positions, None, &indices, Some(material))
 }
 
 /// `scene`, its BVH built on the CPU, traced by the threaded walk on the GPU in storage and in

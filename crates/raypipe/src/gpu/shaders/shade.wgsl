@@ -146,6 +146,17 @@ fn offset_origin(surface: Surface, side: vec3<f32>) -> vec3<f32> {
     return surface.position + side * (RAY_BIAS * surface.reach);
 }
 
+// The unit direction of a ray along i refracted into the medium across n (unit, on i's side) with
+// eta the ratio of indices (from over to), w = 1; w = 0 past the critical angle.
+fn refracted_direction(i: vec3<f32>, n: vec3<f32>, eta: f32) -> vec4<f32> {
+    let cos_i = -dot(n, i);
+    let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    if (k < 0.0) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(normalize(eta * i + (eta * cos_i - sqrt(k)) * n), 1.0);
+}
+
 // Schlick's approximation of the Fresnel reflectance; cos_theta is taken on the less dense side.
 fn fresnel_schlick(cos_theta: f32, ior: f32) -> f32 {
     let r = (1.0 - ior) / (1.0 + ior);

@@ -136,14 +136,20 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     let normal = select(-surface.normal, surface.normal, entering);
     let shading = select(-surface.shading, surface.shading, entering);
     let view = -ray.dir;
+    // A ray that leaves a volume lost light on its way through it (Beer-Lambert).
+    var arrived = task;
+    let volume = HAS_VOLUMES && material.model == MODEL_GLTF && material.volume != 0u;
+    if (volume && !entering) {
+        arrived.weight *= exp(-material.absorption * hit.t);
+    }
     // A blended surface covers its alpha of the ray; the rest goes on behind it.
-    var covered = task;
+    var covered = arrived;
     if (HAS_ALPHA_BLEND && surface.blend) {
         covered.weight *= material.alpha;
         if (blend_layers < MAX_BLEND_LAYERS) {
             blend_layers += 1u;
-            branches.through = RayTask(offset_origin(surface, -normal), ray.dir, task.weight * (1.0 - material.alpha),
-                task.depth, task.culls);
+            branches.through = RayTask(offset_origin(surface, -normal), ray.dir,
+                arrived.weight * (1.0 - material.alpha), task.depth, task.culls);
         }
     }
     // KHR_materials_unlit: the base colour is what the surface shows, and all it sends on.
@@ -163,7 +169,7 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
         return branches;
     }
     if (gltf) {
-        let sent = gltf_branches(covered, surface, normal, shading, view, material);
+        let sent = gltf_branches(covered, surface, normal, shading, view, material, entering);
         branches.reflected = sent.reflected;
         branches.refracted = sent.refracted;
         return branches;
@@ -196,19 +202,34 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
 }
 
 // A glTF surface's rays: the reflected one weighted by the Fresnel term (drawn from the GGX lobe
-// where the surface is rough), and the transmitted one of KHR_materials_transmission. Its surfaces
-// are thin walls: the transmitted ray goes on in the incoming direction, or, rough, in the
-// reflected ray's mirror image through the surface.
-fn gltf_branches(task: RayTask, surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material) -> Branches {
+// where the surface is rough), and the transmitted one of KHR_materials_transmission. A thin wall's
+// transmitted ray goes on in the incoming direction, or, rough, in the reflected ray's mirror image
+// through the surface; across a volume's surface (KHR_materials_volume) it refracts about the
+// sampled microfacet normal, and reflects where it cannot (total internal reflection). A ray inside
+// a volume sees the back faces of single-sided triangles.
+fn gltf_branches(task: RayTask, surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material, entering: bool) -> Branches {
     let s = gltf_surface(material);
     let sample = sample_specular(s, shading, view, random_pair());
     let depth = task.depth + 1u;
-    let transmitted = sample.dir - 2.0 * dot(sample.dir, shading) * shading;
+    var transmitted = sample.dir - 2.0 * dot(sample.dir, shading) * shading;
+    var transmit_side = -normal;
+    var transmit_culls = false;
+    let volume = HAS_VOLUMES && material.volume != 0u;
+    if (volume) {
+        let eta = select(s.ior, 1.0 / s.ior, entering);
+        let bent = refracted_direction(-view, normalize(sample.dir + view), eta);
+        transmitted = select(sample.dir, bent.xyz, bent.w > 0.0);
+        transmit_side = select(normal, -normal, bent.w > 0.0);
+        // Outside after it, where back faces hide again: leaving and refracted, or reflected
+        // from outside.
+        transmit_culls = entering != (bent.w > 0.0);
+    }
     let transmit_share = (1.0 - s.metallic) * s.transmission * (1.0 - max3(sample.dielectric_fresnel)) * sample.share;
     var branches = Branches();
-    branches.reflected = RayTask(offset_origin(surface, normal), sample.dir, task.weight * sample.weight, depth, true);
-    branches.refracted = RayTask(offset_origin(surface, -normal), transmitted, task.weight * s.base * transmit_share, depth,
-        false);
+    branches.reflected = RayTask(offset_origin(surface, normal), sample.dir, task.weight * sample.weight, depth,
+        !volume || entering);
+    branches.refracted = RayTask(offset_origin(surface, transmit_side), transmitted,
+        task.weight * s.base * transmit_share, depth, transmit_culls);
     return branches;
 }
 

@@ -112,6 +112,10 @@ struct Material {
     // A texture map's index, or NONE, and its scale.
     normal_map: u32,
     normal_scale: f32,
+    // A volume's absorption per unit length, and 1 where the surface bounds a volume
+    // (KHR_materials_volume), 0 for a thin wall.
+    absorption: vec3<f32>,
+    volume: u32,
 }
 
 // A texture as a material maps it: its first texel among all textures' (row by row), its size, its

@@ -4,14 +4,15 @@
 //! sRGB decoded to linear), metalness and roughness (factors times the texture's blue and green),
 //! occlusion (its texture's red, by `strength`), emission (`emissiveFactor` times
 //! KHR_materials_emissive_strength times the emissive texture), KHR_materials_transmission,
-//! KHR_materials_ior, KHR_materials_specular's factors and KHR_materials_unlit. Every map may carry a
+//! KHR_materials_ior, KHR_materials_volume, KHR_materials_specular's factors and
+//! KHR_materials_unlit. Every map may carry a
 //! KHR_texture_transform, on TEXCOORD_0 or TEXCOORD_1; normal maps; the alpha mode, cutoff and
 //! sides. What is not read yet is named in one notice each: maps on TEXCOORD_2 and above, the
 //! specular extension's textures.
 
 use super::data::{Files, MAX_IMAGE_BYTES, read_uri, view_bytes};
 use crate::scene::texture::{MAX_DECODED_TEXELS, MAX_TEXELS, MAX_TEXTURE_SIDE, shrink_to_fit};
-use crate::scene::{AlphaMode, Material, Pbr, Texture, TextureMap, TextureTransform, Wrap};
+use crate::scene::{AlphaMode, Material, Pbr, Texture, TextureMap, TextureTransform, Volume, Wrap};
 use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
 use std::collections::{BTreeSet, HashMap};
@@ -43,6 +44,18 @@ impl<'a> MapInfo<'a> {
 }
 
 const TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
+
+/// The [`MapInfo`] of an occlusion or normal texture, which gltf gives types of their own with
+/// textureInfo's methods.
+macro_rules! map_info {
+    ($info:expr) => {
+        MapInfo {
+            texture: $info.texture(),
+            tex_coord: $info.tex_coord(),
+            transform: $info.extension_value(TEXTURE_TRANSFORM),
+        }
+    };
+}
 
 /// The document's materials and the textures they use, built once each.
 pub struct Materials {
@@ -122,25 +135,9 @@ impl Materials {
             self,
         )?;
         let occlusion = material.occlusion_texture();
-        let occlusion_map = map(
-            occlusion.as_ref().map(|o| MapInfo {
-                texture: o.texture(),
-                tex_coord: o.tex_coord(),
-                transform: o.extension_value(TEXTURE_TRANSFORM),
-            }),
-            Encoding::Data,
-            self,
-        )?;
+        let occlusion_map = map(occlusion.as_ref().map(|o| map_info!(o)), Encoding::Data, self)?;
         let normal = material.normal_texture();
-        let normal_map = map(
-            normal.as_ref().map(|n| MapInfo {
-                texture: n.texture(),
-                tex_coord: n.tex_coord(),
-                transform: n.extension_value(TEXTURE_TRANSFORM),
-            }),
-            Encoding::Data,
-            self,
-        )?;
+        let normal_map = map(normal.as_ref().map(|n| map_info!(n)), Encoding::Data, self)?;
         let specular = material.specular();
         if specular
             .as_ref()
@@ -172,6 +169,15 @@ impl Materials {
                 emissive_texture: emissive,
                 normal_texture: normal_map,
                 normal_scale: normal.as_ref().map_or(1.0, |n| n.scale()),
+                // A thickness of 0 is the extension's thin wall; a ray tracer measures the
+                // rest from the geometry, so the thickness's value and map are not read.
+                volume: material
+                    .volume()
+                    .filter(|v| v.thickness_factor() > 0.0)
+                    .map(|v| Volume {
+                        attenuation_color: Vec3::from(v.attenuation_color()),
+                        attenuation_distance: v.attenuation_distance(),
+                    }),
                 unlit: material.unlit(),
             }),
             alpha: alpha.clamp(0.0, 1.0),
