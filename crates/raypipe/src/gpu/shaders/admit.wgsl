@@ -18,21 +18,23 @@ fn triangle_stops_ray(i: u32, ray: Ray) -> bool {
     if (flags == 0u) {
         return true;
     }
-    if ((flags & TRIANGLE_SINGLE_SIDED) != 0u && ray_culls_back_faces) {
+    // The preamble's HAS_* constants keep what the scene does not use out of the walks: software
+    // rasterizers (SwiftShader under WebGL2) pay for every line of a walk's inner loop.
+    if (HAS_ONE_SIDED && (flags & TRIANGLE_SINGLE_SIDED) != 0u && ray_culls_back_faces) {
         let normal = normalize_scaled(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
         if (dot(normal, ray.dir) >= 0.0) {
             return false;
         }
     }
-    if ((flags & (TRIANGLE_ALPHA_MASK | TRIANGLE_ALPHA_BLEND)) == 0u) {
+    if (!(HAS_ALPHA_MASK || HAS_ALPHA_BLEND) || (flags & (TRIANGLE_ALPHA_MASK | TRIANGLE_ALPHA_BLEND)) == 0u) {
         return true;
     }
     let material = load_material(triangle.material & MATERIAL_INDEX_MASK);
     let alpha = surface_alpha(material, triangle_attributes(triangle, ray));
-    if ((flags & TRIANGLE_ALPHA_MASK) != 0u) {
+    if (HAS_ALPHA_MASK && (flags & TRIANGLE_ALPHA_MASK) != 0u) {
         return alpha >= material.alpha_cutoff;
     }
-    if (!ray_is_shadow) {
+    if (!HAS_ALPHA_BLEND || !ray_is_shadow) {
         return true;
     }
     shadow_light *= 1.0 - alpha;
