@@ -231,7 +231,7 @@ fn gltf_materials_match_the_cpu(ctx: &GpuContext) {
     // The quads (double-sided: the camera sees their backs) and the cube show in an eighth of the
     // view and more (the mirror shows much of the background): the glass shows the red quad
     // behind it, and the mirror the scene before it.
-    let background = glam::Vec3::from(scene.settings.background);
+    let background = scene.settings.background;
     let hit = frame
         .color
         .iter()
