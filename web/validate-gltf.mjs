@@ -1,5 +1,6 @@
 // The Khronos glTF-Validator (npm gltf-validator) over files named on the command line: one line
-// per file with its error and warning counts, and each error's code, message and JSON pointer.
+// per file with its error and warning counts, then each error's and warning's severity, code,
+// message and JSON pointer.
 // Exits 1 where any file has an error, 2 where a file cannot be read. The Rust tests run it on
 // every glTF file they generate, so that they test glTF, not a dialect of raypipe's own.
 //   node web/validate-gltf.mjs a.gltf b.glb ...
@@ -29,7 +30,8 @@ for (const file of process.argv.slice(2)) {
   const { numErrors, numWarnings } = report.issues;
   console.log(`${file}: ${numErrors} errors, ${numWarnings} warnings`);
   for (const issue of report.issues.messages) {
-    if (issue.severity === 0) console.log(`  ${issue.code}: ${issue.message} (${issue.pointer ?? ""})`);
+    const severity = ["error", "warning"][issue.severity];
+    if (severity) console.log(`  ${severity} ${issue.code}: ${issue.message} (${issue.pointer ?? ""})`);
   }
   failed ||= numErrors > 0;
 }

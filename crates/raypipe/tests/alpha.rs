@@ -4,13 +4,16 @@
 //! opaque or double-sided and checks that the answer changes, so that it fails where the feature is
 //! broken. The GPU matches the CPU on these scenes in tests/gpu/gltf.rs.
 
+mod common;
+
+use common::quad_triangles;
 use glam::{Vec2, Vec3};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::intersect::Ray;
 use raypipe::cpu::trace::{PixelTrace, Tracer};
 use raypipe::modes::Accel;
 use raypipe::records::PackedScene;
-use raypipe::scene::{AlphaMode, Camera, Light, LightKind, Material, RenderSettings, Scene, Texture, Triangle, Wrap};
+use raypipe::scene::{AlphaMode, Camera, Light, LightKind, Material, RenderSettings, Scene, Texture, Wrap};
 
 /// Irradiance of the light at normal incidence (lux: the light is directional).
 const E: f32 = 2.0;
@@ -28,20 +31,7 @@ fn quad_over_floor(quad: Material, texels: [[f32; 4]; 2], facing_up: bool) -> Sc
         [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(x, y)| Vec3::new(x * size, y * size, z))
     };
     let uv = |p: Vec3| Vec2::new((p.x + 1.0) / 2.0, (1.0 - p.y) / 2.0);
-    let triangles = |corners: [Vec3; 4], material: u32, up: bool| {
-        let order = if up {
-            [[0, 1, 2], [0, 2, 3]]
-        } else {
-            [[0, 2, 1], [0, 3, 2]]
-        };
-        order.map(|[a, b, c]| Triangle {
-            vertices: [corners[a], corners[b], corners[c]],
-            normals: None,
-            uvs: Some([uv(corners[a]), uv(corners[b]), uv(corners[c])]),
-            material,
-            ..Default::default()
-        })
-    };
+    let triangles = |corners, material, up| quad_triangles(corners, material, up, Some(&uv));
     let floor = Material {
         color: Vec3::ONE,
         ..Material::default()

@@ -788,8 +788,21 @@ fn generated_files_pass_the_khronos_validator(root: &std::path::Path) {
         String::from_utf8_lossy(&output.stderr)
     );
     assert_eq!(
-        report.lines().filter(|l| l.ends_with("0 errors, 0 warnings")).count(),
+        report
+            .lines()
+            .filter(|l| l.ends_with(": 0 errors, 0 warnings") || l.ends_with(": 0 errors, 1 warnings"))
+            .count(),
         files.len(),
+        "{report}"
+    );
+    // The one warning allowed: the attribute quad's normal map on a primitive without TANGENT,
+    // which the specification answers with MikkTSpace tangents (the case that file tests).
+    let warnings: Vec<&str> = report.lines().filter(|l| l.starts_with("  warning ")).collect();
+    assert_eq!(warnings.len(), 3, "{report}");
+    assert!(
+        warnings
+            .iter()
+            .all(|l| l.starts_with("  warning MESH_PRIMITIVE_GENERATED_TANGENT_SPACE:")),
         "{report}"
     );
 }

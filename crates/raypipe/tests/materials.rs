@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::render_cpu;
+use common::{quad_triangles, render_cpu};
 use glam::{Quat, Vec2, Vec3};
 use raypipe::modes::Accel;
 use raypipe::records::PackedScene;
@@ -23,16 +23,7 @@ const SIZE: u32 = 9;
 /// ambient light, a black background and no bounces: a pixel is direct light alone.
 fn plane_scene(material: Material, lights: Vec<Light>) -> Scene {
     let corners = [(-50.0, -50.0), (50.0, -50.0), (50.0, 50.0), (-50.0, 50.0)].map(|(x, y)| Vec3::new(x, y, 0.0));
-    let uv = |p: Vec3| Vec2::new(p.x, p.y);
-    let triangles = [[0, 1, 2], [0, 2, 3]]
-        .map(|[a, b, c]| Triangle {
-            vertices: [corners[a], corners[b], corners[c]],
-            normals: None,
-            uvs: Some([uv(corners[a]), uv(corners[b]), uv(corners[c])]),
-            material: 0,
-            ..Default::default()
-        })
-        .to_vec();
+    let triangles = quad_triangles(corners, 0, true, Some(&|p: Vec3| Vec2::new(p.x, p.y))).to_vec();
     Scene {
         camera: Camera {
             eye: Vec3::new(0.0, 0.0, 5.0),
@@ -419,16 +410,7 @@ fn a_volume_refracts_at_its_surfaces_and_absorbs_by_beer_lambert() {
     // thin wall it would go straight on to x = 6: green.
     let quad = |x0: f32, x1: f32, z: f32, up: bool, material: u32| {
         let corners = [(x0, -50.0), (x1, -50.0), (x1, 50.0), (x0, 50.0)].map(|(x, y)| Vec3::new(x, y, z));
-        let order = if up {
-            [[0, 1, 2], [0, 2, 3]]
-        } else {
-            [[0, 2, 1], [0, 3, 2]]
-        };
-        order.map(|[a, b, c]| Triangle {
-            vertices: [corners[a], corners[b], corners[c]],
-            material,
-            ..Default::default()
-        })
+        quad_triangles(corners, material, up, None)
     };
     let unlit = |color: Vec3| {
         let mut material = gltf_material(color, 0.0, 1.0);
@@ -452,24 +434,11 @@ fn a_volume_refracts_at_its_surfaces_and_absorbs_by_beer_lambert() {
         ] {
             triangles.extend(part);
         }
-        let scene = Scene {
-            camera: Camera {
-                eye: Vec3::new(0.0, 0.0, 5.0),
-                target: Vec3::ZERO,
-                up: Vec3::Y,
-                fov_degrees: 20.0,
-            },
-            settings: RenderSettings {
-                width: 8,
-                height: 8,
-                max_depth: 5,
-                background: Vec3::ZERO,
-                ambient: 0.0,
-            },
-            materials: vec![glass, unlit(Vec3::X), unlit(Vec3::Y)],
-            triangles,
-            ..Scene::default()
-        };
+        // The plane scene's camera and settings, with the slab and floors, and bounces.
+        let mut scene = plane_scene(glass, Vec::new());
+        scene.settings.max_depth = 5;
+        scene.materials.extend([unlit(Vec3::X), unlit(Vec3::Y)]);
+        scene.triangles = triangles;
         let mut packed = PackedScene::new(&scene).unwrap();
         packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
         let dir = Vec3::new(1.0, 0.0, -1.0).normalize();

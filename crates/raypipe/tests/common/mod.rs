@@ -40,6 +40,31 @@ pub fn whitted_with_quad(width: u32, height: u32) -> Scene {
     scene
 }
 
+/// Two triangles over the quad `corners` (counter-clockwise seen from the side it faces when
+/// `facing_front`; wound the other way round otherwise), in `material`, with texture coordinates
+/// from `uv` where given.
+pub fn quad_triangles(
+    corners: [glam::Vec3; 4],
+    material: u32,
+    facing_front: bool,
+    uv: Option<&dyn Fn(glam::Vec3) -> glam::Vec2>,
+) -> [raypipe::scene::Triangle; 2] {
+    let order = if facing_front {
+        [[0, 1, 2], [0, 2, 3]]
+    } else {
+        [[0, 2, 1], [0, 3, 2]]
+    };
+    order.map(|[a, b, c]| {
+        let vertices = [corners[a], corners[b], corners[c]];
+        raypipe::scene::Triangle {
+            vertices,
+            uvs: uv.map(|uv| vertices.map(uv)),
+            material,
+            ..Default::default()
+        }
+    })
+}
+
 /// A scene at a test size and depth, packed.
 pub fn packed(spec: &str, width: u32, height: u32, max_depth: u32) -> PackedScene {
     let mut scene = Scene::load(spec).unwrap();
