@@ -320,6 +320,18 @@ fn colours_second_coordinates_and_tangents_are_read() {
     assert_eq!(material.texture.unwrap().tex_coord, 1);
     let pbr = material.pbr.unwrap();
     assert_eq!((pbr.normal_texture.unwrap().tex_coord, pbr.normal_scale), (0, 0.8));
+    // One image for KHR_materials_specular's two maps: its alpha read as data for the strength,
+    // its colour decoded from sRGB for the colour.
+    let [strength, colour] = [pbr.specular_texture, pbr.specular_color_texture].map(Option::unwrap);
+    assert_eq!((strength.tex_coord, colour.tex_coord), (0, 1));
+    // Texels are half floats.
+    let alpha = file.textures[strength.texture as usize].texel(0, 0)[3];
+    assert!((alpha - 64.0 / 255.0).abs() < 1e-3, "{alpha}");
+    let [r, g, b, _] = file.textures[colour.texture as usize].texel(0, 0);
+    let srgb = |c: f32| ((c / 255.0 + 0.055) / 1.055).powf(2.4);
+    for (got, byte) in [(r, 188.0), (g, 255.0), (b, 128.0)] {
+        assert!((got - srgb(byte)).abs() < 1e-3, "{got} against {}", srgb(byte));
+    }
     // MikkTSpace's tangents: along +x (u) with v running down the image (quad's UVs), so the
     // bitangent's sign is -1.
     let tangents = primitive.tangents.as_ref().unwrap();

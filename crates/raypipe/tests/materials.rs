@@ -77,6 +77,20 @@ fn point(position: Vec3, candela: f32, range: Option<f32>) -> Light {
 /// The glTF BRDF (the specification's Appendix B) for n = v = +z, written out in f64:
 /// f = (1 - metallic) [(1 - F) c / pi + F D V] + metallic [F_metal D V].
 fn brdf_formula(base: [f64; 3], metallic: f64, roughness: f64, l: [f64; 3]) -> [f64; 3] {
+    brdf_with_specular(base, metallic, roughness, 1.0, [1.0; 3], l)
+}
+
+/// `brdf_formula` with KHR_materials_specular's strength and colour: the dielectric's Fresnel
+/// term is F = strength (F0 + (1 - F0) (1 - v.h)^5) with F0 = min(0.04 colour, 1), and its diffuse
+/// part keeps 1 - max(F).
+fn brdf_with_specular(
+    base: [f64; 3],
+    metallic: f64,
+    roughness: f64,
+    strength: f64,
+    colour: [f64; 3],
+    l: [f64; 3],
+) -> [f64; 3] {
     let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
     let l = l.map(|c| c / norm);
     let (n_dot_l, n_dot_v) = (l[2], 1.0);
@@ -90,11 +104,13 @@ fn brdf_formula(base: [f64; 3], metallic: f64, roughness: f64, l: [f64; 3]) -> [
     let vis = 0.5
         / (n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt()
             + n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt());
-    let f0 = 0.04; // ((1.5 - 1) / (1.5 + 1))^2
     let schlick = |f0: f64| f0 + (1.0 - f0) * (1.0 - v_dot_h).powi(5);
-    base.map(|c| {
-        let dielectric = (1.0 - schlick(f0)) * c / PI + schlick(f0) * d * vis;
-        let metal = schlick(c) * d * vis;
+    // F0 = ((1.5 - 1) / (1.5 + 1))^2 = 0.04, tinted.
+    let fresnel = colour.map(|c| strength * schlick((0.04 * c).min(1.0)));
+    let max_fresnel = fresnel.iter().copied().fold(0.0, f64::max);
+    std::array::from_fn(|i| {
+        let dielectric = (1.0 - max_fresnel) * base[i] / PI + fresnel[i] * d * vis;
+        let metal = schlick(base[i]) * d * vis;
         (1.0 - metallic) * dielectric + metallic * metal
     })
 }
@@ -128,6 +144,35 @@ fn a_lit_plane_shows_the_gltf_brdf_for_dielectrics_metals_and_mixes() {
         let expected = f.map(|f| candela as f64 / d2 * cos * f);
         assert_close(got, expected, &format!("metallic {metallic}, roughness {roughness}"));
     }
+}
+
+#[test]
+fn the_specular_maps_scale_the_dielectric_layer() {
+    // KHR_materials_specular's strength factor 0.8 times its texture's alpha 0.5, and its colour
+    // factor (4, 2, 1) times its texture's (0.5, 1, 0.25): strength 0.4, colour (2, 2, 0.25).
+    let light_at = Vec3::new(1.5, 0.5, 2.0);
+    let candela = 12.0;
+    let base = [0.8, 0.4, 0.2];
+    let mut material = gltf_material(Vec3::from_array(base.map(|c| c as f32)), 0.0, 0.5);
+    let pbr = material.pbr.as_mut().unwrap();
+    pbr.specular_factor = 0.8;
+    pbr.specular_color = Vec3::new(4.0, 2.0, 1.0);
+    pbr.specular_texture = Some(TextureMap::plain(0));
+    pbr.specular_color_texture = Some(TextureMap::plain(1));
+    let mut scene = plane_scene(material, vec![point(light_at, candela, None)]);
+    scene.textures = vec![
+        Texture::from_linear(1, 1, &[[1.0, 1.0, 1.0, 0.5]], [Wrap::Repeat; 2]),
+        Texture::from_linear(1, 1, &[[0.5, 1.0, 0.25, 1.0]], [Wrap::Repeat; 2]),
+    ];
+    let irradiance = candela as f64 / light_at.length_squared() as f64 * (light_at.z / light_at.length()) as f64;
+    let l = light_at.to_array().map(|c| c as f64);
+    let f = brdf_with_specular(base, 0.0, 0.5, 0.4, [2.0, 2.0, 0.25], l);
+    assert_close(centre(&scene), f.map(|f| irradiance * f), "both maps");
+    // Without the maps the layer is the factors' alone.
+    let pbr = scene.materials[0].pbr.as_mut().unwrap();
+    (pbr.specular_texture, pbr.specular_color_texture) = (None, None);
+    let f = brdf_with_specular(base, 0.0, 0.5, 0.8, [4.0, 2.0, 1.0], l);
+    assert_close(centre(&scene), f.map(|f| irradiance * f), "the factors");
 }
 
 #[test]

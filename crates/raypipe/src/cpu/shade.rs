@@ -95,7 +95,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
 
 /// The surface's material, its vertex colour and maps applied at the hit (`surface_material`): the
 /// base colour's (alpha too, as `surface_alpha` computes it), and a glTF material's metalness and
-/// roughness (blue and green) and emission.
+/// roughness (blue and green), emission, and specular strength (alpha) and colour.
 pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
     let mut material = scene.materials[surface.material as usize];
     let a = &surface.attributes;
@@ -117,6 +117,12 @@ pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
         }
         if let Some(texel) = sample_map(scene, material.emissive_map, a) {
             material.emission = (v3(material.emission) * texel.truncate()).to_array();
+        }
+        if let Some(texel) = sample_map(scene, material.specular_map, a) {
+            material.specular_factor *= texel.w;
+        }
+        if let Some(texel) = sample_map(scene, material.specular_color_map, a) {
+            material.specular_color = (v3(material.specular_color) * texel.truncate()).to_array();
         }
     }
     material

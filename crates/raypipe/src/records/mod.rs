@@ -280,6 +280,11 @@ pub struct GpuMaterial {
     /// glTF with KHR_materials_volume: 1 where the surface bounds a volume (rays refract across
     /// it), 0 for a thin wall.
     pub volume: u32,
+    /// KHR_materials_specular's maps (indices into the texture maps, or `NONE`): the strength's
+    /// (alpha) and the colour's (RGB).
+    pub specular_map: u32,
+    pub specular_color_map: u32,
+    pub _pad1: [u32; 2],
 }
 
 /// A texture as a material maps it (`scene::TextureMap`): where its texels are and how texture
@@ -340,7 +345,7 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuMaterial, "Material", [
         color, specular, shininess, reflect, transmit, ior, emission, model, specular_color, metallic, roughness,
         specular_factor, occlusion_strength, base_map, metallic_roughness_map, occlusion_map, emissive_map, alpha,
-        alpha_cutoff, normal_map, normal_scale, absorption, volume,
+        alpha_cutoff, normal_map, normal_scale, absorption, volume, specular_map, specular_color_map,
     ]),
     struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, tex_coord, transform_v]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),

@@ -496,6 +496,9 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, Textu
                 _pad: 0,
                 absorption: pbr.volume.map_or(Vec3::ZERO, |v| v.absorption()).to_array(),
                 volume: pbr.volume.is_some() as u32,
+                specular_map: map_index(pbr.specular_texture),
+                specular_color_map: map_index(pbr.specular_color_texture),
+                _pad1: [0; 2],
                 alpha: m.alpha,
                 alpha_cutoff: match m.alpha_mode {
                     AlphaMode::Mask { cutoff } => cutoff,

@@ -151,6 +151,12 @@ impl GpuRecord for GpuMaterial {
         ]));
         let [ar, ag, ab] = self.absorption;
         out.push(floats([ar, ag, ab, self.volume as f32]));
+        out.push(floats([
+            link_texel(self.specular_map),
+            link_texel(self.specular_color_map),
+            0.0,
+            0.0,
+        ]));
     }
 }
 

@@ -103,6 +103,8 @@ impl Material {
                 occlusion_texture: shift(p.occlusion_texture),
                 emissive_texture: shift(p.emissive_texture),
                 normal_texture: shift(p.normal_texture),
+                specular_texture: shift(p.specular_texture),
+                specular_color_texture: shift(p.specular_color_texture),
                 ..p
             }),
             ..*self
@@ -124,6 +126,10 @@ pub struct Pbr {
     /// KHR_materials_specular's `specularColorFactor`, which tints a dielectric's reflectance at
     /// normal incidence (white without the extension).
     pub specular_color: Vec3,
+    /// Linear data: alpha multiplies `specular_factor`.
+    pub specular_texture: Option<TextureMap>,
+    /// sRGB colour multiplying `specular_color`.
+    pub specular_color_texture: Option<TextureMap>,
     /// Linear data: blue multiplies `metallic`, green `roughness`.
     pub metallic_roughness_texture: Option<TextureMap>,
     /// Linear data: red is the share of ambient light that reaches the surface.
@@ -153,6 +159,8 @@ impl Default for Pbr {
             roughness: 1.0,
             specular_factor: 1.0,
             specular_color: Vec3::ONE,
+            specular_texture: None,
+            specular_color_texture: None,
             metallic_roughness_texture: None,
             occlusion_texture: None,
             occlusion_strength: 1.0,
@@ -167,12 +175,14 @@ impl Default for Pbr {
 
 impl Pbr {
     /// The textures the material reads besides its base colour's.
-    pub fn maps(&self) -> [Option<TextureMap>; 4] {
+    pub fn maps(&self) -> [Option<TextureMap>; 6] {
         [
             self.metallic_roughness_texture,
             self.occlusion_texture,
             self.emissive_texture,
             self.normal_texture,
+            self.specular_texture,
+            self.specular_color_texture,
         ]
     }
 }
@@ -266,7 +276,7 @@ pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<()
     if !(m.emission.is_finite() && m.emission.min_element() >= 0.0) {
         return Err("emission must be finite and not negative".into());
     }
-    let maps = m.pbr.as_ref().map_or([None; 4], Pbr::maps);
+    let maps = m.pbr.as_ref().map(Pbr::maps).unwrap_or_default();
     for map in std::iter::once(m.texture).chain(maps).flatten() {
         if map.texture as usize >= texture_count {
             return Err(format!(

@@ -455,9 +455,15 @@ pub fn attribute_quad() -> GltfBuilder {
     let mut b = GltfBuilder::default();
     let checker = b.texture(CHECKER.as_flattened(), 2, 2, [REPEAT; 2]);
     let tilt = b.texture(&[128, 200, 230, 255], 1, 1, [REPEAT; 2]);
+    // KHR_materials_specular's strength (alpha, linear) and colour (RGB, sRGB) in one image.
+    let shine = b.texture(&[188, 255, 128, 64], 1, 1, [REPEAT; 2]);
     let material = b.material(json!({
         "pbrMetallicRoughness": { "baseColorTexture": { "index": checker, "texCoord": 1 }, "metallicFactor": 0, "roughnessFactor": 0.5 },
         "normalTexture": { "index": tilt, "scale": 0.8 },
+        "extensions": { "KHR_materials_specular": {
+            "specularFactor": 0.9, "specularTexture": { "index": shine },
+            "specularColorFactor": [1, 0.8, 0.6], "specularColorTexture": { "index": shine, "texCoord": 1 },
+        } },
     }));
     let (positions, uvs, indices) = quad(1.0);
     let mesh = b.mesh(&positions, Some(&uvs), &indices, Some(material));
@@ -479,6 +485,6 @@ pub fn attribute_quad() -> GltfBuilder {
     let light =
         b.node(json!({ "translation": [1.2, 1.4, 0.8], "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
     b.roots.extend([camera, light]);
-    b.extensions_used = vec!["KHR_lights_punctual"];
+    b.extensions_used = vec!["KHR_lights_punctual", "KHR_materials_specular"];
     b
 }

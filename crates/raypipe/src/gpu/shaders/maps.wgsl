@@ -84,13 +84,13 @@ fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
 
 // The materials' records and then the texture maps', texel by texel in one array (its binding is
 // `shading`): MATERIAL_TEXELS and TEXTURE_MAP_TEXELS texels each.
-const MATERIAL_TEXELS: u32 = 8u;
+const MATERIAL_TEXELS: u32 = 9u;
 const TEXTURE_MAP_TEXELS: u32 = 3u;
 
 fn load_material(i: u32) -> Material {
     let b = i * MATERIAL_TEXELS;
     return material_from_texels(load_shading(b), load_shading(b + 1u), load_shading(b + 2u), load_shading(b + 3u),
-        load_shading(b + 4u), load_shading(b + 5u), load_shading(b + 6u), load_shading(b + 7u));
+        load_shading(b + 4u), load_shading(b + 5u), load_shading(b + 6u), load_shading(b + 7u), load_shading(b + 8u));
 }
 
 fn load_texture_map(i: u32) -> TextureMap {

@@ -76,7 +76,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
 
 // The surface's material, its vertex colour and maps applied at the hit: the base colour's (alpha
 // too, as surface_alpha computes it), and a glTF material's metalness and roughness (blue and
-// green) and emission.
+// green), emission, and specular strength (alpha) and colour.
 fn surface_material(surface: Surface) -> Material {
     var material = load_material(surface.material);
     let a = surface.attributes;
@@ -100,6 +100,12 @@ fn surface_material(surface: Surface) -> Material {
         }
         if (material.emissive_map != NONE) {
             material.emission *= sample_map(material.emissive_map, a).rgb;
+        }
+        if (material.specular_map != NONE) {
+            material.specular_factor *= sample_map(material.specular_map, a).a;
+        }
+        if (material.specular_color_map != NONE) {
+            material.specular_color *= sample_map(material.specular_color_map, a).rgb;
         }
     }
     return material;

@@ -37,10 +37,10 @@ fn shading_from_texels(t0: vec4<f32>) -> vec4<f32> {
     return t0;
 }
 
-fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>, t4: vec4<f32>, t5: vec4<f32>, t6: vec4<f32>, t7: vec4<f32>) -> Material {
+fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32>, t4: vec4<f32>, t5: vec4<f32>, t6: vec4<f32>, t7: vec4<f32>, t8: vec4<f32>) -> Material {
     return Material(t0.xyz, t0.w, t1.x, t1.y, t1.z, t1.w, t2.xyz, u32(t2.w), t3.xyz, t3.w, t4.x, t4.y, t4.z,
         link_from_texel(t4.w), link_from_texel(t5.x), link_from_texel(t5.y), link_from_texel(t5.z), t5.w, t6.x,
-        link_from_texel(t6.y), t6.z, t7.xyz, u32(t7.w));
+        link_from_texel(t6.y), t6.z, t7.xyz, u32(t7.w), link_from_texel(t8.x), link_from_texel(t8.y));
 }
 
 fn texture_map_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> TextureMap {

@@ -116,6 +116,9 @@ struct Material {
     // (KHR_materials_volume), 0 for a thin wall.
     absorption: vec3<f32>,
     volume: u32,
+    // KHR_materials_specular's maps (texture map indices, or NONE): strength (alpha), colour (RGB).
+    specular_map: u32,
+    specular_color_map: u32,
 }
 
 // A texture as a material maps it: its first texel among all textures' (row by row), its size, its

@@ -4,11 +4,10 @@
 //! sRGB decoded to linear), metalness and roughness (factors times the texture's blue and green),
 //! occlusion (its texture's red, by `strength`), emission (`emissiveFactor` times
 //! KHR_materials_emissive_strength times the emissive texture), KHR_materials_transmission,
-//! KHR_materials_ior, KHR_materials_volume, KHR_materials_specular's factors and
-//! KHR_materials_unlit. Every map may carry a
+//! KHR_materials_ior, KHR_materials_volume, KHR_materials_specular (factors times the strength
+//! texture's alpha and the colour texture's RGB) and KHR_materials_unlit. Every map may carry a
 //! KHR_texture_transform, on TEXCOORD_0 or TEXCOORD_1; normal maps; the alpha mode, cutoff and
-//! sides. What is not read yet is named in one notice each: maps on TEXCOORD_2 and above, the
-//! specular extension's textures.
+//! sides. What is not read yet is named in one notice: maps on TEXCOORD_2 and above.
 
 use super::data::{Files, MAX_IMAGE_BYTES, read_uri, view_bytes};
 use crate::scene::texture::{MAX_DECODED_TEXELS, MAX_TEXELS, MAX_TEXTURE_SIDE, shrink_to_fit};
@@ -139,13 +138,24 @@ impl Materials {
         let normal = material.normal_texture();
         let normal_map = map(normal.as_ref().map(|n| map_info!(n)), Encoding::Data, self)?;
         let specular = material.specular();
-        if specular
-            .as_ref()
-            .is_some_and(|s| s.specular_texture().is_some() || s.specular_color_texture().is_some())
-        {
-            self.left_out
-                .insert("KHR_materials_specular's textures are not applied (its factors are)");
-        }
+        let specular_map = map(
+            specular
+                .as_ref()
+                .and_then(|s| s.specular_texture())
+                .as_ref()
+                .map(MapInfo::of),
+            Encoding::Data,
+            self,
+        )?;
+        let specular_color_map = map(
+            specular
+                .as_ref()
+                .and_then(|s| s.specular_color_texture())
+                .as_ref()
+                .map(MapInfo::of),
+            Encoding::Srgb,
+            self,
+        )?;
         let emission = Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
         Ok(Material {
             color: Vec3::new(r, g, b),
@@ -163,6 +173,8 @@ impl Materials {
                 specular_color: specular
                     .as_ref()
                     .map_or(Vec3::ONE, |s| Vec3::from(s.specular_color_factor())),
+                specular_texture: specular_map,
+                specular_color_texture: specular_color_map,
                 metallic_roughness_texture: metallic_roughness,
                 occlusion_texture: occlusion_map,
                 occlusion_strength: occlusion.as_ref().map_or(1.0, |o| o.strength()).clamp(0.0, 1.0),
