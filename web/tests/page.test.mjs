@@ -250,6 +250,17 @@ for (const backend of ["webgpu", "webgl2"]) {
       const shot = await screenshot(page, `${backend}-box-textured`);
       assertSimilar(shot, fileReference(BOX_TEXTURED, size.width, size.height));
 
+      // The tone map and exposure controls: the display pass shows what `render --tonemap
+      // --exposure` writes, without tracing again.
+      await page.selectOption("select[data-key=tonemap]", "aces");
+      const exposure = page.locator("input[data-key=exposure]");
+      await exposure.fill("1");
+      await exposure.dispatchEvent("change");
+      const toned = await until(page, (s) => s.tonemap === "aces" && s.exposure === 1, "the tone map and exposure");
+      await until(page, (s, frames) => s.frames >= frames, "a tone-mapped frame", { arg: toned.frames + 2 });
+      const tonedShot = await screenshot(page, `${backend}-box-textured-aces`);
+      assertSimilar(tonedShot, fileReference(BOX_TEXTURED, size.width, size.height, ["--tonemap", "aces", "--exposure", "1"]));
+
       const glb = Buffer.from("glTF\x02\x00\x00\x00\xff\x00\x00\x00", "latin1");
       await page.setInputFiles("#file", { name: "cut.glb", mimeType: "model/gltf-binary", buffer: glb });
       const broken = await until(page, (s) => s.error != null, "the cut file's error", { timeout: 30_000 });

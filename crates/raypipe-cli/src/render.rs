@@ -152,7 +152,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         .then(|| packed.build_bvh_with(args.scene.builder, MortonBits::default()));
     let outcome = render(&packed, &options).map_err(|e| e.context(args.scene.spec.clone()))?;
     let frame = &outcome.frame;
-    io::write_as(&aov_image(args.scene.aov, is_exr, frame), &output, is_exr)?;
+    io::write_as(
+        &aov_image(args.scene.aov, is_exr, frame, &args.scene.display_transform()),
+        &output,
+        is_exr,
+    )?;
     if !args.quiet {
         eprintln!(
             "wrote {} ({}x{}, {} samples per pixel, {})",
@@ -305,9 +309,17 @@ fn render_sequence(
     let outcome = render_frames(scene, options, times, |frame, image| {
         if pattern {
             let path = numbered(&name, frame).expect("checked above");
-            io::write_as(&aov_image(args.scene.aov, is_exr, image), Path::new(&path), is_exr)?;
+            io::write_as(
+                &aov_image(args.scene.aov, is_exr, image, &args.scene.display_transform()),
+                Path::new(&path),
+                is_exr,
+            )?;
         } else if Some(frame) == last {
-            io::write_as(&aov_image(args.scene.aov, is_exr, image), output, is_exr)?;
+            io::write_as(
+                &aov_image(args.scene.aov, is_exr, image, &args.scene.display_transform()),
+                output,
+                is_exr,
+            )?;
         }
         Ok(())
     })

@@ -5,6 +5,7 @@ use crate::args::choice;
 use anyhow::bail;
 use clap::Args;
 use raypipe::gpu::Backend;
+use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE, ToneMap};
 use raypipe::image::{FloatImage, Frame, heatmap};
 use raypipe::modes::{Accel, Aov, Builder, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
@@ -74,6 +75,14 @@ pub struct SceneArgs {
     /// BVH nodes each primary ray tested, with a legend; PNG only).
     #[arg(long, value_parser = choice::<Aov>(), default_value_t)]
     pub aov: Aov,
+    /// Exposure in stops: radiance is multiplied by 2^EV before the tone map (and in EXR colour,
+    /// which takes no tone map).
+    #[arg(long, value_name = "EV", default_value_t = 0.0, value_parser = parse_exposure, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// How exposed radiance is brought into [0, 1] for PNG and the window: clipped (none), Khronos
+    /// PBR Neutral, or ACES filmic.
+    #[arg(long, value_parser = choice::<ToneMap>(), default_value_t)]
+    pub tonemap: ToneMap,
     /// With a glTF that has animations: the one that plays, by name or index (default the first).
     #[arg(long, value_name = "NAME|INDEX")]
     pub animation: Option<String>,
@@ -191,10 +200,32 @@ fn parse_three(text: &str, allowed: fn(f32) -> bool, expected: &str) -> Result<g
     }
 }
 
-pub fn aov_image(aov: Aov, is_exr: bool, frame: &Frame) -> FloatImage {
+/// An exposure in stops: finite, within ±MAX_EXPOSURE.
+fn parse_exposure(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(ev) if ev.is_finite() && ev.abs() <= MAX_EXPOSURE => Ok(ev),
+        _ => Err(format!(
+            "'{text}' is not an exposure: a number of stops within -{MAX_EXPOSURE} to {MAX_EXPOSURE}"
+        )),
+    }
+}
+
+impl SceneArgs {
+    /// What PNG output and the window apply to colour: `--exposure` and `--tonemap`.
+    pub fn display_transform(&self) -> DisplayTransform {
+        DisplayTransform {
+            exposure: self.exposure,
+            tone_map: self.tonemap,
+        }
+    }
+}
+
+/// The image `aov` makes of `frame`: colour through `transform` into a PNG, or exposed linear
+/// radiance into an EXR.
+pub fn aov_image(aov: Aov, is_exr: bool, frame: &Frame, transform: &DisplayTransform) -> FloatImage {
     match (aov, is_exr) {
-        (Aov::Color, false) => frame.display(),
-        (Aov::Color, true) => frame.radiance(),
+        (Aov::Color, false) => frame.display_with(transform),
+        (Aov::Color, true) => frame.exposed_radiance(transform.exposure),
         (Aov::Depth, _) => frame.depth(),
         (Aov::Normal, _) => frame.normals(),
         (Aov::Cost, _) => heatmap::heatmap(&frame.counts(), frame.width, frame.height),

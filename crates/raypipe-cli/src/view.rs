@@ -5,6 +5,7 @@ use crate::io;
 use crate::scene_args::{SceneArgs, aov_image, load_scene};
 use clap::Args;
 use raypipe::image::Frame;
+use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::Aov;
 use raypipe::scene::Scene;
 use raypipe::scene::model::ModelOptions;
@@ -62,9 +63,9 @@ impl Host for CliHost {
         load_scene(&spec, &ModelOptions::default()).map_err(|e| host_error(path, &e))
     }
 
-    fn save(&self, frame: &Frame, view: Aov, path: &Path) -> Result<(), HostError> {
+    fn save(&self, frame: &Frame, view: Aov, transform: &DisplayTransform, path: &Path) -> Result<(), HostError> {
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        io::write(&aov_image(view, is_exr, frame), path).map_err(|e| host_error(path, &e))
+        io::write(&aov_image(view, is_exr, frame, transform), path).map_err(|e| host_error(path, &e))
     }
 
     fn screenshot_path(&self, view: Aov) -> PathBuf {
@@ -110,6 +111,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             view: args.scene.aov,
             paused: args.paused,
             vsync: !args.no_vsync,
+            display: args.scene.display_transform(),
         },
         time: match args.scene.time {
             Some(t) => args.scene.scene_time(&scene, t)?,

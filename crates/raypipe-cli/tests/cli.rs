@@ -78,6 +78,70 @@ fn a_good_scene_renders_every_output() {
     }
 }
 
+/// `--exposure` scales the EXR's radiance by 2^EV and nothing more; the PNG is the tone map of
+/// that EXR, sRGB-encoded.
+#[test]
+fn the_png_is_the_tone_map_of_the_exposed_exr() {
+    use raypipe::image::linear_to_srgb;
+    use raypipe::image::tonemap::DisplayTransform;
+    let scene = write("tonemapped.toml", GOOD);
+    let render = |name: &str, extra: &[&str]| {
+        let out = temp(name);
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--device",
+            "cpu",
+            "--width",
+            "40",
+            "--height",
+            "30",
+        ];
+        args.extend(extra);
+        args.extend(["-o", out.to_str().unwrap()]);
+        let output = raypipe(&args);
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        io::read(&out).unwrap()
+    };
+    let plain = render("plain.exr", &[]);
+    let exposed = render("exposed.exr", &["--exposure", "1.5", "--tonemap", "aces"]);
+    let scale = 1.5f32.exp2();
+    for (a, b) in plain.data.iter().zip(&exposed.data) {
+        assert!(
+            (b - a * scale).abs() <= 2e-3 * b.abs().max(1e-3),
+            "{b} is not 2^1.5 x {a}"
+        );
+    }
+    for tone_map in ["none", "neutral", "aces"] {
+        let png = render(
+            &format!("{tone_map}.png"),
+            &["--exposure", "1.5", "--tonemap", tone_map],
+        );
+        let transform = DisplayTransform {
+            exposure: 0.0,
+            tone_map: raypipe::Choice::from_name(tone_map).unwrap(),
+        };
+        // EXR files list their channels by name: B, G, R.
+        let at = |name: &str| exposed.channels.iter().position(|c| c == name).unwrap();
+        let (r, g, b) = (at("R"), at("G"), at("B"));
+        for (i, pixel) in exposed.data.chunks(3).enumerate() {
+            let want = transform.apply([pixel[r], pixel[g], pixel[b]]).map(linear_to_srgb);
+            for c in 0..3 {
+                let (got, want) = (png.data[i * 3 + c] * 255.0, (want[c] * 255.0).round());
+                assert!(
+                    (got - want).abs() <= 1.0,
+                    "{tone_map}: pixel {i} channel {c}: {got} against {want}"
+                );
+            }
+        }
+    }
+    // The tone maps differ where the scene is bright.
+    assert_ne!(
+        render("n.png", &["--tonemap", "neutral"]).data,
+        render("c.png", &[]).data
+    );
+}
+
 #[test]
 fn diff_exits_by_threshold_and_writes_a_difference_image() {
     let a = temp("diff-a.png");

@@ -6,7 +6,8 @@
 //! `cargo run --release --example window` (`-- --frames N` closes after N frames).
 
 use raypipe::bvh::morton::MortonBits;
-use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions};
+use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions, Shown};
+use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::Aov;
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
@@ -97,14 +98,13 @@ impl App {
             gpu.renderer.encode(&mut encoder);
         }
         let depth_far = 3.0 * gpu.camera_distance;
-        gpu.display.encode(
-            &mut encoder,
-            gpu.renderer.targets(),
-            &view,
-            Aov::Color,
+        let shown = Shown {
+            aov: Aov::Color,
             depth_far,
-            200.0,
-        );
+            cost_max: 200.0,
+            transform: DisplayTransform::IDENTITY,
+        };
+        gpu.display.encode(&mut encoder, gpu.renderer.targets(), &view, &shown);
         // The program's own pass over it, in the same encoder.
         let (width, height) = (gpu.config.width, gpu.config.height);
         let mut pass = overlay_pass(&mut encoder, &view, "overlay");

@@ -236,7 +236,8 @@ impl Viewer {
             return Err(ScreenshotError::NoFrame);
         };
         let frame = block_on(gpu.player.read_frame(&gpu.screen.ctx))?;
-        Ok(self.host.save(&frame, gpu.player.modes.view, path)?)
+        let modes = &gpu.player.modes;
+        Ok(self.host.save(&frame, modes.view, &modes.display, path)?)
     }
 
     fn draw(&mut self, event_loop: &ActiveEventLoop) {

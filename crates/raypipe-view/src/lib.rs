@@ -22,6 +22,7 @@ pub use tracer::{TraceError, Tracer, next_texture, present_format};
 
 use raypipe::gpu::{Backend, GpuContext, GpuError};
 use raypipe::image::Frame;
+use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::Scene;
@@ -43,6 +44,8 @@ pub struct Modes {
     pub paused: bool,
     /// Whether presentation waits for the display's refresh.
     pub vsync: bool,
+    /// The colour view's exposure and tone map (screenshots take them too).
+    pub display: DisplayTransform,
 }
 
 /// A key that changes a mode, as the window and the page both bind them: B, G, M, V, [ and ], Space.
@@ -172,8 +175,9 @@ pub struct ViewerOptions {
 pub trait Host {
     /// Loads a dropped file as a scene.
     fn load(&self, path: &Path) -> Result<Scene, HostError>;
-    /// Saves a frame (the linear frame, as read back) to `path`, as `raypipe render` writes files.
-    fn save(&self, frame: &Frame, view: Aov, path: &Path) -> Result<(), HostError>;
+    /// Saves a frame (the linear frame, as read back) to `path`, as `raypipe render` writes files:
+    /// `view`, with colour through `transform`.
+    fn save(&self, frame: &Frame, view: Aov, transform: &DisplayTransform, path: &Path) -> Result<(), HostError>;
     /// Where `P` saves its next screenshot of `view`.
     fn screenshot_path(&self, view: Aov) -> PathBuf;
 }

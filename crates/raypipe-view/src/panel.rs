@@ -2,6 +2,7 @@
 
 use crate::Modes;
 use raypipe::Choice;
+use raypipe::image::tonemap::ToneMap;
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 
@@ -79,6 +80,12 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout, playback: Opt
             choose::<Builder>(ui, "BVH builder", &mut asked.builder);
             choose::<MemoryMode>(ui, "memory", &mut asked.memory);
             choose::<Aov>(ui, "view", &mut asked.view);
+            choose::<ToneMap>(ui, "tone map", &mut asked.display.tone_map);
+            ui.add(
+                egui::Slider::new(&mut asked.display.exposure, -8.0..=8.0)
+                    .step_by(0.25)
+                    .text("exposure (EV)"),
+            );
             ui.add(egui::Slider::new(&mut asked.depth, 0..=raypipe::scene::MAX_DEPTH_LIMIT).text("depth"));
             if let Some(playback) = playback {
                 ui.checkbox(&mut asked.paused, "pause motion");

@@ -396,8 +396,14 @@ impl Player {
         if trace {
             self.tracer.encode(encoder);
         }
-        self.tracer
-            .show(display, encoder, target, self.modes.view, &self.camera.camera);
+        self.tracer.show(
+            display,
+            encoder,
+            target,
+            self.modes.view,
+            self.modes.display,
+            &self.camera.camera,
+        );
     }
 
     /// Ends a frame `seconds` after the last, whose trace took `gpu_ms` where that was measured.

@@ -8,7 +8,8 @@
 use crate::{Modes, ModesError};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::error::InputError;
-use raypipe::gpu::{CpuRebuild, Display, GpuContext, GpuError, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{CpuRebuild, Display, GpuContext, GpuError, Renderer, RendererOptions, SceneRebuild, Shown};
+use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::{Aov, MemoryMode};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
@@ -165,10 +166,16 @@ impl Tracer {
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
         view: Aov,
+        transform: DisplayTransform,
         camera: &Camera,
     ) {
-        let depth_far = DEPTH_FAR * (camera.eye - camera.target).length();
-        display.encode(encoder, self.renderer.targets(), target, view, depth_far, COST_MAX);
+        let shown = Shown {
+            aov: view,
+            depth_far: DEPTH_FAR * (camera.eye - camera.target).length(),
+            cost_max: COST_MAX,
+            transform,
+        };
+        display.encode(encoder, self.renderer.targets(), target, &shown);
     }
 }
 

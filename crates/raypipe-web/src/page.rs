@@ -186,6 +186,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         view: params.view,
         paused: params.paused,
         vsync: true,
+        display: params.display,
     };
     let mut player = Player::new(ctx, params.scene.clone(), scene, modes, screen.size(), params.spp)
         .await
@@ -274,6 +275,8 @@ impl Page {
         set("memories", memory_names(&self.screen.ctx).into());
         set("depth", modes.depth.into());
         set("aov", modes.view.name().into());
+        set("exposure", modes.display.exposure.into());
+        set("tonemap", modes.display.tone_map.name().into());
         set("paused", modes.paused.into());
         set("floor", (self.floor != Floor::None).into());
         set("moving", player.scene.motion.is_some().into());
@@ -362,7 +365,7 @@ fn publish_failure(why: &str) {
 #[wasm_bindgen]
 impl Viewer {
     /// Changes one setting by the URL's names (`accel`, `builder`, `memory`, `pipeline`, `depth`,
-    /// `aov`, `paused`, `spp`, `scene`); a bad value or a mode that cannot serve the scene shows its
+    /// `aov`, `exposure`, `tonemap`, `paused`, `spp`, `scene`); a bad value or a mode that cannot serve the scene shows its
     /// message and changes nothing.
     pub fn set(&self, key: &str, value: &str) {
         let setting = match Setting::parse(key, value) {
@@ -395,6 +398,8 @@ impl Viewer {
             Setting::Depth(depth) => asked.depth = depth,
             Setting::View(view) => asked.view = view,
             Setting::Paused(paused) => asked.paused = paused,
+            Setting::Exposure(ev) => asked.display.exposure = ev,
+            Setting::ToneMap(tone_map) => asked.display.tone_map = tone_map,
             Setting::Spp(spp) => {
                 self.page.borrow_mut().player.set_spp(spp);
                 return;

@@ -4,6 +4,7 @@
 
 use raypipe::Choice;
 use raypipe::choice::impl_choice;
+use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE, ToneMap};
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::MAX_DEPTH_LIMIT;
@@ -62,6 +63,9 @@ pub enum Setting {
     /// Scene seconds per second.
     Speed(f32),
     Spp(u32),
+    /// Stops: radiance times 2^EV before the tone map.
+    Exposure(f32),
+    ToneMap(ToneMap),
     Width(u32),
     Height(u32),
     Backend(WebBackend),
@@ -70,7 +74,7 @@ pub enum Setting {
 /// The keys, for messages.
 pub const KEYS: &[&str] = &[
     "scene", "model", "accel", "builder", "memory", "pipeline", "depth", "aov", "paused", "floor", "time", "speed",
-    "spp", "width", "height", "backend",
+    "spp", "exposure", "tonemap", "width", "height", "backend",
 ];
 
 impl Setting {
@@ -116,6 +120,15 @@ impl Setting {
             "time" => Setting::Time(seconds(MAX_TIME)?),
             "speed" => Setting::Speed(seconds(MAX_SPEED)?),
             "spp" => Setting::Spp(number(1..=MAX_SPP)?),
+            "exposure" => match value.parse::<f32>() {
+                Ok(ev) if ev.is_finite() && ev.abs() <= MAX_EXPOSURE => Setting::Exposure(ev),
+                _ => {
+                    return Err(format!(
+                        "{key}={value}: expected a number of stops in -{MAX_EXPOSURE}..={MAX_EXPOSURE}"
+                    ));
+                }
+            },
+            "tonemap" => Setting::ToneMap(choice(key, value)?),
             "width" => Setting::Width(number(1..=MAX_SIDE)?),
             "height" => Setting::Height(number(1..=MAX_SIDE)?),
             "backend" => Setting::Backend(choice(key, value)?),
@@ -149,6 +162,8 @@ pub struct StartParams {
     pub time: f32,
     pub speed: f32,
     pub spp: u32,
+    /// The colour view's exposure and tone map.
+    pub display: DisplayTransform,
     pub width: u32,
     pub height: u32,
     /// `None`: WebGPU where the browser has it, else WebGL2.
@@ -171,6 +186,7 @@ impl Default for StartParams {
             time: 0.0,
             speed: 1.0,
             spp: 64,
+            display: DisplayTransform::IDENTITY,
             width: 960,
             height: 540,
             backend: None,
@@ -208,6 +224,8 @@ impl StartParams {
             Setting::Time(time) => self.time = time,
             Setting::Speed(speed) => self.speed = speed,
             Setting::Spp(spp) => self.spp = spp,
+            Setting::Exposure(ev) => self.display.exposure = ev,
+            Setting::ToneMap(tone_map) => self.display.tone_map = tone_map,
             Setting::Width(width) => self.width = width,
             Setting::Height(height) => self.height = height,
             Setting::Backend(backend) => self.backend = Some(backend),
@@ -227,6 +245,7 @@ pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
         ("memory", names::<MemoryMode>()),
         ("pipeline", names::<Pipeline>()),
         ("aov", names::<Aov>()),
+        ("tonemap", names::<ToneMap>()),
     ]
 }
 
@@ -257,6 +276,8 @@ mod tests {
             ("time", "1.5"),
             ("speed", "0.5"),
             ("floor", "0"),
+            ("exposure", "-1.5"),
+            ("tonemap", "neutral"),
         ];
         let (params, errors) = StartParams::from_pairs(query);
         assert!(errors.is_empty(), "{errors:?}");
@@ -276,6 +297,10 @@ mod tests {
                 time: 1.5,
                 speed: 0.5,
                 spp: 1,
+                display: DisplayTransform {
+                    exposure: -1.5,
+                    tone_map: ToneMap::Neutral,
+                },
                 width: 320,
                 height: 240,
                 backend: Some(WebBackend::WebGl2),
@@ -292,6 +317,8 @@ mod tests {
             ("colour", "red"),
             ("height", "200"),
             ("time", "NaN"),
+            ("exposure", "inf"),
+            ("tonemap", "filmic"),
         ];
         let (params, errors) = StartParams::from_pairs(query);
         assert_eq!(params.height, 200);
@@ -304,8 +331,10 @@ mod tests {
                 "accel=bvh: expected one of brute, stack, stackless, threaded",
                 "width=0: expected a whole number in 1..=8192",
                 "depth=33: expected a whole number in 0..=32",
-                "unknown setting 'colour' (known: scene, model, accel, builder, memory, pipeline, depth, aov, paused, floor, time, speed, spp, width, height, backend)",
+                "unknown setting 'colour' (known: scene, model, accel, builder, memory, pipeline, depth, aov, paused, floor, time, speed, spp, exposure, tonemap, width, height, backend)",
                 "time=NaN: expected a number of seconds in 0..=86400",
+                "exposure=inf: expected a number of stops in -64..=64",
+                "tonemap=filmic: expected one of none, neutral, aces",
             ]
         );
     }
@@ -313,7 +342,7 @@ mod tests {
     #[test]
     fn every_listed_control_value_parses() {
         let lists = control_choices();
-        assert_eq!(lists.len(), 5);
+        assert_eq!(lists.len(), 6);
         for (key, names) in lists {
             assert!(names.len() >= 2, "{key}: {names:?}");
             for name in names {

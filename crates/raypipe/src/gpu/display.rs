@@ -5,6 +5,7 @@
 use super::GpuContext;
 use super::renderer::{FrameTargets, target_entry};
 use crate::Choice;
+use crate::image::tonemap::{DisplayTransform, ToneMap};
 use crate::modes::Aov;
 use crate::records::StructLayout;
 use crate::struct_layout;
@@ -21,16 +22,26 @@ pub struct DisplayParams {
     pub cost_max: f32,
     /// Samples summed in the colour target: the pass shows their mean.
     pub samples: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
+    /// The colour view's [`DisplayTransform`]: 2^exposure, and the tone map's number.
+    pub exposure_scale: f32,
+    pub tone_map: u32,
+    pub _pad: u32,
 }
 
 /// The display pass's records with a WGSL twin, for the layout test.
 pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
     DisplayParams,
     "DisplayParams",
-    [view, target_srgb, depth_far, cost_max, samples, _pad0, _pad1, _pad2]
+    [
+        view,
+        target_srgb,
+        depth_far,
+        cost_max,
+        samples,
+        exposure_scale,
+        tone_map,
+        _pad
+    ]
 )];
 
 /// The display pass's WGSL: its numbers from Rust (the views' numbering, the heat map's stops),
@@ -44,6 +55,15 @@ pub fn shader_source() -> String {
             "const DISPLAY_{}: u32 = {}u;",
             view.name().to_uppercase(),
             view as u32
+        )
+        .unwrap();
+    }
+    for &tone_map in ToneMap::ALL {
+        writeln!(
+            out,
+            "const TONE_MAP_{}: u32 = {}u;",
+            tone_map.name().to_uppercase(),
+            tone_map as u32
         )
         .unwrap();
     }
@@ -66,6 +86,18 @@ pub fn shader_source() -> String {
     )
     .unwrap();
     out + DISPLAY
+}
+
+/// What the display pass shows of a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shown {
+    pub aov: Aov,
+    /// The depth view: distances up to this fade from white to black.
+    pub depth_far: f32,
+    /// The cost view: the count at the top of the heat map's scale.
+    pub cost_max: f32,
+    /// The colour view: exposure and tone map before sRGB encoding.
+    pub transform: DisplayTransform,
 }
 
 /// The display pass for targets of one format.
@@ -147,23 +179,23 @@ impl Display {
     }
 
     /// Records the pass: `frame` (the mean of its samples) drawn into `view` (at least the frame's
-    /// size) as `shown`. `depth_far` scales the depth view, `cost_max` the cost view.
+    /// size) as `shown` says.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         frame: &FrameTargets,
         view: &wgpu::TextureView,
-        shown: Aov,
-        depth_far: f32,
-        cost_max: f32,
+        shown: &Shown,
     ) {
         let params = DisplayParams {
-            view: shown as u32,
+            view: shown.aov as u32,
             target_srgb: self.target_srgb as u32,
-            depth_far,
-            cost_max,
+            depth_far: shown.depth_far,
+            cost_max: shown.cost_max,
             samples: frame.samples().max(1),
-            ..Default::default()
+            exposure_scale: shown.transform.scale(),
+            tone_map: shown.transform.tone_map as u32,
+            _pad: 0,
         };
         self.ctx
             .queue

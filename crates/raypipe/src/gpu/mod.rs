@@ -18,7 +18,7 @@ pub mod timing;
 pub mod upload;
 
 pub use context::{Backend, GpuContext};
-pub use display::Display;
+pub use display::{Display, Shown};
 pub use error::{Capacity, GpuError};
 pub use rebuild::{CpuRebuild, CpuStep, SceneRebuild};
 pub use renderer::{Renderer, RendererOptions, TimedFrame};

@@ -2,11 +2,13 @@
 
 pub mod diff;
 pub mod heatmap;
+pub mod tonemap;
 
 pub use crate::records::constants::DEPTH_MISS;
 
 use crate::modes::Count;
 use glam::Vec4;
+use tonemap::DisplayTransform;
 
 /// What a render produces: the fragment shader's two outputs per pixel, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -82,17 +84,33 @@ impl Frame {
     /// Colour as it is displayed: clamped and sRGB-encoded, in [0, 1]. This is what PNG files hold
     /// (before 8-bit rounding) and what colour comparisons measure.
     pub fn display(&self) -> FloatImage {
+        self.display_with(&DisplayTransform::IDENTITY)
+    }
+
+    /// Colour exposed, tone-mapped by `transform` and sRGB-encoded, in [0, 1]: what the display
+    /// pass shows with the same transform.
+    pub fn display_with(&self, transform: &DisplayTransform) -> FloatImage {
         let data = self
             .color
             .iter()
-            .flat_map(|c| [c[0], c[1], c[2]].map(linear_to_srgb))
+            .flat_map(|c| transform.apply([c[0], c[1], c[2]]).map(linear_to_srgb))
             .collect();
         self.image(rgb_names(), data)
     }
 
     /// Linear radiance, for EXR output.
     pub fn radiance(&self) -> FloatImage {
-        let data = self.color.iter().flat_map(|c| [c[0], c[1], c[2]]).collect();
+        self.exposed_radiance(0.0)
+    }
+
+    /// Linear radiance times 2^`exposure`: EXR output with an exposure (before any tone map).
+    pub fn exposed_radiance(&self, exposure: f32) -> FloatImage {
+        let scale = exposure.exp2();
+        let data = self
+            .color
+            .iter()
+            .flat_map(|c| [c[0], c[1], c[2]].map(|v| v * scale))
+            .collect();
         self.image(rgb_names(), data)
     }
 

@@ -7,8 +7,9 @@ use pollster::block_on;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::Count;
 use raypipe::gpu::readback::TextureReadback;
-use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions};
+use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions, Shown};
 use raypipe::image::heatmap::color_scale;
+use raypipe::image::tonemap::{DisplayTransform, ToneMap};
 use raypipe::image::{FloatImage, Frame};
 use raypipe::modes::Accel;
 use raypipe::modes::Aov;
@@ -21,6 +22,7 @@ fn displayed(
     format: wgpu::TextureFormat,
     view: Aov,
     cost_max: f32,
+    transform: DisplayTransform,
 ) -> (Frame, Vec<u8>) {
     let frame = block_on(renderer.render_samples(samples, |_| {})).unwrap().frame;
     let ctx = renderer.context();
@@ -44,13 +46,17 @@ fn displayed(
     let readback = TextureReadback::new(&ctx.device, target.width(), target.height(), 4);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     // The targets still hold the frame read above.
+    let shown = Shown {
+        aov: view,
+        depth_far: 10.0,
+        cost_max,
+        transform,
+    };
     display.encode(
         &mut encoder,
         renderer.targets(),
         &target.create_view(&Default::default()),
-        view,
-        10.0,
-        cost_max,
+        &shown,
     );
     readback.encode_copy(&mut encoder, &target);
     ctx.queue.submit([encoder.finish()]);
@@ -104,21 +110,50 @@ fn scene_renderer(ctx: &GpuContext, count: Count) -> Renderer {
 fn color_and_normals_match_the_files(ctx: &GpuContext) {
     let mut renderer = scene_renderer(ctx, Count::Rays);
     for format in [wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureFormat::Rgba8UnormSrgb] {
-        let (frame, rgba) = displayed(&mut renderer, 1, format, Aov::Color, 1.0);
+        let (frame, rgba) = displayed(&mut renderer, 1, format, Aov::Color, 1.0, DisplayTransform::IDENTITY);
         assert_close(&format!("colour into {format:?}"), &rgba, &frame.display(), 1);
-        let (frame, rgba) = displayed(&mut renderer, 1, format, Aov::Normal, 1.0);
+        let (frame, rgba) = displayed(&mut renderer, 1, format, Aov::Normal, 1.0, DisplayTransform::IDENTITY);
         assert_close(&format!("normals into {format:?}"), &rgba, &frame.normals(), 1);
     }
+}
+
+/// Exposure and each tone map in the display pass as on the host (`Frame::display_with`): what the
+/// window shows is what `render --exposure --tonemap` writes.
+fn exposure_and_tone_maps_match_the_files(ctx: &GpuContext) {
+    let mut renderer = scene_renderer(ctx, Count::Rays);
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    for tone_map in [ToneMap::None, ToneMap::Neutral, ToneMap::Aces] {
+        for exposure in [-1.0, 0.0, 1.5] {
+            let transform = DisplayTransform { exposure, tone_map };
+            let (frame, rgba) = displayed(&mut renderer, 1, format, Aov::Color, 1.0, transform);
+            assert_close(
+                &format!("{tone_map:?} at {exposure} EV"),
+                &rgba,
+                &frame.display_with(&transform),
+                1,
+            );
+        }
+    }
+    // The transform reaches the pass: a stop up is not the picture at 0 EV.
+    let bright = DisplayTransform {
+        exposure: 1.0,
+        tone_map: ToneMap::Neutral,
+    };
+    let (frame, rgba) = displayed(&mut renderer, 1, format, Aov::Color, 1.0, bright);
+    assert!(
+        worst_difference(&rgba, &frame.display()).0 > 10,
+        "the exposure is ignored"
+    );
 }
 
 /// Accumulated samples show as their mean, as the frame read back holds it.
 fn accumulated_samples_show_their_mean(ctx: &GpuContext) {
     let mut renderer = scene_renderer(ctx, Count::Rays);
     let format = wgpu::TextureFormat::Rgba8Unorm;
-    let (frame, rgba) = displayed(&mut renderer, 5, format, Aov::Color, 1.0);
+    let (frame, rgba) = displayed(&mut renderer, 5, format, Aov::Color, 1.0, DisplayTransform::IDENTITY);
     assert_eq!(renderer.samples(), 5);
     assert_close("five samples", &rgba, &frame.display(), 1);
-    let (single, _) = displayed(&mut renderer, 1, format, Aov::Color, 1.0);
+    let (single, _) = displayed(&mut renderer, 1, format, Aov::Color, 1.0, DisplayTransform::IDENTITY);
     assert_ne!(
         frame.color, single.color,
         "five jittered samples must differ from the centre's one"
@@ -127,7 +162,14 @@ fn accumulated_samples_show_their_mean(ctx: &GpuContext) {
 
 fn cost_view_uses_the_heat_map_scale(ctx: &GpuContext) {
     let mut renderer = scene_renderer(ctx, Count::Cost);
-    let (frame, rgba) = displayed(&mut renderer, 1, wgpu::TextureFormat::Rgba8Unorm, Aov::Cost, 40.0);
+    let (frame, rgba) = displayed(
+        &mut renderer,
+        1,
+        wgpu::TextureFormat::Rgba8Unorm,
+        Aov::Cost,
+        40.0,
+        DisplayTransform::IDENTITY,
+    );
     let data = frame
         .counts()
         .iter()
@@ -145,7 +187,14 @@ fn cost_view_uses_the_heat_map_scale(ctx: &GpuContext) {
 /// The check above must fail when the picture is off: one pixel two steps brighter.
 fn a_displayed_image_two_steps_off_fails(ctx: &GpuContext) {
     let mut renderer = scene_renderer(ctx, Count::Rays);
-    let (frame, mut rgba) = displayed(&mut renderer, 1, wgpu::TextureFormat::Rgba8Unorm, Aov::Color, 1.0);
+    let (frame, mut rgba) = displayed(
+        &mut renderer,
+        1,
+        wgpu::TextureFormat::Rgba8Unorm,
+        Aov::Color,
+        1.0,
+        DisplayTransform::IDENTITY,
+    );
     let pixel = rgba.chunks(4).position(|p| p[0] < 250).expect("a pixel short of white") * 4;
     assert!(worst_difference(&rgba, &frame.display()).0 <= 1);
     rgba[pixel] += 2;
@@ -156,6 +205,7 @@ fn a_displayed_image_two_steps_off_fails(ctx: &GpuContext) {
 pub fn tests() -> Vec<Test> {
     raypipe_test_support::tests![
         gpu color_and_normals_match_the_files,
+        gpu exposure_and_tone_maps_match_the_files,
         gpu accumulated_samples_show_their_mean,
         gpu cost_view_uses_the_heat_map_scale,
         gpu a_displayed_image_two_steps_off_fails,

@@ -13,13 +13,15 @@ struct DisplayParams {
     cost_max: f32,
     // Samples summed in the colour target: the pass shows their mean.
     samples: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // The colour view's exposure, 2^EV, and tone map (TONE_MAP_* from the preamble).
+    exposure_scale: f32,
+    tone_map: u32,
+    _pad: u32,
 }
 
-// DISPLAY_COLOR, DISPLAY_DEPTH, DISPLAY_NORMAL and DISPLAY_COST (modes::Aov's numbers) and
-// HEAT_STOPS (heatmap.rs's STOPS) come from the preamble (src/gpu/display.rs).
+// DISPLAY_COLOR, DISPLAY_DEPTH, DISPLAY_NORMAL and DISPLAY_COST (modes::Aov's numbers),
+// TONE_MAP_NONE, TONE_MAP_NEUTRAL and TONE_MAP_ACES (tonemap::ToneMap's) and HEAT_STOPS
+// (heatmap.rs's STOPS) come from the preamble (src/gpu/display.rs).
 
 @group(0) @binding(0) var<uniform> params: DisplayParams;
 @group(0) @binding(1) var color_target: texture_2d<u32>;
@@ -46,6 +48,56 @@ fn srgb_to_linear(x: f32) -> f32 {
         return x / 12.92;
     }
     return pow((x + 0.055) / 1.055, 2.4);
+}
+
+// Khronos PBR Neutral (`pbr_neutral` in src/image/tonemap.rs, which writes out its terms).
+fn pbr_neutral(color: vec3<f32>) -> vec3<f32> {
+    let f90 = 0.04;
+    let ks = 0.8 - f90;
+    let kd = 0.15;
+    let x = min(color.x, min(color.y, color.z));
+    let toe = select(f90, x - x * x / (4.0 * f90), x <= 2.0 * f90);
+    let c = color - toe;
+    let peak = max(c.x, max(c.y, c.z));
+    if (peak <= ks) {
+        return c;
+    }
+    let compressed = 1.0 - (1.0 - ks) * (1.0 - ks) / (peak + 1.0 - 2.0 * ks);
+    let g = 1.0 / (kd * (peak - compressed) + 1.0);
+    return c * (compressed / peak) * g + compressed * (1.0 - g);
+}
+
+// ACES filmic in Stephen Hill's fit (`aces_hill` in src/image/tonemap.rs; WGSL's matrices are
+// built from columns, so these are the host's rows transposed).
+fn aces_hill(color: vec3<f32>) -> vec3<f32> {
+    let into_ap1 = mat3x3<f32>(
+        vec3<f32>(0.59719, 0.07600, 0.02840),
+        vec3<f32>(0.35458, 0.90834, 0.13383),
+        vec3<f32>(0.04823, 0.01566, 0.83777));
+    let out_of_ap1 = mat3x3<f32>(
+        vec3<f32>(1.60475, -0.10208, -0.00327),
+        vec3<f32>(-0.53108, 1.10813, -0.07276),
+        vec3<f32>(-0.07367, -0.00605, 1.07602));
+    let v = into_ap1 * color;
+    let fit = (v * (v + 0.0245786) - 0.000090537) / (v * (0.983729 * v + 0.432951) + 0.238081);
+    return clamp(out_of_ap1 * fit, vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// Linear radiance to linear display values in [0, 1]: exposed, then tone-mapped
+// (`DisplayTransform::apply`).
+fn display_transform(radiance: vec3<f32>) -> vec3<f32> {
+    let exposed = max(radiance, vec3<f32>(0.0)) * params.exposure_scale;
+    switch params.tone_map {
+        case TONE_MAP_NEUTRAL: {
+            return pbr_neutral(exposed);
+        }
+        case TONE_MAP_ACES: {
+            return aces_hill(exposed);
+        }
+        default: {
+            return min(exposed, vec3<f32>(1.0));
+        }
+    }
 }
 
 // The heat map's scale (heatmap.rs's STOPS): dark for cheap pixels, bright for expensive ones.
@@ -80,7 +132,8 @@ fn fs_display(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> 
             shown = color_scale(color.w / max(params.cost_max, 1.0));
         }
         default: {
-            shown = vec3<f32>(linear_to_srgb(color.x), linear_to_srgb(color.y), linear_to_srgb(color.z));
+            let mapped = display_transform(color.xyz);
+            shown = vec3<f32>(linear_to_srgb(mapped.x), linear_to_srgb(mapped.y), linear_to_srgb(mapped.z));
         }
     }
     if (params.target_srgb == 1u) {
