@@ -119,11 +119,23 @@ fn a_gltf_scene_views_as_it_renders(_: &GpuContext, models: &Path) {
     let dir = test_dir("view-gltf");
     let scene = models.join("gltf/BoxTextured.gltf");
     let scene = scene.to_str().unwrap();
-    let render = rendered(&dir, scene, &[]);
+    // Kept by a name of its own: render's files are named by the scene alone.
+    let render = dir.join("render-plain.png");
+    std::fs::rename(rendered(&dir, scene, &[]), &render).unwrap();
     for memory in ["storage", "texture"] {
         let shot = viewed(&dir, scene, &["--memory", memory], 3);
         matches(&shot, &render).unwrap_or_else(|e| panic!("BoxTextured in {memory} memory: {e}"));
     }
+    // Exposure and tone map reach the viewer's screenshots as they reach render's PNG.
+    let toned = ["--tonemap", "aces", "--exposure", "1"];
+    let render_toned = dir.join("render-toned.png");
+    std::fs::rename(rendered(&dir, scene, &toned), &render_toned).unwrap();
+    let shot = viewed(&dir, scene, &toned, 3);
+    matches(&shot, &render_toned).unwrap_or_else(|e| panic!("BoxTextured with ACES at +1 EV: {e}"));
+    assert!(
+        matches(&shot, &render).is_err(),
+        "the tone map and exposure changed nothing"
+    );
 }
 
 /// A still frame gathers one sample per frame up to --spp, then stays: twelve frames with
