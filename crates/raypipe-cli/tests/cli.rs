@@ -42,6 +42,14 @@ fn render_cpu(scene: &Path) -> Output {
 const GOOD: &str = "[camera]\neye = [0, 1, -6]\ntarget = [0, 0, 0]\n\n[material.red]\ncolor = [1, 0, 0]\n\n\
     [[light]]\nposition = [4, 6, -3]\n\n[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\nmaterial = \"red\"\n";
 
+/// `raypipe render SCENE --device cpu` at 40x30 into `out`, with `extra` flags.
+fn render_40x30(scene: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["render", scene, "--device", "cpu", "--width", "40", "--height", "30"];
+    args.extend(extra);
+    args.extend(["-o", out.to_str().unwrap()]);
+    raypipe(&args)
+}
+
 #[test]
 fn a_good_scene_renders_every_output() {
     let scene = write("good.toml", GOOD);
@@ -52,21 +60,7 @@ fn a_good_scene_renders_every_output() {
         ("normal", "n.png"),
     ] {
         let out = temp(name);
-        let output = raypipe(&[
-            "render",
-            scene.to_str().unwrap(),
-            "--device",
-            "cpu",
-            "--width",
-            "40",
-            "--height",
-            "30",
-            "--aov",
-            aov,
-            "-o",
-            out.to_str().unwrap(),
-            "--stats",
-        ]);
+        let output = render_40x30(scene.to_str().unwrap(), &out, &["--aov", aov, "--stats"]);
         assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
         let image = io::read(&out).unwrap();
         assert_eq!((image.width, image.height), (40, 30));
@@ -87,19 +81,7 @@ fn the_png_is_the_tone_map_of_the_exposed_exr() {
     let scene = write("tonemapped.toml", GOOD);
     let render = |name: &str, extra: &[&str]| {
         let out = temp(name);
-        let mut args = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "--device",
-            "cpu",
-            "--width",
-            "40",
-            "--height",
-            "30",
-        ];
-        args.extend(extra);
-        args.extend(["-o", out.to_str().unwrap()]);
-        let output = raypipe(&args);
+        let output = render_40x30(scene.to_str().unwrap(), &out, extra);
         assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
         io::read(&out).unwrap()
     };
@@ -148,20 +130,7 @@ fn diff_exits_by_threshold_and_writes_a_difference_image() {
     let b = temp("diff-b.png");
     let d = temp("diff-d.png");
     for (depth, out) in [("5", &a), ("0", &b)] {
-        let output = raypipe(&[
-            "render",
-            "whitted",
-            "--device",
-            "cpu",
-            "--width",
-            "40",
-            "--height",
-            "30",
-            "--depth",
-            depth,
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+        let output = render_40x30("whitted", out, &["--depth", depth]);
         assert!(output.status.success());
     }
     let same = raypipe(&["diff", a.to_str().unwrap(), a.to_str().unwrap()]);

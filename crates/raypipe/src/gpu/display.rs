@@ -44,28 +44,17 @@ pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
     ]
 )];
 
-/// The display pass's WGSL: its numbers from Rust (the views' numbering, the heat map's stops),
-/// then display.wgsl.
+/// The display pass's WGSL: its numbers from Rust (the views' and tone maps' numbering, the heat
+/// map's stops), then display.wgsl.
 pub fn shader_source() -> String {
     use std::fmt::Write;
     let mut out = String::from("// Generated: src/gpu/display.rs.\n");
-    for &view in Aov::ALL {
-        writeln!(
-            out,
-            "const DISPLAY_{}: u32 = {}u;",
-            view.name().to_uppercase(),
-            view as u32
-        )
-        .unwrap();
-    }
-    for &tone_map in ToneMap::ALL {
-        writeln!(
-            out,
-            "const TONE_MAP_{}: u32 = {}u;",
-            tone_map.name().to_uppercase(),
-            tone_map as u32
-        )
-        .unwrap();
+    let names = Aov::ALL
+        .iter()
+        .map(|&view| ("DISPLAY", view.name(), view as u32))
+        .chain(ToneMap::ALL.iter().map(|&t| ("TONE_MAP", t.name(), t as u32)));
+    for (prefix, name, number) in names {
+        writeln!(out, "const {prefix}_{}: u32 = {number}u;", name.to_uppercase()).unwrap();
     }
     let stops = crate::image::heatmap::STOPS;
     let vectors: Vec<String> = stops
