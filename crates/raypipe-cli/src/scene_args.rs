@@ -8,10 +8,10 @@ use raypipe::gpu::Backend;
 use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE, ToneMap};
 use raypipe::image::{FloatImage, Frame, heatmap};
 use raypipe::modes::{Accel, Aov, Builder, MemoryMode, Pipeline};
-use raypipe::scene::Scene;
 use raypipe::scene::animation::ClipChoice;
 use raypipe::scene::is_model_file;
 use raypipe::scene::model::{Floor, MeshAs, ModelOptions, Normals};
+use raypipe::scene::{Environment, Scene};
 
 /// What names the scene and how it is traced: the flags `render` and `view` share.
 #[derive(Args)]
@@ -49,6 +49,17 @@ pub struct SceneArgs {
     /// (default the scene's background).
     #[arg(long, value_parser = parse_color, value_name = "R,G,B")]
     pub background: Option<glam::Vec3>,
+    /// Light the scene by an equirectangular environment (a Radiance .hdr or OpenEXR .exr, twice as
+    /// wide as high): rays that escape return its radiance, glTF surfaces take its irradiance.
+    /// `none` leaves it out, a scene file's or the studio a glTF without lights gets.
+    #[arg(long, value_name = "FILE|none")]
+    pub environment: Option<String>,
+    /// Turn the environment about +y by this many degrees (counter-clockwise seen from above).
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true, value_parser = parse_finite)]
+    pub environment_rotation: Option<f32>,
+    /// Multiply the environment's radiance by this (finite, not negative).
+    #[arg(long, value_name = "F", value_parser = parse_intensity)]
+    pub environment_intensity: Option<f32>,
     #[arg(long)]
     pub width: Option<u32>,
     #[arg(long)]
@@ -147,12 +158,66 @@ impl SceneArgs {
                 self.spec
             );
         }
+        self.set_environment(&mut scene)?;
         let settings = &mut scene.settings;
         settings.width = self.width.unwrap_or(settings.width);
         settings.height = self.height.unwrap_or(settings.height);
         settings.max_depth = self.depth.unwrap_or(settings.max_depth);
         settings.background = self.background.unwrap_or(settings.background);
         Ok(scene)
+    }
+}
+
+impl SceneArgs {
+    /// The environment `--environment` names (or none), turned and scaled as the flags say.
+    fn set_environment(&self, scene: &mut Scene) -> anyhow::Result<()> {
+        match self.environment.as_deref() {
+            Some("none") => {
+                scene.set_environment(None);
+            }
+            Some(path) => {
+                let (environment, halvings) = Environment::load(std::path::Path::new(path))?;
+                if halvings > 0 {
+                    log::warn!("{path}: halved {halvings} times to fit the texels a render holds");
+                }
+                let halvings = scene.set_environment(Some(environment));
+                if halvings > 0 {
+                    log::warn!(
+                        "{}: textures halved {halvings} times to fit beside the environment",
+                        self.spec
+                    );
+                }
+            }
+            None => {}
+        }
+        match &mut scene.environment {
+            Some(environment) => {
+                environment.rotation_degrees = self.environment_rotation.unwrap_or(environment.rotation_degrees);
+                environment.intensity = self.environment_intensity.unwrap_or(environment.intensity);
+            }
+            None if self.environment_rotation.is_some() || self.environment_intensity.is_some() => bail!(
+                "{}: --environment-rotation and --environment-intensity need an environment (--environment FILE)",
+                self.spec
+            ),
+            None => {}
+        }
+        Ok(())
+    }
+}
+
+/// A finite number.
+fn parse_finite(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => Err(format!("'{text}' is not a finite number")),
+    }
+}
+
+/// A finite number, not negative.
+fn parse_intensity(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("'{text}' is not an intensity: a finite number, not negative")),
     }
 }
 

@@ -5,6 +5,7 @@
 pub mod accel;
 pub mod admit;
 pub mod brdf;
+pub mod environment;
 pub mod intersect;
 pub mod maps;
 pub mod shade;

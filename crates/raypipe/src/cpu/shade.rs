@@ -1,6 +1,7 @@
 //! Surfaces, their materials and maps, lights, and direct light: the twin of `shaders/shade.wgsl`.
 
 use super::brdf::{GltfSurface, gltf_brdf};
+use super::environment::environment_irradiance;
 use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
 use super::maps::{Attributes, has_coordinates, map_coordinates, sample_map, sample_texture, triangle_attributes};
 use crate::bvh::layout::NONE;
@@ -288,9 +289,9 @@ pub fn gltf_surface(material: &GpuMaterial) -> GltfSurface {
     }
 }
 
-/// A glTF surface's direct light: the ambient light on its diffuse share (times `ambient_share`),
-/// plus, for every light that it faces and that nothing blocks, E times the BRDF times the cosine.
-/// Arguments as [`direct_light`]'s.
+/// A glTF surface's direct light: the ambient light (the environment's irradiance, where the
+/// scene has one) on its diffuse share, times `ambient_share`; plus, for every light that it faces
+/// and that nothing blocks, E times the BRDF times the cosine. Arguments as [`direct_light`]'s.
 #[allow(clippy::too_many_arguments)]
 pub fn gltf_direct_light(
     scene: &PackedScene,
@@ -304,7 +305,13 @@ pub fn gltf_direct_light(
 ) -> Vec3 {
     let s = gltf_surface(material);
     let diffuse = s.base * ((1.0 - s.metallic) * (1.0 - s.transmission));
-    let mut color = scene.globals.scene.ambient * ambient_share * diffuse;
+    let info = &scene.globals.scene;
+    let ambient = if info.environment_map == NONE {
+        Vec3::splat(info.ambient)
+    } else {
+        environment_irradiance(scene, shading)
+    };
+    let mut color = ambient * ambient_share * diffuse;
     let origin = offset_origin(surface, normal);
     for light in &scene.lights {
         let arrival = light_arrival(light, surface.position);

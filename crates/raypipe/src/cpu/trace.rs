@@ -3,6 +3,7 @@
 use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
 use super::admit::{Primitives, RayQuery};
 use super::brdf::sample_specular;
+use super::environment::escaped_radiance;
 use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
 use super::shade::{
     Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface, normal_mapped,
@@ -169,7 +170,7 @@ impl<'a> Tracer<'a> {
             result.cost = box_tests();
         }
         if hit.kind == HitKind::None {
-            result.color += task.weight * v3(self.scene.globals.scene.background);
+            result.color += task.weight * escaped_radiance(self.scene, ray.dir);
             return branches;
         }
         let mut surface = surface_at(self.scene, &ray, &hit);

@@ -37,6 +37,7 @@ const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
 const ADMIT: &str = include_str!("shaders/admit.wgsl");
 const MAPS: &str = include_str!("shaders/maps.wgsl");
 const BRDF: &str = include_str!("shaders/brdf.wgsl");
+const ENVIRONMENT: &str = include_str!("shaders/environment.wgsl");
 const SHADE: &str = include_str!("shaders/shade.wgsl");
 const TRACE: &str = include_str!("shaders/trace.wgsl");
 
@@ -142,6 +143,8 @@ pub struct SceneFeatures {
     pub alpha_mask: bool,
     /// A triangle with alpha BLEND: rays that go on behind a surface.
     pub alpha_blend: bool,
+    /// An environment: escaping rays read its radiance, glTF surfaces its irradiance.
+    pub environment: bool,
 }
 
 impl SceneFeatures {
@@ -159,18 +162,23 @@ impl SceneFeatures {
         one_sided: true,
         alpha_mask: true,
         alpha_blend: true,
+        environment: true,
     };
 
     pub fn of(scene: &PackedScene) -> SceneFeatures {
         let flags = scene.triangle_flags();
+        let environment = scene.globals.scene.environment_map != NONE;
+        // The environment's two maps follow the materials'.
+        let environment_maps = if environment { 2 } else { 0 };
         SceneFeatures {
+            environment,
             one_sided: flags & TRIANGLE_SINGLE_SIDED != 0,
             alpha_mask: flags & TRIANGLE_ALPHA_MASK != 0,
             alpha_blend: flags & TRIANGLE_ALPHA_BLEND != 0,
             spheres: !scene.spheres.is_empty(),
             triangles: !scene.triangles.is_empty(),
             planes: !scene.planes.is_empty(),
-            textures: !scene.texture_maps.is_empty(),
+            textures: scene.texture_maps.len() > environment_maps,
             attributes: !scene.triangle_attributes.is_empty(),
             normal_maps: scene.materials.iter().any(|m| m.normal_map != NONE),
             volumes: scene.materials.iter().any(|m| m.volume != 0),
@@ -230,6 +238,7 @@ pub fn compose(config: &ShaderConfig) -> String {
     writeln!(w, "const HAS_ONE_SIDED: bool = {};", features.one_sided).unwrap();
     writeln!(w, "const HAS_ALPHA_MASK: bool = {};", features.alpha_mask).unwrap();
     writeln!(w, "const HAS_ALPHA_BLEND: bool = {};", features.alpha_blend).unwrap();
+    writeln!(w, "const HAS_ENVIRONMENT: bool = {};", features.environment).unwrap();
     writeln!(w, "const BVH_STACK_SIZE: u32 = {}u;", config.bvh_depth.max(1)).unwrap();
     writeln!(w, "const COMPUTE_TILE: u32 = {COMPUTE_TILE}u;").unwrap();
     writeln!(w, "@group(0) @binding(0) var<uniform> globals: Globals;").unwrap();
@@ -294,7 +303,18 @@ pub fn compose(config: &ShaderConfig) -> String {
         Pipeline::Fragment => FULLSCREEN,
         Pipeline::Compute => COMPUTE,
     };
-    for part in [TEXELS, INTERSECT, MAPS, ADMIT, accel, BRDF, SHADE, TRACE, entry_points] {
+    for part in [
+        TEXELS,
+        INTERSECT,
+        MAPS,
+        ADMIT,
+        accel,
+        BRDF,
+        ENVIRONMENT,
+        SHADE,
+        TRACE,
+        entry_points,
+    ] {
         source.push('\n');
         source.push_str(part);
     }

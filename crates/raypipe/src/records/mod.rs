@@ -75,7 +75,8 @@ impl GpuCamera {
     }
 }
 
-/// What stays fixed while the camera moves: the background, the ambient term and the record counts.
+/// What stays fixed while the camera moves: the background or environment, the ambient term and
+/// the record counts.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuSceneInfo {
@@ -86,7 +87,16 @@ pub struct GpuSceneInfo {
     pub light_count: u32,
     pub material_count: u32,
     pub triangle_count: u32,
-    pub _pad: [u32; 3],
+    /// The texture map of the environment's radiance, or NONE: escaping rays return the
+    /// background.
+    pub environment_map: u32,
+    /// The texture map of its irradiance over π (valid with `environment_map`).
+    pub irradiance_map: u32,
+    /// Multiplies both.
+    pub environment_intensity: f32,
+    /// cos and sin of the environment's rotation about +y.
+    pub environment_turn: [f32; 2],
+    pub _pad: [u32; 2],
 }
 
 /// The threaded BVH's quantization frame ([`QuantizationFrame`]) as the shader reads it. A tree
@@ -335,6 +345,7 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuCamera, "Camera", [eye, tan_half_fov, forward, aspect, right, width, up, height, sample]),
     struct_layout!(GpuSceneInfo, "SceneInfo", [
         background, ambient, sphere_count, plane_count, light_count, material_count, triangle_count,
+        environment_map, irradiance_map, environment_intensity, environment_turn,
     ]),
     struct_layout!(GpuBvhFrame, "BvhFrame", [origin, quantum, inverse_quantum]),
     struct_layout!(GpuSphere, "Sphere", [center, radius, material]),

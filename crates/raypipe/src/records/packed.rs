@@ -18,7 +18,8 @@ use crate::records::constants::{
 };
 use crate::records::texels::GpuRecord;
 use crate::scene::{
-    AlphaMode, Camera, Light, LightKind, Material, Moved, Pbr, Plane, Scene, Sphere, TextureMap, Triangle,
+    AlphaMode, Camera, Light, LightKind, Material, Moved, Pbr, Plane, Scene, Sphere, Texture, TextureMap,
+    TextureTransform, Triangle,
 };
 use glam::{Vec2, Vec3};
 
@@ -135,7 +136,7 @@ impl PackedScene {
             }
         }
         let s = &scene.settings;
-        let globals = GpuGlobals {
+        let mut globals = GpuGlobals {
             camera: GpuCamera::new(&scene.camera, s.width, s.height),
             scene: GpuSceneInfo {
                 background: s.background.to_array(),
@@ -145,7 +146,11 @@ impl PackedScene {
                 light_count: scene.lights.len() as u32,
                 material_count: scene.materials.len() as u32,
                 triangle_count: scene.triangles.len() as u32,
-                _pad: [0; 3],
+                environment_map: NONE,
+                irradiance_map: NONE,
+                environment_intensity: 0.0,
+                environment_turn: [1.0, 0.0],
+                _pad: [0; 2],
             },
             // Set with the BVH.
             bvh_frame: GpuBvhFrame::default(),
@@ -163,7 +168,15 @@ impl PackedScene {
         }
         let planes = scene.planes.iter().map(pack_plane).collect();
         let lights = scene.lights.iter().map(pack_light).collect();
-        let (materials, texture_maps, texture_pixels) = pack_materials(scene);
+        let (materials, mut texture_maps, mut texture_pixels) = pack_materials(scene);
+        if let Some(environment) = &scene.environment {
+            let info = &mut globals.scene;
+            info.environment_map = push_whole_texture(environment.radiance(), &mut texture_maps, &mut texture_pixels);
+            info.irradiance_map = push_whole_texture(environment.irradiance(), &mut texture_maps, &mut texture_pixels);
+            info.environment_intensity = environment.intensity;
+            let turn = environment.rotation_degrees.to_radians();
+            info.environment_turn = [turn.cos(), turn.sin()];
+        }
         let mut shading = Vec::new();
         materials.iter().for_each(|m| m.push_texels(&mut shading));
         texture_maps.iter().for_each(|m| m.push_texels(&mut shading));
@@ -431,6 +444,24 @@ fn pack_light(light: &Light) -> GpuLight {
         spot_offset,
         _pad: [0.0; 3],
     }
+}
+
+/// Appends `texture`'s texels and a map of the whole of it (coordinate set 0, no transform);
+/// returns the map's index.
+fn push_whole_texture(texture: &Texture, maps: &mut Vec<GpuTextureMap>, pixels: &mut TexturePixels) -> u32 {
+    let [transform_u, transform_v] = TextureTransform::default().rows();
+    maps.push(GpuTextureMap {
+        offset: pixels.0.len() as u32,
+        width: texture.width,
+        height: texture.height,
+        wrap: texture.wrap[0].code() | texture.wrap[1].code() << 8,
+        transform_u,
+        tex_coord: 0,
+        transform_v,
+        _pad1: 0.0,
+    });
+    pixels.0.extend_from_slice(&texture.texels);
+    maps.len() as u32 - 1
 }
 
 /// Materials' records, the texture maps they name, and every texture's texels one after another

@@ -173,6 +173,7 @@ pub fn whitted() -> Scene {
         triangles: Vec::new(),
         textures: Vec::new(),
         motion: None,
+        environment: None,
     }
 }
 
@@ -213,6 +214,7 @@ fn cloud_scene(spheres: Vec<Sphere>, floor_y: f32) -> Scene {
         triangles: Vec::new(),
         textures: Vec::new(),
         motion: None,
+        environment: None,
     }
 }
 

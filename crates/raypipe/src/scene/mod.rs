@@ -7,6 +7,7 @@
 
 pub mod animation;
 pub mod builtin;
+pub mod environment;
 pub mod file;
 pub mod gltf;
 pub mod light;
@@ -16,6 +17,7 @@ pub mod model;
 pub mod motion;
 pub mod texture;
 
+pub use environment::Environment;
 pub use light::{Light, LightKind};
 pub use load::{is_model_file, model_extension_list};
 pub use material::{AlphaMode, Material, Pbr, TextureMap, TextureTransform, Volume};
@@ -144,6 +146,9 @@ pub struct Scene {
     pub textures: Vec<Texture>,
     /// What moves, and how, as time passes; `None` for a still scene.
     pub motion: Option<Motion>,
+    /// Light from every direction: what escaping rays return instead of the background, and the
+    /// irradiance on glTF surfaces instead of the ambient term. Set with [`Scene::set_environment`].
+    pub environment: Option<Environment>,
 }
 
 /// A similarity transform: rotate, scale uniformly, translate; what a placement does to a file.
@@ -197,6 +202,10 @@ pub const MAX_COORDINATE: f32 = 1e17;
 /// which GPUs flush to zero.
 pub const MIN_RADIUS: f32 = 1e-12;
 
+fn environment_texels(environment: &Environment) -> u64 {
+    (environment.radiance().texels.len() + environment.irradiance().texels.len()) as u64
+}
+
 fn within_reach(v: Vec3) -> bool {
     v.abs().max_element() <= MAX_COORDINATE
 }
@@ -212,6 +221,21 @@ pub fn unit_vector(v: Vec3) -> Option<Vec3> {
 }
 
 impl Scene {
+    /// Lights the scene with `environment` (or none), halving its largest textures where they and
+    /// the environment would hold more texels than a render takes; returns how many halvings that
+    /// took.
+    pub fn set_environment(&mut self, environment: Option<Environment>) -> usize {
+        let taken = environment.as_ref().map_or(0, environment_texels);
+        self.environment = environment;
+        texture::shrink_to_fit(&mut self.textures, texture::MAX_TEXELS - taken)
+    }
+
+    /// The texels of the textures and the environment together.
+    pub fn texels(&self) -> u64 {
+        let textures: u64 = self.textures.iter().map(|t| t.texels.len() as u64).sum();
+        textures + self.environment.as_ref().map_or(0, environment_texels)
+    }
+
     /// Checks every invariant the tracers rely on: finite numbers, positive radii, unit-length normals
     /// that exist, material indices in range, a camera that can see.
     pub fn validate(&self) -> Result<(), InputError> {
@@ -232,12 +256,15 @@ impl Scene {
         for (i, texture) in self.textures.iter().enumerate() {
             texture.validate().map_err(|e| e.with_element(Element::Texture(i)))?;
         }
-        let texels: u64 = self.textures.iter().map(|t| t.texels.len() as u64).sum();
+        if let Some(environment) = &self.environment {
+            environment.validate()?;
+        }
+        let texels = self.texels();
         if texels > texture::MAX_TEXELS {
             return Err(InputError::of(
                 Element::Scene,
                 format!(
-                    "the textures hold {texels} texels, more than the {} a scene takes",
+                    "the textures and the environment hold {texels} texels, more than the {} a scene takes",
                     texture::MAX_TEXELS
                 ),
             ));

@@ -163,14 +163,14 @@ impl Texture {
     }
 }
 
-/// Halves the largest of `textures` until they hold at most [`MAX_TEXELS`] together (a texture
-/// of one texel cannot shrink, and with a million of them the sum cannot exceed the limit).
-/// Returns how many halvings it took.
-pub fn shrink_to_fit(textures: &mut [Texture]) -> usize {
+/// Halves the largest of `textures` until they hold at most `budget` texels together ([`MAX_TEXELS`]
+/// or less; a texture of one texel cannot shrink, and with a million of them the sum cannot exceed
+/// the limit). Returns how many halvings it took.
+pub fn shrink_to_fit(textures: &mut [Texture], budget: u64) -> usize {
     let size = |t: &Texture| t.width as u64 * t.height as u64;
     let mut total: u64 = textures.iter().map(size).sum();
     let mut halvings = 0;
-    while total > MAX_TEXELS {
+    while total > budget {
         let Some(largest) = textures.iter_mut().filter(|t| size(t) > 1).max_by_key(|t| size(t)) else {
             break;
         };
@@ -226,7 +226,7 @@ mod tests {
         };
         let small = Texture::from_linear(2, 2, &[[1.0; 4]; 4], [Wrap::Repeat; 2]);
         let mut textures = vec![big.clone(), big, small.clone()];
-        assert_eq!(shrink_to_fit(&mut textures), 2);
+        assert_eq!(shrink_to_fit(&mut textures, MAX_TEXELS), 2);
         assert_eq!([textures[0].width, textures[1].width], [2048, 2048]);
         assert_eq!(textures[2], small);
     }

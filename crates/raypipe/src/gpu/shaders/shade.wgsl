@@ -260,12 +260,17 @@ fn gltf_surface(material: Material) -> GltfSurface {
         material.specular_factor, material.specular_color);
 }
 
-// A glTF surface's direct light: the ambient light on its diffuse share (times ambient_share),
-// plus, for every light that it faces and that nothing blocks, E times the BRDF times the cosine.
+// A glTF surface's direct light: the ambient light (the environment's irradiance, where the scene
+// has one) on its diffuse share, times ambient_share; plus, for every light that it faces and that
+// nothing blocks, E times the BRDF times the cosine.
 fn gltf_direct_light(surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material, share: f32) -> vec3<f32> {
     let s = gltf_surface(material);
     let diffuse = s.base * ((1.0 - s.metallic) * (1.0 - s.transmission));
-    var color = globals.scene.ambient * share * diffuse;
+    var ambient = vec3<f32>(globals.scene.ambient);
+    if (HAS_ENVIRONMENT) {
+        ambient = environment_irradiance(shading);
+    }
+    var color = ambient * share * diffuse;
     let origin = offset_origin(surface, normal);
     for (var i = 0u; i < globals.scene.light_count; i++) {
         let light = load_light(i);

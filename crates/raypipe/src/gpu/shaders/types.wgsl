@@ -23,6 +23,12 @@ struct SceneInfo {
     light_count: u32,
     material_count: u32,
     triangle_count: u32,
+    // The environment's radiance and irradiance texture maps (NONE: the background), its
+    // intensity, and the cos and sin of its turn about +y.
+    environment_map: u32,
+    irradiance_map: u32,
+    environment_intensity: f32,
+    environment_turn: vec2<f32>,
 }
 
 // The threaded BVH's quantization frame: root box minimum, quantum per axis, its inverse.

@@ -98,7 +98,7 @@ impl Materials {
                 .map_err(|e| format!("{what}: {e}"))?;
             self.materials.push(read);
         }
-        let halvings = shrink_to_fit(&mut self.textures);
+        let halvings = shrink_to_fit(&mut self.textures, MAX_TEXELS);
         if halvings > 0 {
             notices.push(format!(
                 "textures halved {halvings} times to fit the {MAX_TEXELS} texels a render holds"

@@ -1,0 +1,37 @@
+//! The environment's radiance for escaping rays and its light on glTF surfaces: the twin of
+//! `shaders/environment.wgsl`.
+
+use super::intersect::v3;
+use super::maps::sample_texture;
+use crate::bvh::layout::NONE;
+use crate::records::PackedScene;
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// Where direction `d` (unit) reads an equirectangular map of the environment: `d` turned back by
+/// the environment's rotation about +y, then u = 0.5 + atan2(x, -z) / 2π, v = acos(y) / π.
+pub fn environment_uv(scene: &PackedScene, d: Vec3) -> Vec2 {
+    let [cos, sin] = scene.globals.scene.environment_turn;
+    let x = cos * d.x - sin * d.z;
+    let z = sin * d.x + cos * d.z;
+    Vec2::new(0.5 + x.atan2(-z) * (0.5 / PI), d.y.clamp(-1.0, 1.0).acos() * (1.0 / PI))
+}
+
+/// What a ray leaving the scene along `dir` brings back: the environment's radiance, or the
+/// background colour where the scene has none.
+pub fn escaped_radiance(scene: &PackedScene, dir: Vec3) -> Vec3 {
+    let info = &scene.globals.scene;
+    if info.environment_map == NONE {
+        return v3(info.background);
+    }
+    let map = &scene.texture_maps[info.environment_map as usize];
+    info.environment_intensity * sample_texture(scene, map, environment_uv(scene, dir)).truncate()
+}
+
+/// The environment's irradiance over π on a surface facing `normal`: what a white Lambert surface
+/// there reflects.
+pub fn environment_irradiance(scene: &PackedScene, normal: Vec3) -> Vec3 {
+    let info = &scene.globals.scene;
+    let map = &scene.texture_maps[info.irradiance_map as usize];
+    info.environment_intensity * sample_texture(scene, map, environment_uv(scene, normal)).truncate()
+}
