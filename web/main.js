@@ -120,12 +120,16 @@ async function main() {
     select.value = scene;
   }
   wire(viewer);
+  // The environment first: it lights the model opened after it.
+  const environment = new URLSearchParams(window.location.search).get("environment");
+  if (environment) await fetchModel(viewer, environment);
   const model = new URLSearchParams(window.location.search).get("model");
   if (model) await fetchModel(viewer, model);
 }
 
-/// Opens `?model=URL`, fetched relative to the page: the file's name (the URL's last segment) picks
-/// its format. A failed fetch shows its line, as a broken file does, and the scene stays.
+/// Opens `?model=URL` or `?environment=URL`, fetched relative to the page: the file's name (the
+/// URL's last segment) picks its format. A failed fetch shows its line, as a broken file does, and
+/// the scene stays.
 async function fetchModel(viewer, url) {
   let response;
   try {

@@ -111,9 +111,18 @@ function reference(spec, width, height) {
 
 /// `raypipe render FILE --device cpu` at a size: the reference of a file the page opens.
 function fileReference(file, width, height, flags = []) {
-  const out = path.join(references, `${path.basename(file)}-${width}x${height}${flags.join("")}.png`);
+  const named = flags.map((flag) => path.basename(flag)).join("");
+  const out = path.join(references, `${path.basename(file)}-${width}x${height}${named}.png`);
   execFileSync(raypipe, ["render", file, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, ...flags, "-q", "-o", out]);
   return out;
+}
+
+/// An environment in `dir`: `raypipe render SPEC` at `width` x `height` written as EXR (2:1, a colour
+/// for every direction, unless the size says otherwise).
+function environmentFile(dir, name, spec = "random:40:3", width = 64, height = 32) {
+  const file = path.join(dir, name);
+  execFileSync(raypipe, ["render", spec, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "-q", "-o", file]);
+  return file;
 }
 
 /// `raypipe diff --tolerance color` of `actual` against `expected`: the GPU-against-CPU colour
@@ -261,6 +270,21 @@ for (const backend of ["webgpu", "webgl2"]) {
       const tonedShot = await screenshot(page, `${backend}-box-textured-aces`);
       assertSimilar(tonedShot, fileReference(BOX_TEXTURED, size.width, size.height, ["--tonemap", "aces", "--exposure", "1"]));
 
+      // An environment file lights the model as `render --environment` does; one that is not 2:1
+      // shows its error, and the environment stays.
+      const sky = environmentFile(output, "sky.exr");
+      await page.setInputFiles("#file", { name: "sky.exr", mimeType: "image/x-exr", buffer: fs.readFileSync(sky) });
+      const lit = await until(page, (s) => s.environment === "sky.exr" && !s.busy && s.samples >= s.spp, "the environment");
+      await until(page, (s, frames) => s.frames >= frames, "a frame in the environment", { arg: lit.frames + 2 });
+      const litShot = await screenshot(page, `${backend}-box-textured-sky`);
+      assertSimilar(litShot, fileReference(BOX_TEXTURED, size.width, size.height, ["--tonemap", "aces", "--exposure", "1", "--environment", sky]));
+      const square = environmentFile(output, "square.exr", "whitted", 32, 32);
+      await page.setInputFiles("#file", { name: "square.exr", mimeType: "image/x-exr", buffer: fs.readFileSync(square) });
+      const refused = await until(page, (s) => s.error != null, "the square environment's error", { timeout: 30_000 });
+      assert.match(refused.error, /^square\.exr: 32x32: an equirectangular environment is twice as wide as it is high$/);
+      assert.equal(refused.environment, "sky.exr");
+      await shows(page, refused.error);
+
       const glb = Buffer.from("glTF\x02\x00\x00\x00\xff\x00\x00\x00", "latin1");
       await page.setInputFiles("#file", { name: "cut.glb", mimeType: "model/gltf-binary", buffer: glb });
       const broken = await until(page, (s) => s.error != null, "the cut file's error", { timeout: 30_000 });
@@ -326,6 +350,16 @@ for (const backend of ["webgpu", "webgl2"]) {
         fileReference(tetrahedron, size.width, size.height, ["--floor", "none"]));
       assert.deepEqual(floating.errors, []);
       await floating.close();
+
+      // ?environment=: fetched before the model, it lights the model as `render --environment` does.
+      const sky = environmentFile(models, "sky.exr");
+      const lit = await open(`environment=test-models/sky.exr&model=test-models/tetrahedron.obj&${query}`);
+      const shownLit = await until(lit, (s) => s.scene === "tetrahedron.obj" && s.environment === "sky.exr" && !s.busy && s.samples >= s.spp, "the model in the environment");
+      await until(lit, (s, frames) => s.frames >= frames, "a frame of the model", { arg: shownLit.frames + 2 });
+      assertSimilar(await screenshot(lit, `${backend}-model-url-environment`),
+        fileReference(tetrahedron, size.width, size.height, ["--environment", sky]));
+      assert.deepEqual(lit.errors, []);
+      await lit.close();
 
       for (const [file, line] of [["missing.ply", /^test-models\/missing\.ply: cannot fetch: HTTP 404/], ["broken.ply", /^broken\.ply:11: /]]) {
         const failing = await open(`model=test-models/${file}&${query}`);

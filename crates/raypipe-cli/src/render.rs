@@ -153,7 +153,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let outcome = render(&packed, &options).map_err(|e| e.context(args.scene.spec.clone()))?;
     let frame = &outcome.frame;
     io::write_as(
-        &aov_image(args.scene.aov, is_exr, frame, &args.scene.display_transform()),
+        &aov_image(args.scene.aov, is_exr, frame, &args.scene.display_transform(&scene)),
         &output,
         is_exr,
     )?;
@@ -310,13 +310,13 @@ fn render_sequence(
         if pattern {
             let path = numbered(&name, frame).expect("checked above");
             io::write_as(
-                &aov_image(args.scene.aov, is_exr, image, &args.scene.display_transform()),
+                &aov_image(args.scene.aov, is_exr, image, &args.scene.display_transform(scene)),
                 Path::new(&path),
                 is_exr,
             )?;
         } else if Some(frame) == last {
             io::write_as(
-                &aov_image(args.scene.aov, is_exr, image, &args.scene.display_transform()),
+                &aov_image(args.scene.aov, is_exr, image, &args.scene.display_transform(scene)),
                 output,
                 is_exr,
             )?;

@@ -58,7 +58,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "DEGREES", allow_hyphen_values = true, value_parser = parse_finite)]
     pub environment_rotation: Option<f32>,
     /// Multiply the environment's radiance by this (finite, not negative).
-    #[arg(long, value_name = "F", value_parser = parse_intensity)]
+    #[arg(long, value_name = "F", allow_hyphen_values = true, value_parser = parse_intensity)]
     pub environment_intensity: Option<f32>,
     #[arg(long)]
     pub width: Option<u32>,
@@ -91,9 +91,9 @@ pub struct SceneArgs {
     #[arg(long, value_name = "EV", default_value_t = 0.0, value_parser = parse_exposure, allow_hyphen_values = true)]
     pub exposure: f32,
     /// How exposed radiance is brought into [0, 1] for PNG and the window: clipped (none), Khronos
-    /// PBR Neutral, or ACES filmic.
-    #[arg(long, value_parser = choice::<ToneMap>(), default_value_t)]
-    pub tonemap: ToneMap,
+    /// PBR Neutral, or ACES filmic (default neutral for a glTF file, none for other scenes).
+    #[arg(long, value_parser = choice::<ToneMap>())]
+    pub tonemap: Option<ToneMap>,
     /// With a glTF that has animations: the one that plays, by name or index (default the first).
     #[arg(long, value_name = "NAME|INDEX")]
     pub animation: Option<String>,
@@ -146,19 +146,19 @@ impl SceneArgs {
                 self.spec
             );
         }
+        self.set_environment(&mut scene)?;
         // Legal but probably not meant: said once, here, rather than per packed frame.
         if scene.spheres.is_empty() && scene.triangles.is_empty() && scene.planes.is_empty() {
             log::warn!(
                 "{}: the scene holds nothing to hit: the image is its background",
                 self.spec
             );
-        } else if scene.lights.is_empty() {
+        } else if scene.lights.is_empty() && scene.environment.is_none() {
             log::warn!(
                 "{}: the scene has no lights: only its ambient term shades it",
                 self.spec
             );
         }
-        self.set_environment(&mut scene)?;
         let settings = &mut scene.settings;
         settings.width = self.width.unwrap_or(settings.width);
         settings.height = self.height.unwrap_or(settings.height);
@@ -276,11 +276,12 @@ fn parse_exposure(text: &str) -> Result<f32, String> {
 }
 
 impl SceneArgs {
-    /// What PNG output and the window apply to colour: `--exposure` and `--tonemap`.
-    pub fn display_transform(&self) -> DisplayTransform {
+    /// What PNG output and the window apply to `scene`'s colour: `--exposure`, and `--tonemap` or
+    /// the scene's own tone map.
+    pub fn display_transform(&self, scene: &Scene) -> DisplayTransform {
         DisplayTransform {
             exposure: self.exposure,
-            tone_map: self.tonemap,
+            tone_map: self.tonemap.unwrap_or(scene.tone_map),
         }
     }
 }

@@ -7,8 +7,8 @@ use clap::Args;
 use raypipe::image::Frame;
 use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::Aov;
-use raypipe::scene::Scene;
 use raypipe::scene::model::ModelOptions;
+use raypipe::scene::{Environment, Scene};
 use raypipe_view::{Host, HostError, Modes, Script, ViewerOptions};
 use std::cell::Cell;
 use std::path::{Path, PathBuf};
@@ -63,6 +63,17 @@ impl Host for CliHost {
         load_scene(&spec, &ModelOptions::default()).map_err(|e| host_error(path, &e))
     }
 
+    fn load_environment(&self, path: &Path) -> Result<Environment, HostError> {
+        let (environment, halvings) = Environment::load(path).map_err(|e| host_error(path, &e.into()))?;
+        if halvings > 0 {
+            log::warn!(
+                "{}: halved {halvings} times to fit the texels a render holds",
+                path.display()
+            );
+        }
+        Ok(environment)
+    }
+
     fn save(&self, frame: &Frame, view: Aov, transform: &DisplayTransform, path: &Path) -> Result<(), HostError> {
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         io::write(&aov_image(view, is_exr, frame, transform), path).map_err(|e| host_error(path, &e))
@@ -111,8 +122,9 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             view: args.scene.aov,
             paused: args.paused,
             vsync: !args.no_vsync,
-            display: args.scene.display_transform(),
+            display: args.scene.display_transform(&scene),
         },
+        tone_map_chosen: args.scene.tonemap.is_some(),
         time: match args.scene.time {
             Some(t) => args.scene.scene_time(&scene, t)?,
             None => 0.0,

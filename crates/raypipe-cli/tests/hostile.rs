@@ -582,3 +582,119 @@ fn hostile_gltf_files_are_one_line_and_exit_2() {
         ],
     );
 }
+
+/// A flat (not run-length encoded) Radiance HDR of `width` x `height` texels of RGBE (m, m, m, e).
+fn flat_hdr(width: u32, height: u32, rgbe: [u8; 4]) -> Vec<u8> {
+    let mut bytes = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {height} +X {width}\n").into_bytes();
+    for _ in 0..width * height {
+        bytes.extend_from_slice(&rgbe);
+    }
+    bytes
+}
+
+#[test]
+fn environments_are_read_or_refused_in_one_line() {
+    let dir = test_dir("hostile-environment");
+    // Mantissa 128 at exponent 129: radiance 1 (Radiance's RGBE, (m + 0.5) / 256 · 2^(e − 128) in
+    // some readers: within half a percent).
+    let flat = dir.join("flat.hdr");
+    std::fs::write(&flat, flat_hdr(8, 4, [128, 128, 128, 129])).unwrap();
+    let out = dir.join("lit.exr");
+    let output = raypipe(&[
+        "render",
+        "whitted",
+        "--device",
+        "cpu",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--environment",
+        path_str(&flat),
+        "--environment-intensity",
+        "0.5",
+        "-q",
+        "-o",
+        path_str(&out),
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let image = io::read(&out).unwrap();
+    // The top left corner sees the sky: the environment at half intensity.
+    for c in 0..3 {
+        assert!((image.data[c] - 0.5).abs() < 0.003, "{:?}", &image.data[..3]);
+    }
+
+    let exr = |name: &str, width: u32, height: u32, bad: Option<(u32, u32, f32)>| {
+        let mut data = vec![0.25f32; (width * height * 3) as usize];
+        if let Some((x, y, value)) = bad {
+            data[((y * width + x) * 3 + 1) as usize] = value;
+        }
+        let path = dir.join(name);
+        let image = raypipe::image::FloatImage {
+            width,
+            height,
+            channels: ["R", "G", "B"].map(String::from).to_vec(),
+            data,
+        };
+        io::write(&image, &path).unwrap();
+        path
+    };
+    let render = |environment: &Path, extra: &[&str]| {
+        let mut args = vec!["render", "whitted", "--device", "cpu", "--width", "8", "--height", "6"];
+        args.extend_from_slice(&["--environment", path_str(environment)]);
+        args.extend_from_slice(extra);
+        let target = dir.join("never.png");
+        args.extend_from_slice(&["-o", path_str(&target)]);
+        let output = raypipe(&args);
+        assert!(!target.exists(), "{args:?} wrote an image");
+        output
+    };
+    assert_clean_error(
+        &render(&exr("square.exr", 8, 8, None), &[]),
+        &["square.exr: 8x8: an equirectangular environment is twice as wide as it is high"],
+    );
+    assert_clean_error(
+        &render(&exr("nan.exr", 8, 4, Some((3, 1, f32::NAN))), &[]),
+        &["nan.exr: texel (3, 1) is not finite"],
+    );
+    assert_clean_error(
+        &render(&exr("inf.exr", 8, 4, Some((5, 2, f32::INFINITY))), &[]),
+        &["inf.exr: texel (5, 2) is not finite"],
+    );
+    assert_clean_error(
+        &render(&exr("negative.exr", 8, 4, Some((0, 3, -1.0))), &[]),
+        &["negative.exr: texel (0, 3) is negative"],
+    );
+    let garbage = dir.join("garbage.hdr");
+    std::fs::write(&garbage, b"#?RADIANCE\nthis is no image").unwrap();
+    assert_clean_error(&render(&garbage, &[]), &["garbage.hdr: cannot decode Radiance HDR"]);
+    let truncated = dir.join("truncated.exr");
+    std::fs::write(&truncated, &std::fs::read(exr("whole.exr", 8, 4, None)).unwrap()[..200]).unwrap();
+    assert_clean_error(&render(&truncated, &[]), &["truncated.exr: cannot decode OpenEXR"]);
+    assert_clean_error(
+        &render(&dir.join("missing.hdr"), &[]),
+        &["missing.hdr: cannot read environment"],
+    );
+    let folder = dir.join("folder.hdr");
+    std::fs::create_dir_all(&folder).unwrap();
+    assert_clean_error(
+        &render(&folder, &[]),
+        &["folder.hdr: cannot read environment: not a regular file"],
+    );
+    assert_clean_error(&render(Path::new("/dev/zero"), &[]), &["unknown environment format"]);
+    let png = dir.join("sky.png");
+    tiny_render(&png, 8, 4);
+    assert_clean_error(&render(&png, &[]), &["sky.png: unknown environment format"]);
+    assert_clean_error(
+        &render(&flat, &["--environment-intensity", "-1"]),
+        &["not an intensity"],
+    );
+    assert_clean_error(
+        &render(&flat, &["--environment-rotation", "nan"]),
+        &["not a finite number"],
+    );
+    assert_clean_error(
+        &raypipe(&["render", "whitted", "--device", "cpu", "--environment-rotation", "10"]),
+        &["--environment-rotation and --environment-intensity need an environment"],
+    );
+}

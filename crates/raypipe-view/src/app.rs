@@ -6,6 +6,7 @@ use crate::player::{FlyKeys, Player, Screen, Timings, overlay_pass};
 use crate::{Host, ModeKey, Modes, ScreenshotError, Script, Summary, ViewError, ViewerOptions};
 use pollster::block_on;
 use raypipe::gpu::GpuContext;
+use raypipe::scene::environment::is_environment_file;
 use std::sync::Arc;
 use web_time::Instant;
 use winit::application::ApplicationHandler;
@@ -143,6 +144,7 @@ impl Viewer {
             self.options.samples,
         ))?;
         player.start_at(self.options.time);
+        player.tone_map_chosen = self.options.tone_map_chosen;
         if self.options.script.is_some() {
             player.clock.step = Some(SCRIPT_STEP);
         }
@@ -180,11 +182,22 @@ impl Viewer {
         }
     }
 
-    /// A dropped file: its scene replaces the current one, or its one-line error shows and the
-    /// current scene stays.
+    /// A dropped file: its scene replaces the current one, or its environment lights it; or its
+    /// one-line error shows and the current scene and environment stay.
     fn open_file(&mut self, path: &std::path::Path) {
         let Some(gpu) = &mut self.gpu else { return };
         let name = path.display().to_string();
+        if is_environment_file(&name) {
+            match self.host.load_environment(path) {
+                Ok(environment) => {
+                    let request = gpu.player.relight(Some(environment));
+                    let built = block_on(request.build(&gpu.screen.ctx));
+                    gpu.player.install(request, built);
+                }
+                Err(why) => gpu.player.say(why.to_string()),
+            }
+            return;
+        }
         match self.host.load(path) {
             Ok(scene) => {
                 let request = gpu.player.open(name, scene);

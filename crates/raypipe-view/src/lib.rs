@@ -25,7 +25,7 @@ use raypipe::image::Frame;
 use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
-use raypipe::scene::Scene;
+use raypipe::scene::{Environment, Scene};
 use std::path::{Path, PathBuf};
 
 /// What the viewer traces with; every field can change while it runs.
@@ -162,6 +162,9 @@ pub struct ViewerOptions {
     /// The scene, at its starting image size (the window's inner size) and camera.
     pub scene: Scene,
     pub modes: Modes,
+    /// Whether `modes`' tone map was asked for: if not, a file dropped later is shown with its
+    /// scene's own (a glTF's Khronos PBR Neutral, say).
+    pub tone_map_chosen: bool,
     /// Samples per pixel a still frame gathers, one per frame, before the viewer stops tracing
     /// (progressive anti-aliasing; 1 shows `render`'s unjittered image).
     pub samples: u32,
@@ -175,6 +178,8 @@ pub struct ViewerOptions {
 pub trait Host {
     /// Loads a dropped file as a scene.
     fn load(&self, path: &Path) -> Result<Scene, HostError>;
+    /// Loads a dropped `.hdr` or `.exr` as an environment for the current scene.
+    fn load_environment(&self, path: &Path) -> Result<Environment, HostError>;
     /// Saves a frame (the linear frame, as read back) to `path`, as `raypipe render` writes files:
     /// `view`, with colour through `transform`.
     fn save(&self, frame: &Frame, view: Aov, transform: &DisplayTransform, path: &Path) -> Result<(), HostError>;

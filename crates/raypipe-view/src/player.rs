@@ -14,7 +14,7 @@ use crate::{CameraControl, Modes};
 use glam::Vec3;
 use raypipe::gpu::{Display, GpuContext, GpuError};
 use raypipe::image::Frame;
-use raypipe::scene::{Camera, Scene};
+use raypipe::scene::{Camera, Environment, Scene};
 use std::collections::HashSet;
 use web_time::Instant;
 
@@ -193,6 +193,9 @@ pub struct Player {
     pub rate: FrameRate,
     /// Frames finished.
     pub frames: u32,
+    /// Whether the tone map was chosen (by the host's settings or through `set_modes`): until it
+    /// is, each scene opened is shown with its own (`Scene::tone_map`).
+    pub tone_map_chosen: bool,
     /// Tracer requests made: a tracer that lands after a later request is dropped.
     requested: u32,
     last_frame: Instant,
@@ -204,6 +207,8 @@ pub struct TracerRequest {
     pub modes: Modes,
     /// A new scene and its name; `None` keeps the current one.
     pub new_scene: Option<(String, Scene)>,
+    /// The current scene's new environment (`Some(None)` takes it away); its camera and clock stay.
+    pub relight: Option<Option<Environment>>,
     /// What the tracer traces: the new scene, or a copy of the current one.
     scene: Scene,
     size: (u32, u32),
@@ -241,6 +246,7 @@ impl Player {
             message: None,
             rate: FrameRate::default(),
             frames: 0,
+            tone_map_chosen: false,
             requested: 0,
             last_frame: Instant::now(),
             last_presented: Instant::now(),
@@ -423,6 +429,9 @@ impl Player {
     /// Switches to `asked`: at once where the current tracer serves it, else by the request
     /// returned. Modes the device cannot serve are refused with their message.
     pub fn set_modes(&mut self, asked: Modes) -> Option<TracerRequest> {
+        if asked.display.tone_map != self.modes.display.tone_map {
+            self.tone_map_chosen = true;
+        }
         if asked.needs_new_tracer(&self.modes) {
             return Some(self.request(asked, None));
         }
@@ -435,7 +444,19 @@ impl Player {
 
     /// A request for a tracer of `scene`, which replaces the current one when it is built.
     pub fn open(&mut self, name: String, scene: Scene) -> TracerRequest {
-        self.request(self.modes, Some((name, scene)))
+        let mut modes = self.modes;
+        if !self.tone_map_chosen {
+            modes.display.tone_map = scene.tone_map;
+        }
+        self.request(modes, Some((name, scene)))
+    }
+
+    /// A request for the current scene in `environment` (or none), seen as it is now.
+    pub fn relight(&mut self, environment: Option<Environment>) -> TracerRequest {
+        let mut request = self.request(self.modes, None);
+        request.scene.set_environment(environment.clone());
+        request.relight = Some(environment);
+        request
     }
 
     fn request(&mut self, modes: Modes, new_scene: Option<(String, Scene)>) -> TracerRequest {
@@ -447,6 +468,7 @@ impl Player {
         TracerRequest {
             modes,
             new_scene,
+            relight: None,
             scene,
             size: self.tracer.renderer.size(),
             camera,
@@ -471,6 +493,9 @@ impl Player {
                 }
                 self.modes = request.modes;
                 self.message = None;
+                if let Some(environment) = request.relight {
+                    self.scene.set_environment(environment);
+                }
                 if let Some((name, scene)) = request.new_scene {
                     self.camera = CameraControl::new(scene.camera);
                     self.scene = scene;

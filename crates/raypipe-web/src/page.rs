@@ -11,8 +11,9 @@
 use crate::params::{Setting, StartParams, WebBackend};
 use raypipe::Choice;
 use raypipe::gpu::GpuContext;
-use raypipe::scene::Scene;
+use raypipe::scene::environment::is_environment_file;
 use raypipe::scene::model::{Floor, ModelOptions};
+use raypipe::scene::{Environment, Scene};
 use raypipe_view::{FlyKeys, ModeKey, Modes, Player, Screen, Timings, TracerRequest};
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -42,6 +43,9 @@ struct Page {
     floor: Floor,
     /// The file the scene was opened from, kept to open it again when the floor changes.
     opened: Option<OpenedFile>,
+    /// The environment opened here (`?environment=`, a dropped .hdr or .exr): it lights every
+    /// scene opened after it, in place of the scene's own.
+    environment: Option<(String, Environment)>,
 }
 
 /// Starts the viewer on `canvas` with the settings of `query` (the URL's `?...`). Where the page
@@ -192,6 +196,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         .await
         .map_err(|why| format!("{}: {why}", params.scene))?;
     player.message = (!errors.is_empty()).then(|| errors.join("; "));
+    player.tone_map_chosen = params.tone_map_chosen;
     player.start_at(params.time);
     player.clock.speed = params.speed;
     Ok(Page {
@@ -204,6 +209,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         first_frame_ms: None,
         floor: params.floor,
         opened: None,
+        environment: None,
     })
 }
 
@@ -279,6 +285,12 @@ impl Page {
         set("tonemap", modes.display.tone_map.name().into());
         set("paused", modes.paused.into());
         set("floor", (self.floor != Floor::None).into());
+        set(
+            "environment",
+            self.environment
+                .as_ref()
+                .map_or(JsValue::NULL, |(name, _)| name.as_str().into()),
+        );
         set("moving", player.scene.motion.is_some().into());
         set("time", player.clock.time.into());
         set("duration", optional(player.duration().map(f64::from)));
@@ -330,6 +342,9 @@ impl Page {
                 let request = {
                     let mut this = page.borrow_mut();
                     (scene.settings.width, scene.settings.height) = this.screen.size();
+                    if let Some((_, environment)) = &this.environment {
+                        scene.set_environment(Some(environment.clone()));
+                    }
                     this.player.open(name, scene)
                 };
                 Page::build(page, request, source);
@@ -413,7 +428,11 @@ impl Viewer {
                 self.page.borrow_mut().player.clock.speed = speed;
                 return;
             }
-            Setting::Model(_) | Setting::Width(_) | Setting::Height(_) | Setting::Backend(_) => {
+            Setting::Model(_)
+            | Setting::Environment(_)
+            | Setting::Width(_)
+            | Setting::Height(_)
+            | Setting::Backend(_) => {
                 return self.fail(format!(
                     "{key} is set in the page's address only (reload with ?{key}={value})"
                 ));
@@ -446,15 +465,29 @@ impl Viewer {
         self.fail(why);
     }
 
-    /// Opens a file the page was given (the file input, a drop, or the `model` URL): a TOML scene,
-    /// a PLY, OBJ or OFF model, or a glTF, parsed here. A broken one shows its error and the
+    /// Opens a file the page was given (the file input, a drop, or the `model` or `environment`
+    /// URL): a TOML scene, a PLY, OBJ or OFF model, a glTF, or an environment, parsed here. A broken one shows its error and the
     /// current scene stays.
     pub fn open_file(&self, name: String, bytes: Vec<u8>) {
         self.open_bytes(name, Rc::new(bytes));
     }
 
-    /// A file's bytes parsed as its name says, a model file on the page's floor.
+    /// A file's bytes parsed as its name says, a model file on the page's floor; an environment
+    /// lights the current scene and those opened after it.
     fn open_bytes(&self, name: String, bytes: Rc<Vec<u8>>) {
+        if is_environment_file(&name) {
+            return match Environment::decode(&name, &bytes) {
+                Ok((environment, _)) => {
+                    let request = {
+                        let mut this = self.page.borrow_mut();
+                        this.environment = Some((name, environment.clone()));
+                        this.player.relight(Some(environment))
+                    };
+                    Page::build(&self.page, request, None);
+                }
+                Err(why) => self.fail(why.in_origin(&name).to_string()),
+            };
+        }
         let mut options = ModelOptions::default();
         if raypipe::scene::is_model_file(std::path::Path::new(&name)) {
             options.floor = self.page.borrow().floor;

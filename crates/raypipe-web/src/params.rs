@@ -8,6 +8,7 @@ use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE, ToneMap};
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::MAX_DEPTH_LIMIT;
+use raypipe::scene::environment::ENVIRONMENT_EXTENSIONS;
 use raypipe::scene::model::Floor;
 
 /// The browser API the page traces through.
@@ -49,6 +50,8 @@ pub enum Setting {
     Scene(String),
     /// A model or scene file to fetch, by a URL relative to the page (the page's script fetches it).
     Model(String),
+    /// An environment (.hdr, .exr) to fetch, by a URL relative to the page, before the model.
+    Environment(String),
     Accel(Accel),
     Builder(Builder),
     Memory(MemoryMode),
@@ -73,8 +76,25 @@ pub enum Setting {
 
 /// The keys, for messages.
 pub const KEYS: &[&str] = &[
-    "scene", "model", "accel", "builder", "memory", "pipeline", "depth", "aov", "paused", "floor", "time", "speed",
-    "spp", "exposure", "tonemap", "width", "height", "backend",
+    "scene",
+    "model",
+    "environment",
+    "accel",
+    "builder",
+    "memory",
+    "pipeline",
+    "depth",
+    "aov",
+    "paused",
+    "floor",
+    "time",
+    "speed",
+    "spp",
+    "exposure",
+    "tonemap",
+    "width",
+    "height",
+    "backend",
 ];
 
 impl Setting {
@@ -109,6 +129,8 @@ impl Setting {
             "scene" => Setting::Scene(value.to_string()),
             "model" if value.is_empty() => return Err("model=: give a file's URL".into()),
             "model" => Setting::Model(value.to_string()),
+            "environment" if value.is_empty() => return Err("environment=: give a file's URL".into()),
+            "environment" => Setting::Environment(value.to_string()),
             "accel" => Setting::Accel(choice(key, value)?),
             "builder" => Setting::Builder(choice(key, value)?),
             "memory" => Setting::Memory(choice(key, value)?),
@@ -143,6 +165,8 @@ pub struct StartParams {
     pub scene: String,
     /// A file to fetch and open once the page runs, by a URL relative to the page.
     pub model: Option<String>,
+    /// An environment to fetch and light every scene with, by a URL relative to the page.
+    pub environment: Option<String>,
     /// `None`: the adapter's default (`GpuContext::default_accel`: the stack walk on a software
     /// adapter, the threaded walk on others).
     pub accel: Option<Accel>,
@@ -164,6 +188,8 @@ pub struct StartParams {
     pub spp: u32,
     /// The colour view's exposure and tone map.
     pub display: DisplayTransform,
+    /// Whether `?tonemap=` chose the tone map; if not, each scene opened shows with its own.
+    pub tone_map_chosen: bool,
     pub width: u32,
     pub height: u32,
     /// `None`: WebGPU where the browser has it, else WebGL2.
@@ -175,6 +201,7 @@ impl Default for StartParams {
         Self {
             scene: "whitted".into(),
             model: None,
+            environment: None,
             accel: None,
             builder: Builder::Lbvh,
             memory: None,
@@ -187,6 +214,7 @@ impl Default for StartParams {
             speed: 1.0,
             spp: 64,
             display: DisplayTransform::IDENTITY,
+            tone_map_chosen: false,
             width: 960,
             height: 540,
             backend: None,
@@ -213,6 +241,7 @@ impl StartParams {
         match setting {
             Setting::Scene(name) => self.scene = name,
             Setting::Model(url) => self.model = Some(url),
+            Setting::Environment(url) => self.environment = Some(url),
             Setting::Accel(accel) => self.accel = Some(accel),
             Setting::Builder(builder) => self.builder = builder,
             Setting::Memory(memory) => self.memory = Some(memory),
@@ -225,7 +254,10 @@ impl StartParams {
             Setting::Speed(speed) => self.speed = speed,
             Setting::Spp(spp) => self.spp = spp,
             Setting::Exposure(ev) => self.display.exposure = ev,
-            Setting::ToneMap(tone_map) => self.display.tone_map = tone_map,
+            Setting::ToneMap(tone_map) => {
+                self.display.tone_map = tone_map;
+                self.tone_map_chosen = true;
+            }
             Setting::Width(width) => self.width = width,
             Setting::Height(height) => self.height = height,
             Setting::Backend(backend) => self.backend = Some(backend),
@@ -249,10 +281,11 @@ pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
     ]
 }
 
-/// What the page's file input takes: every model and scene format the library reads.
+/// What the page's file input takes: every model, scene and environment format the library reads.
 pub fn file_accept() -> String {
     let models = raypipe::scene::model_extension_list().replace(' ', "");
-    format!("{models},.toml")
+    let environments: Vec<String> = ENVIRONMENT_EXTENSIONS.iter().map(|e| format!(".{e}")).collect();
+    format!("{models},.toml,{}", environments.join(","))
 }
 
 #[cfg(test)]
@@ -273,6 +306,7 @@ mod tests {
             ("aov", "normal"),
             ("spp", "1"),
             ("model", "models/bunny.ply"),
+            ("environment", "sky.hdr"),
             ("time", "1.5"),
             ("speed", "0.5"),
             ("floor", "0"),
@@ -286,6 +320,7 @@ mod tests {
             StartParams {
                 scene: "random:2000".into(),
                 model: Some("models/bunny.ply".into()),
+                environment: Some("sky.hdr".into()),
                 accel: Some(Accel::Threaded),
                 builder: Builder::Sah,
                 memory: Some(MemoryMode::Texture),
@@ -301,6 +336,7 @@ mod tests {
                     exposure: -1.5,
                     tone_map: ToneMap::Neutral,
                 },
+                tone_map_chosen: true,
                 width: 320,
                 height: 240,
                 backend: Some(WebBackend::WebGl2),
@@ -331,7 +367,7 @@ mod tests {
                 "accel=bvh: expected one of brute, stack, stackless, threaded",
                 "width=0: expected a whole number in 1..=8192",
                 "depth=33: expected a whole number in 0..=32",
-                "unknown setting 'colour' (known: scene, model, accel, builder, memory, pipeline, depth, aov, paused, floor, time, speed, spp, exposure, tonemap, width, height, backend)",
+                "unknown setting 'colour' (known: scene, model, environment, accel, builder, memory, pipeline, depth, aov, paused, floor, time, speed, spp, exposure, tonemap, width, height, backend)",
                 "time=NaN: expected a number of seconds in 0..=86400",
                 "exposure=inf: expected a number of stops in -64..=64",
                 "tonemap=filmic: expected one of none, neutral, aces",
@@ -349,7 +385,7 @@ mod tests {
                 assert!(Setting::parse(key, name).is_ok(), "{key}={name}");
             }
         }
-        assert_eq!(file_accept(), ".ply,.obj,.off,.gltf,.glb,.toml");
+        assert_eq!(file_accept(), ".ply,.obj,.off,.gltf,.glb,.toml,.hdr,.exr");
     }
 
     #[test]

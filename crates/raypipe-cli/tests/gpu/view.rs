@@ -373,7 +373,8 @@ fn after_dropping(dir: &Path, file: &Path, shot: &str) -> (PathBuf, Output) {
     (shot, output)
 }
 
-/// A dropped scene replaces the current one; a broken one shows its error and the scene stays.
+/// A dropped scene replaces the current one, a dropped environment lights it; a broken file shows
+/// its error and the scene stays.
 fn dropped_files_load_or_leave_the_scene(_: &GpuContext) {
     let dir = test_dir("view-drop");
     let broken = dir.join("broken.off");
@@ -393,6 +394,53 @@ fn dropped_files_load_or_leave_the_scene(_: &GpuContext) {
     .unwrap();
     let (dropped, _) = after_dropping(&dir, &scene, "dropped.png");
     matches(&dropped, &rendered(&dir, scene.to_str().unwrap(), &[])).unwrap();
+
+    // An environment lights the scene as `render --environment` does; one that is not 2:1 shows
+    // its error and the scene stays as it was.
+    let environment = dir.join("sky.exr");
+    let made = raypipe(&[
+        "render",
+        "random:40:3",
+        "--device",
+        "cpu",
+        "--width",
+        "64",
+        "--height",
+        "32",
+        "-q",
+        "-o",
+        environment.to_str().unwrap(),
+    ]);
+    succeeded(&made, "the environment");
+    let (lit, _) = after_dropping(&dir, &environment, "lit.png");
+    let with_environment = rendered(&dir, "whitted", &["--environment", environment.to_str().unwrap()]);
+    matches(&lit, &with_environment).unwrap();
+    assert!(
+        matches(&lit, &rendered(&dir, "whitted", &[])).is_err(),
+        "the environment did not show"
+    );
+    let square = dir.join("square.exr");
+    let made = raypipe(&[
+        "render",
+        "whitted",
+        "--device",
+        "cpu",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "-q",
+        "-o",
+        square.to_str().unwrap(),
+    ]);
+    succeeded(&made, "the square image");
+    let (kept, output) = after_dropping(&dir, &square, "kept-environment.png");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("square.exr: 32x32: an equirectangular environment"),
+        "{stderr}"
+    );
+    matches(&kept, &rendered(&dir, "whitted", &[])).unwrap();
 }
 
 pub fn tests() -> Vec<Test> {

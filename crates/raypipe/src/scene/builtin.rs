@@ -2,6 +2,7 @@
 
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere};
 use crate::error::InputError;
+use crate::image::tonemap::ToneMap;
 use crate::rng::SplitMix64;
 use glam::Vec3;
 use std::f32::consts::{PI, TAU};
@@ -174,6 +175,7 @@ pub fn whitted() -> Scene {
         textures: Vec::new(),
         motion: None,
         environment: None,
+        tone_map: ToneMap::None,
     }
 }
 
@@ -215,6 +217,7 @@ fn cloud_scene(spheres: Vec<Sphere>, floor_y: f32) -> Scene {
         textures: Vec::new(),
         motion: None,
         environment: None,
+        tone_map: ToneMap::None,
     }
 }
 

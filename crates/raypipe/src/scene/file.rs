@@ -5,7 +5,7 @@
 
 use super::animation::ClipChoice;
 use super::model::{DEFAULT_CREASE_DEGREES, MeshAs, Normals, Placement, SphereCount, add_mesh};
-use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere, unit_vector};
+use super::{Camera, Checker, Environment, Light, Material, Plane, RenderSettings, Scene, Sphere, unit_vector};
 use crate::choice::Choice;
 use crate::error::{Element, InputError};
 use glam::Vec3;
@@ -48,6 +48,10 @@ struct RenderDef {
     max_depth: Option<u32>,
     background: Option<[f32; 3]>,
     ambient: Option<f32>,
+    /// An equirectangular .hdr or .exr, relative to the scene file.
+    environment: Option<Spanned<String>>,
+    environment_rotation: Option<Spanned<f32>>,
+    environment_intensity: Option<Spanned<f32>>,
 }
 
 #[derive(Deserialize)]
@@ -210,6 +214,10 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
     let sphere_lines = tables.add_spheres(&def, &line)?;
     let plane_lines = tables.add_planes(&def, &line)?;
     tables.add_meshes(&def, base, &line)?;
+    // After the meshes, whose textures make room for it.
+    if let Some(render) = &def.render {
+        set_environment(&mut tables.scene, render, base, &line)?;
+    }
     let scene = tables.scene;
 
     // Semantic checks run on the finished scene; the element they name has its line here.
@@ -230,6 +238,43 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
         InputError { element, ..e }.with_line(at)
     })?;
     Ok(scene)
+}
+
+/// The `[render]` table's environment, read relative to `base`, turned and scaled as it says.
+fn set_environment(scene: &mut Scene, render: &RenderDef, base: &Path, line: LineOf) -> Result<(), InputError> {
+    let Some(file) = &render.environment else {
+        let mut keys = [&render.environment_rotation, &render.environment_intensity]
+            .into_iter()
+            .flatten();
+        return match keys.next() {
+            Some(key) => Err(at_element(
+                line(key.span()),
+                Element::Render,
+                "environment_rotation and environment_intensity need an environment",
+            )),
+            None => Ok(()),
+        };
+    };
+    let at = line(file.span());
+    let (mut environment, halvings) =
+        Environment::load(&base.join(file.get_ref())).map_err(|e| e.nested_in(None, at, Element::Render))?;
+    if halvings > 0 {
+        log::warn!(
+            "{}: halved {halvings} times to fit the texels a render holds",
+            file.get_ref()
+        );
+    }
+    if let Some(rotation) = &render.environment_rotation {
+        environment.rotation_degrees = *rotation.get_ref();
+    }
+    if let Some(intensity) = &render.environment_intensity {
+        environment.intensity = *intensity.get_ref();
+    }
+    environment
+        .validate()
+        .map_err(|e| e.with_element(Element::Render).with_line(at))?;
+    scene.set_environment(Some(environment));
+    Ok(())
 }
 
 /// The line a table starts on, from its span in the file's text.

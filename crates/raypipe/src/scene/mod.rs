@@ -25,6 +25,7 @@ pub use motion::{Bounce, Motion, Moved};
 pub use texture::{Texture, Wrap};
 
 use crate::error::{Element, InputError};
+use crate::image::tonemap::ToneMap;
 use glam::{Quat, Vec2, Vec3, Vec4};
 use material::validate_material;
 
@@ -149,6 +150,10 @@ pub struct Scene {
     /// Light from every direction: what escaping rays return instead of the background, and the
     /// irradiance on glTF surfaces instead of the ambient term. Set with [`Scene::set_environment`].
     pub environment: Option<Environment>,
+    /// The tone map the scene is meant to be shown with: Khronos PBR Neutral for a glTF file, as
+    /// glTF viewers show one; none (radiance clipped at 1) for the paper's scenes. A viewer's or
+    /// the command line's choice overrides it.
+    pub tone_map: ToneMap,
 }
 
 /// A similarity transform: rotate, scale uniformly, translate; what a placement does to a file.

@@ -2,12 +2,14 @@
 //! on its surface; and the scene `raypipe render MODEL` gets, which frames one model.
 
 use super::animation::{Animated, ClipChoice, CornerNormals, PlacedInstance};
+use super::environment::Environment;
 use super::gltf::GltfScene;
 use super::{
     Camera, Checker, Light, LightKind, Material, Motion, Plane, RenderSettings, Scene, Similarity, Sphere, Triangle,
 };
 use crate::bvh::aabb::Aabb;
 use crate::error::InputError;
+use crate::image::tonemap::ToneMap;
 use crate::mesh::{self, Mesh};
 use glam::Vec3;
 use std::sync::Arc;
@@ -500,7 +502,8 @@ pub fn gltf_scene(gltf: &GltfScene, shown: &str, options: &ModelOptions) -> Resu
     scene.lights = gltf.lights.iter().map(|light| place_light(light, &place)).collect();
     if scene.lights.is_empty() {
         // A glTF material answers E with its BRDF, a white diffuse one with E / pi: lights pi
-        // times a model's show a glTF model as bright as a model file's clay.
+        // times a model's show a glTF model as bright as a model file's clay. The studio gives
+        // its metals something to reflect and its shadows some light.
         scene.lights = framing
             .lights()
             .into_iter()
@@ -509,7 +512,9 @@ pub fn gltf_scene(gltf: &GltfScene, shown: &str, options: &ModelOptions) -> Resu
                 ..light
             })
             .collect();
+        scene.set_environment(Some(Environment::studio()));
     }
+    scene.tone_map = ToneMap::Neutral;
     scene.validate().map_err(|e| e.in_origin(shown))?;
     Ok(scene)
 }

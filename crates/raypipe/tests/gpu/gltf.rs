@@ -31,6 +31,7 @@ fn albedo_scene(builder: &GltfBuilder) -> PackedScene {
     scene.settings.ambient = 1.0;
     scene.settings.max_depth = 0;
     scene.lights.clear();
+    scene.set_environment(None);
     let mut packed = PackedScene::new(&scene).unwrap();
     packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
     packed

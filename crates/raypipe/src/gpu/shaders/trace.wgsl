@@ -327,8 +327,11 @@ fn summed(pixel: vec2<u32>, sample_color: vec4<f32>, sample_surface: vec4<f32>) 
 // rectangle it projects to, src/gpu/region.rs; the tracer never runs there): what sample_pixel
 // gives such a ray, what it escapes to and one ray, without tracing it.
 fn miss_pixel(pixel: vec2<u32>) -> PixelSums {
-    let primary = camera_ray(vec2<f32>(pixel) + sample_offset(pixel, globals.camera.sample));
     // Added to zero, as trace_task adds it to the pixel's colour.
-    let color = vec3<f32>(0.0) + escaped_radiance(primary.dir);
+    var color = vec3<f32>(0.0) + globals.scene.background;
+    if (HAS_ENVIRONMENT) {
+        let primary = camera_ray(vec2<f32>(pixel) + sample_offset(pixel, globals.camera.sample));
+        color = vec3<f32>(0.0) + escaped_radiance(primary.dir);
+    }
     return summed(pixel, vec4<f32>(color, 1.0), vec4<f32>(vec3<f32>(0.0), DEPTH_MISS));
 }
