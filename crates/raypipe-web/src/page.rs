@@ -36,6 +36,8 @@ struct Page {
     player: Player,
     /// A tracer is being built.
     busy: bool,
+    /// The request made while one was being built: built next.
+    waiting: Option<(TracerRequest, Option<OpenedFile>)>,
     fly: FlyKeys,
     started: Instant,
     first_frame_ms: Option<f64>,
@@ -204,6 +206,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         screen,
         player,
         busy: false,
+        waiting: None,
         fly: FlyKeys::default(),
         started: Instant::now(),
         first_frame_ms: None,
@@ -312,6 +315,12 @@ impl Page {
     fn build(page: &Rc<RefCell<Page>>, request: TracerRequest, source: Option<OpenedFile>) {
         let ctx = {
             let mut this = page.borrow_mut();
+            if this.busy {
+                // One build at a time: WebGPU's error scopes, which a build pushes and pops across
+                // awaits, must not interleave. The latest request waits for the running one.
+                this.waiting = Some((request, source));
+                return;
+            }
             this.busy = true;
             // The last request's message no longer applies.
             this.player.message = None;
@@ -321,17 +330,22 @@ impl Page {
         let page = page.clone();
         wasm_bindgen_futures::spawn_local(async move {
             let built = request.build(&ctx).await;
-            let mut this = page.borrow_mut();
-            if !this.player.is_current(&request) {
-                return;
+            let waiting = {
+                let mut this = page.borrow_mut();
+                this.busy = false;
+                if this.player.is_current(&request) {
+                    let new_scene = request.new_scene.is_some();
+                    this.player.install(request, built);
+                    if new_scene && this.player.message.is_none() {
+                        this.opened = source;
+                    }
+                    this.publish();
+                }
+                this.waiting.take()
+            };
+            if let Some((request, source)) = waiting {
+                Page::build(&page, request, source);
             }
-            this.busy = false;
-            let new_scene = request.new_scene.is_some();
-            this.player.install(request, built);
-            if new_scene && this.player.message.is_none() {
-                this.opened = source;
-            }
-            this.publish();
         });
     }
 
