@@ -176,10 +176,7 @@ impl SceneArgs {
                 scene.set_environment(None);
             }
             Some(path) => {
-                let (environment, halvings) = Environment::load(std::path::Path::new(path))?;
-                if halvings > 0 {
-                    log::warn!("{path}: halved {halvings} times to fit the texels a render holds");
-                }
+                let environment = Environment::load(std::path::Path::new(path))?;
                 let halvings = scene.set_environment(Some(environment));
                 if halvings > 0 {
                     log::warn!(

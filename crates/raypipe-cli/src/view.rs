@@ -64,14 +64,7 @@ impl Host for CliHost {
     }
 
     fn load_environment(&self, path: &Path) -> Result<Environment, HostError> {
-        let (environment, halvings) = Environment::load(path).map_err(|e| host_error(path, &e.into()))?;
-        if halvings > 0 {
-            log::warn!(
-                "{}: halved {halvings} times to fit the texels a render holds",
-                path.display()
-            );
-        }
-        Ok(environment)
+        Environment::load(path).map_err(|e| host_error(path, &e.into()))
     }
 
     fn save(&self, frame: &Frame, view: Aov, transform: &DisplayTransform, path: &Path) -> Result<(), HostError> {

@@ -207,8 +207,9 @@ pub struct TracerRequest {
     pub modes: Modes,
     /// A new scene and its name; `None` keeps the current one.
     pub new_scene: Option<(String, Scene)>,
-    /// The current scene's new environment (`Some(None)` takes it away); its camera and clock stay.
-    pub relight: Option<Option<Environment>>,
+    /// Whether it lights the current scene anew (`scene` holds the scene in its new environment);
+    /// the camera and clock stay.
+    pub relit: bool,
     /// What the tracer traces: the new scene, or a copy of the current one.
     scene: Scene,
     size: (u32, u32),
@@ -454,8 +455,8 @@ impl Player {
     /// A request for the current scene in `environment` (or none), seen as it is now.
     pub fn relight(&mut self, environment: Option<Environment>) -> TracerRequest {
         let mut request = self.request(self.modes, None);
-        request.scene.set_environment(environment.clone());
-        request.relight = Some(environment);
+        request.scene.set_environment(environment);
+        request.relit = true;
         request
     }
 
@@ -468,7 +469,7 @@ impl Player {
         TracerRequest {
             modes,
             new_scene,
-            relight: None,
+            relit: false,
             scene,
             size: self.tracer.renderer.size(),
             camera,
@@ -493,8 +494,8 @@ impl Player {
                 }
                 self.modes = request.modes;
                 self.message = None;
-                if let Some(environment) = request.relight {
-                    self.scene.set_environment(environment);
+                if request.relit {
+                    self.scene = request.scene;
                 }
                 if let Some((name, scene)) = request.new_scene {
                     self.camera = CameraControl::new(scene.camera);

@@ -480,8 +480,8 @@ impl Viewer {
     }
 
     /// Opens a file the page was given (the file input, a drop, or the `model` or `environment`
-    /// URL): a TOML scene, a PLY, OBJ or OFF model, a glTF, or an environment, parsed here. A broken one shows its error and the
-    /// current scene stays.
+    /// URL): a TOML scene, a PLY, OBJ or OFF model, a glTF, or an environment, parsed here. A
+    /// broken one shows its error and the current scene stays.
     pub fn open_file(&self, name: String, bytes: Vec<u8>) {
         self.open_bytes(name, Rc::new(bytes));
     }
@@ -491,7 +491,7 @@ impl Viewer {
     fn open_bytes(&self, name: String, bytes: Rc<Vec<u8>>) {
         if is_environment_file(&name) {
             return match Environment::decode(&name, &bytes) {
-                Ok((environment, _)) => {
+                Ok(environment) => {
                     let request = {
                         let mut this = self.page.borrow_mut();
                         this.environment = Some((name, environment.clone()));

@@ -446,20 +446,31 @@ fn pack_light(light: &Light) -> GpuLight {
     }
 }
 
-/// Appends `texture`'s texels and a map of the whole of it (coordinate set 0, no transform);
-/// returns the map's index.
-fn push_whole_texture(texture: &Texture, maps: &mut Vec<GpuTextureMap>, pixels: &mut TexturePixels) -> u32 {
-    let [transform_u, transform_v] = TextureTransform::default().rows();
-    maps.push(GpuTextureMap {
-        offset: pixels.0.len() as u32,
+/// The record of a map that reads `texture`, whose texels start at `offset`, through `transform`
+/// from coordinate set `tex_coord`.
+fn texture_map_record(texture: &Texture, offset: u32, transform: &TextureTransform, tex_coord: u32) -> GpuTextureMap {
+    let [transform_u, transform_v] = transform.rows();
+    GpuTextureMap {
+        offset,
         width: texture.width,
         height: texture.height,
         wrap: texture.wrap[0].code() | texture.wrap[1].code() << 8,
         transform_u,
-        tex_coord: 0,
+        tex_coord,
         transform_v,
         _pad1: 0.0,
-    });
+    }
+}
+
+/// Appends `texture`'s texels and a map of the whole of it (coordinate set 0, no transform);
+/// returns the map's index.
+fn push_whole_texture(texture: &Texture, maps: &mut Vec<GpuTextureMap>, pixels: &mut TexturePixels) -> u32 {
+    maps.push(texture_map_record(
+        texture,
+        pixels.0.len() as u32,
+        &TextureTransform::default(),
+        0,
+    ));
     pixels.0.extend_from_slice(&texture.texels);
     maps.len() as u32 - 1
 }
@@ -482,17 +493,8 @@ fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, Textu
     let mut map_index = |map: Option<TextureMap>| {
         let Some(map) = map else { return NONE };
         let texture = &scene.textures[map.texture as usize];
-        let [transform_u, transform_v] = map.transform.rows();
-        maps.push(GpuTextureMap {
-            offset: texture_offsets[map.texture as usize],
-            width: texture.width,
-            height: texture.height,
-            wrap: texture.wrap[0].code() | texture.wrap[1].code() << 8,
-            transform_u,
-            tex_coord: map.tex_coord,
-            transform_v,
-            _pad1: 0.0,
-        });
+        let offset = texture_offsets[map.texture as usize];
+        maps.push(texture_map_record(texture, offset, &map.transform, map.tex_coord));
         maps.len() as u32 - 1
     };
     let materials = scene

@@ -119,13 +119,20 @@ impl Environment {
     /// The built-in studio that lights glTF files bringing no lights of their own: a soft grey
     /// dome, brighter overhead, a darker ground, and two soft boxes high to the front left and
     /// right, so that metals have something to reflect.
+    /// Made once (its irradiance is a few million products) and cloned for every glTF opened.
     pub fn studio() -> Environment {
-        Environment::from_function(256, studio_radiance).expect("the studio is a valid environment")
+        static STUDIO: std::sync::OnceLock<Environment> = std::sync::OnceLock::new();
+        STUDIO
+            .get_or_init(|| {
+                Environment::from_function(256, studio_radiance).expect("the studio is a valid environment")
+            })
+            .clone()
     }
 
     /// Decodes a Radiance `.hdr` or an OpenEXR `.exr` (its first RGB layer) by `name`'s
-    /// extension. Errors name no file: the caller adds it.
-    pub fn decode(name: &str, bytes: &[u8]) -> Result<(Environment, usize), InputError> {
+    /// extension; an image halved to fit says so in a notice. Errors name no file: the caller
+    /// adds it.
+    pub fn decode(name: &str, bytes: &[u8]) -> Result<Environment, InputError> {
         let lower = name.to_ascii_lowercase();
         let (width, height, rgb) = if lower.ends_with(".hdr") {
             decode_hdr(bytes)?
@@ -136,12 +143,16 @@ impl Environment {
                 "unknown environment format (expected an equirectangular .hdr or .exr)",
             ));
         };
-        Environment::from_rgb(width, height, &rgb)
+        let (environment, halvings) = Environment::from_rgb(width, height, &rgb)?;
+        if halvings > 0 {
+            log::warn!("{name}: halved {halvings} times to fit the texels a render holds");
+        }
+        Ok(environment)
     }
 
     /// Reads and decodes an environment file (a regular file, at most [`MAX_ENVIRONMENT_BYTES`]);
     /// errors start with its path.
-    pub fn load(path: &Path) -> Result<(Environment, usize), InputError> {
+    pub fn load(path: &Path) -> Result<Environment, InputError> {
         let shown = path.display().to_string();
         if !is_environment_file(&shown) {
             return Err(

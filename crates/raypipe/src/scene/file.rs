@@ -256,14 +256,8 @@ fn set_environment(scene: &mut Scene, render: &RenderDef, base: &Path, line: Lin
         };
     };
     let at = line(file.span());
-    let (mut environment, halvings) =
+    let mut environment =
         Environment::load(&base.join(file.get_ref())).map_err(|e| e.nested_in(None, at, Element::Render))?;
-    if halvings > 0 {
-        log::warn!(
-            "{}: halved {halvings} times to fit the texels a render holds",
-            file.get_ref()
-        );
-    }
     if let Some(rotation) = &render.environment_rotation {
         environment.rotation_degrees = *rotation.get_ref();
     }
