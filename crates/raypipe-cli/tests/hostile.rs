@@ -4,7 +4,7 @@
 
 mod common;
 use common::test_dir;
-use common::{assert_clean_error, raypipe, raypipe_on_a_terminal};
+use common::{assert_clean_error, raypipe, raypipe_on_a_terminal, render_on_cpu};
 use raypipe_cli::io;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -19,27 +19,7 @@ fn path_str(path: &Path) -> &str {
 
 /// whitted at `width` x `height` on the CPU, written to `path`.
 fn tiny_render(path: &Path, width: u32, height: u32) {
-    tiny_render_of("whitted", path, width, height);
-}
-
-/// `scene` at `width` x `height` on the CPU, written to `path`.
-fn tiny_render_of(scene: &str, path: &Path, width: u32, height: u32) {
-    let (w, h) = (width.to_string(), height.to_string());
-    let args = [
-        "render",
-        scene,
-        "--device",
-        "cpu",
-        "--width",
-        &w,
-        "--height",
-        &h,
-        "-q",
-        "-o",
-        path_str(path),
-    ];
-    let output = raypipe(&args);
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    render_on_cpu("whitted", path, width, height);
 }
 
 /// A tiny OFF model (one triangle), for the model flags.
@@ -518,7 +498,7 @@ fn hostile_gltf_files_are_one_line_and_exit_2() {
     let dir = test_dir("hostile-gltf");
     let good = dir.join("triangle.gltf");
     std::fs::write(&good, TRIANGLE_GLTF).unwrap();
-    tiny_render_of(path_str(&good), &dir.join("triangle.png"), 16, 12);
+    render_on_cpu(path_str(&good), &dir.join("triangle.png"), 16, 12);
 
     let link = dir.join("zero.glb");
     let _ = std::fs::remove_file(&link);

@@ -5,8 +5,8 @@
 
 mod common;
 
-use common::{quad_triangles, render_cpu};
-use glam::{Vec2, Vec3};
+use common::{centre, plane_scene, render_cpu};
+use glam::Vec3;
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, Count};
 use raypipe::records::PackedScene;
@@ -241,45 +241,27 @@ fn a_white_metal_in_a_uniform_environment_reads_its_radiance() {
 /// 0.5 at full strength halves it, and at strength 0.5 takes a quarter.
 #[test]
 fn occlusion_scales_the_environment_light() {
-    let size = 9;
     let occlusion = |strength: Option<f32>| {
-        let mut scene = Scene {
-            camera: Camera {
-                eye: Vec3::new(0.0, 0.0, 5.0),
-                target: Vec3::ZERO,
-                up: Vec3::Y,
-                fov_degrees: 20.0,
-            },
-            settings: RenderSettings {
-                width: size,
-                height: size,
-                max_depth: 0,
-                background: Vec3::ZERO,
-                ambient: 0.0,
-            },
-            materials: vec![Material {
-                color: Vec3::new(0.8, 0.6, 0.4),
-                pbr: Some(Pbr {
-                    metallic: 0.0,
-                    roughness: 1.0,
-                    occlusion_texture: strength.map(|_| TextureMap::plain(0)),
-                    occlusion_strength: strength.unwrap_or(1.0),
-                    ..Pbr::default()
-                }),
-                ..Material::default()
-            }],
-            textures: vec![Texture::from_linear(
-                2,
-                2,
-                &[[0.5, 0.5, 0.5, 1.0]; 4],
-                [Wrap::Repeat; 2],
-            )],
-            ..Scene::default()
+        let material = Material {
+            color: Vec3::new(0.8, 0.6, 0.4),
+            pbr: Some(Pbr {
+                metallic: 0.0,
+                roughness: 1.0,
+                occlusion_texture: strength.map(|_| TextureMap::plain(0)),
+                occlusion_strength: strength.unwrap_or(1.0),
+                ..Pbr::default()
+            }),
+            ..Material::default()
         };
-        let corners = [(-50.0, -50.0), (50.0, -50.0), (50.0, 50.0), (-50.0, 50.0)].map(|(x, y)| Vec3::new(x, y, 0.0));
-        scene.triangles = quad_triangles(corners, 0, true, Some(&|p: Vec3| Vec2::new(p.x, p.y) * 0.01)).to_vec();
+        let mut scene = plane_scene(material, Vec::new());
+        scene.textures = vec![Texture::from_linear(
+            2,
+            2,
+            &[[0.5, 0.5, 0.5, 1.0]; 4],
+            [Wrap::Repeat; 2],
+        )];
         scene.set_environment(Some(Environment::uniform(Vec3::splat(0.7))));
-        pixel(&render(&scene, 1), size / 2, size / 2)
+        centre(&scene)
     };
     // Facing +z, the surface sees half the sphere of radiance 0.7: E / π = 0.7.
     let open = occlusion(None);

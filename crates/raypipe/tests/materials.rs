@@ -5,54 +5,12 @@
 
 mod common;
 
-use common::{quad_triangles, render_cpu};
+use common::{centre, plane_scene, quad_triangles};
 use glam::{Quat, Vec2, Vec3};
 use raypipe::modes::Accel;
 use raypipe::records::PackedScene;
-use raypipe::scene::{
-    Camera, Light, LightKind, Material, Pbr, RenderSettings, Scene, Texture, TextureMap, TextureTransform, Triangle,
-    Wrap,
-};
+use raypipe::scene::{Light, LightKind, Material, Pbr, Scene, Texture, TextureMap, TextureTransform, Triangle, Wrap};
 use std::f64::consts::PI;
-
-/// A 9x9 image whose centre pixel's ray runs down -z onto the plane z = 0 at the origin: view
-/// direction (0, 0, 1), normal (0, 0, 1).
-const SIZE: u32 = 9;
-
-/// The plane z = 0 (a big quad facing +z) in `material`, seen from (0, 0, 5), with `lights`, no
-/// ambient light, a black background and no bounces: a pixel is direct light alone.
-fn plane_scene(material: Material, lights: Vec<Light>) -> Scene {
-    let corners = [(-50.0, -50.0), (50.0, -50.0), (50.0, 50.0), (-50.0, 50.0)].map(|(x, y)| Vec3::new(x, y, 0.0));
-    let triangles = quad_triangles(corners, 0, true, Some(&|p: Vec3| Vec2::new(p.x, p.y))).to_vec();
-    Scene {
-        camera: Camera {
-            eye: Vec3::new(0.0, 0.0, 5.0),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_degrees: 20.0,
-        },
-        settings: RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            max_depth: 0,
-            background: Vec3::ZERO,
-            ambient: 0.0,
-        },
-        lights,
-        materials: vec![material],
-        triangles,
-        ..Scene::default()
-    }
-}
-
-/// The centre pixel's radiance.
-fn centre(scene: &Scene) -> Vec3 {
-    let mut packed = PackedScene::new(scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
-    let frame = render_cpu(&packed, Accel::Threaded);
-    let [r, g, b, _] = frame.color[(SIZE / 2 * SIZE + SIZE / 2) as usize];
-    Vec3::new(r, g, b)
-}
 
 fn gltf_material(base: Vec3, metallic: f32, roughness: f32) -> Material {
     Material {

@@ -5,7 +5,7 @@
 #[allow(unused_imports)]
 pub use raypipe_test_support::{self as harness, models};
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// A fresh, empty folder for a test's files ([`harness::fresh_dir`]).
@@ -44,4 +44,24 @@ pub fn assert_clean_error(output: &Output, needles: &[&str]) {
     for needle in needles {
         assert!(lines[0].contains(needle), "{needle:?} not in {:?}", lines[0]);
     }
+}
+
+/// `scene` at `width` x `height` on the CPU, written to `path`.
+pub fn render_on_cpu(scene: &str, path: &Path, width: u32, height: u32) {
+    let (w, h) = (width.to_string(), height.to_string());
+    let args = [
+        "render",
+        scene,
+        "--device",
+        "cpu",
+        "--width",
+        &w,
+        "--height",
+        &h,
+        "-q",
+        "-o",
+        path.to_str().unwrap(),
+    ];
+    let output = raypipe(&args);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
 }

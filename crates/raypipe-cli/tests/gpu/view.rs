@@ -4,8 +4,8 @@
 //! moving scene change the frames, and a mode that cannot serve the scene is refused.
 
 use crate::common::harness::Test;
-use crate::common::raypipe;
 use crate::common::test_dir;
+use crate::common::{raypipe, render_on_cpu};
 use crate::io;
 use raypipe::gpu::GpuContext;
 use raypipe::image::diff::{Tolerance, compare};
@@ -398,20 +398,7 @@ fn dropped_files_load_or_leave_the_scene(_: &GpuContext) {
     // An environment lights the scene as `render --environment` does; one that is not 2:1 shows
     // its error and the scene stays as it was.
     let environment = dir.join("sky.exr");
-    let made = raypipe(&[
-        "render",
-        "random:40:3",
-        "--device",
-        "cpu",
-        "--width",
-        "64",
-        "--height",
-        "32",
-        "-q",
-        "-o",
-        environment.to_str().unwrap(),
-    ]);
-    succeeded(&made, "the environment");
+    render_on_cpu("random:40:3", &environment, 64, 32);
     let (lit, _) = after_dropping(&dir, &environment, "lit.png");
     let with_environment = rendered(&dir, "whitted", &["--environment", environment.to_str().unwrap()]);
     matches(&lit, &with_environment).unwrap();
@@ -420,20 +407,7 @@ fn dropped_files_load_or_leave_the_scene(_: &GpuContext) {
         "the environment did not show"
     );
     let square = dir.join("square.exr");
-    let made = raypipe(&[
-        "render",
-        "whitted",
-        "--device",
-        "cpu",
-        "--width",
-        "32",
-        "--height",
-        "32",
-        "-q",
-        "-o",
-        square.to_str().unwrap(),
-    ]);
-    succeeded(&made, "the square image");
+    render_on_cpu("whitted", &square, 32, 32);
     let (kept, output) = after_dropping(&dir, &square, "kept-environment.png");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(

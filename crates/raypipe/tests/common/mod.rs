@@ -8,12 +8,13 @@ pub mod gltf_file;
 #[allow(unused_imports)]
 pub use raypipe_test_support::{self as harness, models};
 
+use glam::{Vec2, Vec3};
 use raypipe::gpu::{GpuContext, Renderer, RendererOptions};
 use raypipe::image::diff::{self, Tolerance};
 use raypipe::image::{FloatImage, Frame};
 use raypipe::modes::{Accel, MemoryMode};
 use raypipe::records::PackedScene;
-use raypipe::scene::Scene;
+use raypipe::scene::{Camera, Light, Material, RenderSettings, Scene};
 use std::path::{Path, PathBuf};
 
 /// A fresh, empty folder for a test's files ([`harness::fresh_dir`]).
@@ -85,6 +86,11 @@ pub fn render_gpu(ctx: &GpuContext, scene: &PackedScene, memory: MemoryMode, acc
         accel,
         ..Default::default()
     };
+    render_gpu_with(ctx, scene, options)
+}
+
+/// One frame of `scene` on the GPU, traced as `options` say.
+pub fn render_gpu_with(ctx: &GpuContext, scene: &PackedScene, options: RendererOptions) -> Frame {
     pollster::block_on(renderer(ctx, scene, options).read_frame())
         .unwrap_or_else(|e| panic!("GPU render failed on {}: {e}", ctx.describe()))
         .frame
@@ -165,4 +171,43 @@ pub fn assert_frames_match(name: &str, actual: &Frame, expected: &Frame) {
         &expected.depth(),
         Tolerance::DEPTH,
     );
+}
+
+/// A 9x9 image whose centre pixel's ray runs down -z onto the plane z = 0 at the origin: view
+/// direction (0, 0, 1), normal (0, 0, 1).
+pub const PLANE_SIZE: u32 = 9;
+
+/// The plane z = 0 (a big quad facing +z) in `material`, seen from (0, 0, 5), with `lights`, no
+/// ambient light, a black background and no bounces: a pixel is direct light alone.
+pub fn plane_scene(material: Material, lights: Vec<Light>) -> Scene {
+    let corners = [(-50.0, -50.0), (50.0, -50.0), (50.0, 50.0), (-50.0, 50.0)].map(|(x, y)| Vec3::new(x, y, 0.0));
+    let triangles = quad_triangles(corners, 0, true, Some(&|p: Vec3| Vec2::new(p.x, p.y))).to_vec();
+    Scene {
+        camera: Camera {
+            eye: Vec3::new(0.0, 0.0, 5.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_degrees: 20.0,
+        },
+        settings: RenderSettings {
+            width: PLANE_SIZE,
+            height: PLANE_SIZE,
+            max_depth: 0,
+            background: Vec3::ZERO,
+            ambient: 0.0,
+        },
+        lights,
+        materials: vec![material],
+        triangles,
+        ..Scene::default()
+    }
+}
+
+/// The centre pixel's radiance.
+pub fn centre(scene: &Scene) -> Vec3 {
+    let mut packed = PackedScene::new(scene).unwrap();
+    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    let frame = render_cpu(&packed, Accel::Threaded);
+    let [r, g, b, _] = frame.color[(PLANE_SIZE / 2 * PLANE_SIZE + PLANE_SIZE / 2) as usize];
+    Vec3::new(r, g, b)
 }

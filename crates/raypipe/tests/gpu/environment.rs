@@ -59,9 +59,7 @@ fn environment_matches_the_cpu_in_every_memory_mode_and_pipeline(ctx: &GpuContex
                 accel: Accel::Threaded,
                 ..Default::default()
             };
-            let frame = pollster::block_on(renderer(ctx, &scene, options).read_frame())
-                .unwrap()
-                .frame;
+            let frame = render_gpu_with(ctx, &scene, options);
             assert_frames_match(&format!("environment-{pipeline:?}-{memory:?}"), &frame, &cpu);
         }
     }

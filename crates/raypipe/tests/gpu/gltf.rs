@@ -91,9 +91,7 @@ fn gpu_checker_texels_in_every_memory_mode_and_pipeline(ctx: &GpuContext) {
                     accel: Accel::Threaded,
                     ..Default::default()
                 };
-                let frame = pollster::block_on(renderer(ctx, &scene, options).read_frame())
-                    .unwrap()
-                    .frame;
+                let frame = render_gpu_with(ctx, &scene, options);
                 let name = format!("gltf-texture-{pipeline:?}-{memory:?}-{}-{}", wrap[0], wrap[1]);
                 check_texels(&frame, wrap, &name);
                 assert_frames_match(&name, &frame, &cpu);
