@@ -127,22 +127,25 @@ fn escaping_rays_read_the_environment_by_the_stated_convention_and_rotation() {
     for y in 0..size {
         for x in 0..size {
             let d = camera_ray(&scene.camera, size, x, y);
-            let direction = match mirrored(eye, d) {
+            // A mirror pixel's reflected cone spans about 0.15 radians of the map (the sphere's
+            // curvature spreads it), over which the filtered map departs from the ramp's value at
+            // the centre by up to 0.03 near the poles; the background's spans 0.024.
+            let (direction, tolerance) = match mirrored(eye, d) {
                 None => {
                     background += 1;
-                    d
+                    (d, 0.01)
                 }
                 // Grazing hits: the pixel's reflection turns fast across it.
                 Some((_, squareness)) if squareness < 0.2 => continue,
                 Some((r, _)) => {
                     reflected += 1;
-                    r
+                    (r, 0.03)
                 }
             };
             let expected = 2.0 * ramp(turned_back(direction));
             let got = pixel(&frame, x, y);
             assert!(
-                (got - expected).abs().max_element() < 0.01,
+                (got - expected).abs().max_element() < tolerance,
                 "pixel ({x}, {y}): {got} for {expected} (direction {direction})"
             );
         }

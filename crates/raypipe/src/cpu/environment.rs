@@ -2,7 +2,7 @@
 //! `shaders/environment.wgsl`.
 
 use super::intersect::v3;
-use super::maps::sample_texture;
+use super::maps::{lod_of, sample_texture};
 use crate::bvh::layout::NONE;
 use crate::records::PackedScene;
 use glam::{Vec2, Vec3};
@@ -17,15 +17,17 @@ pub fn environment_uv(scene: &PackedScene, d: Vec3) -> Vec2 {
     Vec2::new(0.5 + x.atan2(-z) * (0.5 / PI), d.y.clamp(-1.0, 1.0).acos() * (1.0 / PI))
 }
 
-/// What a ray leaving the scene along `dir` brings back: the environment's radiance, or the
-/// background colour where the scene has none.
-pub fn escaped_radiance(scene: &PackedScene, dir: Vec3) -> Vec3 {
+/// What a ray leaving the scene along `dir` brings back (`escaped_radiance`): the environment's
+/// radiance, or the background colour where the scene has none. The map is read at the level
+/// where a texel spans the ray cone's `spread` (radians; a row of the map spans π / height).
+pub fn escaped_radiance(scene: &PackedScene, dir: Vec3, spread: f32) -> Vec3 {
     let info = &scene.globals.scene;
     if info.environment_map == NONE {
         return v3(info.background);
     }
     let map = &scene.texture_maps[info.environment_map as usize];
-    info.environment_intensity * sample_texture(scene, map, environment_uv(scene, dir)).truncate()
+    let lod = lod_of(spread.abs() * map.height as f32 * (1.0 / PI));
+    info.environment_intensity * sample_texture(scene, map, environment_uv(scene, dir), lod).truncate()
 }
 
 /// The environment's irradiance over π on a surface facing `normal`: what a white Lambert surface
@@ -33,5 +35,5 @@ pub fn escaped_radiance(scene: &PackedScene, dir: Vec3) -> Vec3 {
 pub fn environment_irradiance(scene: &PackedScene, normal: Vec3) -> Vec3 {
     let info = &scene.globals.scene;
     let map = &scene.texture_maps[info.irradiance_map as usize];
-    info.environment_intensity * sample_texture(scene, map, environment_uv(scene, normal)).truncate()
+    info.environment_intensity * sample_texture(scene, map, environment_uv(scene, normal), -1.0).truncate()
 }

@@ -3,7 +3,9 @@
 use super::brdf::{GltfSurface, gltf_brdf};
 use super::environment::environment_irradiance;
 use super::intersect::{Hit, HitKind, Ray, triangle_uvt, v3};
-use super::maps::{Attributes, has_coordinates, map_coordinates, sample_map, sample_texture, triangle_attributes};
+use super::maps::{
+    Attributes, has_coordinates, map_coordinates, sample_map, sample_texture, texture_lod, triangle_attributes,
+};
 use crate::bvh::layout::NONE;
 use crate::records::constants::{
     ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF,
@@ -29,6 +31,10 @@ pub struct Surface {
     pub attributes: Attributes,
     /// A triangle with alpha BLEND: it covers its alpha of the ray.
     pub blend: bool,
+    /// How fast the shading normal turns per unit of length across the surface, positive where it
+    /// turns away from the geometric normal's side (a sphere's 1 / radius seen from outside): what
+    /// widens or narrows a ray cone that the surface reflects or refracts.
+    pub curvature: f32,
 }
 
 pub fn max_abs(v: Vec3) -> f32 {
@@ -60,19 +66,22 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
                 reach,
                 attributes: Attributes::NONE,
                 blend: false,
+                curvature: 1.0 / sphere.radius,
             };
         }
         let triangle = &scene.triangles[hit.index as usize - scene.spheres.len()];
         let [v0, v1, v2] = triangle.corners();
         let normal = normalize_scaled((v1 - v0).cross(v2 - v0));
+        let (shading, curvature) = triangle_shading(scene, triangle, ray, normal);
         return Surface {
             position,
             normal,
-            shading: triangle_shading(scene, triangle, ray, normal),
+            shading,
             material: triangle.material & MATERIAL_INDEX_MASK,
             reach,
             attributes: triangle_attributes(scene, triangle, ray),
             blend: triangle.material & TRIANGLE_ALPHA_BLEND != 0,
+            curvature,
         };
     }
     let plane = &scene.planes[hit.index as usize];
@@ -91,6 +100,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
         reach,
         attributes: Attributes::NONE,
         blend: false,
+        curvature: 0.0,
     }
 }
 
@@ -159,7 +169,7 @@ pub fn normal_mapped(scene: &PackedScene, surface: &Surface, material: &GpuMater
     let tangent = along.normalize();
     let sign = if a.tangent.w >= 0.0 { 1.0 } else { -1.0 };
     let bitangent = sign * n.cross(tangent);
-    let texel = sample_texture(scene, map, map_coordinates(map, a));
+    let texel = sample_texture(scene, map, map_coordinates(map, a), texture_lod(map, a));
     let xy = (2.0 * Vec2::new(texel.x, texel.y) - 1.0) * material.normal_scale;
     let bent = xy.x * tangent + xy.y * bitangent + (2.0 * texel.z - 1.0) * n;
     if bent.dot(surface.normal) <= 0.0 {
@@ -169,19 +179,41 @@ pub fn normal_mapped(scene: &PackedScene, surface: &Surface, material: &GpuMater
 }
 
 /// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's
-/// side; the geometric normal where they cancel out.
-fn triangle_shading(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray, normal: Vec3) -> Vec3 {
+/// side (the geometric normal where they cancel out), and the triangle's curvature
+/// (`triangle_shading`). A flat triangle has neither.
+fn triangle_shading(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray, normal: Vec3) -> (Vec3, f32) {
     if triangle.normals == NONE {
-        return normal;
+        return (normal, 0.0);
     }
     let uvt = triangle_uvt(triangle, ray);
     let n = &scene.triangle_normals[triangle.normals as usize];
-    let blended = (1.0 - uvt.x - uvt.y) * v3(n.n0) + uvt.x * v3(n.n1) + uvt.y * v3(n.n2);
+    let [n0, n1, n2] = [n.n0, n.n1, n.n2].map(v3);
+    let curvature = triangle_curvature(triangle, [n0, n1, n2], normal);
+    let blended = (1.0 - uvt.x - uvt.y) * n0 + uvt.x * n1 + uvt.y * n2;
     if blended.dot(blended) == 0.0 {
-        return normal;
+        return (normal, curvature);
     }
     let shading = blended.normalize();
-    if shading.dot(normal) < 0.0 { -shading } else { shading }
+    (if shading.dot(normal) < 0.0 { -shading } else { shading }, curvature)
+}
+
+/// How fast a smooth triangle's vertex normals turn along its edges, averaged over the three
+/// (`triangle_curvature`): the change of normal along an edge, over its length squared, taken
+/// along it. Normals on a sphere of radius r, seen from the geometric normal's side, give 1 / r
+/// outside and -1 / r inside.
+fn triangle_curvature(triangle: &GpuTriangle, normals: [Vec3; 3], normal: Vec3) -> f32 {
+    let corners = triangle.corners();
+    // The vertex normals facing the geometric normal's side, as the shading normal does.
+    let n = normals.map(|n| if n.dot(normal) < 0.0 { -n } else { n });
+    let mut sum = 0.0;
+    for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+        let edge = corners[b] - corners[a];
+        let length_squared = edge.dot(edge);
+        if length_squared > 0.0 {
+            sum += (n[b] - n[a]).dot(edge) / length_squared;
+        }
+    }
+    sum / 3.0
 }
 
 /// How a light reaches a point: the unit direction to it, how far a shadow ray runs, and E, the

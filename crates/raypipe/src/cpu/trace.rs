@@ -13,7 +13,7 @@ use crate::error::MissingBvh;
 use crate::modes::Accel;
 use crate::records::GpuMaterial;
 pub use crate::records::constants::T_FAR;
-use crate::records::constants::{MAX_BLEND_LAYERS, MIN_WEIGHT, R2_STEP, ray_stack_size};
+use crate::records::constants::{MAX_BLEND_LAYERS, MIN_FOOTPRINT_COSINE, MIN_WEIGHT, R2_STEP, ray_stack_size};
 use crate::records::constants::{MODEL_GLTF, MODEL_UNLIT};
 use crate::records::{PackedBvh, PackedScene};
 use glam::{UVec2, Vec2, Vec3};
@@ -28,6 +28,8 @@ struct RayTask {
     /// Whether single-sided triangles hide their backs from the ray: camera and reflected rays,
     /// not rays transmitted through a surface (which may be inside a volume).
     culls: bool,
+    /// The ray cone around it: its width where the ray starts, and its spread angle (radians).
+    cone: Vec2,
 }
 
 /// The rays a hit sends on; a weight that is not worth tracing means none. `through` goes on
@@ -170,10 +172,13 @@ impl<'a> Tracer<'a> {
             result.cost = box_tests();
         }
         if hit.kind == HitKind::None {
-            result.color += task.weight * escaped_radiance(self.scene, ray.dir);
+            result.color += task.weight * escaped_radiance(self.scene, ray.dir, task.cone.y);
             return branches;
         }
         let mut surface = surface_at(self.scene, &ray, &hit);
+        // The cone where it meets the surface: its width there, and its spread.
+        let cone = Vec2::new(task.cone.x + task.cone.y * hit.t, task.cone.y);
+        surface.attributes.footprint = cone.x.abs() / surface.normal.dot(ray.dir).abs().max(MIN_FOOTPRINT_COSINE);
         let material = surface_material(self.scene, &surface);
         surface.shading = normal_mapped(self.scene, &surface, &material);
         // The first surface the camera ray meets, blended or not.
@@ -185,6 +190,11 @@ impl<'a> Tracer<'a> {
         // The geometric normal picks the side new rays start on; the shading normal bends them.
         let normal = if entering { surface.normal } else { -surface.normal };
         let shading = if entering { surface.shading } else { -surface.shading };
+        let curvature = if entering {
+            surface.curvature
+        } else {
+            -surface.curvature
+        };
         let view = -ray.dir;
         // A ray that leaves a volume lost light on its way through it (Beer-Lambert).
         let mut arrived = *task;
@@ -202,6 +212,7 @@ impl<'a> Tracer<'a> {
                     origin: offset_origin(&surface, -normal),
                     dir: ray.dir,
                     weight: arrived.weight * (1.0 - material.alpha),
+                    cone,
                     ..*task
                 };
             }
@@ -237,7 +248,13 @@ impl<'a> Tracer<'a> {
             return branches;
         }
         if gltf {
-            let sent = self.gltf_branches(&covered, &surface, [normal, shading, view], &material, entering);
+            let sent = self.gltf_branches(
+                &covered,
+                &surface,
+                [normal, shading, view],
+                &material,
+                (entering, cone, curvature),
+            );
             return Branches {
                 through: branches.through,
                 ..sent
@@ -248,6 +265,7 @@ impl<'a> Tracer<'a> {
         let mut reflect_share = material.reflect;
         let mut transmit_share = material.transmit;
         let mut refracted = Vec3::ZERO;
+        let mut refracted_cone = cone;
         if transmit_share > 0.0 {
             let eta = if entering { 1.0 / material.ior } else { material.ior };
             let cos_i = view.dot(shading);
@@ -258,6 +276,7 @@ impl<'a> Tracer<'a> {
             } else {
                 let cos_t = k.sqrt();
                 refracted = (eta * ray.dir + (eta * cos_i - cos_t) * shading).normalize();
+                refracted_cone = cone_refracted(cone, curvature, eta, cos_i, cos_t);
                 let fresnel = fresnel_schlick(if entering { cos_i } else { cos_t }, material.ior);
                 reflect_share += transmit_share * fresnel;
                 transmit_share *= 1.0 - fresnel;
@@ -270,6 +289,7 @@ impl<'a> Tracer<'a> {
             weight: covered.weight * transmit_share,
             depth,
             culls: false,
+            cone: refracted_cone,
         };
         branches.reflected = RayTask {
             origin: offset_origin(&surface, normal),
@@ -277,6 +297,7 @@ impl<'a> Tracer<'a> {
             weight: covered.weight * reflect_share,
             depth,
             culls: true,
+            cone: cone_reflected(cone, curvature),
         };
         branches
     }
@@ -288,14 +309,15 @@ impl<'a> Tracer<'a> {
     /// surface (KHR_materials_volume) it refracts about the sampled microfacet normal, and reflects
     /// where it cannot (total internal reflection). A ray inside a volume sees the back faces of
     /// single-sided triangles. `frame` is the facing geometric normal, the facing shading normal
-    /// and the view direction.
+    /// and the view direction; `arrival` whether the ray enters, and its cone and the surface's
+    /// curvature where it meets it.
     fn gltf_branches(
         &mut self,
         task: &RayTask,
         surface: &Surface,
         [normal, shading, view]: [Vec3; 3],
         material: &GpuMaterial,
-        entering: bool,
+        (entering, cone, curvature): (bool, Vec2, f32),
     ) -> Branches {
         let s = gltf_surface(material);
         let sample = sample_specular(&s, shading, view, self.random_pair());
@@ -303,11 +325,18 @@ impl<'a> Tracer<'a> {
         let mut transmitted = sample.dir - 2.0 * sample.dir.dot(shading) * shading;
         let mut transmit_side = -normal;
         let mut transmit_culls = false;
+        let reflected_cone = cone_reflected(cone, curvature);
+        let mut transmitted_cone = cone;
         let volume = material.volume != 0;
         if volume {
             let eta = if entering { 1.0 / s.ior } else { s.ior };
-            let bent = refracted_direction(-view, (sample.dir + view).normalize(), eta);
+            let microfacet = (sample.dir + view).normalize();
+            let bent = refracted_direction(-view, microfacet, eta);
             transmitted = bent.unwrap_or(sample.dir);
+            transmitted_cone = match bent {
+                Some(t) => cone_refracted(cone, curvature, eta, view.dot(microfacet), -t.dot(microfacet)),
+                None => reflected_cone,
+            };
             transmit_side = if bent.is_some() { -normal } else { normal };
             // Outside after it, where back faces hide again: leaving and refracted, or reflected
             // from outside.
@@ -322,6 +351,7 @@ impl<'a> Tracer<'a> {
                 weight: task.weight * sample.weight,
                 depth,
                 culls: !volume || entering,
+                cone: reflected_cone,
             },
             refracted: RayTask {
                 origin: offset_origin(surface, transmit_side),
@@ -329,6 +359,7 @@ impl<'a> Tracer<'a> {
                 weight: task.weight * s.base * transmit_share,
                 depth,
                 culls: transmit_culls,
+                cone: transmitted_cone,
             },
             through: RayTask::default(),
         }
@@ -374,6 +405,7 @@ impl<'a> Tracer<'a> {
             weight: Vec3::ONE,
             depth: 0,
             culls: true,
+            cone: Vec2::new(0.0, pixel_spread(self.scene)),
         };
         let mut waiting = Vec::with_capacity(stack_size);
         loop {
@@ -438,6 +470,32 @@ pub fn sample_offset(pixel: UVec2, index: u32) -> Vec2 {
 /// The seed of a pixel's sample's random sequence (`sample_seed`).
 pub fn sample_seed(pixel: UVec2, sample: u32) -> u32 {
     hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(sample)))
+}
+
+/// The spread angle of the ray cone through a pixel (`pixel_spread`): the angle one pixel of
+/// the image subtends at the eye, at its centre.
+pub fn pixel_spread(scene: &PackedScene) -> f32 {
+    let camera = &scene.globals.camera;
+    (2.0 * camera.tan_half_fov / camera.height).atan()
+}
+
+/// A ray cone (width at the surface, spread) reflected by a surface of `curvature` (seen from the
+/// ray's side; `cone_reflected`): across the cone's width the normal turns by curvature × width,
+/// and the reflected rays by twice that (Akenine-Möller et al., "Improved Shader and Texture Level
+/// of Detail Using Ray Cones", 2021).
+fn cone_reflected(cone: Vec2, curvature: f32) -> Vec2 {
+    Vec2::new(cone.x, cone.y + 2.0 * curvature * cone.x)
+}
+
+/// A ray cone refracted by a surface of `curvature` (`cone_refracted`), with `eta` the ratio of
+/// indices and the cosines of the incident and refracted rays to the normal. Snell's law
+/// differentiated: a change of the incident angle changes the refracted one ratio = η cos θi /
+/// cos θt times as much, so the incoming spread scales by it, and the normal's turn across the
+/// width bends the refracted rays by (ratio - 1) times that turn (a convex surface entering glass
+/// focuses).
+fn cone_refracted(cone: Vec2, curvature: f32, eta: f32, cos_i: f32, cos_t: f32) -> Vec2 {
+    let ratio = eta * cos_i / cos_t.max(MIN_FOOTPRINT_COSINE);
+    Vec2::new(cone.x, ratio * cone.y + (ratio - 1.0) * curvature * cone.x)
 }
 
 fn worth_tracing(weight: Vec3) -> bool {

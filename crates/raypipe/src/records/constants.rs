@@ -73,6 +73,18 @@ pub const LIGHT_SPOT: u32 = 2;
 /// Parallel light in lux.
 pub const LIGHT_DIRECTIONAL: u32 = 3;
 
+/// `GpuTextureMap::sampling`: its low byte counts the texture's mip levels; these bits above it
+/// are the sampler's filter (`scene::Filter::code`). Magnified and minified reads are linear unless
+/// a NEAREST bit says otherwise; without a MIPMAP bit only the full-size image is read.
+pub const MIP_LEVELS_MASK: u32 = 0xff;
+pub const FILTER_MAGNIFY_NEAREST: u32 = 1 << 8;
+pub const FILTER_MINIFY_NEAREST: u32 = 1 << 9;
+pub const FILTER_MIPMAP_NEAREST: u32 = 1 << 10;
+pub const FILTER_MIPMAP_LINEAR: u32 = 1 << 11;
+/// A footprint is its cone's width over the cosine between the ray and the surface, at least this:
+/// at grazing angles the footprint is long, and reads the coarsest level.
+pub const MIN_FOOTPRINT_COSINE: f32 = 1e-4;
+
 /// The constants above as WGSL declarations. Floats print in Rust's shortest round-trip form, so
 /// the shader's literal is the same f32.
 pub fn wgsl() -> String {
@@ -87,6 +99,7 @@ pub fn wgsl() -> String {
         ("NO_HIT", NO_HIT),
         ("MAX_QUANTUM", MAX_QUANTUM as f32),
         ("TINY_EXTENT", TINY_EXTENT),
+        ("MIN_FOOTPRINT_COSINE", MIN_FOOTPRINT_COSINE),
     ] {
         writeln!(out, "const {name}: f32 = {};", float_literal(value)).unwrap();
     }
@@ -113,6 +126,11 @@ pub fn wgsl() -> String {
         ("TRIANGLE_ALPHA_BLEND", TRIANGLE_ALPHA_BLEND),
         ("MAX_BLEND_LAYERS", MAX_BLEND_LAYERS),
         ("BLEND_STACK_ROOM", BLEND_STACK_ROOM),
+        ("MIP_LEVELS_MASK", MIP_LEVELS_MASK),
+        ("FILTER_MAGNIFY_NEAREST", FILTER_MAGNIFY_NEAREST),
+        ("FILTER_MINIFY_NEAREST", FILTER_MINIFY_NEAREST),
+        ("FILTER_MIPMAP_NEAREST", FILTER_MIPMAP_NEAREST),
+        ("FILTER_MIPMAP_LINEAR", FILTER_MIPMAP_LINEAR),
     ] {
         writeln!(out, "const {name}: u32 = {value:#x}u;").unwrap();
     }

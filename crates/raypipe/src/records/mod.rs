@@ -314,7 +314,9 @@ pub struct GpuTextureMap {
     /// Which texture coordinate set the map reads, 0 or 1.
     pub tex_coord: u32,
     pub transform_v: [f32; 3],
-    pub _pad1: f32,
+    /// The texture's mip levels (`MIP_LEVELS_MASK`; level k follows level k - 1, each side halved
+    /// and rounded up) and its sampler's `FILTER_*` bits.
+    pub sampling: u32,
 }
 
 /// One host struct's layout, for the naga layout test.
@@ -358,7 +360,7 @@ pub const LAYOUTS: &[StructLayout] = &[
         specular_factor, occlusion_strength, base_map, metallic_roughness_map, occlusion_map, emissive_map, alpha,
         alpha_cutoff, normal_map, normal_scale, absorption, volume, specular_map, specular_color_map,
     ]),
-    struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, tex_coord, transform_v]),
+    struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, tex_coord, transform_v, sampling]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
     struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
 ];

@@ -97,7 +97,7 @@ pub struct PackedScene {
     /// (`load_shading`), so that they take one binding (storage memory has 8 a stage). Made with
     /// the two above by [`PackedScene::new`].
     pub shading: Vec<ShadingTexel>,
-    /// The textures' texels, one texture after another; texture maps say where theirs start.
+    /// The textures' mip chains, one texture after another; texture maps say where theirs start.
     pub texture_pixels: TexturePixels,
     /// The BVH, once [`PackedScene::build_bvh`] or [`PackedScene::set_bvh`] made it.
     pub bvh: Option<PackedBvh>,
@@ -446,55 +446,69 @@ fn pack_light(light: &Light) -> GpuLight {
     }
 }
 
-/// The record of a map that reads `texture`, whose texels start at `offset`, through `transform`
-/// from coordinate set `tex_coord`.
-fn texture_map_record(texture: &Texture, offset: u32, transform: &TextureTransform, tex_coord: u32) -> GpuTextureMap {
+/// Where a texture's mip chain starts among all textures' texels, and its levels.
+#[derive(Clone, Copy)]
+struct StoredTexture {
+    offset: u32,
+    levels: u32,
+}
+
+/// Appends `texture`'s mip chain to `pixels`.
+fn store_texture(texture: &Texture, pixels: &mut Vec<[u16; 4]>) -> StoredTexture {
+    let offset = pixels.len() as u32;
+    let levels = texture.push_mip_chain(pixels);
+    StoredTexture { offset, levels }
+}
+
+/// The record of a map that reads `texture`, stored as `stored`, through `transform` from
+/// coordinate set `tex_coord`.
+fn texture_map_record(
+    texture: &Texture,
+    stored: StoredTexture,
+    transform: &TextureTransform,
+    tex_coord: u32,
+) -> GpuTextureMap {
     let [transform_u, transform_v] = transform.rows();
     GpuTextureMap {
-        offset,
+        offset: stored.offset,
         width: texture.width,
         height: texture.height,
         wrap: texture.wrap[0].code() | texture.wrap[1].code() << 8,
         transform_u,
         tex_coord,
         transform_v,
-        _pad1: 0.0,
+        sampling: stored.levels | texture.filter.code(),
     }
 }
 
-/// Appends `texture`'s texels and a map of the whole of it (coordinate set 0, no transform);
+/// Appends `texture`'s mip chain and a map of the whole of it (coordinate set 0, no transform);
 /// returns the map's index.
 fn push_whole_texture(texture: &Texture, maps: &mut Vec<GpuTextureMap>, pixels: &mut TexturePixels) -> u32 {
-    maps.push(texture_map_record(
-        texture,
-        pixels.0.len() as u32,
-        &TextureTransform::default(),
-        0,
-    ));
-    pixels.0.extend_from_slice(&texture.texels);
+    let stored = store_texture(texture, &mut pixels.0);
+    maps.push(texture_map_record(texture, stored, &TextureTransform::default(), 0));
     maps.len() as u32 - 1
 }
 
 /// Materials' records, the texture maps they name, and every texture's texels one after another
 /// (each map says where its texture's start).
 fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTextureMap>, TexturePixels) {
-    // Every texture's texels, one after another: where each starts.
+    // Every texture's mip chain, one after another.
     let mut texture_pixels = Vec::new();
-    let texture_offsets: Vec<u32> = scene
+    let stored: Vec<StoredTexture> = scene
         .textures
         .iter()
-        .map(|t| {
-            let offset = texture_pixels.len() as u32;
-            texture_pixels.extend_from_slice(&t.texels);
-            offset
-        })
+        .map(|t| store_texture(t, &mut texture_pixels))
         .collect();
     let mut maps = Vec::new();
     let mut map_index = |map: Option<TextureMap>| {
         let Some(map) = map else { return NONE };
         let texture = &scene.textures[map.texture as usize];
-        let offset = texture_offsets[map.texture as usize];
-        maps.push(texture_map_record(texture, offset, &map.transform, map.tex_coord));
+        maps.push(texture_map_record(
+            texture,
+            stored[map.texture as usize],
+            &map.transform,
+            map.tex_coord,
+        ));
         maps.len() as u32 - 1
     };
     let materials = scene

@@ -80,7 +80,7 @@ impl GpuRecord for ShadingTexel {
     }
 }
 
-/// Every texture's texels, one after another, as the GPU's rgba16float texture holds them (half
+/// Every texture's mip chain, one after another, as the GPU's rgba16float texture holds them (half
 /// floats' bits): the pixels `GpuTextureMap::offset` points into.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TexturePixels(pub Vec<[u16; 4]>);
@@ -170,7 +170,7 @@ impl GpuRecord for GpuTextureMap {
             [self.offset, self.width, self.height, self.wrap].map(|n| n as f32),
         ));
         out.push(floats([ua, ub, uc, self.tex_coord as f32]));
-        out.push(floats([va, vb, vc, 0.0]));
+        out.push(floats([va, vb, vc, self.sampling as f32]));
     }
 }
 

@@ -22,7 +22,7 @@ pub use light::{Light, LightKind};
 pub use load::{is_model_file, model_extension_list};
 pub use material::{AlphaMode, Material, Pbr, TextureMap, TextureTransform, Volume};
 pub use motion::{Bounce, Motion, Moved};
-pub use texture::{Texture, Wrap};
+pub use texture::{Filter, TexelFilter, Texture, Wrap};
 
 use crate::error::{Element, InputError};
 use crate::image::tonemap::ToneMap;
@@ -208,7 +208,7 @@ pub const MAX_COORDINATE: f32 = 1e17;
 pub const MIN_RADIUS: f32 = 1e-12;
 
 fn environment_texels(environment: &Environment) -> u64 {
-    (environment.radiance().texels.len() + environment.irradiance().texels.len()) as u64
+    environment.radiance().stored_texels() + environment.irradiance().stored_texels()
 }
 
 fn within_reach(v: Vec3) -> bool {
@@ -235,9 +235,9 @@ impl Scene {
         texture::shrink_to_fit(&mut self.textures, texture::MAX_TEXELS - taken)
     }
 
-    /// The texels of the textures and the environment together.
+    /// The texels of the textures and the environment together, mipmaps counted.
     pub fn texels(&self) -> u64 {
-        let textures: u64 = self.textures.iter().map(|t| t.texels.len() as u64).sum();
+        let textures: u64 = self.textures.iter().map(Texture::stored_texels).sum();
         textures + self.environment.as_ref().map_or(0, environment_texels)
     }
 

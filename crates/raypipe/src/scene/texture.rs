@@ -1,6 +1,8 @@
 //! Images that materials are textured with: linear RGBA texels at half precision, with the wrap mode
-//! of each axis. Both tracers sample them alike (`sample_texture` in `shaders/shade.wgsl` and
-//! `cpu/shade.rs`): bilinear, from the four texels around the point, without mipmaps.
+//! of each axis and the sampler's filters. Both tracers sample them alike (`sample_texture` in
+//! `shaders/maps.wgsl` and `cpu/maps.rs`): from a chain of mipmaps made on the host
+//! ([`Texture::halved`] again and again), at the level a ray cone's footprint picks, trilinear by
+//! default.
 
 use crate::error::InputError;
 use half::f16;
@@ -34,8 +36,57 @@ impl Wrap {
     }
 }
 
-/// The most texels a scene's textures hold together: 2^24, so that a texel's index is exact in
-/// the f32 records of texture memory (a 4096 x 4096 image, or sixteen of 1024 x 1024).
+/// How texels are read within a level: the one nearest the point, or the four around it blended.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TexelFilter {
+    Nearest,
+    #[default]
+    Linear,
+}
+
+/// A sampler's filters (glTF's magFilter and minFilter): how a texture is read where a texel
+/// covers more than the ray's footprint (magnified), and where the footprint covers more than a
+/// texel (minified), within a mip level and between two.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Filter {
+    pub magnify: TexelFilter,
+    pub minify: TexelFilter,
+    /// Between mip levels: the nearest level or the two around the footprint blended; `None`
+    /// reads the full-size image only (minFilter NEAREST or LINEAR).
+    pub mipmaps: Option<TexelFilter>,
+}
+
+impl Default for Filter {
+    /// Trilinear: what glTF's viewers use where the sampler names no filter.
+    fn default() -> Self {
+        Filter {
+            magnify: TexelFilter::Linear,
+            minify: TexelFilter::Linear,
+            mipmaps: Some(TexelFilter::Linear),
+        }
+    }
+}
+
+impl Filter {
+    /// The bits the records carry (`FILTER_*` in records/constants.rs).
+    pub fn code(self) -> u32 {
+        use crate::records::constants::{
+            FILTER_MAGNIFY_NEAREST, FILTER_MINIFY_NEAREST, FILTER_MIPMAP_LINEAR, FILTER_MIPMAP_NEAREST,
+        };
+        let nearest = |f: TexelFilter, bit: u32| if f == TexelFilter::Nearest { bit } else { 0 };
+        nearest(self.magnify, FILTER_MAGNIFY_NEAREST)
+            | nearest(self.minify, FILTER_MINIFY_NEAREST)
+            | match self.mipmaps {
+                None => 0,
+                Some(TexelFilter::Nearest) => FILTER_MIPMAP_NEAREST,
+                Some(TexelFilter::Linear) => FILTER_MIPMAP_LINEAR,
+            }
+    }
+}
+
+/// The most texels a scene's textures hold together, their mipmaps counted: 2^24, so that a
+/// texel's index is exact in the f32 records of texture memory (a 2048 x 2048 image and its
+/// mipmaps take a third of it).
 pub const MAX_TEXELS: u64 = 1 << 24;
 /// The most texels a file's images may decode to together: what [`shrink_to_fit`] brings down
 /// to MAX_TEXELS.
@@ -52,6 +103,7 @@ pub struct Texture {
     pub texels: Vec<[u16; 4]>,
     /// Along u, then v.
     pub wrap: [Wrap; 2],
+    pub filter: Filter,
 }
 
 impl Texture {
@@ -77,6 +129,7 @@ impl Texture {
             height,
             texels,
             wrap,
+            filter: Filter::default(),
         }
     }
 
@@ -91,6 +144,7 @@ impl Texture {
                 .map(|p| [p[0], p[1], p[2], p[3]].map(|c| f16::from_f32(c as f32 / 255.0).to_bits()))
                 .collect(),
             wrap,
+            filter: Filter::default(),
         }
     }
 
@@ -101,7 +155,13 @@ impl Texture {
             height,
             texels: rgba.iter().map(|p| p.map(|c| f16::from_f32(c).to_bits())).collect(),
             wrap,
+            filter: Filter::default(),
         }
+    }
+
+    /// The texture read through `filter`.
+    pub fn with_filter(self, filter: Filter) -> Texture {
+        Texture { filter, ..self }
     }
 
     /// The texture at half its size each way (an odd side rounds up, a side of 1 stays), each
@@ -130,7 +190,34 @@ impl Texture {
             height,
             texels,
             wrap: self.wrap,
+            filter: self.filter,
         }
+    }
+
+    /// Appends the texture's mip chain to `out`: the image, then each level [`halved`](Self::halved)
+    /// from the one before, down to a single texel. Returns the number of levels.
+    pub fn push_mip_chain(&self, out: &mut Vec<[u16; 4]>) -> u32 {
+        out.extend_from_slice(&self.texels);
+        let mut levels = 1;
+        let mut level = None::<Texture>;
+        while level
+            .as_ref()
+            .map_or((self.width, self.height), |l| (l.width, l.height))
+            != (1, 1)
+        {
+            let next = level.as_ref().unwrap_or(self).halved();
+            out.extend_from_slice(&next.texels);
+            level = Some(next);
+            levels += 1;
+        }
+        levels
+    }
+
+    /// The texels of the image and its mipmaps together: what the texture takes of [`MAX_TEXELS`].
+    pub fn stored_texels(&self) -> u64 {
+        mip_sizes(self.width, self.height)
+            .map(|(w, h)| w as u64 * h as u64)
+            .sum()
     }
 
     /// The texel at column `x`, row `y`, as f32 (exact: every half is an f32).
@@ -163,11 +250,19 @@ impl Texture {
     }
 }
 
-/// Halves the largest of `textures` until they hold at most `budget` texels together ([`MAX_TEXELS`]
-/// or less; a texture of one texel cannot shrink, and with a million of them the sum cannot exceed
+/// The sizes of a `width` x `height` image's mip levels, the image first: each side halved and
+/// rounded up, down to 1 x 1 (what the shader's `mip_level` walks).
+pub fn mip_sizes(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
+    std::iter::successors(Some((width, height)), |&(w, h)| {
+        ((w, h) != (1, 1)).then(|| (w.div_ceil(2), h.div_ceil(2)))
+    })
+}
+
+/// Halves the largest of `textures` until they hold at most `budget` texels together, mipmaps
+/// counted ([`MAX_TEXELS`] or less; a texture of one texel cannot shrink, and with a million of them the sum cannot exceed
 /// the limit). Returns how many halvings it took.
 pub fn shrink_to_fit(textures: &mut [Texture], budget: u64) -> usize {
-    let size = |t: &Texture| t.width as u64 * t.height as u64;
+    let size = |t: &Texture| t.stored_texels();
     let mut total: u64 = textures.iter().map(size).sum();
     let mut halvings = 0;
     while total > budget {
@@ -217,18 +312,36 @@ mod tests {
         assert_eq!((half.width, half.height), (2, 1));
         assert_eq!(half.texel(0, 0), [0.5; 4]);
         assert_eq!(half.texel(1, 0), [0.5, 0.25, 0.0, 1.0]);
-        // Two 4096 x 4096 textures (twice the limit) and a small one: the big ones halve once each.
+        // Two 4096 x 4096 textures (with their mipmaps, 2.7 times the limit) and a small one: the big
+        // ones halve once each.
         let big = Texture {
             width: 4096,
             height: 4096,
             texels: vec![[0; 4]; 4096 * 4096],
             wrap: [Wrap::Repeat; 2],
+            filter: Filter::default(),
         };
         let small = Texture::from_linear(2, 2, &[[1.0; 4]; 4], [Wrap::Repeat; 2]);
         let mut textures = vec![big.clone(), big, small.clone()];
         assert_eq!(shrink_to_fit(&mut textures, MAX_TEXELS), 2);
         assert_eq!([textures[0].width, textures[1].width], [2048, 2048]);
         assert_eq!(textures[2], small);
+    }
+
+    #[test]
+    fn mip_chains_halve_down_to_one_texel() {
+        let sizes: Vec<_> = mip_sizes(5, 2).collect();
+        assert_eq!(sizes, [(5, 2), (3, 1), (2, 1), (1, 1)]);
+        assert_eq!(mip_sizes(1, 1).count(), 1);
+        // A 4 x 4 checker of one-texel squares: its 2 x 2 level is grey, and so is its last.
+        let checker: Vec<[f32; 4]> = (0..16).map(|i| [((i % 4 + i / 4) % 2) as f32; 4]).collect();
+        let texture = Texture::from_linear(4, 4, &checker, [Wrap::Repeat; 2]);
+        let mut chain = Vec::new();
+        assert_eq!(texture.push_mip_chain(&mut chain), 3);
+        assert_eq!(chain.len() as u64, texture.stored_texels());
+        assert_eq!(chain.len(), 16 + 4 + 1);
+        let grey = [f16::from_f32(0.5).to_bits(); 4];
+        assert!(chain[16..].iter().all(|&t| t == grey));
     }
 
     #[test]

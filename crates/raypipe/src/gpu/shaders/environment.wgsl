@@ -12,18 +12,20 @@ fn environment_uv(d: vec3<f32>) -> vec2<f32> {
 }
 
 // What a ray leaving the scene along `dir` brings back: the environment's radiance, or the
-// background colour where the scene has none.
-fn escaped_radiance(dir: vec3<f32>) -> vec3<f32> {
+// background colour where the scene has none. The map is read at the level where a texel spans the
+// ray cone's `spread` (radians; a row of the map spans π / height).
+fn escaped_radiance(dir: vec3<f32>, spread: f32) -> vec3<f32> {
     if (!HAS_ENVIRONMENT) {
         return globals.scene.background;
     }
     let map = load_texture_map(globals.scene.environment_map);
-    return globals.scene.environment_intensity * sample_texture(map, environment_uv(dir)).rgb;
+    let lod = lod_of(abs(spread) * f32(map.height) * (1.0 / PI));
+    return globals.scene.environment_intensity * sample_texture(map, environment_uv(dir), lod).rgb;
 }
 
 // The environment's irradiance over π on a surface facing `normal`: what a white Lambert surface
 // there reflects.
 fn environment_irradiance(normal: vec3<f32>) -> vec3<f32> {
     let map = load_texture_map(globals.scene.irradiance_map);
-    return globals.scene.environment_intensity * sample_texture(map, environment_uv(normal)).rgb;
+    return globals.scene.environment_intensity * sample_texture(map, environment_uv(normal), -1.0).rgb;
 }

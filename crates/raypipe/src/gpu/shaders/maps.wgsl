@@ -12,10 +12,32 @@ struct Attributes {
     color: vec4<f32>,
     // Interpolated, not unit; w is the bitangent's sign.
     tangent: vec4<f32>,
+    // The texture coordinates' units per unit of length on the triangle, for sets 0 and 1: the
+    // square root of their area over the triangle's.
+    texel_scale: vec2<f32>,
+    // The ray cone's width where it meets the surface, over the cosine between them: the length on
+    // the surface that the pixel sees (trace_task sets it; 0 reads textures at full size, as the
+    // walks' alpha test does).
+    footprint: f32,
 }
 
 fn no_attributes() -> Attributes {
-    return Attributes(0u, vec2<f32>(0.0), vec2<f32>(0.0), vec4<f32>(1.0), vec4<f32>(0.0));
+    return Attributes(0u, vec2<f32>(0.0), vec2<f32>(0.0), vec4<f32>(1.0), vec4<f32>(0.0), vec2<f32>(0.0), 0.0);
+}
+
+// A set of texture coordinates' units per unit of length on the triangle: the square root of the
+// ratio of the corners' area in texture space (the first two in t0, the third in t1.xy) to the
+// triangle's; 0 where the triangle has no area.
+fn texel_scale(triangle: Triangle, t0: vec4<f32>, t1: vec4<f32>) -> f32 {
+    let e1 = triangle.v1 - triangle.v0;
+    let e2 = triangle.v2 - triangle.v0;
+    // Scaled by the longest edge's largest coordinate, so that no square overflows or underflows.
+    let m = max(max(max(abs(e1.x), abs(e1.y)), abs(e1.z)), max(max(abs(e2.x), abs(e2.y)), abs(e2.z)));
+    let world = sqrt(length(cross(e1 / m, e2 / m))) * m;
+    let b = t0.zw - t0.xy;
+    let c = t1.xy - t0.xy;
+    let texture = sqrt(abs(b.x * c.y - b.y * c.x));
+    return select(0.0, texture / world, world > 0.0);
 }
 
 // Three corners' coordinates (the first two in t0, the third in t1.xy) blended by the hit's
@@ -38,10 +60,15 @@ fn triangle_attributes(triangle: Triangle, ray: Ray) -> Attributes {
     var at = triangle.attributes;
     let set0_last = load_triangle_attributes(at + 1u);
     a.present = u32(set0_last.z);
-    a.uv0 = blend_coordinates(uvt, load_triangle_attributes(at), set0_last);
+    let set0_first = load_triangle_attributes(at);
+    a.uv0 = blend_coordinates(uvt, set0_first, set0_last);
+    a.texel_scale.x = texel_scale(triangle, set0_first, set0_last);
     at += 2u;
     if ((a.present & ATTRIBUTE_UV1) != 0u) {
-        a.uv1 = blend_coordinates(uvt, load_triangle_attributes(at), load_triangle_attributes(at + 1u));
+        let set1_first = load_triangle_attributes(at);
+        let set1_last = load_triangle_attributes(at + 1u);
+        a.uv1 = blend_coordinates(uvt, set1_first, set1_last);
+        a.texel_scale.y = texel_scale(triangle, set1_first, set1_last);
         at += 2u;
     }
     if ((a.present & ATTRIBUTE_COLOR) != 0u) {
@@ -98,8 +125,26 @@ fn load_texture_map(i: u32) -> TextureMap {
     return texture_map_from_texels(load_shading(b), load_shading(b + 1u), load_shading(b + 2u));
 }
 
-fn texture_texel(map: TextureMap, x: i32, y: i32) -> vec4<f32> {
-    let index = map.offset + u32(y) * map.width + u32(x);
+// Where a mip level's texels start among all textures' texels, and its size.
+struct MipLevel {
+    offset: u32,
+    size: vec2<u32>,
+}
+
+// Level `level` of the map's texture: the levels follow the image one after another, each side
+// halved and rounded up (scene::texture::mip_sizes).
+fn mip_level(map: TextureMap, level: u32) -> MipLevel {
+    var offset = map.offset;
+    var size = vec2<u32>(map.width, map.height);
+    for (var i = 0u; i < level; i += 1u) {
+        offset += size.x * size.y;
+        size = (size + 1u) / 2u;
+    }
+    return MipLevel(offset, size);
+}
+
+fn texture_texel(level: MipLevel, x: i32, y: i32) -> vec4<f32> {
+    let index = level.offset + u32(y) * level.size.x + u32(x);
     return textureLoad(texture_pixels, texel_coord(index), 0);
 }
 
@@ -107,15 +152,19 @@ fn lerp4(a: vec4<f32>, b: vec4<f32>, t: f32) -> vec4<f32> {
     return a * (1.0 - t) + b * t;
 }
 
-// The map's texture at uv, carried there by its transform. Bilinear filtering without mipmaps:
-// the four texels around the point (texel centres at +0.5), weighted by its distance to them.
-fn sample_texture(map: TextureMap, surface_uv: vec2<f32>) -> vec4<f32> {
-    let point = vec3<f32>(surface_uv, 1.0);
-    let uv = vec2<f32>(dot(map.transform_u, point), dot(map.transform_v, point));
+// Mip level `level_index` at uv (after the map's transform): the texel nearest the point, or the
+// four around it (texel centres at +0.5) weighted by its distance to them.
+fn sample_level(map: TextureMap, uv: vec2<f32>, level_index: u32, nearest: bool) -> vec4<f32> {
+    let level = mip_level(map, level_index);
     let wrap_u = map.wrap & 0xffu;
     let wrap_v = map.wrap >> 8u;
-    let size = vec2<i32>(i32(map.width), i32(map.height));
-    let p = vec2<f32>(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * vec2<f32>(size) - 0.5;
+    let size = vec2<i32>(level.size);
+    let folded = vec2<f32>(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * vec2<f32>(size);
+    if (nearest) {
+        let i = vec2<i32>(floor(folded));
+        return texture_texel(level, wrap_texel(i.x, size.x, wrap_u), wrap_texel(i.y, size.y, wrap_v));
+    }
+    let p = folded - 0.5;
     let corner = floor(p);
     let f = p - corner;
     let i = vec2<i32>(corner);
@@ -123,9 +172,55 @@ fn sample_texture(map: TextureMap, surface_uv: vec2<f32>) -> vec4<f32> {
     let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
     let y0 = wrap_texel(i.y, size.y, wrap_v);
     let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
-    let near_row = lerp4(texture_texel(map, x0, y0), texture_texel(map, x1, y0), f.x);
-    let far_row = lerp4(texture_texel(map, x0, y1), texture_texel(map, x1, y1), f.x);
+    let near_row = lerp4(texture_texel(level, x0, y0), texture_texel(level, x1, y0), f.x);
+    let far_row = lerp4(texture_texel(level, x0, y1), texture_texel(level, x1, y1), f.x);
     return lerp4(near_row, far_row, f.y);
+}
+
+// The map's texture at uv, carried there by its transform, read at level of detail `lod` (log2 of
+// the texels a footprint spans). At or below 0 the image is magnified and read at full size through
+// the magnification filter; above, the minification filter reads the level nearest `lod` or blends
+// the two around it (trilinear), or reads the full size where the sampler has no mipmaps.
+fn sample_texture(map: TextureMap, surface_uv: vec2<f32>, lod: f32) -> vec4<f32> {
+    let point = vec3<f32>(surface_uv, 1.0);
+    let uv = vec2<f32>(dot(map.transform_u, point), dot(map.transform_v, point));
+    let bits = map.sampling;
+    if (lod <= 0.0) {
+        return sample_level(map, uv, 0u, (bits & FILTER_MAGNIFY_NEAREST) != 0u);
+    }
+    let nearest = (bits & FILTER_MINIFY_NEAREST) != 0u;
+    if ((bits & (FILTER_MIPMAP_NEAREST | FILTER_MIPMAP_LINEAR)) == 0u) {
+        return sample_level(map, uv, 0u, nearest);
+    }
+    let top = min(lod, f32((map.sampling & MIP_LEVELS_MASK) - 1u));
+    if ((bits & FILTER_MIPMAP_NEAREST) != 0u) {
+        return sample_level(map, uv, u32(floor(top + 0.5)), nearest);
+    }
+    let base = floor(top);
+    let finer = sample_level(map, uv, u32(base), nearest);
+    let blend = top - base;
+    if (blend == 0.0) {
+        return finer;
+    }
+    return lerp4(finer, sample_level(map, uv, u32(base) + 1u, nearest), blend);
+}
+
+// The level of detail at which a map reads the hit: log2 of the texels the footprint spans in the
+// map's texture, through the triangle's texel scale for the map's coordinate set and the map's
+// transform (which scales areas by its determinant). -1 (full size) where there is no footprint.
+fn texture_lod(map: TextureMap, attributes: Attributes) -> f32 {
+    let scale = select(attributes.texel_scale.x, attributes.texel_scale.y, map.tex_coord == 1u);
+    let texel_area = abs(map.transform_u.x * map.transform_v.y - map.transform_u.y * map.transform_v.x)
+        * f32(map.width) * f32(map.height);
+    return lod_of(attributes.footprint * scale * sqrt(texel_area));
+}
+
+// log2 of `texels`, -1 where it is not positive.
+fn lod_of(texels: f32) -> f32 {
+    if (texels > 0.0) {
+        return log2(min(texels, 1e30));
+    }
+    return -1.0;
 }
 
 // Whether the attributes hold the coordinate set the map reads.
@@ -140,7 +235,7 @@ fn sample_map(index: u32, attributes: Attributes) -> vec4<f32> {
     if (!has_coordinates(map, attributes)) {
         return vec4<f32>(1.0);
     }
-    return sample_texture(map, select(attributes.uv0, attributes.uv1, map.tex_coord == 1u));
+    return sample_texture(map, select(attributes.uv0, attributes.uv1, map.tex_coord == 1u), texture_lod(map, attributes));
 }
 
 // The alpha of a material's surface at the hit: its own, times the vertex colour's, times the base

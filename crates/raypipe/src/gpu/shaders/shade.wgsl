@@ -20,6 +20,10 @@ struct Surface {
     attributes: Attributes,
     // A triangle with alpha BLEND: it covers its alpha of the ray.
     blend: bool,
+    // How fast the shading normal turns per unit of length across the surface, positive where it
+    // turns away from the geometric normal's side (a sphere's 1 / radius seen from outside): what
+    // widens or narrows a ray cone that the surface reflects or refracts.
+    curvature: f32,
 }
 
 fn max_abs(v: vec3<f32>) -> f32 {
@@ -31,20 +35,46 @@ fn normalize_scaled(v: vec3<f32>) -> vec3<f32> {
     return normalize(v / max_abs(v));
 }
 
-// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's side;
-// the geometric normal where they cancel out.
-fn triangle_shading(triangle: Triangle, ray: Ray, normal: vec3<f32>) -> vec3<f32> {
+// A smooth triangle's vertex normals interpolated at the hit, turned to the geometric normal's side
+// (the geometric normal where they cancel out), in xyz, and the triangle's curvature in w. A flat
+// triangle has neither.
+fn triangle_shading(triangle: Triangle, ray: Ray, normal: vec3<f32>) -> vec4<f32> {
     if (triangle.normals == NONE) {
-        return normal;
+        return vec4<f32>(normal, 0.0);
     }
     let uvt = triangle_uvt(triangle, ray);
     let n = load_triangle_normals(triangle.normals);
+    let curvature = triangle_curvature(triangle, n, normal);
     let blended = (1.0 - uvt.x - uvt.y) * n.n0 + uvt.x * n.n1 + uvt.y * n.n2;
     if (dot(blended, blended) == 0.0) {
-        return normal;
+        return vec4<f32>(normal, curvature);
     }
     let shading = normalize(blended);
-    return select(shading, -shading, dot(shading, normal) < 0.0);
+    return vec4<f32>(select(shading, -shading, dot(shading, normal) < 0.0), curvature);
+}
+
+fn facing(n: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
+    return select(n, -n, dot(n, normal) < 0.0);
+}
+
+// The change of normal from corner a to corner b along their edge, over its length squared.
+fn edge_turn(a: vec3<f32>, b: vec3<f32>, na: vec3<f32>, nb: vec3<f32>) -> f32 {
+    let edge = b - a;
+    let length_squared = dot(edge, edge);
+    return select(0.0, dot(nb - na, edge) / length_squared, length_squared > 0.0);
+}
+
+// How fast a smooth triangle's vertex normals turn along its edges, averaged over the three. Normals
+// on a sphere of radius r, seen from the geometric normal's side, give 1 / r outside and -1 / r
+// inside.
+fn triangle_curvature(triangle: Triangle, n: TriangleNormals, normal: vec3<f32>) -> f32 {
+    // The vertex normals facing the geometric normal's side, as the shading normal does.
+    let n0 = facing(n.n0, normal);
+    let n1 = facing(n.n1, normal);
+    let n2 = facing(n.n2, normal);
+    let sum = edge_turn(triangle.v0, triangle.v1, n0, n1) + edge_turn(triangle.v1, triangle.v2, n1, n2)
+        + edge_turn(triangle.v2, triangle.v0, n2, n0);
+    return sum / 3.0;
 }
 
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
@@ -54,14 +84,15 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         if (is_sphere(hit.index)) {
             let sphere = load_sphere(hit.index);
             let normal = normalize(position - sphere.center);
-            return Surface(position, normal, normal, sphere.material, reach, no_attributes(), false);
+            return Surface(position, normal, normal, sphere.material, reach, no_attributes(), false, 1.0 / sphere.radius);
         }
         let triangle = load_triangle(hit.index - globals.scene.sphere_count);
         let normal = normalize_scaled(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
         let shading = triangle_shading(triangle, ray, normal);
         let material = triangle.material & MATERIAL_INDEX_MASK;
         let blend = HAS_ALPHA_BLEND && (triangle.material & TRIANGLE_ALPHA_BLEND) != 0u;
-        return Surface(position, normal, shading, material, reach, triangle_attributes(triangle, ray), blend);
+        return Surface(position, normal, shading.xyz, material, reach, triangle_attributes(triangle, ray), blend,
+            shading.w);
     }
     let plane = load_plane(hit.index);
     let local = position - plane.point;
@@ -71,7 +102,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     if (cell - 2.0 * floor(cell * 0.5) != 0.0) {
         material = plane.checker_material;
     }
-    return Surface(position, plane.normal, plane.normal, material, reach, no_attributes(), false);
+    return Surface(position, plane.normal, plane.normal, material, reach, no_attributes(), false, 0.0);
 }
 
 // The surface's material, its vertex colour and maps applied at the hit: the base colour's (alpha
@@ -137,7 +168,7 @@ fn normal_mapped(surface: Surface, material: Material) -> vec3<f32> {
     }
     let tangent = normalize(along);
     let bitangent = select(-1.0, 1.0, a.tangent.w >= 0.0) * cross(n, tangent);
-    let texel = sample_texture(map, select(a.uv0, a.uv1, map.tex_coord == 1u));
+    let texel = sample_texture(map, select(a.uv0, a.uv1, map.tex_coord == 1u), texture_lod(map, a));
     let local = vec3<f32>((2.0 * texel.xy - 1.0) * material.normal_scale, 2.0 * texel.z - 1.0);
     let bent = local.x * tangent + local.y * bitangent + local.z * n;
     if (dot(bent, surface.normal) <= 0.0) {

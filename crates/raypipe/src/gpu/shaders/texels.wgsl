@@ -45,7 +45,7 @@ fn material_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f3
 
 fn texture_map_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> TextureMap {
     let size = vec4<u32>(t0);
-    return TextureMap(size.x, size.y, size.z, size.w, t1.xyz, u32(t1.w), t2.xyz);
+    return TextureMap(size.x, size.y, size.z, size.w, t1.xyz, u32(t1.w), t2.xyz, u32(t2.w));
 }
 
 // Node links travel as exact floats, with NONE and LEAF as -1.

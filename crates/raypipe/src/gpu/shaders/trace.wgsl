@@ -27,6 +27,8 @@ struct RayTask {
     // Whether single-sided triangles hide their backs from the ray: camera and reflected rays,
     // not rays transmitted through a surface (which may be inside a volume).
     culls: bool,
+    // The ray cone around it: its width where the ray starts, and its spread angle (radians).
+    cone: vec2<f32>,
 }
 
 struct PixelTrace {
@@ -97,6 +99,30 @@ fn occluded(ray: Ray, t_max: f32) -> bool {
     return blocked;
 }
 
+// The spread angle of the ray cone through a pixel: the angle one pixel of the image subtends at the
+// eye, at its centre.
+fn pixel_spread() -> f32 {
+    return atan(2.0 * globals.camera.tan_half_fov / globals.camera.height);
+}
+
+// A ray cone (width at the surface, spread) reflected by a surface of `curvature` (seen from the
+// ray's side): across the cone's width the normal turns by curvature × width, and the reflected
+// rays by twice that (Akenine-Möller et al., "Improved Shader and Texture Level of Detail Using Ray
+// Cones", 2021).
+fn cone_reflected(cone: vec2<f32>, curvature: f32) -> vec2<f32> {
+    return vec2<f32>(cone.x, cone.y + 2.0 * curvature * cone.x);
+}
+
+// A ray cone refracted by a surface of `curvature`, with `eta` the ratio of indices and the cosines
+// of the incident and refracted rays to the normal. Snell's law differentiated: a change of the
+// incident angle changes the refracted one ratio = η cos θi / cos θt times as much, so the incoming
+// spread scales by it, and the normal's turn across the width bends the refracted rays by
+// (ratio - 1) times that turn (a convex surface entering glass focuses).
+fn cone_refracted(cone: vec2<f32>, curvature: f32, eta: f32, cos_i: f32, cos_t: f32) -> vec2<f32> {
+    let ratio = eta * cos_i / max(cos_t, MIN_FOOTPRINT_COSINE);
+    return vec2<f32>(cone.x, ratio * cone.y + (ratio - 1.0) * curvature * cone.x);
+}
+
 fn worth_tracing(weight: vec3<f32>) -> bool {
     return max(weight.x, max(weight.y, weight.z)) >= MIN_WEIGHT;
 }
@@ -120,10 +146,13 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
         primary_cost = box_tests;
     }
     if (hit.kind == HIT_NONE) {
-        (*result).color += task.weight * escaped_radiance(ray.dir);
+        (*result).color += task.weight * escaped_radiance(ray.dir, task.cone.y);
         return branches;
     }
     var surface = surface_at(ray, hit);
+    // The cone where it meets the surface: its width there, and its spread.
+    let cone = vec2<f32>(task.cone.x + task.cone.y * hit.t, task.cone.y);
+    surface.attributes.footprint = abs(cone.x) / max(abs(dot(surface.normal, ray.dir)), MIN_FOOTPRINT_COSINE);
     let material = surface_material(surface);
     surface.shading = normal_mapped(surface, material);
     // The first surface the camera ray meets, blended or not.
@@ -135,6 +164,7 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     // The geometric normal picks the side new rays start on; the shading normal bends them.
     let normal = select(-surface.normal, surface.normal, entering);
     let shading = select(-surface.shading, surface.shading, entering);
+    let curvature = select(-surface.curvature, surface.curvature, entering);
     let view = -ray.dir;
     // A ray that leaves a volume lost light on its way through it (Beer-Lambert).
     var arrived = task;
@@ -149,7 +179,7 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
         if (blend_layers < MAX_BLEND_LAYERS) {
             blend_layers += 1u;
             branches.through = RayTask(offset_origin(surface, -normal), ray.dir,
-                arrived.weight * (1.0 - material.alpha), task.depth, task.culls);
+                arrived.weight * (1.0 - material.alpha), task.depth, task.culls, cone);
         }
     }
     // KHR_materials_unlit: the base colour is what the surface shows, and all it sends on.
@@ -169,7 +199,7 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
         return branches;
     }
     if (gltf) {
-        let sent = gltf_branches(covered, surface, normal, shading, view, material, entering);
+        let sent = gltf_branches(covered, surface, normal, shading, view, material, entering, cone, curvature);
         branches.reflected = sent.reflected;
         branches.refracted = sent.refracted;
         return branches;
@@ -179,6 +209,7 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     var reflect_share = material.reflect;
     var transmit_share = material.transmit;
     var refracted = vec3<f32>(0.0);
+    var refracted_cone = cone;
     if (transmit_share > 0.0) {
         let eta = select(material.ior, 1.0 / material.ior, entering);
         let cos_i = dot(view, shading);
@@ -189,15 +220,17 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
         } else {
             let cos_t = sqrt(k);
             refracted = normalize(eta * ray.dir + (eta * cos_i - cos_t) * shading);
+            refracted_cone = cone_refracted(cone, curvature, eta, cos_i, cos_t);
             let fresnel = fresnel_schlick(select(cos_t, cos_i, entering), material.ior);
             reflect_share += transmit_share * fresnel;
             transmit_share *= 1.0 - fresnel;
         }
     }
     let depth = task.depth + 1u;
-    branches.refracted = RayTask(offset_origin(surface, -normal), refracted, covered.weight * transmit_share, depth, false);
+    branches.refracted = RayTask(offset_origin(surface, -normal), refracted, covered.weight * transmit_share, depth, false,
+        refracted_cone);
     branches.reflected = RayTask(offset_origin(surface, normal), reflect(ray.dir, shading), covered.weight * reflect_share,
-        depth, true);
+        depth, true, cone_reflected(cone, curvature));
     return branches;
 }
 
@@ -206,19 +239,27 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
 // transmitted ray goes on in the incoming direction, or, rough, in the reflected ray's mirror image
 // through the surface; across a volume's surface (KHR_materials_volume) it refracts about the
 // sampled microfacet normal, and reflects where it cannot (total internal reflection). A ray inside
-// a volume sees the back faces of single-sided triangles.
-fn gltf_branches(task: RayTask, surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material, entering: bool) -> Branches {
+// a volume sees the back faces of single-sided triangles. `cone` is the ray's cone where it meets the
+// surface, `curvature` the surface's seen from the ray's side.
+fn gltf_branches(task: RayTask, surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material, entering: bool, cone: vec2<f32>, curvature: f32) -> Branches {
     let s = gltf_surface(material);
     let sample = sample_specular(s, shading, view, random_pair());
     let depth = task.depth + 1u;
     var transmitted = sample.dir - 2.0 * dot(sample.dir, shading) * shading;
     var transmit_side = -normal;
     var transmit_culls = false;
+    let reflected_cone = cone_reflected(cone, curvature);
+    var transmitted_cone = cone;
     let volume = HAS_VOLUMES && material.volume != 0u;
     if (volume) {
         let eta = select(s.ior, 1.0 / s.ior, entering);
-        let bent = refracted_direction(-view, normalize(sample.dir + view), eta);
+        let microfacet = normalize(sample.dir + view);
+        let bent = refracted_direction(-view, microfacet, eta);
         transmitted = select(sample.dir, bent.xyz, bent.w > 0.0);
+        transmitted_cone = reflected_cone;
+        if (bent.w > 0.0) {
+            transmitted_cone = cone_refracted(cone, curvature, eta, dot(view, microfacet), -dot(bent.xyz, microfacet));
+        }
         transmit_side = select(normal, -normal, bent.w > 0.0);
         // Outside after it, where back faces hide again: leaving and refracted, or reflected
         // from outside.
@@ -227,9 +268,9 @@ fn gltf_branches(task: RayTask, surface: Surface, normal: vec3<f32>, shading: ve
     let transmit_share = (1.0 - s.metallic) * s.transmission * (1.0 - max3(sample.dielectric_fresnel)) * sample.share;
     var branches = Branches();
     branches.reflected = RayTask(offset_origin(surface, normal), sample.dir, task.weight * sample.weight, depth,
-        !volume || entering);
+        !volume || entering, reflected_cone);
     branches.refracted = RayTask(offset_origin(surface, transmit_side), transmitted,
-        task.weight * s.base * transmit_share, depth, transmit_culls);
+        task.weight * s.base * transmit_share, depth, transmit_culls, transmitted_cone);
     return branches;
 }
 
@@ -237,7 +278,7 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
     var result = PixelTrace(vec3<f32>(0.0), vec3<f32>(0.0), DEPTH_MISS);
     // The ray being traced stays out of the stack, which a scene without mirrors or glass never
     // touches.
-    var task = RayTask(primary.origin, primary.dir, vec3<f32>(1.0), 0u, true);
+    var task = RayTask(primary.origin, primary.dir, vec3<f32>(1.0), 0u, true, vec2<f32>(0.0, pixel_spread()));
     var waiting: array<RayTask, RAY_STACK_SIZE>;
     var top = 0u;
     loop {
@@ -331,7 +372,7 @@ fn miss_pixel(pixel: vec2<u32>) -> PixelSums {
     var color = vec3<f32>(0.0) + globals.scene.background;
     if (HAS_ENVIRONMENT) {
         let primary = camera_ray(vec2<f32>(pixel) + sample_offset(pixel, globals.camera.sample));
-        color = vec3<f32>(0.0) + escaped_radiance(primary.dir);
+        color = vec3<f32>(0.0) + escaped_radiance(primary.dir, pixel_spread());
     }
     return summed(pixel, vec4<f32>(color, 1.0), vec4<f32>(vec3<f32>(0.0), DEPTH_MISS));
 }

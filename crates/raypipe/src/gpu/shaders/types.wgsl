@@ -138,6 +138,8 @@ struct TextureMap {
     transform_u: vec3<f32>,
     tex_coord: u32,
     transform_v: vec3<f32>,
+    // The mip levels (MIP_LEVELS_MASK) and the sampler's FILTER_* bits.
+    sampling: u32,
 }
 
 // A BVH node (src/bvh/layout.rs): internal nodes first, then leaves; the root is node 0.

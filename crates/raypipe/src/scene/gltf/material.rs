@@ -11,9 +11,11 @@
 
 use super::data::{Files, MAX_IMAGE_BYTES, read_uri, view_bytes};
 use crate::scene::texture::{MAX_DECODED_TEXELS, MAX_TEXELS, MAX_TEXTURE_SIDE, shrink_to_fit};
-use crate::scene::{AlphaMode, Material, Pbr, Texture, TextureMap, TextureTransform, Volume, Wrap};
+use crate::scene::{
+    AlphaMode, Filter, Material, Pbr, TexelFilter, Texture, TextureMap, TextureTransform, Volume, Wrap,
+};
 use glam::{Vec2, Vec3};
-use gltf::texture::WrappingMode;
+use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 use std::collections::{BTreeSet, HashMap};
 
 /// How an image's values are read.
@@ -64,7 +66,7 @@ pub struct Materials {
     default: Option<u32>,
     texels: u64,
     /// (image, wrap, encoding) to texture index.
-    by_image: HashMap<(usize, [Wrap; 2], Encoding), u32>,
+    by_image: HashMap<(usize, [Wrap; 2], Filter, Encoding), u32>,
     /// What the materials hold that is not drawn, said once each.
     left_out: BTreeSet<&'static str>,
 }
@@ -289,8 +291,9 @@ impl Materials {
             WrappingMode::ClampToEdge => Wrap::Clamp,
             WrappingMode::MirroredRepeat => Wrap::Mirror,
         });
+        let filter = sampler_filter(sampler.mag_filter(), sampler.min_filter());
         let image = texture.source().index();
-        if let Some(&index) = self.by_image.get(&(image, wrap, encoding)) {
+        if let Some(&index) = self.by_image.get(&(image, wrap, filter, encoding)) {
             return Ok(index);
         }
         let what = format!("image {image}");
@@ -309,13 +312,33 @@ impl Materials {
         let (width, height, rgba) = decode_image(&bytes, mime, budget).map_err(|e| format!("{what}: {e}"))?;
         self.texels += width as u64 * height as u64;
         self.textures.push(match encoding {
-            Encoding::Srgb => Texture::from_srgb8(width, height, &rgba, wrap),
-            Encoding::Data => Texture::from_data8(width, height, &rgba, wrap),
+            Encoding::Srgb => Texture::from_srgb8(width, height, &rgba, wrap).with_filter(filter),
+            Encoding::Data => Texture::from_data8(width, height, &rgba, wrap).with_filter(filter),
         });
         let index = self.textures.len() as u32 - 1;
-        self.by_image.insert((image, wrap, encoding), index);
+        self.by_image.insert((image, wrap, filter, encoding), index);
         Ok(index)
     }
+}
+
+/// A glTF sampler's filters; where it names none, trilinear (as the Khronos viewers read them).
+fn sampler_filter(magnify: Option<MagFilter>, minify: Option<MinFilter>) -> Filter {
+    use TexelFilter::{Linear, Nearest};
+    let mut filter = Filter::default();
+    if magnify == Some(MagFilter::Nearest) {
+        filter.magnify = Nearest;
+    }
+    if let Some(minify) = minify {
+        (filter.minify, filter.mipmaps) = match minify {
+            MinFilter::Nearest => (Nearest, None),
+            MinFilter::Linear => (Linear, None),
+            MinFilter::NearestMipmapNearest => (Nearest, Some(Nearest)),
+            MinFilter::LinearMipmapNearest => (Linear, Some(Nearest)),
+            MinFilter::NearestMipmapLinear => (Nearest, Some(Linear)),
+            MinFilter::LinearMipmapLinear => (Linear, Some(Linear)),
+        };
+    }
+    filter
 }
 
 /// A KHR_texture_transform object's transform and texture coordinate set (`texCoord` overrides
