@@ -211,3 +211,78 @@ pub fn centre(scene: &Scene) -> Vec3 {
     let [r, g, b, _] = frame.color[(PLANE_SIZE / 2 * PLANE_SIZE + PLANE_SIZE / 2) as usize];
     Vec3::new(r, g, b)
 }
+
+/// An unlit material showing texture 0 as it is: a pixel's radiance is the filtered texel.
+pub fn unlit_textured() -> Material {
+    Material {
+        color: Vec3::ONE,
+        texture: Some(raypipe::scene::TextureMap::plain(0)),
+        pbr: Some(raypipe::scene::Pbr {
+            unlit: true,
+            ..Default::default()
+        }),
+        ..Material::default()
+    }
+}
+
+/// A `size` x `size` checker of one-texel squares, 1 where x + y is even and 0 elsewhere, tiling
+/// the plane, read through `filter`.
+pub fn checker_texture(size: u32, filter: raypipe::scene::Filter) -> raypipe::scene::Texture {
+    let texels: Vec<[f32; 4]> = (0..size * size)
+        .map(|i| {
+            let on = (i % size + i / size).is_multiple_of(2);
+            if on { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] }
+        })
+        .collect();
+    raypipe::scene::Texture::from_linear(size, size, &texels, [raypipe::scene::Wrap::Repeat; 2]).with_filter(filter)
+}
+
+/// The texels of [`checker_floor`]'s texture per unit of length on the floor.
+pub const FLOOR_TEXELS_PER_UNIT: f32 = 10.0;
+
+/// A floor (y = 0) to the horizon, 4 km wide and 1 km deep, in a 64 x 64 checker of one-texel
+/// squares (10 to a unit of length, read through `filter`), unlit, seen at `width` x `height` from
+/// 1 unit above it, looking slightly down: the near rows see a texel over several pixels, the far
+/// rows hundreds of texels in a pixel.
+pub fn checker_floor(filter: raypipe::scene::Filter, width: u32, height: u32) -> Scene {
+    let corners =
+        [(-2000.0, 10.0), (2000.0, 10.0), (2000.0, -1000.0), (-2000.0, -1000.0)].map(|(x, z)| Vec3::new(x, 0.0, z));
+    let uv = |p: Vec3| Vec2::new(p.x, p.z) * (FLOOR_TEXELS_PER_UNIT / 64.0);
+    Scene {
+        camera: Camera {
+            eye: Vec3::new(0.3, 1.0, 0.0),
+            target: Vec3::new(0.3, 0.6, -4.0),
+            up: Vec3::Y,
+            fov_degrees: 40.0,
+        },
+        settings: RenderSettings {
+            width,
+            height,
+            max_depth: 0,
+            background: Vec3::ZERO,
+            ambient: 0.0,
+        },
+        materials: vec![unlit_textured()],
+        textures: vec![checker_texture(64, filter)],
+        triangles: quad_triangles(corners, 0, true, Some(&uv)).to_vec(),
+        ..Scene::default()
+    }
+}
+
+/// The rows of `frame` whose every pixel hit something, top to bottom.
+pub fn hit_rows(frame: &Frame) -> Vec<u32> {
+    (0..frame.height)
+        .filter(|&y| (0..frame.width).all(|x| frame.surface[(y * frame.width + x) as usize][3] >= 0.0))
+        .collect()
+}
+
+/// The standard deviation of the red channel over `rows` of `frame`.
+pub fn red_deviation(frame: &Frame, rows: &[u32]) -> f32 {
+    let values: Vec<f32> = rows
+        .iter()
+        .flat_map(|&y| (0..frame.width).map(move |x| (y * frame.width + x) as usize))
+        .map(|i| frame.color[i][0])
+        .collect();
+    let mean = values.iter().sum::<f32>() / values.len() as f32;
+    (values.iter().map(|v| (v - mean) * (v - mean)).sum::<f32>() / values.len() as f32).sqrt()
+}

@@ -1,5 +1,5 @@
 //! The tests that need a GPU, on one shared device (see `common::harness`): the fragment shader
-//! against the CPU reference, memory modes against each other, the environment, closed-form answers, the GPU LBVH
+//! against the CPU reference, memory modes against each other, the environment, texture filtering, closed-form answers, the GPU LBVH
 //! build against the CPU's, per-frame rebuilds, the display pass, watertight triangles, and scenes
 //! at the ends of the accepted numeric range; and the tests of the shared
 //! models.
@@ -10,6 +10,7 @@ mod common;
 mod analytic;
 mod display;
 mod environment;
+mod filtering;
 mod frames;
 mod gltf;
 mod gpu_build;
@@ -25,6 +26,7 @@ fn main() -> std::process::ExitCode {
         analytic::tests(),
         display::tests(),
         environment::tests(),
+        filtering::tests(),
         frames::tests(),
         gpu_build::tests(),
         gltf::tests(),

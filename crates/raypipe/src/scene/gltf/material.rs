@@ -483,6 +483,44 @@ mod tests {
     }
 
     #[test]
+    fn samplers_filters_are_read_and_default_to_trilinear() {
+        use TexelFilter::{Linear, Nearest};
+        assert_eq!(sampler_filter(None, None), Filter::default());
+        assert_eq!(
+            Filter::default(),
+            Filter {
+                magnify: Linear,
+                minify: Linear,
+                mipmaps: Some(Linear)
+            }
+        );
+        let pixel_art = sampler_filter(Some(MagFilter::Nearest), Some(MinFilter::Nearest));
+        assert_eq!(
+            pixel_art,
+            Filter {
+                magnify: Nearest,
+                minify: Nearest,
+                mipmaps: None
+            }
+        );
+        let cases = [
+            (MinFilter::Linear, Linear, None),
+            (MinFilter::NearestMipmapNearest, Nearest, Some(Nearest)),
+            (MinFilter::LinearMipmapNearest, Linear, Some(Nearest)),
+            (MinFilter::NearestMipmapLinear, Nearest, Some(Linear)),
+            (MinFilter::LinearMipmapLinear, Linear, Some(Linear)),
+        ];
+        for (min, minify, mipmaps) in cases {
+            let filter = sampler_filter(Some(MagFilter::Linear), Some(min));
+            assert_eq!(
+                (filter.magnify, filter.minify, filter.mipmaps),
+                (Linear, minify, mipmaps),
+                "{min:?}"
+            );
+        }
+    }
+
+    #[test]
     fn images_that_are_neither_png_nor_jpeg_are_refused() {
         // The size check before decoding is in tests/gltf.rs (a_huge_texture_is_refused_...).
         assert!(
