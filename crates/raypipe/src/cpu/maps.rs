@@ -65,25 +65,22 @@ fn lerp4(a: Vec4, b: Vec4, t: f32) -> Vec4 {
 }
 
 /// Mip level `level` at `uv` (after the map's transform; `sample_level`): the texel nearest the
-/// point, or the four around it (texel centres at +0.5) weighted by its distance to them.
+/// point, or the four around it (texel centres at +0.5) weighted by its distance to them. Nearest
+/// reads the same four with all the weight on the first (the shader's one body for both).
 fn sample_level(scene: &PackedScene, map: &GpuTextureMap, uv: Vec2, level: u32, nearest: bool) -> Vec4 {
     let level = mip_level(map, level);
     let (wrap_u, wrap_v) = (map.wrap & 0xff, map.wrap >> 8);
     let size = level.size.as_ivec2();
     let folded = Vec2::new(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * size.as_vec2();
-    let texel = |x, y| texture_texel(scene, &level, x, y);
-    if nearest {
-        let i = folded.floor().as_ivec2();
-        return texel(wrap_texel(i.x, size.x, wrap_u), wrap_texel(i.y, size.y, wrap_v));
-    }
-    let p = folded - 0.5;
+    let p = if nearest { folded.floor() } else { folded - 0.5 };
     let corner = p.floor();
-    let f = p - corner;
+    let f = if nearest { Vec2::ZERO } else { p - corner };
     let i = corner.as_ivec2();
     let x0 = wrap_texel(i.x, size.x, wrap_u);
     let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
     let y0 = wrap_texel(i.y, size.y, wrap_v);
     let y1 = wrap_texel(i.y + 1, size.y, wrap_v);
+    let texel = |x, y| texture_texel(scene, &level, x, y);
     let near_row = lerp4(texel(x0, y0), texel(x1, y0), f.x);
     let far_row = lerp4(texel(x0, y1), texel(x1, y1), f.x);
     lerp4(near_row, far_row, f.y)
@@ -97,25 +94,28 @@ fn sample_level(scene: &PackedScene, map: &GpuTextureMap, uv: Vec2, level: u32, 
 pub fn sample_texture(scene: &PackedScene, map: &GpuTextureMap, surface_uv: Vec2, lod: f32) -> Vec4 {
     let point = surface_uv.extend(1.0);
     let uv = Vec2::new(v3(map.transform_u).dot(point), v3(map.transform_v).dot(point));
-    let filter = map.sampling;
-    if lod <= 0.0 {
-        return sample_level(scene, map, uv, 0, filter & FILTER_MAGNIFY_NEAREST != 0);
+    let bits = map.sampling;
+    let mut nearest = bits & FILTER_MAGNIFY_NEAREST != 0;
+    let mut level = 0.0;
+    if lod > 0.0 {
+        nearest = bits & FILTER_MINIFY_NEAREST != 0;
+        if bits & (FILTER_MIPMAP_NEAREST | FILTER_MIPMAP_LINEAR) != 0 {
+            level = lod.min(((bits & MIP_LEVELS_MASK) - 1) as f32);
+        }
+        if bits & FILTER_MIPMAP_NEAREST != 0 {
+            level = (level + 0.5).floor();
+        }
     }
-    let nearest = filter & FILTER_MINIFY_NEAREST != 0;
-    if filter & (FILTER_MIPMAP_NEAREST | FILTER_MIPMAP_LINEAR) == 0 {
-        return sample_level(scene, map, uv, 0, nearest);
+    let base = level.floor();
+    let blend = level - base;
+    // The shader's loop over the one or two levels read, weight by weight.
+    let mut color = Vec4::ZERO;
+    let mut weight = 1.0 - blend;
+    for k in 0..if blend > 0.0 { 2 } else { 1 } {
+        color += weight * sample_level(scene, map, uv, base as u32 + k, nearest);
+        weight = blend;
     }
-    let lod = lod.min(((map.sampling & MIP_LEVELS_MASK) - 1) as f32);
-    if filter & FILTER_MIPMAP_NEAREST != 0 {
-        return sample_level(scene, map, uv, (lod + 0.5).floor() as u32, nearest);
-    }
-    let base = lod.floor();
-    let finer = sample_level(scene, map, uv, base as u32, nearest);
-    let blend = lod - base;
-    if blend == 0.0 {
-        return finer;
-    }
-    lerp4(finer, sample_level(scene, map, uv, base as u32 + 1, nearest), blend)
+    color
 }
 
 /// The level of detail at which a map reads the hit (`texture_lod`): log2 of the texels the

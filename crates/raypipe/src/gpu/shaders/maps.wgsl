@@ -153,20 +153,18 @@ fn lerp4(a: vec4<f32>, b: vec4<f32>, t: f32) -> vec4<f32> {
 }
 
 // Mip level `level_index` at uv (after the map's transform): the texel nearest the point, or the
-// four around it (texel centres at +0.5) weighted by its distance to them.
+// four around it (texel centres at +0.5) weighted by its distance to them. Nearest reads the same
+// four with all the weight on the first: one body for both keeps the shader small, as every
+// texture read inlines it.
 fn sample_level(map: TextureMap, uv: vec2<f32>, level_index: u32, nearest: bool) -> vec4<f32> {
     let level = mip_level(map, level_index);
     let wrap_u = map.wrap & 0xffu;
     let wrap_v = map.wrap >> 8u;
     let size = vec2<i32>(level.size);
     let folded = vec2<f32>(fold_coordinate(uv.x, wrap_u), fold_coordinate(uv.y, wrap_v)) * vec2<f32>(size);
-    if (nearest) {
-        let i = vec2<i32>(floor(folded));
-        return texture_texel(level, wrap_texel(i.x, size.x, wrap_u), wrap_texel(i.y, size.y, wrap_v));
-    }
-    let p = folded - 0.5;
+    let p = select(folded - 0.5, floor(folded), nearest);
     let corner = floor(p);
-    let f = p - corner;
+    let f = select(p - corner, vec2<f32>(0.0), nearest);
     let i = vec2<i32>(corner);
     let x0 = wrap_texel(i.x, size.x, wrap_u);
     let x1 = wrap_texel(i.x + 1, size.x, wrap_u);
@@ -180,29 +178,32 @@ fn sample_level(map: TextureMap, uv: vec2<f32>, level_index: u32, nearest: bool)
 // The map's texture at uv, carried there by its transform, read at level of detail `lod` (log2 of
 // the texels a footprint spans). At or below 0 the image is magnified and read at full size through
 // the magnification filter; above, the minification filter reads the level nearest `lod` or blends
-// the two around it (trilinear), or reads the full size where the sampler has no mipmaps.
+// the two around it (trilinear), or reads the full size where the sampler has no mipmaps. The two
+// levels are read in a loop, so that the shader holds one read.
 fn sample_texture(map: TextureMap, surface_uv: vec2<f32>, lod: f32) -> vec4<f32> {
     let point = vec3<f32>(surface_uv, 1.0);
     let uv = vec2<f32>(dot(map.transform_u, point), dot(map.transform_v, point));
     let bits = map.sampling;
-    if (lod <= 0.0) {
-        return sample_level(map, uv, 0u, (bits & FILTER_MAGNIFY_NEAREST) != 0u);
+    var nearest = (bits & FILTER_MAGNIFY_NEAREST) != 0u;
+    var level = 0.0;
+    if (lod > 0.0) {
+        nearest = (bits & FILTER_MINIFY_NEAREST) != 0u;
+        if ((bits & (FILTER_MIPMAP_NEAREST | FILTER_MIPMAP_LINEAR)) != 0u) {
+            level = min(lod, f32((bits & MIP_LEVELS_MASK) - 1u));
+        }
+        if ((bits & FILTER_MIPMAP_NEAREST) != 0u) {
+            level = floor(level + 0.5);
+        }
     }
-    let nearest = (bits & FILTER_MINIFY_NEAREST) != 0u;
-    if ((bits & (FILTER_MIPMAP_NEAREST | FILTER_MIPMAP_LINEAR)) == 0u) {
-        return sample_level(map, uv, 0u, nearest);
+    let base = floor(level);
+    let blend = level - base;
+    var color = vec4<f32>(0.0);
+    var weight = 1.0 - blend;
+    for (var k = 0u; k < select(1u, 2u, blend > 0.0); k += 1u) {
+        color += weight * sample_level(map, uv, u32(base) + k, nearest);
+        weight = blend;
     }
-    let top = min(lod, f32((map.sampling & MIP_LEVELS_MASK) - 1u));
-    if ((bits & FILTER_MIPMAP_NEAREST) != 0u) {
-        return sample_level(map, uv, u32(floor(top + 0.5)), nearest);
-    }
-    let base = floor(top);
-    let finer = sample_level(map, uv, u32(base), nearest);
-    let blend = top - base;
-    if (blend == 0.0) {
-        return finer;
-    }
-    return lerp4(finer, sample_level(map, uv, u32(base) + 1u, nearest), blend);
+    return color;
 }
 
 // The level of detail at which a map reads the hit: log2 of the texels the footprint spans in the
