@@ -25,13 +25,9 @@ fn red(frame: &Frame, x: u32, y: u32) -> f32 {
 const FACING_SIZE: u32 = 33;
 const FACING_FOV: f32 = 30.0;
 
-/// A wall facing the camera `distance` away, textured with `texture` at `texels_per_unit`, its
-/// texture coordinate at the wall's centre (0.25, 0.25): the centre of texel (0, 0) of a 2 x 2
-/// texture.
-fn facing_wall(texture: Texture, texels_per_unit: f32, distance: f32) -> Scene {
+/// A wall facing the camera `distance` away, unlit, textured with `texture` through `uv`.
+fn wall(texture: Texture, uv: &dyn Fn(Vec3) -> Vec2, distance: f32) -> Scene {
     let corners = [(-50.0, -50.0), (50.0, -50.0), (50.0, 50.0), (-50.0, 50.0)].map(|(x, y)| Vec3::new(x, y, 0.0));
-    let size = texture.width as f32;
-    let uv = |p: Vec3| Vec2::new(p.x, -p.y) * (texels_per_unit / size) + Vec2::splat(0.25);
     Scene {
         camera: Camera {
             eye: Vec3::new(0.0, 0.0, distance),
@@ -48,9 +44,17 @@ fn facing_wall(texture: Texture, texels_per_unit: f32, distance: f32) -> Scene {
         },
         materials: vec![unlit_textured()],
         textures: vec![texture],
-        triangles: quad_triangles(corners, 0, true, Some(&uv)).to_vec(),
+        triangles: quad_triangles(corners, 0, true, Some(uv)).to_vec(),
         ..Scene::default()
     }
+}
+
+/// A [`wall`] textured with `texture` at `texels_per_unit`, its texture coordinate at the wall's
+/// centre (0.25, 0.25): the centre of texel (0, 0) of a 2 x 2 texture.
+fn facing_wall(texture: Texture, texels_per_unit: f32, distance: f32) -> Scene {
+    let size = texture.width as f32;
+    let uv = |p: Vec3| Vec2::new(p.x, -p.y) * (texels_per_unit / size) + Vec2::splat(0.25);
+    wall(texture, &uv, distance)
 }
 
 #[test]
@@ -125,34 +129,13 @@ fn a_checker_floor_to_the_horizon_is_filtered_not_aliased() {
     assert!(near_filtered > 0.12, "near rows filtered: deviation {near_filtered}");
 }
 
-/// A 2 x 1 texture, black then white, magnified on a wall that fills the image with one texel's
-/// width between the image's centre and its right edge; the centre pixel at a quarter of a texel
-/// from the boundary between them.
+/// A 2 x 1 texture, black then white, magnified on a [`wall`] (a texel spans 4 units of it); the
+/// centre pixel a quarter of a texel right of the boundary between them.
 fn magnified_pair(filter: Filter) -> f32 {
     let texture = Texture::from_linear(2, 1, &[[0.0, 0.0, 0.0, 1.0], [1.0; 4]], [Wrap::Clamp; 2]).with_filter(filter);
-    let corners = [(-50.0, -50.0), (50.0, -50.0), (50.0, 50.0), (-50.0, 50.0)].map(|(x, y)| Vec3::new(x, y, 0.0));
     // u = 0.5 (the boundary) a quarter texel left of the centre: u = 0.5 + x / 2 / 4 at x.
     let uv = |p: Vec3| Vec2::new(0.625 + p.x / 8.0, 0.5);
-    let scene = Scene {
-        camera: Camera {
-            eye: Vec3::new(0.0, 0.0, 3.0),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_degrees: 40.0,
-        },
-        settings: RenderSettings {
-            width: FACING_SIZE,
-            height: FACING_SIZE,
-            max_depth: 0,
-            background: Vec3::ZERO,
-            ambient: 0.0,
-        },
-        materials: vec![unlit_textured()],
-        textures: vec![texture],
-        triangles: quad_triangles(corners, 0, true, Some(&uv)).to_vec(),
-        ..Scene::default()
-    };
-    let frame = render(&scene);
+    let frame = render(&wall(texture, &uv, 3.0));
     red(&frame, FACING_SIZE / 2, FACING_SIZE / 2)
 }
 

@@ -198,19 +198,14 @@ impl Texture {
     /// from the one before, down to a single texel. Returns the number of levels.
     pub fn push_mip_chain(&self, out: &mut Vec<[u16; 4]>) -> u32 {
         out.extend_from_slice(&self.texels);
-        let mut levels = 1;
+        let levels = mip_sizes(self.width, self.height).count();
         let mut level = None::<Texture>;
-        while level
-            .as_ref()
-            .map_or((self.width, self.height), |l| (l.width, l.height))
-            != (1, 1)
-        {
+        for _ in 1..levels {
             let next = level.as_ref().unwrap_or(self).halved();
             out.extend_from_slice(&next.texels);
             level = Some(next);
-            levels += 1;
         }
-        levels
+        levels as u32
     }
 
     /// The texels of the image and its mipmaps together: what the texture takes of [`MAX_TEXELS`].

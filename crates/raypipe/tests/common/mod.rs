@@ -9,10 +9,11 @@ pub mod gltf_file;
 pub use raypipe_test_support::{self as harness, models};
 
 use glam::{Vec2, Vec3};
+use raypipe::Choice;
 use raypipe::gpu::{GpuContext, Renderer, RendererOptions};
 use raypipe::image::diff::{self, Tolerance};
 use raypipe::image::{FloatImage, Frame};
-use raypipe::modes::{Accel, MemoryMode};
+use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Light, Material, RenderSettings, Scene};
 use std::path::{Path, PathBuf};
@@ -94,6 +95,30 @@ pub fn render_gpu_with(ctx: &GpuContext, scene: &PackedScene, options: RendererO
     pollster::block_on(renderer(ctx, scene, options).read_frame())
         .unwrap_or_else(|e| panic!("GPU render failed on {}: {e}", ctx.describe()))
         .frame
+}
+
+/// `scene` traced by the threaded walk in each pipeline and each memory mode the adapter has,
+/// each frame handed to `check` with its name, `{prefix}-{pipeline}-{memory}`.
+pub fn each_pipeline_and_memory_mode(
+    ctx: &GpuContext,
+    scene: &PackedScene,
+    prefix: &str,
+    mut check: impl FnMut(&str, Frame),
+) {
+    for &pipeline in Pipeline::ALL {
+        for memory in ctx.memory_modes() {
+            let options = RendererOptions {
+                pipeline,
+                memory,
+                accel: Accel::Threaded,
+                ..Default::default()
+            };
+            check(
+                &format!("{prefix}-{pipeline:?}-{memory:?}"),
+                render_gpu_with(ctx, scene, options),
+            );
+        }
+    }
 }
 
 /// The CPU reference's frame.

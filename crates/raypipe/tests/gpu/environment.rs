@@ -5,10 +5,9 @@
 use crate::common::harness::Test;
 use crate::common::*;
 use glam::Vec3;
-use raypipe::Choice;
-use raypipe::gpu::{GpuContext, RendererOptions};
+use raypipe::gpu::GpuContext;
 use raypipe::image::diff::Tolerance;
-use raypipe::modes::{Accel, Pipeline};
+use raypipe::modes::Accel;
 use raypipe::records::PackedScene;
 use raypipe::scene::{Environment, Material, Pbr, Sphere};
 
@@ -51,18 +50,9 @@ fn environment_scene() -> PackedScene {
 fn environment_matches_the_cpu_in_every_memory_mode_and_pipeline(ctx: &GpuContext) {
     let scene = environment_scene();
     let cpu = render_cpu(&scene, Accel::Threaded);
-    for &pipeline in Pipeline::ALL {
-        for memory in ctx.memory_modes() {
-            let options = RendererOptions {
-                pipeline,
-                memory,
-                accel: Accel::Threaded,
-                ..Default::default()
-            };
-            let frame = render_gpu_with(ctx, &scene, options);
-            assert_frames_match(&format!("environment-{pipeline:?}-{memory:?}"), &frame, &cpu);
-        }
-    }
+    each_pipeline_and_memory_mode(ctx, &scene, "environment", |name, frame| {
+        assert_frames_match(name, &frame, &cpu)
+    });
     // The background is the map, not the scene's background colour.
     let corner = cpu.color[0];
     assert!(

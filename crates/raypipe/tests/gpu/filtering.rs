@@ -6,9 +6,8 @@
 use crate::common::harness::Test;
 use crate::common::*;
 use glam::{Vec2, Vec3};
-use raypipe::Choice;
-use raypipe::gpu::{GpuContext, RendererOptions};
-use raypipe::modes::{Accel, Pipeline};
+use raypipe::gpu::GpuContext;
+use raypipe::modes::Accel;
 use raypipe::records::PackedScene;
 use raypipe::scene::{Filter, Material, Sphere, TexelFilter, TextureMap};
 
@@ -66,18 +65,9 @@ fn filtering_scene() -> PackedScene {
 fn filtered_textures_match_the_cpu_in_every_memory_mode_and_pipeline(ctx: &GpuContext) {
     let scene = filtering_scene();
     let cpu = render_cpu(&scene, Accel::Threaded);
-    for &pipeline in Pipeline::ALL {
-        for memory in ctx.memory_modes() {
-            let options = RendererOptions {
-                pipeline,
-                memory,
-                accel: Accel::Threaded,
-                ..Default::default()
-            };
-            let frame = render_gpu_with(ctx, &scene, options);
-            assert_frames_match(&format!("filtering-{pipeline:?}-{memory:?}"), &frame, &cpu);
-        }
-    }
+    each_pipeline_and_memory_mode(ctx, &scene, "filtering", |name, frame| {
+        assert_frames_match(name, &frame, &cpu)
+    });
 }
 
 pub fn tests() -> Vec<Test> {

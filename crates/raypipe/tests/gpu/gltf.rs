@@ -83,24 +83,15 @@ fn gpu_checker_texels_in_every_memory_mode_and_pipeline(ctx: &GpuContext) {
         let scene = albedo_scene(&framed_textured_quad(2.0, wrap));
         let cpu = render_cpu(&scene, Accel::Threaded);
         let mut first: Option<Frame> = None;
-        for &pipeline in Pipeline::ALL {
-            for memory in ctx.memory_modes() {
-                let options = RendererOptions {
-                    pipeline,
-                    memory,
-                    accel: Accel::Threaded,
-                    ..Default::default()
-                };
-                let frame = render_gpu_with(ctx, &scene, options);
-                let name = format!("gltf-texture-{pipeline:?}-{memory:?}-{}-{}", wrap[0], wrap[1]);
-                check_texels(&frame, wrap, &name);
-                assert_frames_match(&name, &frame, &cpu);
-                match &first {
-                    None => first = Some(frame),
-                    Some(first) => assert_images_match(&name, &frame.display(), &first.display(), Tolerance::EXACT),
-                }
+        let prefix = format!("gltf-texture-{}-{}", wrap[0], wrap[1]);
+        each_pipeline_and_memory_mode(ctx, &scene, &prefix, |name, frame| {
+            check_texels(&frame, wrap, name);
+            assert_frames_match(name, &frame, &cpu);
+            match &first {
+                None => first = Some(frame),
+                Some(first) => assert_images_match(name, &frame.display(), &first.display(), Tolerance::EXACT),
             }
-        }
+        });
     }
 }
 

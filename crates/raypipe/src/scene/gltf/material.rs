@@ -65,7 +65,7 @@ pub struct Materials {
     /// The material of primitives without one (glTF's default material), added on first use.
     default: Option<u32>,
     texels: u64,
-    /// (image, wrap, encoding) to texture index.
+    /// (image, wrap, filter, encoding) to texture index.
     by_image: HashMap<(usize, [Wrap; 2], Filter, Encoding), u32>,
     /// What the materials hold that is not drawn, said once each.
     left_out: BTreeSet<&'static str>,
