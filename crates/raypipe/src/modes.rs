@@ -16,6 +16,10 @@ pub enum Accel {
     /// The linear BVH, walked without a stack along escape links, in fixed depth-first order.
     #[default]
     Threaded,
+    /// The driver's own acceleration structures (a BLAS of triangles, one of spheres as boxes, a
+    /// TLAS over them) walked by ray queries: ray-tracing hardware where the GPU has it. Vulkan,
+    /// DX12 and Metal adapters with ray queries only.
+    RayQuery,
 }
 
 impl_choice!(
@@ -37,12 +41,23 @@ impl_choice!(
             "threaded",
             "the linear BVH, walked without a stack along escape links, in fixed depth-first order"
         ),
+        (
+            RayQuery,
+            "rayquery",
+            "the driver's acceleration structures, walked by ray queries (adapters with ray queries only)"
+        ),
     ]
 );
 
 impl Accel {
+    /// Whether it walks raypipe's own BVH, which the host or the GPU builds for it.
     pub fn uses_bvh(self) -> bool {
-        self != Accel::Brute
+        Accel::BVH.contains(&self)
+    }
+
+    /// Whether it needs the adapter's ray queries (`wgpu::Features::EXPERIMENTAL_RAY_QUERY`).
+    pub fn needs_ray_queries(self) -> bool {
+        self == Accel::RayQuery
     }
 
     /// The walks over the BVH, without brute force.

@@ -110,7 +110,12 @@ fn every_shader_variant_validates() {
                     });
                     let module = parse(&source);
                     let flags = naga::valid::ValidationFlags::all();
-                    naga::valid::Validator::new(flags, naga::valid::Capabilities::empty())
+                    let capabilities = if accel.needs_ray_queries() {
+                        naga::valid::Capabilities::RAY_QUERY
+                    } else {
+                        naga::valid::Capabilities::empty()
+                    };
+                    naga::valid::Validator::new(flags, capabilities)
                         .validate(&module)
                         .unwrap_or_else(|e| {
                             panic!(

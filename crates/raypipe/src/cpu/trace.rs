@@ -109,7 +109,8 @@ impl<'a> Tracer<'a> {
             return brute_closest(&primitives, ray, best);
         };
         match self.accel {
-            Accel::Brute => brute_closest(&primitives, ray, best),
+            // The driver's walk has no CPU twin: it finds the closest hit that brute force finds.
+            Accel::Brute | Accel::RayQuery => brute_closest(&primitives, ray, best),
             Accel::Stack => traverse_stack(bvh.threaded_tree(), &primitives, ray, best, false),
             Accel::Stackless => traverse_stackless(&bvh.nodes, &primitives, ray, best, false),
             Accel::Threaded => traverse_threaded(bvh.threaded_tree(), &primitives, ray, best, false),
@@ -129,7 +130,7 @@ impl<'a> Tracer<'a> {
         };
         let none = Hit::none(t_max);
         let hit = match self.accel {
-            Accel::Brute => return brute_occluded(&primitives, ray, t_max),
+            Accel::Brute | Accel::RayQuery => return brute_occluded(&primitives, ray, t_max),
             Accel::Stack => traverse_stack(bvh.threaded_tree(), &primitives, ray, none, true),
             Accel::Stackless => traverse_stackless(&bvh.nodes, &primitives, ray, none, true),
             Accel::Threaded => traverse_threaded(bvh.threaded_tree(), &primitives, ray, none, true),

@@ -4,7 +4,7 @@
 //! awaits them. An adapter can be asked for a surface (WebGL2 has none to offer before its canvas).
 
 use super::GpuError;
-use crate::choice::impl_choice;
+use crate::choice::{Choice, impl_choice};
 use crate::error::one_line;
 use crate::modes::{Accel, MemoryMode};
 use std::future::Future;
@@ -100,6 +100,9 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// The smallest and largest subgroup, where shaders may use subgroup operations.
     pub subgroups: Option<(u32, u32)>,
+    /// Whether shaders may trace the driver's acceleration structures with ray queries
+    /// ([`Accel::RayQuery`]).
+    pub ray_queries: bool,
 }
 
 impl GpuContext {
@@ -144,6 +147,7 @@ impl GpuContext {
         Self {
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
             subgroups: subgroups.then_some((info.subgroup_min_size, info.subgroup_max_size)),
+            ray_queries: features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
             adapter,
             device,
             queue,
@@ -152,7 +156,8 @@ impl GpuContext {
     }
 
     /// Opens a device on `adapter` with every limit it offers (large scenes need its real buffer and
-    /// texture limits) and timestamp queries where it has them.
+    /// texture limits, ray queries its acceleration structures' limits), timestamp queries and ray
+    /// queries where it has them.
     pub async fn open(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         if let Some(warning) = driver_warning(&info) {
@@ -160,17 +165,27 @@ impl GpuContext {
         }
         // Subgroup operations speed up the build's sort. Not in a browser: naga would pass the
         // shader on without the `enable subgroups;` that the browser's compiler asks for.
+        // Ray queries: no browser offers them yet.
         let wanted = if cfg!(target_arch = "wasm32") {
             wgpu::Features::TIMESTAMP_QUERY
         } else {
-            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP | wgpu::Features::EXPERIMENTAL_RAY_QUERY
         };
         let required_features = adapter.features() & wanted;
+        let experimental_features = if required_features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) {
+            // SAFETY: wgpu asks callers of its experimental features to accept that they may still
+            // have bugs. Ray queries are used only by `Accel::RayQuery`, whose images the tests hold
+            // to the BVH walks'.
+            unsafe { wgpu::ExperimentalFeatures::enabled() }
+        } else {
+            wgpu::ExperimentalFeatures::disabled()
+        };
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("raypipe"),
                 required_features,
                 required_limits: adapter.limits(),
+                experimental_features,
                 ..Default::default()
             })
             .await
@@ -187,6 +202,7 @@ impl GpuContext {
             subgroups: required_features
                 .contains(wgpu::Features::SUBGROUP)
                 .then_some((info.subgroup_min_size, info.subgroup_max_size)),
+            ray_queries: required_features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
             adapter,
             device,
             queue,
@@ -202,6 +218,15 @@ impl GpuContext {
     /// The limits the device was opened with.
     pub fn limits(&self) -> wgpu::Limits {
         self.device.limits()
+    }
+
+    /// The acceleration modes this device can trace with: all but ray queries where it lacks them.
+    pub fn accels(&self) -> Vec<Accel> {
+        Accel::ALL
+            .iter()
+            .copied()
+            .filter(|a| self.ray_queries || !a.needs_ray_queries())
+            .collect()
     }
 
     /// The memory modes the fragment shader can read on this device: storage buffers only where

@@ -8,6 +8,7 @@ pub mod context;
 pub mod deform;
 pub mod display;
 mod error;
+pub mod rayquery;
 pub mod readback;
 pub mod rebuild;
 pub mod region;

@@ -56,7 +56,7 @@ impl SceneRebuild {
             Accel::Stack | Accel::Threaded => {
                 Some(GpuThreadedLayout::new(ctx, &builder.buffers().nodes, packed.primitive_count()).await?)
             }
-            Accel::Brute | Accel::Stackless => None,
+            Accel::Brute | Accel::Stackless | Accel::RayQuery => None,
         };
         let deform = match &scene.motion {
             Some(motion) => GpuDeform::new(ctx, motion, &builder.buffers().triangles, &packed.triangle_normals).await?,

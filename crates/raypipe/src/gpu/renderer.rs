@@ -12,10 +12,11 @@
 //! the sums in one pair while writing the other ([`Renderer::encode`]); a camera, scene or size
 //! change starts again from the pixel centres ([`Renderer::restart`]).
 
+use super::rayquery::AccelStructures;
 use super::readback::TextureReadback;
 use super::rebuild::SceneRebuild;
 use super::region::{BoxCover, TracedPixels};
-use super::shader::{RecordKind, SceneFeatures, ShaderConfig, compose};
+use super::shader::{RecordKind, SceneFeatures, ShaderConfig, compose, ray_query_binding};
 use super::threaded::encode_frame_copy;
 use super::timing::PassTimestamps;
 use super::upload::{SceneResources, SharedBuffers, upload};
@@ -216,6 +217,8 @@ pub struct Renderer {
     /// ([`super::region`]): a BVH the host knows (not rebuilt on the GPU), no planes (which no box
     /// holds), the ray count (a cost view counts the misses' box tests too).
     confinement: Option<Confinement>,
+    /// With ray queries: the driver's acceleration structures over the scene.
+    structures: Option<AccelStructures>,
     timer: Option<PassTimestamps>,
 }
 
@@ -262,6 +265,16 @@ impl Renderer {
         self.resources
             .write(&self.ctx.queue, scene, self.options.accel, kinds)?;
         self.restart();
+        let primitives_moved = kinds
+            .iter()
+            .any(|k| matches!(k, RecordKind::Sphere | RecordKind::Triangle));
+        if let Some(structures) = self.structures.as_ref().filter(|_| primitives_moved) {
+            // The driver's structures built again over the moved primitives.
+            structures.write_moved(&self.ctx.queue, scene);
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            structures.encode_build(&mut encoder);
+            self.ctx.queue.submit([encoder.finish()]);
+        }
         let tree_written = kinds
             .iter()
             .any(|k| matches!(k, RecordKind::Node | RecordKind::ThreadedNode));
@@ -322,6 +335,15 @@ impl Renderer {
             .flatten();
         ctx.checked("uploading the scene and building the pipeline", || {
             let resources = upload(ctx, scene, memory, accel, shared, tracer_stage(pipeline))?;
+            let structures = if accel.needs_ray_queries() {
+                let structures = AccelStructures::new(ctx, scene)?;
+                let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                structures.encode_build(&mut encoder);
+                ctx.queue.submit([encoder.finish()]);
+                Some(structures)
+            } else {
+                None
+            };
             let globals = scene.globals;
             let globals_buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("globals"),
@@ -345,6 +367,7 @@ impl Renderer {
                 pipeline,
                 &source,
                 &resources,
+                structures.as_ref(),
                 &globals_buffer,
                 &previous_layout,
                 confinement.is_some(),
@@ -362,6 +385,7 @@ impl Renderer {
                 bvh_frame: shared.and_then(|s| s.bvh_frame.clone()),
                 resources,
                 confinement,
+                structures,
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
@@ -753,8 +777,10 @@ fn scene_bind_group(
     device: &wgpu::Device,
     kind: Pipeline,
     resources: &SceneResources,
+    structures: Option<&AccelStructures>,
     globals: &wgpu::Buffer,
 ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let ray_queries = ray_query_binding(&resources.arrays);
     let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
         binding: 0,
         visibility: tracer_stage(kind),
@@ -766,6 +792,9 @@ fn scene_bind_group(
         count: None,
     }];
     layout_entries.extend_from_slice(&resources.layout_entries);
+    if let Some(structures) = structures {
+        layout_entries.extend(structures.layout_entries(ray_queries, tracer_stage(kind)));
+    }
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("scene"),
         entries: &layout_entries,
@@ -775,6 +804,9 @@ fn scene_bind_group(
         resource: globals.as_entire_binding(),
     }];
     entries.extend(resources.bind_entries());
+    if let Some(structures) = structures {
+        entries.extend(structures.bind_entries(ray_queries));
+    }
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("scene"),
         layout: &layout,
@@ -788,6 +820,7 @@ fn build_pipeline(
     kind: Pipeline,
     source: &str,
     resources: &SceneResources,
+    structures: Option<&AccelStructures>,
     globals: &wgpu::Buffer,
     previous_layout: &wgpu::BindGroupLayout,
     with_miss: bool,
@@ -797,7 +830,7 @@ fn build_pipeline(
         label: Some("trace"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     });
-    let (bind_group_layout, bind_group) = scene_bind_group(device, kind, resources, globals);
+    let (bind_group_layout, bind_group) = scene_bind_group(device, kind, resources, structures, globals);
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("trace"),
         bind_group_layouts: &[Some(&bind_group_layout), Some(previous_layout)],

@@ -34,6 +34,7 @@ const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
 const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
 const ACCEL_STACKLESS: &str = include_str!("shaders/accel_stackless.wgsl");
 const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
+const ACCEL_RAYQUERY: &str = include_str!("shaders/accel_rayquery.wgsl");
 const ADMIT: &str = include_str!("shaders/admit.wgsl");
 const MAPS: &str = include_str!("shaders/maps.wgsl");
 const BRDF: &str = include_str!("shaders/brdf.wgsl");
@@ -113,6 +114,12 @@ pub struct RecordArray {
 /// whatever the memory mode: images are what texture units are for.
 pub fn texture_pixels_binding(arrays: &[RecordArray]) -> u32 {
     arrays.iter().map(|a| a.binding).max().unwrap_or(0) + 1
+}
+
+/// Where ray queries' two bindings start ([`crate::gpu::rayquery::AccelStructures`]): after the
+/// textures' texels.
+pub fn ray_query_binding(arrays: &[RecordArray]) -> u32 {
+    texture_pixels_binding(arrays) + 1
 }
 
 /// What kinds of things a scene holds, written into the preamble as constants so that the shader
@@ -210,6 +217,10 @@ pub struct ShaderConfig<'a> {
 pub fn compose(config: &ShaderConfig) -> String {
     let mut source = String::new();
     let w = &mut source;
+    if config.accel.needs_ray_queries() {
+        // Enable directives come before every declaration.
+        writeln!(w, "enable wgpu_ray_query;").unwrap();
+    }
     writeln!(
         w,
         "// Generated preamble: {:?} pipeline, memory {:?}, accel {:?}.",
@@ -248,6 +259,20 @@ pub fn compose(config: &ShaderConfig) -> String {
         texture_pixels_binding(config.arrays)
     )
     .unwrap();
+    if config.accel.needs_ray_queries() {
+        let first = ray_query_binding(config.arrays);
+        writeln!(
+            w,
+            "@group(0) @binding({first}) var<storage, read> blas_primitives: array<u32>;"
+        )
+        .unwrap();
+        writeln!(
+            w,
+            "@group(0) @binding({}) var scene_tlas: acceleration_structure;",
+            first + 1
+        )
+        .unwrap();
+    }
     for array in config.arrays {
         let (name, ty, binding) = (array.kind.name(), array.wgsl_type, array.binding);
         match config.memory {
@@ -296,6 +321,7 @@ pub fn compose(config: &ShaderConfig) -> String {
         Accel::Stack => ACCEL_STACK,
         Accel::Stackless => ACCEL_STACKLESS,
         Accel::Threaded => ACCEL_THREADED,
+        Accel::RayQuery => ACCEL_RAYQUERY,
     };
     source.push('\n');
     source.push_str(&records_source());

@@ -366,7 +366,8 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn Rec
     static NO_THREADED_NODES: Vec<GpuThreadedNode> = Vec::new();
     let bvh = scene.bvh.as_ref();
     match accel {
-        Accel::Brute => {}
+        // The driver's structures reach the shader beside these (`super::rayquery`).
+        Accel::Brute | Accel::RayQuery => {}
         Accel::Stack | Accel::Threaded => records.push((
             RecordKind::ThreadedNode,
             bvh.map_or(&NO_THREADED_NODES, |b| &b.threaded_nodes),
