@@ -216,7 +216,7 @@ impl Viewer {
         }
         let Some(gpu) = &mut self.gpu else { return };
         if let Some(key) = mode_key(code) {
-            let asked = gpu.player.modes.after(key);
+            let asked = gpu.player.modes.after(key, &gpu.screen.ctx.accels());
             return self.set_modes(asked);
         }
         let mut asked = gpu.player.modes;
@@ -329,6 +329,7 @@ fn draw_panel(
     let ctx = &screen.ctx;
     let raw = panel.state.take_egui_input(window);
     let adapter = ctx.describe();
+    let accels = ctx.accels();
     let (width, height) = screen.size();
     let readout = Readout {
         scene: &player.name,
@@ -342,6 +343,7 @@ fn draw_panel(
         mrays_per_s: (width as u64 * height as u64) as f64 / (player.rate.frame_ms.max(1e-6) * 1e3),
         samples: (player.gathered(), player.spp),
         build_ms: player.build_ms,
+        accels: &accels,
         message: player.message.as_deref(),
     };
     let modes = player.modes;

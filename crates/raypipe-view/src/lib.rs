@@ -86,16 +86,24 @@ impl ModeKey {
 
 /// The variant after `value` in `T::ALL`, round to the first.
 pub fn next<T: raypipe::Choice>(value: T) -> T {
-    let all = T::ALL;
-    let i = all.iter().position(|&v| v == value).unwrap_or(0);
-    all[(i + 1) % all.len()]
+    next_of(value, T::ALL)
+}
+
+/// The value after `value` among `offered`, round to the first; the first where `value` is not
+/// among them.
+pub fn next_of<T: Copy + PartialEq>(value: T, offered: &[T]) -> T {
+    match offered.iter().position(|&v| v == value) {
+        Some(i) => offered[(i + 1) % offered.len()],
+        None => offered[0],
+    }
 }
 
 impl Modes {
-    /// The modes `key` asks for.
-    pub fn after(mut self, key: ModeKey) -> Modes {
+    /// The modes `key` asks for, on a device that traces with the acceleration modes `accels`
+    /// ([`GpuContext::accels`]: ray queries where it has them).
+    pub fn after(mut self, key: ModeKey, accels: &[Accel]) -> Modes {
         match key {
-            ModeKey::Accel => self.accel = next(self.accel),
+            ModeKey::Accel => self.accel = next_of(self.accel, accels),
             ModeKey::Pipeline => self.pipeline = next(self.pipeline),
             ModeKey::Memory => self.memory = next(self.memory),
             ModeKey::View => self.view = next(self.view),
@@ -128,6 +136,11 @@ impl Modes {
                 memory: self.memory,
             });
         }
+        if !ctx.accels().contains(&self.accel) {
+            return Err(ModesError::NoRayQueries {
+                adapter: ctx.describe(),
+            });
+        }
         Ok(())
     }
 }
@@ -137,6 +150,8 @@ impl Modes {
 pub enum ModesError {
     #[error("{adapter} has no {memory} memory for fragment shaders")]
     NoMemory { adapter: String, memory: MemoryMode },
+    #[error("{adapter} has no ray queries (--accel rayquery needs Vulkan, DX12 or Metal ray queries)")]
+    NoRayQueries { adapter: String },
     #[error(
         "the {0} builder builds a still scene's tree once; this scene moves, and its tree is rebuilt every frame by the LBVH"
     )]

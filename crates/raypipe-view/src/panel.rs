@@ -18,6 +18,8 @@ pub struct Readout<'a> {
     pub timestamps: bool,
     pub mrays_per_s: f64,
     pub build_ms: Option<f64>,
+    /// The acceleration modes the device offers (ray queries where it has them).
+    pub accels: &'a [Accel],
     /// Samples per pixel gathered, and the cap.
     pub samples: (u32, u32),
     pub message: Option<&'a str>,
@@ -38,10 +40,15 @@ pub const KEYS: &str = "drag: orbit · right or middle drag: pan · wheel: dolly
     G: pipeline · B: acceleration · M: memory · [ ]: depth · V: view · Space: pause · Y: vsync · P: screenshot · H: panel";
 
 fn choose<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T) {
+    choose_from(ui, label, value, T::ALL);
+}
+
+/// [`choose`] among `offered` only.
+fn choose_from<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T, offered: &[T]) {
     egui::ComboBox::from_label(label)
         .selected_text(value.name())
         .show_ui(ui, |ui| {
-            for &option in T::ALL {
+            for &option in offered {
                 ui.selectable_value(value, option, option.name())
                     .on_hover_text(option.about());
             }
@@ -72,11 +79,12 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout, playback: Opt
             ui.label(format!("{samples} of {cap} samples per pixel{done}"));
             match readout.build_ms {
                 Some(ms) => ui.label(format!("BVH build: {ms:.2} ms")),
+                None if modes.accel.needs_ray_queries() => ui.label("BVH build: the driver's, with ray queries"),
                 None => ui.label("BVH build: none (brute force)"),
             };
             ui.separator();
             choose::<Pipeline>(ui, "pipeline", &mut asked.pipeline);
-            choose::<Accel>(ui, "acceleration", &mut asked.accel);
+            choose_from(ui, "acceleration", &mut asked.accel, readout.accels);
             choose::<Builder>(ui, "BVH builder", &mut asked.builder);
             choose::<MemoryMode>(ui, "memory", &mut asked.memory);
             choose::<Aov>(ui, "view", &mut asked.view);

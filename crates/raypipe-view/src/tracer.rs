@@ -146,9 +146,13 @@ impl Tracer {
     }
 
     /// The GPU time of the last BVH rebuild on the GPU, where the scene is rebuilt there and the
-    /// walk reads a tree; this waits for the frame that ran it.
+    /// walk reads a tree (with ray queries, the driver's structures' build, where the device times
+    /// it); this waits for the frame that ran it.
     pub async fn read_gpu_build_ms(&self) -> Option<f64> {
         match &self.motion {
+            Motion::OnGpu { .. } if self.renderer.options().accel.needs_ray_queries() => {
+                self.renderer.read_structures_build_ms().await.ok().flatten()
+            }
             Motion::OnGpu { rebuild, .. } if self.renderer.options().accel.uses_bvh() => {
                 rebuild.read_timings().await.ok().map(|timings| timings.total())
             }

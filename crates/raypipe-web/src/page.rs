@@ -543,7 +543,9 @@ impl Viewer {
         let Some(key) = ModeKey::from_code(code) else {
             return false;
         };
-        let asked = self.page.borrow().player.modes.after(key);
+        let page = self.page.borrow();
+        let asked = page.player.modes.after(key, &page.screen.ctx.accels());
+        drop(page);
         self.set_modes(asked);
         true
     }

@@ -265,14 +265,20 @@ impl StartParams {
     }
 }
 
-/// The page's select lists, by the setting each one sets: every name its `Choice` has. The page's
-/// script fills its controls from these (through the wasm module), so the HTML holds no copy.
+/// The page's select lists, by the setting each one sets: every name its `Choice` has that a browser can
+/// trace with. The page's script fills its controls from these (through the wasm module), so the HTML holds no copy.
 pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
     fn names<T: Choice + 'static>() -> Vec<&'static str> {
         T::ALL.iter().map(|c| c.name()).collect()
     }
+    // No browser has ray queries: the page never offers them.
+    let accels = Accel::ALL
+        .iter()
+        .filter(|a| !a.needs_ray_queries())
+        .map(|a| a.name())
+        .collect();
     vec![
-        ("accel", names::<Accel>()),
+        ("accel", accels),
         ("builder", names::<Builder>()),
         ("memory", names::<MemoryMode>()),
         ("pipeline", names::<Pipeline>()),

@@ -46,7 +46,9 @@ struct MotionRow {
     eval_ms: f64,
     /// Posing the vertices: the GPU's skinning pass, or the CPU's skinning and repacking.
     skin_ms: f64,
-    /// The BVH build: its GPU passes (and the threaded layout), or the CPU builder.
+    /// The BVH build: its GPU passes (and the threaded layout), or the CPU builder; with ray
+    /// queries, the driver's BLAS and TLAS build (GPU timestamps between passes, 0 where the
+    /// device has none).
     build_ms: f64,
     /// Writing the moved records and nodes to the GPU (the CPU path; 0 on the GPU path).
     upload_ms: f64,
@@ -391,7 +393,11 @@ fn gpu_point(
             upload = elapsed_ms(start);
         }
         let traced = block_on(renderer.render_samples(args.spp, |encoder| rebuild.encode(encoder)))?;
-        let build = block_on(rebuild.read_timings())?.total();
+        let build = if options.accel.needs_ray_queries() {
+            block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0)
+        } else {
+            block_on(rebuild.read_timings())?.total()
+        };
         let skin = block_on(rebuild.read_skinning_ms())?.unwrap_or(0.0);
         let trace = traced.gpu_ms.unwrap_or(0.0);
         if let Some((own, refit_rebuild, refit_renderer)) = &mut refitting {
@@ -460,9 +466,13 @@ fn cpu_point(
         let step = rebuild.move_to(scene, &mut packed, t)?;
         // Posing evaluates the clips again before it skins.
         let skin = (step.pose_ms - eval).max(0.0);
-        let build = step.build.map_or(0.0, |timings| timings.total());
         let upload = rebuild.write(&step, &packed, &mut renderer)?;
         let traced = block_on(renderer.render_samples(args.spp, |_| {}))?;
+        let build = match step.build {
+            Some(timings) => timings.total(),
+            // Ray queries: the driver's structures, built on the GPU as the records were written.
+            None => block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0),
+        };
         if k >= args.warmup {
             first.get_or_insert(traced.frame);
             frames.push(FrameTimes {

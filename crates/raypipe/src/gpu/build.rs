@@ -776,11 +776,18 @@ impl Buffers {
             record_room(sphere_count, std::mem::size_of::<GpuSphere>()),
             wgpu::BufferUsages::COPY_DST,
         );
+        // Ray queries build the driver's triangle structures from these records where they move
+        // on the GPU (`super::rayquery`).
+        let blas_input = if ctx.ray_queries {
+            wgpu::BufferUsages::BLAS_INPUT
+        } else {
+            wgpu::BufferUsages::empty()
+        };
         let triangles = storage_buffer(
             device,
             "build triangles",
             record_room(triangle_count, std::mem::size_of::<GpuTriangle>()),
-            wgpu::BufferUsages::COPY_DST,
+            wgpu::BufferUsages::COPY_DST | blas_input,
         );
         let pairs = storage_buffer(device, "pairs A", n * pair_bytes(bits), wgpu::BufferUsages::COPY_DST);
         let pairs_b = storage_buffer(device, "pairs B", n * pair_bytes(bits), wgpu::BufferUsages::empty());

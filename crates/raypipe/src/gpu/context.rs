@@ -98,6 +98,8 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Whether passes can be timed with timestamp queries.
     pub timestamps: bool,
+    /// Whether work between passes can be timed too (`TIMESTAMP_QUERY_INSIDE_ENCODERS`).
+    pub encoder_timestamps: bool,
     /// The smallest and largest subgroup, where shaders may use subgroup operations.
     pub subgroups: Option<(u32, u32)>,
     /// Whether shaders may trace the driver's acceleration structures with ray queries
@@ -146,6 +148,7 @@ impl GpuContext {
         let subgroups = !cfg!(target_arch = "wasm32") && features.contains(wgpu::Features::SUBGROUP);
         Self {
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            encoder_timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS),
             subgroups: subgroups.then_some((info.subgroup_min_size, info.subgroup_max_size)),
             ray_queries: features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
             adapter,
@@ -169,7 +172,10 @@ impl GpuContext {
         let wanted = if cfg!(target_arch = "wasm32") {
             wgpu::Features::TIMESTAMP_QUERY
         } else {
-            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP | wgpu::Features::EXPERIMENTAL_RAY_QUERY
+            wgpu::Features::TIMESTAMP_QUERY
+                | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+                | wgpu::Features::SUBGROUP
+                | wgpu::Features::EXPERIMENTAL_RAY_QUERY
         };
         let required_features = adapter.features() & wanted;
         let experimental_features = if required_features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) {
@@ -199,6 +205,7 @@ impl GpuContext {
         }));
         Ok(Self {
             timestamps: required_features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            encoder_timestamps: required_features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS),
             subgroups: required_features
                 .contains(wgpu::Features::SUBGROUP)
                 .then_some((info.subgroup_min_size, info.subgroup_max_size)),

@@ -15,6 +15,7 @@
 //! (spheres first, then triangles, as the BVH walks name them) of each BLAS primitive: an instance's
 //! custom index is where its BLAS's names start.
 
+use super::timing::PassTimestamps;
 use super::{GpuContext, GpuError};
 use crate::bvh::morton::{MortonBits, centroid_codes};
 use crate::records::PackedScene;
@@ -93,10 +94,21 @@ struct Blas {
 }
 
 /// A scene's BLASes and TLAS on one device, with the buffers they are built from; rebuilt from
-/// moved records with [`AccelStructures::write_moved`] and [`AccelStructures::encode_build`].
+/// moved records with [`AccelStructures::write_moved`] and [`AccelStructures::encode_build`], or
+/// every frame from triangles that move on the GPU.
+///
+/// wgpu 30 builds acceleration structures afresh every time: its update mode (`PreferUpdate`,
+/// refitting a built structure) is not implemented yet ("only rebuild implemented" in wgpu-core), so
+/// a moving scene's structures are rebuilt.
 pub struct AccelStructures {
-    /// The triangle records, the BLASes' vertices (corner `3 i + k` of triangle `i`).
+    /// The triangle records, the BLASes' vertices (corner `3 i + k` of triangle `i`): a buffer of
+    /// their own, or the records a GPU rebuild poses ([`AccelStructures::follows_gpu`]).
     vertices: Option<wgpu::Buffer>,
+    /// Whether the vertices are posed on the GPU every frame, and the structures must be rebuilt
+    /// before every frame.
+    follows_gpu: bool,
+    /// The build's GPU time, where the device times work between passes.
+    timer: Option<PassTimestamps>,
     /// The triangle BLASes' corners, three a triangle, in the BLASes' order.
     indices: Option<wgpu::Buffer>,
     /// The spheres' boxes, in the sphere BLAS's order.
@@ -110,8 +122,10 @@ pub struct AccelStructures {
 }
 
 impl AccelStructures {
-    /// Creates the structures for `scene` and records their first build into `encoder`.
-    pub fn new(ctx: &GpuContext, scene: &PackedScene) -> Result<Self, GpuError> {
+    /// Creates the structures for `scene`, to be built by [`AccelStructures::encode_build`]. Its
+    /// triangles are read from `gpu_triangles` where a rebuild poses them on the GPU (a buffer with
+    /// `BLAS_INPUT` usage, holding `scene.triangles`' records), else from a copy of their own.
+    pub fn new(ctx: &GpuContext, scene: &PackedScene, gpu_triangles: Option<wgpu::Buffer>) -> Result<Self, GpuError> {
         if !ctx.ray_queries {
             return Err(GpuError::Unsupported {
                 adapter: ctx.describe(),
@@ -122,13 +136,17 @@ impl AccelStructures {
         let order = BlasOrder::new(scene);
         let input = wgpu::BufferUsages::BLAS_INPUT | wgpu::BufferUsages::COPY_DST;
         let sphere_count = scene.spheres.len() as u32;
-        let vertices = (!scene.triangles.is_empty()).then(|| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("ray query vertices"),
-                contents: bytemuck::cast_slice(&scene.triangles),
-                usage: input,
-            })
-        });
+        let follows_gpu = gpu_triangles.is_some();
+        let vertices = match gpu_triangles {
+            Some(buffer) => Some(buffer),
+            None => (!scene.triangles.is_empty()).then(|| {
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("ray query vertices"),
+                    contents: bytemuck::cast_slice(&scene.triangles),
+                    usage: input,
+                })
+            }),
+        };
         let corners: Vec<u32> = order
             .primitives
             .iter()
@@ -232,6 +250,10 @@ impl AccelStructures {
         }
         Ok(Self {
             vertices,
+            follows_gpu,
+            timer: ctx
+                .encoder_timestamps
+                .then(|| PassTimestamps::new(device, "ray query build", 1)),
             indices,
             boxes,
             primitives,
@@ -273,7 +295,28 @@ impl AccelStructures {
                 }
             })
             .collect();
+        if let Some(timer) = &self.timer {
+            timer.write(encoder, 0, false);
+        }
         encoder.build_acceleration_structures(entries.iter(), [&self.tlas]);
+        if let Some(timer) = &self.timer {
+            timer.write(encoder, 0, true);
+            timer.resolve(encoder);
+        }
+    }
+
+    /// Whether the triangles are posed on the GPU, so that every frame needs a build first.
+    pub fn follows_gpu(&self) -> bool {
+        self.follows_gpu
+    }
+
+    /// GPU milliseconds of the last build submitted and finished, where the device times work
+    /// between passes.
+    pub async fn read_build_ms(&self, ctx: &GpuContext) -> Result<Option<f64>, GpuError> {
+        match &self.timer {
+            Some(timer) => Ok(Some(timer.read_ms(ctx).await?[0])),
+            None => Ok(None),
+        }
     }
 
     /// The triangles before `blas` among the triangle BLASes': where its corners start, over 3.
@@ -286,13 +329,14 @@ impl AccelStructures {
             .sum()
     }
 
-    /// Rewrites the vertices and boxes from a moved scene's records (as many as before): the next
+    /// Rewrites the vertices (unless the GPU poses them) and boxes from a moved scene's records (as
+    /// many as before), as `spheres` and `triangles` say they moved: the next
     /// [`AccelStructures::encode_build`] builds over them.
-    pub fn write_moved(&self, queue: &wgpu::Queue, scene: &PackedScene) {
-        if let Some(vertices) = &self.vertices {
+    pub fn write_moved(&self, queue: &wgpu::Queue, scene: &PackedScene, spheres: bool, triangles: bool) {
+        if let Some(vertices) = self.vertices.as_ref().filter(|_| triangles && !self.follows_gpu) {
             queue.write_buffer(vertices, 0, bytemuck::cast_slice(&scene.triangles));
         }
-        if let Some(boxes) = &self.boxes {
+        if let Some(boxes) = self.boxes.as_ref().filter(|_| spheres) {
             queue.write_buffer(boxes, 0, bytemuck::cast_slice(&sphere_boxes(scene, &self.sphere_order)));
         }
     }

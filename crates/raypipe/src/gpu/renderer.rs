@@ -265,15 +265,19 @@ impl Renderer {
         self.resources
             .write(&self.ctx.queue, scene, self.options.accel, kinds)?;
         self.restart();
-        let primitives_moved = kinds
-            .iter()
-            .any(|k| matches!(k, RecordKind::Sphere | RecordKind::Triangle));
-        if let Some(structures) = self.structures.as_ref().filter(|_| primitives_moved) {
-            // The driver's structures built again over the moved primitives.
-            structures.write_moved(&self.ctx.queue, scene);
-            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-            structures.encode_build(&mut encoder);
-            self.ctx.queue.submit([encoder.finish()]);
+        let (spheres, triangles) = (
+            kinds.contains(&RecordKind::Sphere),
+            kinds.contains(&RecordKind::Triangle),
+        );
+        if let Some(structures) = self.structures.as_ref().filter(|_| spheres || triangles) {
+            // The driver's structures built again over the moved primitives (before the next
+            // frame, where they follow the GPU's).
+            structures.write_moved(&self.ctx.queue, scene, spheres, triangles);
+            if !structures.follows_gpu() {
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                structures.encode_build(&mut encoder);
+                self.ctx.queue.submit([encoder.finish()]);
+            }
         }
         let tree_written = kinds
             .iter()
@@ -336,7 +340,7 @@ impl Renderer {
         ctx.checked("uploading the scene and building the pipeline", || {
             let resources = upload(ctx, scene, memory, accel, shared, tracer_stage(pipeline))?;
             let structures = if accel.needs_ray_queries() {
-                let structures = AccelStructures::new(ctx, scene)?;
+                let structures = AccelStructures::new(ctx, scene, shared.map(|s| s.triangles.clone()))?;
                 let mut encoder = ctx.device.create_command_encoder(&Default::default());
                 structures.encode_build(&mut encoder);
                 ctx.queue.submit([encoder.finish()]);
@@ -498,11 +502,19 @@ impl Renderer {
 
     /// Records the next sample per pixel (the first after a restart) into the targets: the trace
     /// pass, and before it, where a rebuild feeds the walks, the copy of its quantization frame into
-    /// the globals. The sample's index reaches the shader through a queue write, as a camera does:
+    /// the globals, and where it feeds ray queries, with the first sample after a restart, the
+    /// build of the driver's structures over the triangles it posed. The sample's index reaches the shader through a queue write, as a camera does:
     /// submit each frame before encoding the next.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
         if let Some(frame) = &self.bvh_frame {
             encode_frame_copy(encoder, frame, &self.globals_buffer);
+        }
+        if let Some(structures) = self.structures.as_ref().filter(|s| s.follows_gpu())
+            && self.samples() == 0
+        {
+            // The triangles the rebuild posed (recorded before, with the first sample after a
+            // restart), in the driver's structures.
+            structures.encode_build(encoder);
         }
         let sample = self.samples();
         self.globals.camera.sample = sample;
@@ -586,6 +598,15 @@ impl Renderer {
     pub async fn read_gpu_ms(&self) -> Result<Option<f64>, GpuError> {
         match &self.timer {
             Some(timer) => Ok(Some(timer.read_ms(&self.ctx).await?[0])),
+            None => Ok(None),
+        }
+    }
+
+    /// GPU milliseconds of the last build of the driver's acceleration structures submitted and
+    /// finished, with ray queries, where the device times work between passes.
+    pub async fn read_structures_build_ms(&self) -> Result<Option<f64>, GpuError> {
+        match &self.structures {
+            Some(structures) => structures.read_build_ms(&self.ctx).await,
             None => Ok(None),
         }
     }

@@ -49,6 +49,13 @@ impl PassTimestamps {
         }
     }
 
+    /// Records pass `pass`'s begin (`end` false) or end timestamp between commands, for work that
+    /// is no pass (acceleration structure builds): where the device has
+    /// `TIMESTAMP_QUERY_INSIDE_ENCODERS` ([`GpuContext::encoder_timestamps`]).
+    pub fn write(&self, encoder: &mut wgpu::CommandEncoder, pass: u32, end: bool) {
+        encoder.write_timestamp(&self.queries, 2 * pass + end as u32);
+    }
+
     /// Records the copy of this submission's timestamps to the host-readable buffer.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         encoder.resolve_query_set(&self.queries, 0..2 * self.passes, &self.resolve, 0);
