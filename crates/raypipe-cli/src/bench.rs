@@ -36,7 +36,9 @@ pub struct BenchArgs {
     /// triangles, one point (--counts unused).
     #[arg(long = "as", value_parser = choice::<MeshAs>())]
     pub(crate) as_: Option<MeshAs>,
-    #[arg(long, value_parser = choice::<Accel>(), value_delimiter = ',', default_values_t = Accel::ALL.to_vec())]
+    /// The acceleration modes to time [default: every one the adapter has: rayquery where it has
+    /// ray queries]
+    #[arg(long, value_parser = choice::<Accel>(), value_delimiter = ',')]
     pub(crate) accel: Vec<Accel>,
     #[arg(long, value_parser = choice::<MemoryMode>(), value_delimiter = ',', default_values_t = [MemoryMode::Storage])]
     pub(crate) memory: Vec<MemoryMode>,
@@ -61,7 +63,8 @@ pub struct BenchArgs {
     /// rebuild the LBVH every frame.
     #[arg(long, value_parser = choice::<Builder>(), default_value_t)]
     pub(crate) builder: Builder,
-    /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately.
+    /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately; with
+    /// rayquery, the driver's BLASes and TLAS.
     #[arg(long)]
     pub(crate) rebuild: bool,
     #[arg(long, value_parser = choice::<Backend>())]
@@ -102,7 +105,8 @@ struct Row {
     ms_max: f64,
     fps: f64,
     mrays_per_s: f64,
-    /// GPU time of the per-frame LBVH build (median), with --rebuild.
+    /// GPU time of the per-frame build (median), with --rebuild: the LBVH's, or with rayquery the
+    /// driver's BLASes and TLAS (where the adapter times work between passes).
     build_ms_median: Option<f64>,
     /// The same build's phases, each the median over the frames.
     build_phases_ms: Option<BuildPhases>,
@@ -259,7 +263,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         args.counts.clone()
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
-    let points = counts.len() * args.pipeline.len() * args.accel.len() * args.memory.len();
+    let accels = accels(&args, &ctx);
+    let points = counts.len() * args.pipeline.len() * accels.len() * args.memory.len();
     let bar = crate::device::progress_bar(
         true,
         points as u64,
@@ -272,7 +277,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         let count = packed.primitive_count();
         // Made on first need: a run of brute force alone does not render it.
         let mut reference: Option<Reference> = None;
-        for &accel in &args.accel {
+        for &accel in &accels {
             let rebuild = rebuild_for(&ctx, &args, &loaded, &packed, accel)?;
             for (&pipeline, &memory) in args
                 .pipeline
@@ -331,6 +336,15 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The acceleration modes asked for, or every one the adapter has.
+pub(crate) fn accels(args: &BenchArgs, ctx: &GpuContext) -> Vec<Accel> {
+    if args.accel.is_empty() {
+        ctx.accels()
+    } else {
+        args.accel.clone()
+    }
+}
+
 /// Refuses combinations that cannot run; says how a model file is measured.
 fn check_args(args: &BenchArgs) -> anyhow::Result<MeshAs> {
     anyhow::ensure!(args.frames >= 1, "--frames must be at least 1");
@@ -359,10 +373,15 @@ impl Row {
         ctx: &GpuContext,
         clock: &str,
         point: (usize, Pipeline, Accel, MemoryMode),
-        frames: (Vec<f64>, Vec<BuildTimings>, u64),
+        frames: TimedFrames,
     ) -> Row {
         let (count, pipeline, accel, memory) = point;
-        let (mut times, builds, rays) = frames;
+        let TimedFrames {
+            mut times,
+            builds,
+            driver_builds,
+            rays,
+        } = frames;
         times.sort_by(f64::total_cmp);
         let ms = median(times.iter().copied());
         Row {
@@ -379,7 +398,11 @@ impl Row {
             ms_max: times[times.len() - 1],
             fps: 1e3 / ms,
             mrays_per_s: rays as f64 / (ms * 1e3),
-            build_ms_median: (!builds.is_empty()).then(|| median(builds.iter().map(BuildTimings::total))),
+            build_ms_median: if driver_builds.is_empty() {
+                (!builds.is_empty()).then(|| median(builds.iter().map(BuildTimings::total)))
+            } else {
+                Some(median(driver_builds.iter().copied()))
+            },
             build_phases_ms: BuildPhases::median_of(&builds),
             clock: clock.into(),
             adapter: ctx.info.name.clone(),
@@ -427,22 +450,41 @@ fn print_table(args: &BenchArgs, ctx: &GpuContext, clock: &str, rows: &[Row]) ->
     Ok(())
 }
 
-/// Times `args.frames` frames after `args.warmup` warm-up frames, the rebuild (where there is one)
-/// recorded before each: the frames' times (GPU timestamps, else the wall clock), their builds'
-/// phases, and the rays of the last. `progress` hears of each frame as it starts (1-based).
+/// What [`time_frames`] measured.
+struct TimedFrames {
+    /// The frames' times (GPU timestamps, else the wall clock).
+    times: Vec<f64>,
+    /// The LBVH builds' phases, with --rebuild.
+    builds: Vec<BuildTimings>,
+    /// The driver's BLAS and TLAS builds (GPU milliseconds), with --rebuild and rayquery.
+    driver_builds: Vec<f64>,
+    /// The rays of the last frame.
+    rays: u64,
+}
+
+/// Times `args.frames` frames after `args.warmup` warm-up frames, the rebuild (where there is one;
+/// with rayquery and --rebuild, the driver's structures' build) recorded before each. `progress`
+/// hears of each frame as it starts (1-based).
 fn time_frames(
     args: &BenchArgs,
     renderer: &mut Renderer,
     rebuild: Option<&SceneRebuild>,
     progress: impl Fn(usize, usize),
-) -> anyhow::Result<(Vec<f64>, Vec<BuildTimings>, u64)> {
-    let mut times = Vec::new();
-    let mut builds = Vec::new();
-    let mut rays = 0;
+) -> anyhow::Result<TimedFrames> {
+    let mut measured = TimedFrames {
+        times: Vec::new(),
+        builds: Vec::new(),
+        driver_builds: Vec::new(),
+        rays: 0,
+    };
+    let driver_builds = args.rebuild && renderer.options().accel.needs_ray_queries();
     let total = args.warmup + args.frames;
     for frame in 0..total {
         progress(frame + 1, total);
         let start = std::time::Instant::now();
+        if driver_builds {
+            renderer.rebuild_structures();
+        }
         let timed = block_on(renderer.render_samples(args.spp, |encoder| {
             if let Some(rebuild) = rebuild {
                 rebuild.encode(encoder);
@@ -450,14 +492,17 @@ fn time_frames(
         }))?;
         let wall = start.elapsed().as_secs_f64() * 1e3;
         if frame >= args.warmup {
-            times.push(timed.gpu_ms.unwrap_or(wall));
-            rays = timed.frame.rays();
+            measured.times.push(timed.gpu_ms.unwrap_or(wall));
+            measured.rays = timed.frame.rays();
             if let Some(rebuild) = rebuild {
-                builds.push(block_on(rebuild.read_timings())?);
+                measured.builds.push(block_on(rebuild.read_timings())?);
+            }
+            if let Some(ms) = block_on(renderer.read_structures_build_ms())?.filter(|_| driver_builds) {
+                measured.driver_builds.push(ms);
             }
         }
     }
-    Ok((times, builds, rays))
+    Ok(measured)
 }
 
 /// results.csv and results.json in `out`; returns the JSON.

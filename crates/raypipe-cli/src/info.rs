@@ -39,6 +39,11 @@ pub fn run() -> anyhow::Result<ExitCode> {
             "  timestamp queries:          {}",
             adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
         );
+        // What `--accel rayquery` needs.
+        crate::say!(
+            "  ray queries:                {}",
+            adapter.features().contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+        );
         if adapter.features().contains(wgpu::Features::SUBGROUP) {
             crate::say!(
                 "  subgroups:                  {} to {} invocations",

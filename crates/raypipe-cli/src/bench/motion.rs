@@ -153,9 +153,10 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
         cpu::render(&packed, Accel::Threaded)?
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
+    let accels = super::accels(args, &ctx);
     let bar = crate::device::progress_bar(
         true,
-        (args.pipeline.len() * args.accel.len() * args.memory.len()) as u64,
+        (args.pipeline.len() * accels.len() * args.memory.len()) as u64,
         "{spinner} bench --motion {bar:40} {pos}/{len} {msg}, {elapsed}",
     );
     let name = Path::new(&args.scene)
@@ -170,7 +171,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     };
     for &memory in &args.memory {
         for &pipeline in &args.pipeline {
-            for &accel in &args.accel {
+            for &accel in &accels {
                 let point = format!("{} {} {}", pipeline.name(), accel.name(), memory.name());
                 bar.set_message(point.clone());
                 let options = RendererOptions {

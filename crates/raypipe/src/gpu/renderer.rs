@@ -219,6 +219,8 @@ pub struct Renderer {
     confinement: Option<Confinement>,
     /// With ray queries: the driver's acceleration structures over the scene.
     structures: Option<AccelStructures>,
+    /// The structures are built again before the next sample ([`Renderer::rebuild_structures`]).
+    structures_stale: bool,
     timer: Option<PassTimestamps>,
 }
 
@@ -390,6 +392,7 @@ impl Renderer {
                 resources,
                 confinement,
                 structures,
+                structures_stale: false,
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
@@ -509,12 +512,13 @@ impl Renderer {
         if let Some(frame) = &self.bvh_frame {
             encode_frame_copy(encoder, frame, &self.globals_buffer);
         }
-        if let Some(structures) = self.structures.as_ref().filter(|s| s.follows_gpu())
-            && self.samples() == 0
+        if let Some(structures) = &self.structures
+            && (self.structures_stale || (structures.follows_gpu() && self.samples() == 0))
         {
             // The triangles the rebuild posed (recorded before, with the first sample after a
             // restart), in the driver's structures.
             structures.encode_build(encoder);
+            self.structures_stale = false;
         }
         let sample = self.samples();
         self.globals.camera.sample = sample;
@@ -600,6 +604,13 @@ impl Renderer {
             Some(timer) => Ok(Some(timer.read_ms(&self.ctx).await?[0])),
             None => Ok(None),
         }
+    }
+
+    /// With ray queries: builds the driver's acceleration structures again before the next sample,
+    /// over the records as they are (as a moving scene's are every frame); for benchmarks that time
+    /// the build.
+    pub fn rebuild_structures(&mut self) {
+        self.structures_stale = self.structures.is_some();
     }
 
     /// GPU milliseconds of the last build of the driver's acceleration structures submitted and
