@@ -57,7 +57,7 @@ fn gpu_frames_refitting(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u3
 
 /// `count` frames in `memory`, the BVH rebuilt on the CPU before each and the records rewritten in
 /// place: the route of adapters without compute shaders (WebGL2).
-fn rewritten_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, memory: MemoryMode, count: u32) -> Vec<Frame> {
+pub fn rewritten_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, memory: MemoryMode, count: u32) -> Vec<Frame> {
     let mut builder = LbvhBuilder::<u64>::new();
     let mut packed_at = |frame: u32| {
         let mut packed = PackedScene::new(&scene.at_time(time_of(frame)).unwrap()).unwrap();

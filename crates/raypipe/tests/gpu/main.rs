@@ -1,6 +1,7 @@
 //! The tests that need a GPU, on one shared device (see `common::harness`): the fragment shader
 //! against the CPU reference, memory modes against each other, the environment, texture filtering, closed-form answers, the GPU LBVH
-//! build against the CPU's, per-frame rebuilds, the display pass, watertight triangles, and scenes
+//! build against the CPU's, per-frame rebuilds, the driver's structures walked by ray queries, the
+//! display pass, watertight triangles, and scenes
 //! at the ends of the accepted numeric range; and the tests of the shared
 //! models.
 
@@ -17,6 +18,7 @@ mod gpu_build;
 mod gpu_vs_cpu;
 mod memory_modes;
 mod pipelines;
+mod rayquery;
 mod scale;
 mod scans;
 mod watertight;
@@ -33,6 +35,7 @@ fn main() -> std::process::ExitCode {
         gpu_vs_cpu::tests(),
         memory_modes::tests(),
         pipelines::tests(),
+        rayquery::tests(),
         scale::tests(),
         scans::tests(),
         watertight::tests(),

@@ -12,7 +12,7 @@ use raypipe::records::PackedScene;
 fn check(ctx: &GpuContext, spec: &str) {
     let mut scene = packed(spec, 64, 48, 5);
     scene.build_bvh(MortonBits::Bits30);
-    for &accel in Accel::ALL {
+    for accel in ctx.accels() {
         check_accel(ctx, &scene, accel, spec);
     }
 }
@@ -46,7 +46,7 @@ fn triangles_in_every_memory_mode(ctx: &GpuContext) {
     scene.settings.height = 48;
     let mut scene = PackedScene::new(&scene).unwrap();
     scene.build_bvh(MortonBits::Bits30);
-    for &accel in Accel::ALL {
+    for accel in ctx.accels() {
         check_accel(ctx, &scene, accel, "spheres-and-triangles");
     }
 }

@@ -3,7 +3,6 @@
 
 use crate::common::harness::Test;
 use crate::common::*;
-use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{GpuContext, RendererOptions};
 use raypipe::image::Frame;
@@ -36,7 +35,7 @@ fn compute_equals_fragment(ctx: &GpuContext) {
     // whitted's BVH, not the cloud's), costs, and several samples.
     let mut cases = Vec::new();
     for scene in [&whitted, &cloud] {
-        for &accel in Accel::ALL {
+        for accel in ctx.accels() {
             cases.push((scene, options(accel, MemoryMode::Storage, Count::Rays), 1));
         }
         cases.push((scene, options(Accel::Threaded, MemoryMode::Storage, Count::Cost), 1));
