@@ -4,7 +4,9 @@
 # at 1920x1080 with the BVH rebuilt every frame (and its triangles over a tree built once by the
 # LBVH and by binned SAH), the GPU and CPU LBVH builds from 100K to 16M primitives with 30- and
 # 63-bit Morton codes, and an animated skinned mesh of 10K to 1M triangles (scripts/skinned-mesh.py)
-# posed, rebuilt and refitted every frame at 640x360.
+# posed, rebuilt and refitted every frame at 640x360. Where the adapter has ray queries, the driver's
+# acceleration structures beside the walks (rayquery, rebuilt every frame): Figure 4 at the larger
+# size, the Bunny's triangles in Morton and in file order, and the animated mesh.
 #
 #   scripts/gpu-bench.sh OUT_DIR            # on a real GPU: at most 9.5 minutes
 #   scripts/gpu-bench.sh --quick OUT_DIR    # the same steps at small sizes (CI runs it on lavapipe)
@@ -77,9 +79,10 @@ if [[ $quick -eq 1 ]]; then
   motion_counts=(3000)
   motion_frames=(--frames 2 --warmup 1 --width 64 --height 36)
   # Seconds for: Figure 4's BVH modes and its brute force (each size), the Bunny's spheres and its
-  # triangles, one build, one build of the largest count, one animated mesh, and the Bunny's
-  # triangles over a tree built once (each builder).
-  limits=(300 300 300 300 120 120 300 300)
+  # triangles, one build, one build of the largest count, one animated mesh, the Bunny's
+  # triangles over a tree built once (each builder), Figure 4 with ray queries, and the Bunny's
+  # triangles with ray queries (each order).
+  limits=(300 300 300 300 120 120 300 300 300 300)
 else
   sizes=(1920x1080 256x256)
   brute_counts=1000,2000,5000,10000,20000
@@ -91,13 +94,16 @@ else
   build_runs=5
   motion_counts=(10000 100000 1000000)
   motion_frames=(--frames 30 --warmup 3 --width 640 --height 360)
-  # As above; at most 2 x (90 + 25) + 2 x 25 + 12 x 8 + 4 x 25 + 3 x 20 + 2 x 12 = 560 seconds in
-  # all.
-  limits=(90 25 25 25 8 25 20 12)
+  # As above; at most 2 x (80 + 25) + 2 x 25 + 12 x 8 + 4 x 25 + 3 x 20 + 2 x 12 + 20 + 2 x 10
+  # = 580 seconds in all.
+  limits=(80 25 25 25 8 25 20 12 20 10)
 fi
 
 "$raypipe" info > "$out/info.txt" 2>&1 || { cat "$out/info.txt"; exit 2; }
 cat "$out/info.txt"
+# Ray queries where an adapter has them (a benchmark on another adapter says it refused them).
+rayquery=0
+grep -Eq 'ray queries: +true' "$out/info.txt" && rayquery=1
 
 for size in "${sizes[@]}"; do
   w=${size%x*}
@@ -109,6 +115,12 @@ for size in "${sizes[@]}"; do
     "$raypipe" bench random --counts "$brute_counts" --accel brute --pipeline fragment,compute \
     --width "$w" --height "$h" "${frames[@]}" --out "$out/figure4-$size-brute"
 done
+if [[ $rayquery -eq 1 ]]; then
+  size=${sizes[0]}
+  step "figure 4, $size, ray queries, rebuilt every frame" "${limits[8]}" \
+    "$raypipe" bench random --counts "$bvh_counts" --accel rayquery --pipeline fragment,compute \
+    --width "${size%x*}" --height "${size#*x}" --rebuild "${frames[@]}" --out "$out/figure4-$size-rayquery"
+fi
 
 if [[ -n $models ]]; then
   step "Bunny, $bunny_spheres spheres, rebuilt every frame" "${limits[2]}" \
@@ -123,6 +135,15 @@ if [[ -n $models ]]; then
       "$raypipe" bench "$models/bunny.ply" --as triangles --builder "$builder" --accel stack,threaded \
       --pipeline fragment "${bunny_size[@]}" "${frames[@]}" --out "$out/bunny-triangles-$builder"
   done
+  # The driver's structures over the Bunny's triangles, sorted along the Morton curve and in the
+  # file's order: what the sort buys the driver's builder.
+  if [[ $rayquery -eq 1 ]]; then
+    for order in morton scene; do
+      step "Bunny, triangles, ray queries, $order order, rebuilt every frame" "${limits[9]}" \
+        "$raypipe" bench "$models/bunny.ply" --as triangles --accel rayquery --blas-order "$order" \
+        --pipeline fragment,compute "${bunny_size[@]}" --rebuild "${frames[@]}" --out "$out/bunny-triangles-rayquery-$order"
+    done
+  fi
 else
   echo "== Bunny: skipped, no bunny.ply in ../shared/models or .models (set RAYPIPE_MODELS)" | tee -a "$log"
   failed=1
@@ -156,12 +177,15 @@ with open(sys.argv[2], "w", newline="") as f:
                      + [round(r["mprims_per_s"], 2)])
 print(f"builds.csv: {len(rows)} builds")
 EOF
-# The animated mesh: each frame evaluated, skinned and rebuilt on the GPU, and a second tree refitted.
+# The animated mesh: each frame evaluated, skinned and rebuilt on the GPU, and a second tree refitted;
+# with ray queries, the driver's structures rebuilt over the skinned triangles too.
+motion_accels=threaded
+[[ $rayquery -eq 1 ]] && motion_accels=threaded,rayquery
 for n in "${motion_counts[@]}"; do
   mesh=$out/skinned-$n.glb
   if python3 "$(dirname "$0")/skinned-mesh.py" --triangles "$n" -o "$mesh" >> "$log" 2>&1; then
     step "animated skinned mesh, $n triangles, skinned and rebuilt every frame" "${limits[6]}" \
-      "$raypipe" bench "$mesh" --motion --refit --memory storage --accel threaded --pipeline fragment,compute \
+      "$raypipe" bench "$mesh" --motion --refit --memory storage --accel "$motion_accels" --pipeline fragment,compute \
       "${motion_frames[@]}" --out "$out/motion-$n"
     rm -f "$mesh"
   else

@@ -15,7 +15,7 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{Backend, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::image::diff::{Tolerance, compare};
-use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, BlasOrder, Builder, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use raypipe::scene::is_model_file;
@@ -63,6 +63,10 @@ pub struct BenchArgs {
     /// rebuild the LBVH every frame.
     #[arg(long, value_parser = choice::<Builder>(), default_value_t)]
     pub(crate) builder: Builder,
+    /// With rayquery: the order the driver's BLASes get the primitives in (the scene's own order
+    /// shows what the Morton sort buys a driver that builds in the order it is given).
+    #[arg(long, value_parser = choice::<BlasOrder>(), default_value_t)]
+    pub(crate) blas_order: BlasOrder,
     /// Rebuild the LBVH on the GPU before every frame (storage memory), timed separately; with
     /// rayquery, the driver's BLASes and TLAS.
     #[arg(long)]
@@ -116,6 +120,8 @@ struct Row {
     backend: String,
     /// How the tree was built: "lbvh" or "sah".
     builder: String,
+    /// With rayquery: the BLASes' primitive order, "morton" or "scene".
+    blas_order: String,
 }
 
 /// Per-phase medians of a rebuild's timings (`BuildTimings`' phases).
@@ -295,7 +301,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     };
                     reference.check(&ctx, pipeline, accel, memory)
                 };
-                let modes = options(pipeline, memory, accel);
+                let modes = RendererOptions {
+                    blas_order: args.blas_order,
+                    ..options(pipeline, memory, accel)
+                };
                 let renderer =
                     checked.and_then(|()| crate::device::build_renderer(&ctx, &packed, rebuild.as_ref(), modes, false));
                 let mut renderer = match renderer {
@@ -408,6 +417,7 @@ impl Row {
             adapter: ctx.info.name.clone(),
             backend: format!("{:?}", ctx.info.backend),
             builder: name(&args.builder),
+            blas_order: name(&args.blas_order),
         }
     }
 }

@@ -51,6 +51,7 @@ impl RenderOptions {
             memory: self.memory,
             accel: self.accel,
             count: self.count,
+            ..Default::default()
         }
     }
 }

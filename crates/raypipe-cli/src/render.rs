@@ -8,7 +8,7 @@ use anyhow::bail;
 use clap::Args;
 use raypipe::bvh::BuildTimings;
 use raypipe::bvh::morton::MortonBits;
-use raypipe::modes::Aov;
+use raypipe::modes::{Accel, Aov};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use std::io::IsTerminal;
@@ -111,7 +111,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         backend: args.scene.backend,
         pipeline: args.scene.pipeline,
         memory: args.scene.memory,
-        accel: args.scene.accel,
+        accel: scene.settings.accel.unwrap_or_default(),
         progress: std::io::stderr().is_terminal(),
         count: args.scene.aov.count(),
         warm_up: args.stats,
@@ -145,8 +145,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         .at_time(args.scene.scene_time(&scene, start)?)
         .map_err(|e| e.in_origin(&args.scene.spec))?;
     let mut packed = PackedScene::new(&posed).map_err(|e| e.in_origin(&args.scene.spec))?;
-    let build = args
-        .scene
+    let build = options
         .accel
         .uses_bvh()
         .then(|| packed.build_bvh_with(args.scene.builder, MortonBits::default()));
@@ -169,7 +168,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     }
 
     if args.stats {
-        say_stats(&args, &packed, build, &outcome)?;
+        say_stats(&args, options.accel, &packed, build, &outcome)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -226,6 +225,7 @@ fn check_output(args: &RenderArgs) -> anyhow::Result<(PathBuf, bool)> {
 /// the nodes tested).
 fn say_stats(
     args: &RenderArgs,
+    accel: Accel,
     packed: &PackedScene,
     build: Option<BuildTimings>,
     outcome: &RenderOutcome,
@@ -244,7 +244,7 @@ fn say_stats(
         packed.lights.len(),
         packed.max_depth
     );
-    say_device(args, &outcome.device)?;
+    say_device(args, accel, &outcome.device)?;
     if let (Some(build), Some(bvh)) = (build, &packed.bvh) {
         crate::say!(
             "bvh: {} on the CPU in {:.2} ms, {} nodes, depth {}",
@@ -283,12 +283,11 @@ fn say_stats(
 }
 
 /// `--stats`'s line on what traced.
-fn say_device(args: &RenderArgs, device: &str) -> anyhow::Result<()> {
+fn say_device(args: &RenderArgs, accel: Accel, device: &str) -> anyhow::Result<()> {
     crate::say!(
-        "device: {device}, pipeline {}, memory {}, accel {}, {} samples per pixel",
+        "device: {device}, pipeline {}, memory {}, accel {accel}, {} samples per pixel",
         args.scene.pipeline,
         args.scene.memory,
-        args.scene.accel,
         args.spp
     );
     Ok(())
@@ -342,7 +341,7 @@ fn render_sequence(
             scene.spheres.len(),
             scene.triangles.len()
         );
-        say_device(args, &outcome.device)?;
+        say_device(args, options.accel, &outcome.device)?;
         // The first frame pays for pipeline compilation on some drivers: medians skip it.
         let steady = if frames > 1 { 1 } else { 0 };
         if !outcome.builds.is_empty() {

@@ -75,8 +75,9 @@ pub struct SceneArgs {
     pub pipeline: Pipeline,
     #[arg(long, value_parser = choice::<MemoryMode>(), default_value_t)]
     pub memory: MemoryMode,
-    #[arg(long, value_parser = choice::<Accel>(), default_value_t)]
-    pub accel: Accel,
+    /// How rays find their closest primitive [default: the scene file's `accel`, else threaded]
+    #[arg(long, value_parser = choice::<Accel>())]
+    pub accel: Option<Accel>,
     /// How the BVH is built: the LBVH, or binned SAH for a still scene (about 50 times slower to
     /// build, some 10 % fewer tests a ray). A moving scene's tree is rebuilt every frame by the LBVH.
     #[arg(long, value_parser = choice::<Builder>(), default_value_t)]
@@ -163,6 +164,7 @@ impl SceneArgs {
         settings.width = self.width.unwrap_or(settings.width);
         settings.height = self.height.unwrap_or(settings.height);
         settings.max_depth = self.depth.unwrap_or(settings.max_depth);
+        settings.accel = self.accel.or(settings.accel);
         settings.background = self.background.unwrap_or(settings.background);
         Ok(scene)
     }

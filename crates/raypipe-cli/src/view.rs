@@ -108,7 +108,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
         name: args.scene.spec.clone(),
         modes: Modes {
             pipeline: args.scene.pipeline,
-            accel: args.scene.accel,
+            accel: scene.settings.accel.unwrap_or_default(),
             builder: args.scene.builder,
             memory: args.scene.memory,
             depth: scene.settings.max_depth,

@@ -79,6 +79,7 @@ impl Tracer {
             memory: modes.memory,
             accel: modes.accel,
             count: modes.view.count(),
+            ..Default::default()
         };
         let primitives = packed.primitive_count();
         let (renderer, cpu_build, motion) = if scene.motion.is_none() {

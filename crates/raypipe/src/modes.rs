@@ -64,6 +64,26 @@ impl Accel {
     pub const BVH: [Accel; 3] = [Accel::Stack, Accel::Stackless, Accel::Threaded];
 }
 
+/// The order the driver's bottom-level structures hold their primitives in, with
+/// [`Accel::RayQuery`]: a driver whose builder keeps the order it is given (lavapipe's) builds its
+/// tree from it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BlasOrder {
+    /// Morton order of the centroids: neighbours in space are neighbours in the list.
+    #[default]
+    Morton,
+    /// The scene's own order (a file's): what the sort buys, measured.
+    Scene,
+}
+
+impl_choice!(
+    BlasOrder,
+    [
+        (Morton, "morton", "Morton order of the centroids"),
+        (Scene, "scene", "the scene's own order (a file's)"),
+    ]
+);
+
 /// How the BVH over a scene's primitives is built on the host.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Builder {

@@ -51,6 +51,7 @@ fn quad_over_floor(quad: Material, texels: [[f32; 4]; 2], facing_up: bool) -> Sc
             max_depth: 0,
             background: Vec3::ZERO,
             ambient: 0.0,
+            accel: None,
         },
         lights: vec![Light {
             position: Vec3::ZERO,

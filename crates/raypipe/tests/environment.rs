@@ -52,6 +52,7 @@ fn sphere_scene(material: Material, eye: Vec3, size: u32, environment: Environme
             max_depth: 2,
             background: Vec3::new(9.0, 9.0, 9.0),
             ambient: 0.0,
+            accel: None,
         },
         materials: vec![material],
         spheres: vec![Sphere {

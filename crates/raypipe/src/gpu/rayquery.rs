@@ -18,6 +18,7 @@
 use super::timing::PassTimestamps;
 use super::{GpuContext, GpuError};
 use crate::bvh::morton::{MortonBits, centroid_codes};
+use crate::modes::BlasOrder;
 use crate::records::PackedScene;
 use crate::records::constants::MATERIAL_INDEX_MASK;
 use rayon::prelude::*;
@@ -37,7 +38,7 @@ pub enum BlasKind {
 
 /// The scene's primitives in the BLASes' order.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct BlasOrder {
+pub struct BlasLayout {
     /// The scene primitive (spheres first, then triangles) of each BLAS primitive, the BLASes one
     /// after another.
     pub primitives: Vec<u32>,
@@ -45,14 +46,15 @@ pub struct BlasOrder {
     pub parts: Vec<(BlasKind, Range<usize>)>,
 }
 
-impl BlasOrder {
-    /// Each primitive's BLAS, and its place there: Morton order of the centroids (30-bit codes over
-    /// the whole scene's centroid bounds), ties by index.
-    pub fn new(scene: &PackedScene) -> Self {
-        let boxes = scene.primitive_boxes();
-        let codes = centroid_codes(&boxes, MortonBits::Bits30);
-        let mut sorted: Vec<u32> = (0..boxes.len() as u32).collect();
-        sorted.par_sort_unstable_by_key(|&i| (codes[i as usize], i));
+impl BlasLayout {
+    /// Each primitive's BLAS, and its place there: in `order`, Morton order of the centroids (30-bit
+    /// codes over the whole scene's centroid bounds, ties by index) or the scene's.
+    pub fn new(scene: &PackedScene, order: BlasOrder) -> Self {
+        let mut sorted: Vec<u32> = (0..scene.primitive_count() as u32).collect();
+        if order == BlasOrder::Morton {
+            let codes = centroid_codes(&scene.primitive_boxes(), MortonBits::Bits30);
+            sorted.par_sort_unstable_by_key(|&i| (codes[i as usize], i));
+        }
         let sphere_count = scene.spheres.len() as u32;
         let kind_of = |i: u32| {
             if i < sphere_count {
@@ -113,7 +115,7 @@ pub struct AccelStructures {
     indices: Option<wgpu::Buffer>,
     /// The spheres' boxes, in the sphere BLAS's order.
     boxes: Option<wgpu::Buffer>,
-    /// [`BlasOrder::primitives`], bound for the shader.
+    /// [`BlasLayout::primitives`], bound for the shader.
     primitives: wgpu::Buffer,
     /// The sphere BLAS's spheres, in its order.
     sphere_order: Vec<u32>,
@@ -122,10 +124,15 @@ pub struct AccelStructures {
 }
 
 impl AccelStructures {
-    /// Creates the structures for `scene`, to be built by [`AccelStructures::encode_build`]. Its
+    /// Creates the structures for `scene`, its primitives in `order`, to be built by [`AccelStructures::encode_build`]. Its
     /// triangles are read from `gpu_triangles` where a rebuild poses them on the GPU (a buffer with
     /// `BLAS_INPUT` usage, holding `scene.triangles`' records), else from a copy of their own.
-    pub fn new(ctx: &GpuContext, scene: &PackedScene, gpu_triangles: Option<wgpu::Buffer>) -> Result<Self, GpuError> {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &PackedScene,
+        order: BlasOrder,
+        gpu_triangles: Option<wgpu::Buffer>,
+    ) -> Result<Self, GpuError> {
         if !ctx.ray_queries {
             return Err(GpuError::Unsupported {
                 adapter: ctx.describe(),
@@ -133,7 +140,7 @@ impl AccelStructures {
             });
         }
         let device = &ctx.device;
-        let order = BlasOrder::new(scene);
+        let order = BlasLayout::new(scene, order);
         let input = wgpu::BufferUsages::BLAS_INPUT | wgpu::BufferUsages::COPY_DST;
         let sphere_count = scene.spheres.len() as u32;
         let follows_gpu = gpu_triangles.is_some();

@@ -24,7 +24,7 @@ use super::{GpuContext, GpuError};
 use crate::error::MissingBvh;
 use crate::image::Frame;
 use crate::modes::Count;
-use crate::modes::{Accel, MemoryMode, Pipeline};
+use crate::modes::{Accel, BlasOrder, MemoryMode, Pipeline};
 use crate::records::packed::MovedRecords;
 use crate::records::{GpuCamera, GpuGlobals, PackedScene};
 use crate::scene::Camera;
@@ -58,6 +58,8 @@ pub struct RendererOptions {
     pub accel: Accel,
     /// What the colour target's fourth channel counts.
     pub count: Count,
+    /// With ray queries: the order the driver's structures get the primitives in.
+    pub blas_order: BlasOrder,
 }
 
 /// The tracer's outputs, one texel per pixel: colour (rgb linear radiance, a the count, both summed
@@ -329,6 +331,7 @@ impl Renderer {
             memory,
             accel,
             count,
+            blas_order,
         } = options;
         check_pipeline(ctx, pipeline)?;
         let confined = pipeline == Pipeline::Fragment
@@ -342,7 +345,7 @@ impl Renderer {
         ctx.checked("uploading the scene and building the pipeline", || {
             let resources = upload(ctx, scene, memory, accel, shared, tracer_stage(pipeline))?;
             let structures = if accel.needs_ray_queries() {
-                let structures = AccelStructures::new(ctx, scene, shared.map(|s| s.triangles.clone()))?;
+                let structures = AccelStructures::new(ctx, scene, blas_order, shared.map(|s| s.triangles.clone()))?;
                 let mut encoder = ctx.device.create_command_encoder(&Default::default());
                 structures.encode_build(&mut encoder);
                 ctx.queue.submit([encoder.finish()]);

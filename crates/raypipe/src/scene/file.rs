@@ -8,6 +8,7 @@ use super::model::{DEFAULT_CREASE_DEGREES, MeshAs, Normals, Placement, SphereCou
 use super::{Camera, Checker, Environment, Light, Material, Plane, RenderSettings, Scene, Sphere, unit_vector};
 use crate::choice::Choice;
 use crate::error::{Element, InputError};
+use crate::modes::Accel;
 use glam::Vec3;
 use serde::Deserialize;
 use std::collections::{BTreeMap, HashMap};
@@ -48,6 +49,8 @@ struct RenderDef {
     max_depth: Option<u32>,
     background: Option<[f32; 3]>,
     ambient: Option<f32>,
+    /// An acceleration mode's name (`Accel`'s).
+    accel: Option<Spanned<String>>,
     /// An equirectangular .hdr or .exr, relative to the scene file.
     environment: Option<Spanned<String>>,
     environment_rotation: Option<Spanned<f32>>,
@@ -192,6 +195,7 @@ fn set_view(scene: &mut Scene, def: &SceneDef) {
             max_depth: r.max_depth.unwrap_or(d.max_depth),
             background: r.background.map_or(d.background, vec3),
             ambient: r.ambient.unwrap_or(d.ambient),
+            accel: None,
         };
     }
 
@@ -217,6 +221,16 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
     // After the meshes, whose textures make room for it.
     if let Some(render) = &def.render {
         set_environment(&mut tables.scene, render, base, &line)?;
+        if let Some(accel) = &render.accel {
+            let name = accel.get_ref();
+            tables.scene.settings.accel = Some(Accel::from_name(name).ok_or_else(|| {
+                at_element(
+                    line(accel.span()),
+                    Element::Render,
+                    format!("accel must be one of {} (got \"{name}\")", Accel::names()),
+                )
+            })?);
+        }
     }
     let scene = tables.scene;
 
@@ -484,6 +498,20 @@ mod tests {
         let scene = parse("[[sphere]]\ncenter = [0, 0, 0]\nradius = 1.0\n").unwrap();
         assert_eq!(scene.spheres.len(), 1);
         assert_eq!(scene.materials.len(), 1, "the default material is added on use");
+        assert_eq!(scene.settings.accel, None, "no accel: the program's default");
+    }
+
+    #[test]
+    fn render_accel_names_a_mode_or_is_refused_on_its_line() {
+        use crate::modes::Accel;
+        for (name, accel) in [("rayquery", Accel::RayQuery), ("stack", Accel::Stack)] {
+            let scene = parse(&format!("[render]\naccel = \"{name}\"\n")).unwrap();
+            assert_eq!(scene.settings.accel, Some(accel));
+        }
+        let e = parse("[render]\nwidth = 64\naccel = \"fastest\"\n").unwrap_err();
+        assert_eq!(e.line, Some(3));
+        assert_eq!(e.element, Some(Element::Render));
+        assert!(e.message.contains("rayquery (got \"fastest\")"), "{}", e.message);
     }
 
     #[test]

@@ -26,6 +26,7 @@ pub use texture::{Filter, TexelFilter, Texture, Wrap};
 
 use crate::error::{Element, InputError};
 use crate::image::tonemap::ToneMap;
+use crate::modes::Accel;
 use glam::{Quat, Vec2, Vec3, Vec4};
 use material::validate_material;
 
@@ -56,6 +57,9 @@ pub struct RenderSettings {
     pub background: Vec3,
     /// Ambient light intensity, multiplied by a surface's diffuse colour.
     pub ambient: f32,
+    /// How the scene asks to be traced (TOML `[render] accel`): a command line's `--accel`
+    /// overrides it; with neither, the program's default.
+    pub accel: Option<Accel>,
 }
 
 impl Default for RenderSettings {
@@ -66,6 +70,7 @@ impl Default for RenderSettings {
             max_depth: 5,
             background: Vec3::new(0.05, 0.05, 0.1),
             ambient: 0.1,
+            accel: None,
         }
     }
 }
