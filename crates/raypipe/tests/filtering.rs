@@ -41,6 +41,7 @@ fn wall(texture: Texture, uv: &dyn Fn(Vec3) -> Vec2, distance: f32) -> Scene {
             max_depth: 0,
             background: Vec3::ZERO,
             ambient: 0.0,
+            accel: None,
         },
         materials: vec![unlit_textured()],
         textures: vec![texture],

@@ -375,9 +375,11 @@ impl Renderer {
                 ctx,
                 pipeline,
                 &source,
-                &resources,
-                structures.as_ref(),
-                &globals_buffer,
+                &SceneBindings {
+                    globals: &globals_buffer,
+                    resources: &resources,
+                    structures: structures.as_ref(),
+                },
                 &previous_layout,
                 confinement.is_some(),
             );
@@ -807,14 +809,28 @@ fn previous_sample_layout(device: &wgpu::Device, pipeline: Pipeline) -> wgpu::Bi
     })
 }
 
+/// What group 0 of the tracer binds.
+#[derive(Clone, Copy)]
+struct SceneBindings<'a> {
+    /// At binding 0.
+    globals: &'a wgpu::Buffer,
+    /// The scene's record arrays and the textures' texels.
+    resources: &'a SceneResources,
+    /// With ray queries, after the texels.
+    structures: Option<&'a AccelStructures>,
+}
+
 /// Group 0 of the tracer: the globals at binding 0, then the scene's records.
 fn scene_bind_group(
     device: &wgpu::Device,
     kind: Pipeline,
-    resources: &SceneResources,
-    structures: Option<&AccelStructures>,
-    globals: &wgpu::Buffer,
+    bindings: &SceneBindings,
 ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let SceneBindings {
+        globals,
+        resources,
+        structures,
+    } = *bindings;
     let ray_queries = ray_query_binding(&resources.arrays);
     let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
         binding: 0,
@@ -854,9 +870,7 @@ fn build_pipeline(
     ctx: &GpuContext,
     kind: Pipeline,
     source: &str,
-    resources: &SceneResources,
-    structures: Option<&AccelStructures>,
-    globals: &wgpu::Buffer,
+    bindings: &SceneBindings,
     previous_layout: &wgpu::BindGroupLayout,
     with_miss: bool,
 ) -> (TracePipeline, wgpu::BindGroup) {
@@ -865,7 +879,7 @@ fn build_pipeline(
         label: Some("trace"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     });
-    let (bind_group_layout, bind_group) = scene_bind_group(device, kind, resources, structures, globals);
+    let (bind_group_layout, bind_group) = scene_bind_group(device, kind, bindings);
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("trace"),
         bind_group_layouts: &[Some(&bind_group_layout), Some(previous_layout)],

@@ -30,6 +30,7 @@ fn compute_equals_fragment(ctx: &GpuContext) {
         memory,
         accel,
         count,
+        ..Default::default()
     };
     // Every walk; then, on the threaded walk, the other memory modes (uniform arrays hold
     // whitted's BVH, not the cloud's), costs, and several samples.
