@@ -131,7 +131,19 @@ impl Setting {
             "model" => Setting::Model(value.to_string()),
             "environment" if value.is_empty() => return Err("environment=: give a file's URL".into()),
             "environment" => Setting::Environment(value.to_string()),
-            "accel" => Setting::Accel(choice(key, value)?),
+            "accel" => {
+                let accels = page_accels();
+                let names = accels.iter().map(|a| a.name()).collect::<Vec<_>>().join(", ");
+                match Accel::from_name(value) {
+                    Some(accel) if accels.contains(&accel) => Setting::Accel(accel),
+                    Some(_) => {
+                        return Err(format!(
+                            "{key}={value}: no browser offers ray queries yet; expected one of {names}"
+                        ));
+                    }
+                    None => return Err(format!("{key}={value}: expected one of {names}")),
+                }
+            }
             "builder" => Setting::Builder(choice(key, value)?),
             "memory" => Setting::Memory(choice(key, value)?),
             "pipeline" => Setting::Pipeline(choice(key, value)?),
@@ -271,20 +283,19 @@ pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
     fn names<T: Choice + 'static>() -> Vec<&'static str> {
         T::ALL.iter().map(|c| c.name()).collect()
     }
-    // No browser has ray queries: the page never offers them.
-    let accels = Accel::ALL
-        .iter()
-        .filter(|a| !a.needs_ray_queries())
-        .map(|a| a.name())
-        .collect();
     vec![
-        ("accel", accels),
+        ("accel", page_accels().iter().map(|a| a.name()).collect()),
         ("builder", names::<Builder>()),
         ("memory", names::<MemoryMode>()),
         ("pipeline", names::<Pipeline>()),
         ("aov", names::<Aov>()),
         ("tonemap", names::<ToneMap>()),
     ]
+}
+
+/// The acceleration modes the page offers: all but ray queries, which no browser has yet.
+pub fn page_accels() -> Vec<Accel> {
+    Accel::ALL.iter().copied().filter(|a| !a.needs_ray_queries()).collect()
 }
 
 /// What the page's file input takes: every model, scene and environment format the library reads.
@@ -396,9 +407,16 @@ mod tests {
 
     #[test]
     fn every_mode_name_parses_back() {
-        for &accel in Accel::ALL {
+        for accel in page_accels() {
             assert_eq!(Setting::parse("accel", accel.name()), Ok(Setting::Accel(accel)));
         }
+        assert_eq!(
+            Setting::parse("accel", "rayquery"),
+            Err(
+                "accel=rayquery: no browser offers ray queries yet; expected one of brute, stack, stackless, threaded"
+                    .into()
+            )
+        );
         for &builder in Builder::ALL {
             assert_eq!(Setting::parse("builder", builder.name()), Ok(Setting::Builder(builder)));
         }
