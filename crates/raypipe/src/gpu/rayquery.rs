@@ -3,7 +3,9 @@
 //! them, built by the driver (on ray-tracing hardware where the GPU has it) and walked in the
 //! shader with ray queries (`shaders/accel_rayquery.wgsl`).
 //!
-//! The primitives go to up to three BLASes, each one TLAS instance with the identity transform:
+//! Each mesh's triangles (a model file's, a glTF primitive's: [`PackedScene::mesh_starts`]) go to up
+//! to two BLASes, and the spheres to one, each BLAS one TLAS instance with the identity transform
+//! (the scene's instances arrive placed, their triangles copied):
 //! - triangles the driver may decide alone (double-sided, no alpha) as opaque triangle geometry;
 //! - triangles whose hits the shader decides (single-sided, alpha MASK or BLEND) as non-opaque
 //!   triangle geometry, each met handed to the shader as a candidate for the walks' own hit test;
@@ -40,39 +42,60 @@ pub enum BlasKind {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct BlasLayout {
     /// The scene primitive (spheres first, then triangles) of each BLAS primitive, the BLASes one
-    /// after another.
+    /// after another: every triangle BLAS before the spheres'.
     pub primitives: Vec<u32>,
     /// Each BLAS's kind and its primitives' range in `primitives`; none is empty.
     pub parts: Vec<(BlasKind, Range<usize>)>,
 }
 
 impl BlasLayout {
-    /// Each primitive's BLAS, and its place there: in `order`, Morton order of the centroids (30-bit
-    /// codes over the whole scene's centroid bounds, ties by index) or the scene's.
+    /// Each primitive's BLAS (its mesh's, of its kind), and its place there: in `order`, Morton
+    /// order of the centroids (30-bit codes over the whole scene's centroid bounds, ties by index)
+    /// or the scene's.
     pub fn new(scene: &PackedScene, order: BlasOrder) -> Self {
-        let mut sorted: Vec<u32> = (0..scene.primitive_count() as u32).collect();
-        if order == BlasOrder::Morton {
-            let codes = centroid_codes(&scene.primitive_boxes(), MortonBits::Bits30);
-            sorted.par_sort_unstable_by_key(|&i| (codes[i as usize], i));
-        }
         let sphere_count = scene.spheres.len() as u32;
-        let kind_of = |i: u32| {
+        // The triangles' meshes: mesh k starts at mesh_starts[k] (0 before the first start).
+        let mut mesh_of = vec![0u32; scene.triangles.len()];
+        for (k, &start) in scene.mesh_starts.iter().enumerate() {
+            let end = scene.mesh_starts.get(k + 1).map_or(mesh_of.len(), |&e| e as usize);
+            mesh_of[start as usize..end].fill(k as u32 + 1);
+        }
+        let blas_of = |i: u32| {
             if i < sphere_count {
-                BlasKind::Spheres
-            } else if scene.triangles[(i - sphere_count) as usize].material & !MATERIAL_INDEX_MASK != 0 {
+                return (BlasKind::Spheres, 0);
+            }
+            let t = (i - sphere_count) as usize;
+            let kind = if scene.triangles[t].material & !MATERIAL_INDEX_MASK != 0 {
                 BlasKind::ShaderTriangles
             } else {
                 BlasKind::OpaqueTriangles
-            }
+            };
+            (kind, mesh_of[t])
         };
-        let mut primitives = Vec::with_capacity(sorted.len());
-        let mut parts = Vec::new();
-        for kind in [BlasKind::OpaqueTriangles, BlasKind::ShaderTriangles, BlasKind::Spheres] {
-            let start = primitives.len();
-            primitives.extend(sorted.iter().copied().filter(|&i| kind_of(i) == kind));
-            if primitives.len() > start {
-                parts.push((kind, start..primitives.len()));
+        let mut primitives: Vec<u32> = (0..scene.primitive_count() as u32).collect();
+        let rank = |kind: BlasKind| kind as u32;
+        if order == BlasOrder::Morton {
+            let codes = centroid_codes(&scene.primitive_boxes(), MortonBits::Bits30);
+            primitives.par_sort_unstable_by_key(|&i| {
+                let (kind, mesh) = blas_of(i);
+                (rank(kind), mesh, codes[i as usize], i)
+            });
+        } else {
+            primitives.par_sort_by_key(|&i| {
+                let (kind, mesh) = blas_of(i);
+                (rank(kind), mesh)
+            });
+        }
+        // One BLAS per run of one kind and mesh.
+        let mut parts: Vec<(BlasKind, Range<usize>)> = Vec::new();
+        let mut current = None;
+        for (j, &i) in primitives.iter().enumerate() {
+            let blas = blas_of(i);
+            if current != Some(blas) {
+                parts.push((blas.0, j..j));
+                current = Some(blas);
             }
+            parts.last_mut().expect("pushed above").1.end = j + 1;
         }
         Self { primitives, parts }
     }
@@ -141,6 +164,27 @@ impl AccelStructures {
         }
         let device = &ctx.device;
         let order = BlasLayout::new(scene, order);
+        let limits = ctx.limits();
+        let largest = order.parts.iter().map(|(_, r)| r.len()).max().unwrap_or(0) as u64;
+        for (what, needed, allowed) in [
+            (
+                "instances (one a mesh's BLAS)",
+                order.parts.len() as u64,
+                limits.max_tlas_instance_count as u64,
+            ),
+            (
+                "primitives in one BLAS",
+                largest,
+                limits.max_blas_primitive_count as u64,
+            ),
+        ] {
+            if needed > allowed {
+                return Err(GpuError::Operation {
+                    what: "building the driver's acceleration structures",
+                    message: format!("{needed} {what}, where the adapter allows {allowed}"),
+                });
+            }
+        }
         let input = wgpu::BufferUsages::BLAS_INPUT | wgpu::BufferUsages::COPY_DST;
         let sphere_count = scene.spheres.len() as u32;
         let follows_gpu = gpu_triangles.is_some();
@@ -284,7 +328,8 @@ impl AccelStructures {
                         first_vertex: 0,
                         vertex_stride: CORNER_STRIDE,
                         index_buffer: self.indices.as_ref(),
-                        first_index: Some(3 * self.triangle_offset(blas) as u32),
+                        // The triangle BLASes come first, their corners in the same order.
+                        first_index: Some(3 * blas.range.start as u32),
                         transform_buffer: None,
                         transform_buffer_offset: None,
                     }]),
@@ -324,16 +369,6 @@ impl AccelStructures {
             Some(timer) => Ok(Some(timer.read_ms(ctx).await?[0])),
             None => Ok(None),
         }
-    }
-
-    /// The triangles before `blas` among the triangle BLASes': where its corners start, over 3.
-    fn triangle_offset(&self, blas: &Blas) -> usize {
-        self.blases
-            .iter()
-            .take_while(|b| !std::ptr::eq(*b, blas))
-            .filter(|b| b.kind != BlasKind::Spheres)
-            .map(|b| b.range.len())
-            .sum()
     }
 
     /// Rewrites the vertices (unless the GPU poses them) and boxes from a moved scene's records (as
@@ -399,4 +434,69 @@ fn sphere_boxes(scene: &PackedScene, order: &[u32]) -> Vec<[f32; 6]> {
             [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z]
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::records::constants::TRIANGLE_SINGLE_SIDED;
+    use crate::scene::{Material, Scene, Sphere, Triangle};
+    use glam::Vec3;
+
+    /// Two meshes of three triangles each along x, one single-sided triangle in the second, and
+    /// two spheres.
+    fn scene() -> PackedScene {
+        let triangle = |x: f32| Triangle {
+            vertices: [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 0.5, 0.0, 0.0),
+                Vec3::new(x, 0.5, 0.0),
+            ],
+            ..Triangle::default()
+        };
+        let scene = Scene {
+            materials: vec![Material::default()],
+            // Out of order along x, so that the sort has work to do.
+            triangles: [5.0, 0.0, 2.0, 7.0, 1.0, 3.0].map(triangle).to_vec(),
+            mesh_starts: vec![0, 3],
+            spheres: [4.0, -1.0]
+                .map(|x| Sphere {
+                    center: Vec3::new(x, 0.0, 0.0),
+                    radius: 0.25,
+                    material: 0,
+                })
+                .to_vec(),
+            ..Scene::default()
+        };
+        let mut packed = PackedScene::new(&scene).unwrap();
+        packed.triangles[4].material |= TRIANGLE_SINGLE_SIDED;
+        packed
+    }
+
+    #[test]
+    fn a_blas_per_mesh_and_kind_in_morton_order() {
+        let layout = BlasLayout::new(&scene(), BlasOrder::Morton);
+        let parts: Vec<(BlasKind, Vec<u32>)> = layout
+            .parts
+            .iter()
+            .map(|(kind, range)| (*kind, layout.primitives[range.clone()].to_vec()))
+            .collect();
+        // Primitives: spheres 0 (x 4) and 1 (x -1), then triangles 2.. (x 5, 0, 2 | 7, 1, 3).
+        assert_eq!(
+            parts,
+            vec![
+                (BlasKind::OpaqueTriangles, vec![3, 4, 2]),
+                (BlasKind::OpaqueTriangles, vec![7, 5]),
+                (BlasKind::ShaderTriangles, vec![6]),
+                (BlasKind::Spheres, vec![1, 0]),
+            ]
+        );
+    }
+
+    #[test]
+    fn the_scene_order_keeps_each_blas_in_file_order() {
+        let layout = BlasLayout::new(&scene(), BlasOrder::Scene);
+        assert_eq!(layout.primitives, vec![2, 3, 4, 5, 7, 6, 0, 1]);
+        assert_eq!(layout.parts.len(), 4);
+    }
 }

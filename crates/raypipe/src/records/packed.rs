@@ -99,6 +99,9 @@ pub struct PackedScene {
     pub shading: Vec<ShadingTexel>,
     /// The textures' mip chains, one texture after another; texture maps say where theirs start.
     pub texture_pixels: TexturePixels,
+    /// Where each mesh starts among the triangles ([`crate::scene::Scene::mesh_starts`]): the
+    /// driver's structures take one per mesh.
+    pub mesh_starts: Vec<u32>,
     /// The BVH, once [`PackedScene::build_bvh`] or [`PackedScene::set_bvh`] made it.
     pub bvh: Option<PackedBvh>,
 }
@@ -194,6 +197,7 @@ impl PackedScene {
             texture_maps,
             shading,
             texture_pixels,
+            mesh_starts: scene.mesh_starts.clone(),
             bvh: None,
         })
     }

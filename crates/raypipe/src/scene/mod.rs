@@ -146,6 +146,10 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     /// Triangle primitives, in the BVH beside the spheres.
     pub triangles: Vec<Triangle>,
+    /// Where each mesh (a model file's, a glTF primitive's) starts in `triangles`, ascending: its
+    /// triangles run to the next start. Triangles before the first start, or in a scene that names
+    /// none, are one mesh. Ray queries build a bottom-level structure per mesh.
+    pub mesh_starts: Vec<u32>,
     /// Infinite planes, tested beside the BVH.
     pub planes: Vec<Plane>,
     /// The images materials are textured with.
@@ -268,6 +272,18 @@ impl Scene {
         }
         if let Some(environment) = &self.environment {
             environment.validate()?;
+        }
+        let ascending = self.mesh_starts.windows(2).all(|w| w[0] <= w[1]);
+        if !ascending
+            || self
+                .mesh_starts
+                .last()
+                .is_some_and(|&s| s as usize > self.triangles.len())
+        {
+            return Err(InputError::of(
+                Element::Scene,
+                format!("mesh starts must ascend within the {} triangles", self.triangles.len()),
+            ));
         }
         let texels = self.texels();
         if texels > texture::MAX_TEXELS {

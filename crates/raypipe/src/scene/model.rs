@@ -211,6 +211,7 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
                 (Normals::Smooth, _) | (Normals::Auto, None) => Some(mesh.smooth_normals(placement.crease_degrees)),
             };
             scene.triangles.reserve(mesh.triangles.len());
+            scene.mesh_starts.push(scene.triangles.len() as u32);
             for (f, &t) in mesh.triangles.iter().enumerate() {
                 scene.triangles.push(Triangle {
                     vertices: mesh.corners(t),
@@ -357,6 +358,7 @@ fn add_gltf_triangles(
             (Normals::Smooth, _) | (Normals::Auto, None) => CornerNormals::Smooth(placement.crease_degrees),
         };
         starts.push((scene.triangles.len(), normals_from));
+        scene.mesh_starts.push(scene.triangles.len() as u32);
         let positions: Vec<Vec3> = primitive.positions.iter().map(|&p| place.point(p)).collect();
         let corner_normals =
             normals_from.corners(&primitive.triangles, &positions, primitive.normals.as_deref(), place);
