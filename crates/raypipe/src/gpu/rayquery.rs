@@ -147,9 +147,10 @@ pub struct AccelStructures {
 }
 
 impl AccelStructures {
-    /// Creates the structures for `scene`, its primitives in `order`, to be built by [`AccelStructures::encode_build`]. Its
-    /// triangles are read from `gpu_triangles` where a rebuild poses them on the GPU (a buffer with
-    /// `BLAS_INPUT` usage, holding `scene.triangles`' records), else from a copy of their own.
+    /// Creates the structures for `scene`, its primitives in `order`, to be built by
+    /// [`AccelStructures::encode_build`]. Its triangles are read from `gpu_triangles` where a
+    /// rebuild poses them on the GPU (a buffer with `BLAS_INPUT` usage, holding `scene.triangles`'
+    /// records), else from a copy of their own.
     pub fn new(
         ctx: &GpuContext,
         scene: &PackedScene,
@@ -163,13 +164,13 @@ impl AccelStructures {
             });
         }
         let device = &ctx.device;
-        let order = BlasLayout::new(scene, order);
+        let layout = BlasLayout::new(scene, order);
         let limits = ctx.limits();
-        let largest = order.parts.iter().map(|(_, r)| r.len()).max().unwrap_or(0) as u64;
+        let largest = layout.parts.iter().map(|(_, r)| r.len()).max().unwrap_or(0) as u64;
         for (what, needed, allowed) in [
             (
                 "instances (one a mesh's BLAS)",
-                order.parts.len() as u64,
+                layout.parts.len() as u64,
                 limits.max_tlas_instance_count as u64,
             ),
             (
@@ -198,7 +199,7 @@ impl AccelStructures {
                 })
             }),
         };
-        let corners: Vec<u32> = order
+        let corners: Vec<u32> = layout
             .primitives
             .iter()
             .filter(|&&p| p >= sphere_count)
@@ -214,7 +215,12 @@ impl AccelStructures {
                 usage: input,
             })
         });
-        let sphere_order: Vec<u32> = order.primitives.iter().copied().filter(|&p| p < sphere_count).collect();
+        let sphere_order: Vec<u32> = layout
+            .primitives
+            .iter()
+            .copied()
+            .filter(|&p| p < sphere_count)
+            .collect();
         let boxes = (!sphere_order.is_empty()).then(|| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("ray query sphere boxes"),
@@ -223,10 +229,10 @@ impl AccelStructures {
             })
         });
         // A binding may not be empty: a scene without primitives binds one unread name.
-        let names = if order.primitives.is_empty() {
+        let names = if layout.primitives.is_empty() {
             vec![0]
         } else {
-            order.primitives.clone()
+            layout.primitives.clone()
         };
         let primitives = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("ray query primitives"),
@@ -234,7 +240,7 @@ impl AccelStructures {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let flags = wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE;
-        let blases: Vec<Blas> = order
+        let blases: Vec<Blas> = layout
             .parts
             .iter()
             .map(|(kind, range)| {

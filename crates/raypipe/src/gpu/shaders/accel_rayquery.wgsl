@@ -47,12 +47,12 @@ fn walk_query(ray: Ray, best: Hit, shadow: bool) -> Hit {
     return with_driver_triangle(rayQueryGetCommittedIntersection(&query), ray, hit);
 }
 
-// `hit`, or the triangle the driver holds (`committed`) where it is nearer: an opaque triangle it took alone (or
-// one the shader confirmed). The shader keeps the hits it takes itself rather than read them back
-// as the committed intersection: after rayQueryGenerateIntersection, lavapipe's committed
-// intersection did not always name the box's primitive (hundreds of wrong pixels among 2000
-// spheres). The distance is the walks' own, as the BVH walks find it; the driver's where their test
-// misses the triangle (an edge the two tests round differently).
+// `hit`, or the triangle the driver holds (`committed`) where it is nearer: an opaque triangle it
+// took alone (or one the shader confirmed). The shader keeps the hits it takes itself rather than
+// read them back as the committed intersection: after rayQueryGenerateIntersection, lavapipe's
+// committed intersection did not always name the box's primitive (hundreds of wrong pixels among
+// 2000 spheres). The distance is the walks' own, as the BVH walks find it; the driver's where their
+// test misses the triangle (an edge the two tests round differently).
 fn with_driver_triangle(committed: RayIntersection, ray: Ray, hit: Hit) -> Hit {
     if (committed.kind != RAY_QUERY_INTERSECTION_TRIANGLE || committed.t >= hit.t) {
         return hit;
