@@ -454,3 +454,32 @@ impl RenderSettings {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Mesh starts ascend within the triangles, or the scene is refused in one line.
+    #[test]
+    fn mesh_starts_must_ascend_within_the_triangles() {
+        let mut scene = Scene {
+            materials: vec![Material::default()],
+            triangles: vec![Triangle::default(); 4],
+            ..Scene::default()
+        };
+        for (starts, valid) in [
+            (vec![], true),
+            (vec![0, 2], true),
+            (vec![1, 4], true),
+            (vec![2, 1], false),
+            (vec![0, 5], false),
+        ] {
+            scene.mesh_starts = starts.clone();
+            let result = scene.validate();
+            assert_eq!(result.is_ok(), valid, "{starts:?}: {result:?}");
+            if let Err(e) = result {
+                assert_eq!(e.message, "mesh starts must ascend within the 4 triangles");
+            }
+        }
+    }
+}
