@@ -203,18 +203,8 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(|error| {
             log::warn!("GPU error outside an operation: {}", one_line(&error.to_string()));
         }));
-        Ok(Self {
-            timestamps: required_features.contains(wgpu::Features::TIMESTAMP_QUERY),
-            encoder_timestamps: required_features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS),
-            subgroups: required_features
-                .contains(wgpu::Features::SUBGROUP)
-                .then_some((info.subgroup_min_size, info.subgroup_max_size)),
-            ray_queries: required_features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
-            adapter,
-            device,
-            queue,
-            info,
-        })
+        // The device has the features asked for: what a caller's device has, raypipe uses.
+        Ok(Self::from_device(adapter, device, queue))
     }
 
     /// One line naming the adapter, its backend and driver.
