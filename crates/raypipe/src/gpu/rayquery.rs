@@ -111,7 +111,6 @@ const BOX_STRIDE: u64 = 24;
 const CORNER_STRIDE: u64 = 16;
 
 struct Blas {
-    kind: BlasKind,
     range: Range<usize>,
     blas: wgpu::Blas,
     triangles: Option<wgpu::BlasTriangleGeometrySizeDescriptor>,
@@ -283,7 +282,6 @@ impl AccelStructures {
                     sizes,
                 );
                 Blas {
-                    kind: *kind,
                     range: range.clone(),
                     blas,
                     triangles,
@@ -387,11 +385,6 @@ impl AccelStructures {
         if let Some(boxes) = self.boxes.as_ref().filter(|_| spheres) {
             queue.write_buffer(boxes, 0, bytemuck::cast_slice(&sphere_boxes(scene, &self.sphere_order)));
         }
-    }
-
-    /// The BLASes' kinds and primitive counts, in the TLAS's instance order.
-    pub fn blas_sizes(&self) -> Vec<(BlasKind, usize)> {
-        self.blases.iter().map(|b| (b.kind, b.range.len())).collect()
     }
 
     /// The shader's bindings at `first` and after: the primitives' names, then the TLAS.

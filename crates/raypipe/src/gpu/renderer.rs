@@ -221,7 +221,8 @@ pub struct Renderer {
     confinement: Option<Confinement>,
     /// With ray queries: the driver's acceleration structures over the scene.
     structures: Option<AccelStructures>,
-    /// The structures are built again before the next sample ([`Renderer::rebuild_structures`]).
+    /// The structures are built before the next sample: new, their records rewritten, or asked
+    /// for ([`Renderer::rebuild_structures`]).
     structures_stale: bool,
     timer: Option<PassTimestamps>,
 }
@@ -274,14 +275,9 @@ impl Renderer {
             kinds.contains(&RecordKind::Triangle),
         );
         if let Some(structures) = self.structures.as_ref().filter(|_| spheres || triangles) {
-            // The driver's structures built again over the moved primitives (before the next
-            // frame, where they follow the GPU's).
+            // The driver's structures built again over the moved primitives, with the next sample.
             structures.write_moved(&self.ctx.queue, scene, spheres, triangles);
-            if !structures.follows_gpu() {
-                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-                structures.encode_build(&mut encoder);
-                self.ctx.queue.submit([encoder.finish()]);
-            }
+            self.structures_stale = true;
         }
         let tree_written = kinds
             .iter()
@@ -344,15 +340,11 @@ impl Renderer {
             .flatten();
         ctx.checked("uploading the scene and building the pipeline", || {
             let resources = upload(ctx, scene, memory, accel, shared, tracer_stage(pipeline))?;
-            let structures = if accel.needs_ray_queries() {
-                let structures = AccelStructures::new(ctx, scene, blas_order, shared.map(|s| s.triangles.clone()))?;
-                let mut encoder = ctx.device.create_command_encoder(&Default::default());
-                structures.encode_build(&mut encoder);
-                ctx.queue.submit([encoder.finish()]);
-                Some(structures)
-            } else {
-                None
-            };
+            // Built with the first sample (`Renderer::encode`).
+            let structures = accel
+                .needs_ray_queries()
+                .then(|| AccelStructures::new(ctx, scene, blas_order, shared.map(|s| s.triangles.clone())))
+                .transpose()?;
             let globals = scene.globals;
             let globals_buffer = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("globals"),
@@ -396,8 +388,8 @@ impl Renderer {
                 bvh_frame: shared.and_then(|s| s.bvh_frame.clone()),
                 resources,
                 confinement,
+                structures_stale: structures.is_some(),
                 structures,
-                structures_stale: false,
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
@@ -510,9 +502,10 @@ impl Renderer {
 
     /// Records the next sample per pixel (the first after a restart) into the targets: the trace
     /// pass, and before it, where a rebuild feeds the walks, the copy of its quantization frame into
-    /// the globals, and where it feeds ray queries, with the first sample after a restart, the
-    /// build of the driver's structures over the triangles it posed. The sample's index reaches the shader through a queue write, as a camera does:
-    /// submit each frame before encoding the next.
+    /// the globals; with ray queries, the build of the driver's structures where they are new or
+    /// their records were rewritten, and with the first sample after a restart where a rebuild
+    /// poses their triangles. The sample's index reaches the shader through a queue write, as a
+    /// camera does: submit each frame before encoding the next.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
         if let Some(frame) = &self.bvh_frame {
             encode_frame_copy(encoder, frame, &self.globals_buffer);
@@ -520,8 +513,8 @@ impl Renderer {
         if let Some(structures) = &self.structures
             && (self.structures_stale || (structures.follows_gpu() && self.samples() == 0))
         {
-            // The triangles the rebuild posed (recorded before, with the first sample after a
-            // restart), in the driver's structures.
+            // New or rewritten records, or the triangles a rebuild posed (recorded before, with
+            // the first sample after a restart).
             structures.encode_build(encoder);
             self.structures_stale = false;
         }
