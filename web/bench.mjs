@@ -63,7 +63,7 @@ for (const backend of ["webgpu", "webgl2"]) {
     ms_per_frame: Number((1000 / fps).toFixed(2)),
   }));
   if (options.screenshot && backend === "webgpu") {
-    await page.evaluate(() => window.raypipeViewer.set("spp", "16"));
+    await page.evaluate(() => window.raypipeViewer.set({ spp: 16 }));
     await page.waitForFunction(() => window.raypipeStatus.samples >= 16, null, { timeout: 600_000 });
     await page.locator("main").screenshot({ path: options.screenshot, timeout: 120_000 });
   }

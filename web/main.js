@@ -1,6 +1,7 @@
-// The page's controls: they pass the user's input to the viewer (wasm) and show what
-// window.raypipeStatus, which the viewer publishes every frame, says.
-import init, { controls as offered, start } from "./raypipe_web.js";
+// The demo page: one viewer of the npm package (raypipe.js), its settings from the URL, and
+// controls that pass the user's input to it and show what its status says. The status is also
+// window.raypipeStatus and the viewer window.raypipeViewer, for the page's tests.
+import { choices, createViewer } from "./raypipe.js";
 
 const canvas = document.getElementById("frame");
 const message = document.getElementById("message");
@@ -37,16 +38,9 @@ function describe(status) {
   show(status.error);
 }
 
-function watch() {
-  const status = window.raypipeStatus;
-  if (status && status.backend) describe(status);
-  else if (status) show(status.error);
-  requestAnimationFrame(watch);
-}
-
-async function open(viewer, file) {
-  const bytes = new Uint8Array(await file.arrayBuffer());
-  viewer.open_file(file.name, bytes);
+/// Opens a file the user gave; a broken one shows its line (the viewer's status), and the scene stays.
+function open(viewer, file) {
+  viewer.load(file).catch(() => {});
 }
 
 function wire(viewer) {
@@ -56,37 +50,22 @@ function wire(viewer) {
       if (input.files.length) open(viewer, input.files[0]);
       input.value = "";
     } else if (input.id === "scene-name") {
-      if (input.value.trim()) viewer.set("scene", input.value.trim());
+      if (input.value.trim()) change(viewer, { scene: input.value.trim() });
     } else if (input.dataset.key) {
-      const value = input.type === "checkbox" ? String(input.checked) : input.value;
-      viewer.set(input.dataset.key, value);
+      change(viewer, { [input.dataset.key]: input.type === "checkbox" ? input.checked : input.value });
     }
   });
   controls.addEventListener("submit", (event) => event.preventDefault());
 
-  let last = null;
-  canvas.addEventListener("pointerdown", (event) => {
-    last = { x: event.clientX, y: event.clientY, pan: event.button !== 0 };
-    canvas.setPointerCapture(event.pointerId);
-    canvas.focus();
-  });
-  canvas.addEventListener("pointermove", (event) => {
-    if (!last) return;
-    viewer.drag(event.clientX - last.x, event.clientY - last.y, last.pan);
-    last = { ...last, x: event.clientX, y: event.clientY };
-  });
-  canvas.addEventListener("pointerup", () => { last = null; });
-  canvas.addEventListener("contextmenu", (event) => event.preventDefault());
-  canvas.addEventListener("wheel", (event) => {
-    event.preventDefault();
-    viewer.dolly(-event.deltaY / (event.deltaMode === 0 ? 100 : 1));
-  }, { passive: false });
-
-  const typing = () => ["INPUT", "SELECT"].includes(document.activeElement?.tagName);
+  // The canvas takes keys while it has the focus (the package's input); the rest of the page too,
+  // but for its form fields.
+  const elsewhere = (event) => !["INPUT", "SELECT", "CANVAS"].includes(event.target?.tagName);
   document.addEventListener("keydown", (event) => {
-    if (!typing() && !event.repeat && viewer.key(event.code, true)) event.preventDefault();
+    if (elsewhere(event) && !event.repeat && viewer.key(event.code, true)) event.preventDefault();
   });
-  document.addEventListener("keyup", (event) => viewer.key(event.code, false));
+  document.addEventListener("keyup", (event) => {
+    if (elsewhere(event)) viewer.key(event.code, false);
+  });
 
   document.addEventListener("dragover", (event) => event.preventDefault());
   document.addEventListener("drop", (event) => {
@@ -96,10 +75,17 @@ function wire(viewer) {
   });
 }
 
+/// A change from the controls: a refused one shows its line through the status.
+function change(viewer, settings) {
+  try {
+    viewer.set(settings);
+  } catch {}
+}
+
 /// The controls' lists, limits and file types, as the wasm module (Rust) has them.
-function fill() {
-  const { choices, accept, maxDepth, maxSpp } = offered();
-  for (const [key, names] of Object.entries(choices)) {
+async function fill() {
+  const { choices: lists, accept, maxDepth, maxSpp } = await choices();
+  for (const [key, names] of Object.entries(lists)) {
     const select = controls.querySelector(`select[data-key=${key}]`);
     for (const name of names) select.add(new Option(name));
   }
@@ -109,50 +95,32 @@ function fill() {
 }
 
 async function main() {
-  await init();
-  fill();
-  const viewer = await start(canvas, window.location.search);
+  await fill();
+  const query = Object.fromEntries(new URLSearchParams(window.location.search));
+  const { model, environment, ...options } = query;
+  // Not strict: a bad setting in the address is shown, and the page starts without it.
+  const viewer = await createViewer(canvas, { ...options, strict: false });
   window.raypipeViewer = viewer;
-  const scene = new URLSearchParams(window.location.search).get("scene");
+  viewer.addEventListener("status", (event) => {
+    window.raypipeStatus = event.detail;
+    describe(event.detail);
+  });
+  window.raypipeStatus = viewer.status;
+  describe(viewer.status);
+  const scene = query.scene;
   if (scene) {
     const select = document.getElementById("scene");
     if (![...select.options].some((o) => o.value === scene)) select.add(new Option(scene), 0);
     select.value = scene;
   }
   wire(viewer);
-  // The environment first: it lights the model opened after it.
-  const environment = new URLSearchParams(window.location.search).get("environment");
-  if (environment) await fetchModel(viewer, environment);
-  const model = new URLSearchParams(window.location.search).get("model");
-  if (model) await fetchModel(viewer, model);
+  // The environment first: it lights the model opened after it. A failure shows its line.
+  if (environment) await viewer.load(environment).catch(() => {});
+  if (model) await viewer.load(model).catch(() => {});
 }
 
-/// Opens `?model=URL` or `?environment=URL`, fetched relative to the page: the file's name (the
-/// URL's last segment) picks its format. A failed fetch shows its line, as a broken file does, and
-/// the scene stays.
-async function fetchModel(viewer, url) {
-  let response;
-  try {
-    response = await fetch(new URL(url, window.location.href));
-  } catch (error) {
-    viewer.report(`${url}: cannot fetch: ${error.message}`);
-    return;
-  }
-  if (!response.ok) {
-    viewer.report(`${url}: cannot fetch: HTTP ${response.status} ${response.statusText}`.trimEnd());
-    return;
-  }
-  const name = decodeURIComponent(new URL(response.url).pathname.split("/").pop() || url);
-  viewer.open_file(name, new Uint8Array(await response.arrayBuffer()));
-}
-
-watch();
 main().catch((error) => {
-  // start() has already published the reason in window.raypipeStatus.error; a failure to load the
-  // module itself has not.
   const line = String(error?.message ?? error);
-  if (!window.raypipeStatus) {
-    window.raypipeStatus = { frames: 0, backend: null, adapter: null, scene: null, error: line };
-  }
-  show(window.raypipeStatus.error ?? line);
+  window.raypipeStatus = { frames: 0, backend: null, adapter: null, scene: null, error: line };
+  show(line);
 });

@@ -211,7 +211,7 @@ async function measureRaypipe(backend, accel, builder) {
   const timing = frameTimes(intervals, timed.at(-1)[0] - timed[0][0], timed.at(-1)[1] - timed[0][1]);
 
   // Hits: the pixels the normal view does not leave black.
-  await page.evaluate(() => window.raypipeViewer.set("aov", "normal"));
+  await page.evaluate(() => window.raypipeViewer.set({ aov: "normal" }));
   await until((n) => window.raypipeStatus.aov === "normal" && window.raypipeStatus.frames >= n, status.frames + 2);
   const png = PNG.sync.read(await page.locator("#frame").screenshot());
   if (png.width !== width || png.height !== height) throw new Error(`${name}: canvas is ${png.width}x${png.height}`);

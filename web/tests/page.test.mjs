@@ -200,7 +200,7 @@ for (const backend of ["webgpu", "webgl2"]) {
         await page.waitForFunction(() =>
           [...document.querySelectorAll("select[data-key=pipeline] option")].some((o) => o.value === "compute" && o.disabled),
           null, { timeout: 10_000 });
-        await page.evaluate(() => window.raypipeViewer.set("pipeline", "compute"));
+        await page.evaluate(() => window.raypipeViewer.set({ pipeline: "compute" }));
         const refused = await until(page, (s) => s.error != null && !s.busy, "the refusal");
         assert.match(refused.error, /compute/);
         assert.equal(refused.pipeline, "fragment");
@@ -380,7 +380,7 @@ for (const backend of ["webgpu", "webgl2"]) {
       await until(page, (s, frames) => s.frames >= frames, "a frame of random:2000", { arg: opened.frames + 2 });
       assertSimilar(await screenshot(page, `${backend}-builder-sah`), reference("random:2000", size.width, size.height));
       assert.deepEqual(page.errors, []);
-      await page.evaluate(() => window.raypipeViewer.set("scene", "bounce:40"));
+      await page.evaluate(() => window.raypipeViewer.set({ scene: "bounce:40" }));
       const refused = await until(page, (s) => s.error != null && !s.busy, "the refusal of bounce:40");
       assert.match(refused.error, /sah builder builds a still scene's tree once/);
       assert.equal(refused.scene, "random:2000");

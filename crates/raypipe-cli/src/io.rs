@@ -1,8 +1,7 @@
 //! Reading and writing PNG (8-bit, display-encoded) and OpenEXR (32-bit float) images.
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use exr::prelude::{self as exrs, ReadChannels, ReadLayers, WritableImage};
-use image::ImageEncoder;
 use raypipe::image::FloatImage;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -82,18 +81,9 @@ pub fn check_writable(path: &Path) -> anyhow::Result<()> {
 }
 
 fn encode_png(image: &FloatImage, path: &Path) -> anyhow::Result<Vec<u8>> {
-    let channels = image.channels.len();
-    let bytes = image.to_bytes();
-    let color = match channels {
-        1 => image::ExtendedColorType::L8,
-        3 => image::ExtendedColorType::Rgb8,
-        n => bail!("{}: cannot write a {n}-channel image as PNG", path.display()),
-    };
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&bytes, image.width, image.height, color)
-        .with_context(|| format!("{}: cannot encode PNG", path.display()))?;
-    Ok(png)
+    image
+        .to_png()
+        .map_err(|why| anyhow::anyhow!("{}: {why}", path.display()))
 }
 
 fn encode_exr(image: &FloatImage, path: &Path) -> anyhow::Result<Vec<u8>> {

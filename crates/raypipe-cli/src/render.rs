@@ -3,7 +3,7 @@
 use crate::device::{DeviceChoice, RenderOptions, RenderOutcome, render, render_frames};
 use crate::io;
 use crate::report::median;
-use crate::scene_args::{MAX_SPP, SceneArgs, aov_image};
+use crate::scene_args::{MAX_SPP, SceneArgs};
 use anyhow::bail;
 use clap::Args;
 use raypipe::bvh::BuildTimings;
@@ -152,7 +152,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let outcome = render(&packed, &options).map_err(|e| e.context(args.scene.spec.clone()))?;
     let frame = &outcome.frame;
     io::write_as(
-        &aov_image(args.scene.aov, is_exr, frame, &args.scene.display_transform(&scene)),
+        &frame.aov_image(args.scene.aov, is_exr, &args.scene.display_transform(&scene)),
         &output,
         is_exr,
     )?;
@@ -309,13 +309,13 @@ fn render_sequence(
         if pattern {
             let path = numbered(&name, frame).expect("checked above");
             io::write_as(
-                &aov_image(args.scene.aov, is_exr, image, &args.scene.display_transform(scene)),
+                &image.aov_image(args.scene.aov, is_exr, &args.scene.display_transform(scene)),
                 Path::new(&path),
                 is_exr,
             )?;
         } else if Some(frame) == last {
             io::write_as(
-                &aov_image(args.scene.aov, is_exr, image, &args.scene.display_transform(scene)),
+                &image.aov_image(args.scene.aov, is_exr, &args.scene.display_transform(scene)),
                 output,
                 is_exr,
             )?;

@@ -6,7 +6,6 @@ use anyhow::bail;
 use clap::Args;
 use raypipe::gpu::Backend;
 use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE, ToneMap};
-use raypipe::image::{FloatImage, Frame, heatmap};
 use raypipe::modes::{Accel, Aov, Builder, MemoryMode, Pipeline};
 use raypipe::scene::animation::ClipChoice;
 use raypipe::scene::is_model_file;
@@ -282,17 +281,5 @@ impl SceneArgs {
             exposure: self.exposure,
             tone_map: self.tonemap.unwrap_or(scene.tone_map),
         }
-    }
-}
-
-/// The image `aov` makes of `frame`: colour through `transform` into a PNG, or exposed linear
-/// radiance into an EXR.
-pub fn aov_image(aov: Aov, is_exr: bool, frame: &Frame, transform: &DisplayTransform) -> FloatImage {
-    match (aov, is_exr) {
-        (Aov::Color, false) => frame.display_with(transform),
-        (Aov::Color, true) => frame.exposed_radiance(transform.exposure),
-        (Aov::Depth, _) => frame.depth(),
-        (Aov::Normal, _) => frame.normals(),
-        (Aov::Cost, _) => heatmap::heatmap(&frame.counts(), frame.width, frame.height),
     }
 }

@@ -2,7 +2,7 @@
 //! flags; this side loads dropped files and writes screenshots.
 
 use crate::io;
-use crate::scene_args::{SceneArgs, aov_image, load_scene};
+use crate::scene_args::{SceneArgs, load_scene};
 use clap::Args;
 use raypipe::image::Frame;
 use raypipe::image::tonemap::DisplayTransform;
@@ -69,7 +69,7 @@ impl Host for CliHost {
 
     fn save(&self, frame: &Frame, view: Aov, transform: &DisplayTransform, path: &Path) -> Result<(), HostError> {
         let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        io::write(&aov_image(view, is_exr, frame, transform), path).map_err(|e| host_error(path, &e))
+        io::write(&frame.aov_image(view, is_exr, transform), path).map_err(|e| host_error(path, &e))
     }
 
     fn screenshot_path(&self, view: Aov) -> PathBuf {

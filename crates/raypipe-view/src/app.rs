@@ -256,6 +256,10 @@ impl Viewer {
     fn draw(&mut self, event_loop: &ActiveEventLoop) {
         let script = self.options.script.clone();
         let Some(gpu) = &mut self.gpu else { return };
+        // wgpu said at its last poll that the device is gone: the window says so and closes.
+        if let Err(lost) = gpu.screen.ctx.live() {
+            return self.fail(event_loop, lost.into());
+        }
         if let Some(script) = &script
             && script.orbit_degrees != 0.0
             && gpu.player.frames > 0

@@ -334,12 +334,17 @@ impl Player {
 
     /// The frame shown, read back linear (tracing one sample first where none is).
     pub async fn read_frame(&mut self, ctx: &GpuContext) -> Result<Frame, GpuError> {
+        self.read_frame_detached(ctx).await
+    }
+
+    /// [`Player::read_frame`] as a future that borrows nothing (a page draws on while it waits).
+    pub fn read_frame_detached(&mut self, ctx: &GpuContext) -> impl Future<Output = Result<Frame, GpuError>> + 'static {
         if self.tracer.renderer.samples() == 0 {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             self.tracer.encode(&mut encoder);
             ctx.queue.submit([encoder.finish()]);
         }
-        self.tracer.renderer.read_back().await
+        self.tracer.renderer.read_back_detached()
     }
 
     /// Whether the scene moves now (it has motion and is not paused).
@@ -475,6 +480,29 @@ impl Player {
             camera,
             serial: self.requested,
         }
+    }
+
+    /// A request for the tracer as it is now (scene, modes, camera, size), to build on a new device
+    /// after the last one was lost; [`Player::restore`] puts it in place whatever was asked since.
+    pub fn restore_request(&self) -> TracerRequest {
+        TracerRequest {
+            modes: self.modes,
+            new_scene: None,
+            relit: false,
+            scene: self.scene.clone(),
+            size: self.tracer.renderer.size(),
+            camera: self.camera.camera,
+            serial: self.requested,
+        }
+    }
+
+    /// Puts a tracer built by [`Player::restore_request`] on a new device in place of the one on
+    /// the lost device: the same scene, modes and camera; the motion is posed again at the clock's
+    /// time and the samples start again.
+    pub fn restore(&mut self, tracer: Tracer) {
+        self.build_ms = tracer.cpu_build_ms;
+        self.tracer = tracer;
+        self.message = None;
     }
 
     /// Whether a request is still the latest (a page builds tracers while frames go on).

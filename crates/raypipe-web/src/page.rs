@@ -21,13 +21,14 @@ use wasm_bindgen::JsCast;
 use wasm_bindgen::prelude::*;
 use web_time::Instant;
 
-/// The page's handle on the viewer: the controls' calls land here.
+/// A viewer's handle: the page's controls, or the npm package's `Viewer`, call its methods.
 #[wasm_bindgen]
 pub struct Viewer {
     page: Rc<RefCell<Page>>,
 }
 
 struct Page {
+    canvas: web_sys::HtmlCanvasElement,
     backend: WebBackend,
     screen: Screen,
     /// The scene, modes, camera, tracer and clock. Its frame rate is the wall clock's between
@@ -36,8 +37,8 @@ struct Page {
     player: Player,
     /// A tracer is being built.
     busy: bool,
-    /// The request made while one was being built: built next.
-    waiting: Option<(TracerRequest, Option<OpenedFile>)>,
+    /// The request made while one was being built (or while the GPU is lost): built next.
+    waiting: Option<Pending>,
     fly: FlyKeys,
     started: Instant,
     first_frame_ms: Option<f64>,
@@ -48,30 +49,86 @@ struct Page {
     /// The environment opened here (`?environment=`, a dropped .hdr or .exr): it lights every
     /// scene opened after it, in place of the scene's own.
     environment: Option<(String, Environment)>,
+    gpu: GpuState,
+    /// Counts the devices this viewer has opened: a tracer built on an earlier one is not shown.
+    generation: u32,
+    /// The last status published, and who hears of the next ([`Viewer::on_status`]).
+    status: JsValue,
+    listener: Option<js_sys::Function>,
+    /// The animation-frame callback and the frame it asked for, dropped by [`Viewer::dispose`].
+    frames: FrameCallback,
+    frame_request: Option<i32>,
+    /// The canvas's context-loss listeners (WebGL2), removed by [`Viewer::dispose`].
+    canvas_listeners: Vec<(&'static str, EventListener)>,
+    disposed: bool,
 }
 
-/// Starts the viewer on `canvas` with the settings of `query` (the URL's `?...`). Where the page
-/// cannot start (no WebGPU and no WebGL2, a scene that does not load), `window.raypipeStatus.error`
-/// says why and the promise rejects with the same line.
+/// Whether the viewer's device can draw.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GpuState {
+    Live,
+    /// Lost (a WebGL2 context lost, a WebGPU device lost): nothing is drawn or built until a new
+    /// device is open.
+    Lost,
+    /// A new device is open and the tracer is being built on it; frames wait for it.
+    Restoring,
+}
+
+/// A tracer request waiting to be built, with the file it came from and the promise it settles.
+struct Pending {
+    request: TracerRequest,
+    source: Option<OpenedFile>,
+    settle: Option<Settle>,
+}
+
+/// A `load` promise's two ends: resolved when the scene it opened is shown, rejected with the
+/// one-line message otherwise.
+struct Settle {
+    resolve: js_sys::Function,
+    reject: js_sys::Function,
+}
+
+impl Settle {
+    fn new() -> (js_sys::Promise, Settle) {
+        let mut ends = None;
+        let promise = js_sys::Promise::new(&mut |resolve, reject| ends = Some(Settle { resolve, reject }));
+        (promise, ends.expect("a Promise runs its executor at once"))
+    }
+
+    fn done(self, result: Result<(), String>) {
+        let _ = match result {
+            Ok(()) => self.resolve.call0(&JsValue::NULL),
+            Err(why) => self.reject.call1(&JsValue::NULL, &js_sys::Error::new(&why)),
+        };
+    }
+}
+
+fn settle(settle: Option<Settle>, result: Result<(), String>) {
+    if let Some(settle) = settle {
+        settle.done(result);
+    }
+}
+
+/// Starts a viewer on `canvas` with the settings of `query` (the URL's `?...`, or the package's
+/// options as a query). A bad setting is shown and skipped, unless `strict`, where it rejects.
+/// Where the viewer cannot start (no WebGPU and no WebGL2, a scene that does not load), the promise
+/// rejects with the one-line reason.
 #[wasm_bindgen]
-pub async fn start(canvas: web_sys::HtmlCanvasElement, query: String) -> Result<Viewer, JsError> {
+pub async fn start(canvas: web_sys::HtmlCanvasElement, query: String, strict: bool) -> Result<Viewer, JsError> {
     crate::console::install();
     let search =
-        web_sys::UrlSearchParams::new_with_str(&query).map_err(|_| JsError::new("cannot read the URL's query"))?;
+        web_sys::UrlSearchParams::new_with_str(&query).map_err(|_| JsError::new("cannot read the settings' query"))?;
     let pairs = query_pairs(&search);
     let (params, errors) = StartParams::from_pairs(pairs.iter().map(|(k, v)| (k.as_str(), v.as_str())));
-    match open(canvas, params, errors).await {
-        Ok(page) => {
-            let page = Rc::new(RefCell::new(page));
-            page.borrow().publish();
-            animate(page.clone());
-            Ok(Viewer { page })
-        }
-        Err(why) => {
-            publish_failure(&why);
-            Err(JsError::new(&why))
-        }
+    if strict && !errors.is_empty() {
+        return Err(JsError::new(&errors.join("; ")));
     }
+    let page = open(canvas, params, errors).await.map_err(|why| JsError::new(&why))?;
+    let page = Rc::new(RefCell::new(page));
+    Page::watch_canvas(&page);
+    page.borrow_mut().publish();
+    animate(&page);
+    Ok(Viewer { page })
 }
 
 /// What the page's controls offer, from Rust: `{ choices: { accel: [names], builder, memory,
@@ -161,6 +218,30 @@ async fn connect(
     Err(format!("raypipe cannot trace here: {}", tried.join("; ")))
 }
 
+/// The adapter, its device and the canvas's surface, ready to present at `size`. Where the device
+/// is lost later, WebGPU says so through the context (`GpuContext::lost`); a WebGL2 context's loss
+/// is an event of the canvas ([`Page::watch_canvas`]).
+async fn screen_on(
+    canvas: &web_sys::HtmlCanvasElement,
+    wanted: Option<WebBackend>,
+    size: (u32, u32),
+) -> Result<(WebBackend, Screen), String> {
+    let (backend, ctx, surface) = connect(canvas, wanted).await?;
+    let max_side = ctx.limits().max_texture_dimension_2d;
+    if size.0 > max_side || size.1 > max_side {
+        return Err(format!(
+            "{}x{} is larger than {} draws ({max_side} pixels a side at most)",
+            size.0,
+            size.1,
+            ctx.describe()
+        ));
+    }
+    let adapter = ctx.describe();
+    let screen =
+        Screen::new(ctx, surface, size, true).ok_or_else(|| format!("{adapter} cannot present to the canvas"))?;
+    Ok((backend, screen))
+}
+
 async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: Vec<String>) -> Result<Page, String> {
     let mut scene = builtin_scene(&params.scene).map_err(|why| format!("{}: {why}", params.scene))?;
     canvas.set_width(params.width);
@@ -168,19 +249,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
     let style = canvas.style();
     let _ = style.set_property("width", &format!("{}px", params.width));
     let _ = style.set_property("height", &format!("{}px", params.height));
-    let (backend, ctx, surface) = connect(&canvas, params.backend).await?;
-    let max_side = ctx.limits().max_texture_dimension_2d;
-    if params.width > max_side || params.height > max_side {
-        return Err(format!(
-            "{}x{} is larger than {} draws ({max_side} pixels a side at most)",
-            params.width,
-            params.height,
-            ctx.describe()
-        ));
-    }
-    let adapter = ctx.describe();
-    let screen = Screen::new(ctx, surface, (params.width, params.height), true)
-        .ok_or_else(|| format!("{adapter} cannot present to the canvas"))?;
+    let (backend, screen) = screen_on(&canvas, params.backend, (params.width, params.height)).await?;
     let ctx = &screen.ctx;
     (scene.settings.width, scene.settings.height) = (params.width, params.height);
     let modes = Modes {
@@ -202,6 +271,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
     player.start_at(params.time);
     player.clock.speed = params.speed;
     Ok(Page {
+        canvas,
         backend,
         screen,
         player,
@@ -213,40 +283,72 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         floor: params.floor,
         opened: None,
         environment: None,
+        gpu: GpuState::Live,
+        generation: 0,
+        status: JsValue::NULL,
+        listener: None,
+        frames: Rc::new(RefCell::new(None)),
+        frame_request: None,
+        canvas_listeners: Vec::new(),
+        disposed: false,
     })
 }
 
 /// A file's name and bytes, as the page was given them.
 type OpenedFile = (String, Rc<Vec<u8>>);
 
+/// A listener of DOM events, kept to be removed.
+type EventListener = Closure<dyn FnMut(web_sys::Event)>;
+
 /// The animation-frame callback, which asks for the next frame with itself.
 type FrameCallback = Rc<RefCell<Option<Closure<dyn FnMut()>>>>;
 
-/// Draws a frame at every animation frame of the browser, for as long as the page lives.
-fn animate(page: Rc<RefCell<Page>>) {
-    let callback: FrameCallback = Rc::new(RefCell::new(None));
-    let again = callback.clone();
-    *callback.borrow_mut() = Some(Closure::new(move || {
+/// Draws a frame at every animation frame of the browser, until the viewer is disposed.
+fn animate(page: &Rc<RefCell<Page>>) {
+    let frames = page.borrow().frames.clone();
+    let weak = Rc::downgrade(page);
+    *frames.borrow_mut() = Some(Closure::new(move || {
+        let Some(page) = weak.upgrade() else { return };
         Page::frame(&page);
-        if let Some(next) = again.borrow().as_ref() {
-            request_animation_frame(next);
-        }
+        Page::request_frame(&page);
     }));
-    if let Some(first) = callback.borrow().as_ref() {
-        request_animation_frame(first);
-    }
-}
-
-fn request_animation_frame(callback: &Closure<dyn FnMut()>) {
-    if let Some(window) = web_sys::window() {
-        let _ = window.request_animation_frame(callback.as_ref().unchecked_ref());
-    }
+    Page::request_frame(page);
 }
 
 impl Page {
+    fn request_frame(page: &Rc<RefCell<Page>>) {
+        let mut this = page.borrow_mut();
+        if this.disposed {
+            return;
+        }
+        let frames = this.frames.clone();
+        let callback = frames.borrow();
+        if let (Some(window), Some(callback)) = (web_sys::window(), callback.as_ref()) {
+            this.frame_request = window.request_animation_frame(callback.as_ref().unchecked_ref()).ok();
+        }
+    }
+
     fn frame(page: &Rc<RefCell<Page>>) {
+        let lost = {
+            let this = page.borrow();
+            (this.gpu == GpuState::Live).then(|| this.screen.ctx.lost()).flatten()
+        };
+        if let Some(why) = lost {
+            // WebGPU: a new adapter and device at once.
+            Page::lose(page, format!("the GPU was lost ({why})"));
+            Page::restore(page);
+            return;
+        }
+        if page.borrow().webgl_context_lost() {
+            // Lost since the last frame, its event not yet dispatched: no GL call until it is back.
+            Page::lose(page, "the GPU was lost (the WebGL2 context was lost)".into());
+            return;
+        }
         let mut this = page.borrow_mut();
         let this = &mut *this;
+        if this.gpu != GpuState::Live || this.disposed {
+            return;
+        }
         let report = this
             .player
             .frame(&this.screen, this.fly.direction(), Timings::Skip, |_, _, _| Vec::new());
@@ -259,8 +361,120 @@ impl Page {
         this.publish();
     }
 
-    /// `window.raypipeStatus`: what runs, for the page's readout and for tests.
-    fn publish(&self) {
+    fn webgl_context_lost(&self) -> bool {
+        self.backend == WebBackend::WebGl2
+            && self.gpu == GpuState::Live
+            && matches!(self.canvas.get_context("webgl2"), Ok(Some(context))
+                if context.unchecked_ref::<web_sys::WebGl2RenderingContext>().is_context_lost())
+    }
+
+    /// Listens for the loss and restoration of the canvas's WebGL2 context. The loss's default
+    /// is prevented: without that, the browser never restores it.
+    fn watch_canvas(page: &Rc<RefCell<Page>>) {
+        if page.borrow().backend != WebBackend::WebGl2 {
+            return;
+        }
+        let weak = Rc::downgrade(page);
+        let lost = EventListener::new(move |event: web_sys::Event| {
+            event.prevent_default();
+            if let Some(page) = weak.upgrade() {
+                Page::lose(&page, "the GPU was lost (the WebGL2 context was lost)".into());
+            }
+        });
+        let weak = Rc::downgrade(page);
+        let restored = EventListener::new(move |_: web_sys::Event| {
+            if let Some(page) = weak.upgrade() {
+                Page::restore(&page);
+            }
+        });
+        let mut this = page.borrow_mut();
+        for (name, listener) in [("webglcontextlost", lost), ("webglcontextrestored", restored)] {
+            let _ = this
+                .canvas
+                .add_event_listener_with_callback(name, listener.as_ref().unchecked_ref());
+            this.canvas_listeners.push((name, listener));
+        }
+    }
+
+    /// The device is gone: nothing is drawn or built until [`Page::restore`] opens another.
+    fn lose(page: &Rc<RefCell<Page>>, why: String) {
+        let mut this = page.borrow_mut();
+        if this.disposed || this.gpu == GpuState::Lost {
+            return;
+        }
+        this.gpu = GpuState::Lost;
+        this.player
+            .say(format!("{why}; the viewer shows the scene again when it can"));
+        this.publish();
+    }
+
+    /// Opens a new device on the canvas (the same backend) and builds the tracer of the scene as
+    /// it is now (its camera, modes and time) on it, from what the viewer holds: nothing is
+    /// fetched again. Requests made meanwhile are built after it.
+    fn restore(page: &Rc<RefCell<Page>>) {
+        let (canvas, backend, size) = {
+            let this = page.borrow();
+            if this.disposed || this.gpu != GpuState::Lost {
+                return;
+            }
+            (this.canvas.clone(), this.backend, this.screen.size())
+        };
+        let page = page.clone();
+        wasm_bindgen_futures::spawn_local(async move {
+            let opened = screen_on(&canvas, Some(backend), size).await;
+            let (ctx, request) = {
+                let mut this = page.borrow_mut();
+                if this.disposed {
+                    return;
+                }
+                match opened {
+                    Ok((_, screen)) => {
+                        this.screen = screen;
+                        this.generation += 1;
+                        this.gpu = GpuState::Restoring;
+                        (this.screen.ctx.clone(), this.player.restore_request())
+                    }
+                    Err(why) => {
+                        this.player.say(format!("the GPU was lost and no new one opens: {why}"));
+                        this.publish();
+                        return;
+                    }
+                }
+            };
+            let built = request.build(&ctx).await;
+            let waiting = {
+                let mut this = page.borrow_mut();
+                if this.disposed || this.gpu != GpuState::Restoring {
+                    return;
+                }
+                match built {
+                    Ok(tracer) => {
+                        this.player.restore(tracer);
+                        this.gpu = GpuState::Live;
+                    }
+                    Err(why) => {
+                        this.gpu = GpuState::Lost;
+                        this.player
+                            .say(format!("the GPU was lost and the scene does not trace again: {why}"));
+                    }
+                }
+                this.publish();
+                if this.busy || this.gpu != GpuState::Live {
+                    None
+                } else {
+                    this.waiting.take()
+                }
+            };
+            if let Some(pending) = waiting {
+                Page::build(&page, pending);
+            }
+        });
+    }
+
+    /// The viewer's status: what runs, for the page's readout, the package's `status` event and
+    /// tests. Listeners hear of it after the current call returns, so that they may call the
+    /// viewer back.
+    fn publish(&mut self) {
         let status = js_sys::Object::new();
         let set = |key: &str, value: JsValue| {
             let _ = js_sys::Reflect::set(&status, &key.into(), &value);
@@ -273,6 +487,7 @@ impl Page {
         set("adapter", self.screen.ctx.describe().into());
         set("scene", player.name.clone().into());
         set("error", player.message.clone().map_or(JsValue::NULL, JsValue::from));
+        set("lost", (self.gpu != GpuState::Live).into());
         set("busy", self.busy.into());
         set("width", self.screen.config.width.into());
         set("height", self.screen.config.height.into());
@@ -304,53 +519,97 @@ impl Page {
         set("frameMs", player.rate.frame_ms.into());
         set("buildMs", optional(player.build_ms));
         set("firstFrameMs", optional(self.first_frame_ms));
-        if let Some(window) = web_sys::window() {
-            let _ = js_sys::Reflect::set(&window, &"raypipeStatus".into(), &status);
+        self.status = status.into();
+        if let Some(listener) = self.listener.clone() {
+            let status = self.status.clone();
+            wasm_bindgen_futures::spawn_local(async move {
+                let _ = listener.call1(&JsValue::NULL, &status);
+            });
         }
     }
 
-    /// Builds the tracer `request` asks for and swaps it in when it is ready (unless a later
+    /// Builds the tracer `pending` asks for and swaps it in when it is ready (unless a later
     /// request came first); on failure the current one stays and the message shows.
-    /// `source` is the file a new scene was read from: the page keeps it once the scene is in.
-    fn build(page: &Rc<RefCell<Page>>, request: TracerRequest, source: Option<OpenedFile>) {
-        let ctx = {
+    /// Its source is the file a new scene was read from: the page keeps it once the scene is in.
+    fn build(page: &Rc<RefCell<Page>>, pending: Pending) {
+        let (ctx, generation) = {
             let mut this = page.borrow_mut();
-            if this.busy {
+            if this.disposed {
+                return settle(pending.settle, Err("the viewer was disposed".into()));
+            }
+            if this.busy || this.gpu != GpuState::Live {
                 // One build at a time: WebGPU's error scopes, which a build pushes and pops across
-                // awaits, must not interleave. The latest request waits for the running one.
-                this.waiting = Some((request, source));
+                // awaits, must not interleave; and none on a lost device. The latest request waits.
+                if let Some(earlier) = this.waiting.replace(pending) {
+                    settle(earlier.settle, Err(superseded(&earlier.request)));
+                }
                 return;
             }
             this.busy = true;
             // The last request's message no longer applies.
             this.player.message = None;
             this.publish();
-            this.screen.ctx.clone()
+            (this.screen.ctx.clone(), this.generation)
         };
         let page = page.clone();
         wasm_bindgen_futures::spawn_local(async move {
-            let built = request.build(&ctx).await;
+            let built = pending.request.build(&ctx).await;
             let waiting = {
                 let mut this = page.borrow_mut();
                 this.busy = false;
-                if this.player.is_current(&request) {
+                let Pending {
+                    request,
+                    source,
+                    settle: ends,
+                } = pending;
+                if this.disposed {
+                    settle(ends, Err("the viewer was disposed".into()));
+                    return;
+                }
+                if this.generation != generation || this.gpu != GpuState::Live {
+                    // Built on a device since lost: built again on the next, unless a later
+                    // request replaces it.
+                    let again = Pending {
+                        request,
+                        source,
+                        settle: ends,
+                    };
+                    if this.waiting.is_none() {
+                        this.waiting = Some(again);
+                    } else {
+                        settle(again.settle, Err(superseded(&again.request)));
+                    }
+                } else if this.player.is_current(&request) {
                     let new_scene = request.new_scene.is_some();
                     this.player.install(request, built);
                     if new_scene && this.player.message.is_none() {
                         this.opened = source;
                     }
+                    settle(ends, this.player.message.clone().map_or(Ok(()), Err));
                     this.publish();
+                } else {
+                    settle(ends, Err(superseded(&request)));
                 }
-                this.waiting.take()
+                if this.gpu == GpuState::Live {
+                    this.waiting.take()
+                } else {
+                    None
+                }
             };
-            if let Some((request, source)) = waiting {
-                Page::build(&page, request, source);
+            if let Some(pending) = waiting {
+                Page::build(&page, pending);
             }
         });
     }
 
     /// A new scene: its size is the canvas's; it replaces the current one once its tracer is built.
-    fn open_scene(page: &Rc<RefCell<Page>>, name: String, loaded: Result<Scene, String>, source: Option<OpenedFile>) {
+    fn open_scene(
+        page: &Rc<RefCell<Page>>,
+        name: String,
+        loaded: Result<Scene, String>,
+        source: Option<OpenedFile>,
+        ends: Option<Settle>,
+    ) {
         match loaded {
             Ok(mut scene) => {
                 let request = {
@@ -361,14 +620,30 @@ impl Page {
                     }
                     this.player.open(name, scene)
                 };
-                Page::build(page, request, source);
+                Page::build(
+                    page,
+                    Pending {
+                        request,
+                        source,
+                        settle: ends,
+                    },
+                );
             }
             Err(why) => {
                 let mut this = page.borrow_mut();
-                this.player.say(why);
+                this.player.say(why.clone());
                 this.publish();
+                settle(ends, Err(why));
             }
         }
+    }
+}
+
+/// Why a request was dropped unbuilt or unshown.
+fn superseded(request: &TracerRequest) -> String {
+    match &request.new_scene {
+        Some((name, _)) => format!("{name}: replaced by a later request before it was shown"),
+        None => "replaced by a later request before it was shown".into(),
     }
 }
 
@@ -376,27 +651,14 @@ fn memory_names(ctx: &GpuContext) -> js_sys::Array {
     ctx.memory_modes().iter().map(|m| JsValue::from(m.name())).collect()
 }
 
-fn publish_failure(why: &str) {
-    let status = js_sys::Object::new();
-    let set = |key: &str, value: JsValue| {
-        let _ = js_sys::Reflect::set(&status, &key.into(), &value);
-    };
-    set("frames", 0.into());
-    set("backend", JsValue::NULL);
-    set("adapter", JsValue::NULL);
-    set("scene", JsValue::NULL);
-    set("error", why.into());
-    if let Some(window) = web_sys::window() {
-        let _ = js_sys::Reflect::set(&window, &"raypipeStatus".into(), &status);
-    }
-}
-
 #[wasm_bindgen]
 impl Viewer {
     /// Changes one setting by the URL's names (`accel`, `builder`, `memory`, `pipeline`, `depth`,
-    /// `aov`, `exposure`, `tonemap`, `paused`, `spp`, `scene`); a bad value or a mode that cannot serve the scene shows its
-    /// message and changes nothing.
-    pub fn set(&self, key: &str, value: &str) {
+    /// `aov`, `exposure`, `tonemap`, `paused`, `spp`, `scene`, `floor`, `time`, `speed`); a bad value
+    /// or a mode that cannot serve the scene shows its message and changes nothing. Returns the
+    /// message, or `undefined` where the setting was taken (a tracer it needs lands a few frames
+    /// later).
+    pub fn set(&self, key: &str, value: &str) -> Option<String> {
         let setting = match Setting::parse(key, value) {
             Ok(setting) => setting,
             Err(why) => return self.fail(why),
@@ -405,7 +667,9 @@ impl Viewer {
         match setting {
             Setting::Scene(name) => {
                 let loaded = builtin_scene(&name).map_err(|why| format!("{name}: {why}"));
-                return Page::open_scene(&self.page, name, loaded, None);
+                let failed = loaded.as_ref().err().cloned();
+                Page::open_scene(&self.page, name, loaded, None, None);
+                return failed;
             }
             Setting::Floor(floor) => {
                 // A model file shows the new floor at once: it is opened again from its bytes.
@@ -416,9 +680,9 @@ impl Viewer {
                     this.opened.clone()
                 };
                 if let Some((name, bytes)) = opened {
-                    self.open_bytes(name, bytes);
+                    self.open_bytes(name, bytes, None);
                 }
-                return;
+                return None;
             }
             Setting::Accel(accel) => asked.accel = accel,
             Setting::Builder(builder) => asked.builder = builder,
@@ -431,16 +695,15 @@ impl Viewer {
             Setting::ToneMap(tone_map) => asked.display.tone_map = tone_map,
             Setting::Spp(spp) => {
                 self.page.borrow_mut().player.set_spp(spp);
-                return;
+                return None;
             }
             Setting::Time(time) => {
-                let mut this = self.page.borrow_mut();
-                this.player.seek(time);
-                return;
+                self.page.borrow_mut().player.seek(time);
+                return None;
             }
             Setting::Speed(speed) => {
                 self.page.borrow_mut().player.clock.speed = speed;
-                return;
+                return None;
             }
             Setting::Model(_)
             | Setting::Environment(_)
@@ -448,29 +711,38 @@ impl Viewer {
             | Setting::Height(_)
             | Setting::Backend(_) => {
                 return self.fail(format!(
-                    "{key} is set in the page's address only (reload with ?{key}={value})"
+                    "{key} is set when the viewer starts only (the page's address: ?{key}={value})"
                 ));
             }
         }
-        self.set_modes(asked);
+        self.set_modes(asked)
     }
 
-    fn set_modes(&self, asked: Modes) {
+    fn set_modes(&self, asked: Modes) -> Option<String> {
         let request = self.page.borrow_mut().player.set_modes(asked);
         match request {
-            Some(request) => Page::build(&self.page, request, None),
+            Some(request) => Page::build(
+                &self.page,
+                Pending {
+                    request,
+                    source: None,
+                    settle: None,
+                },
+            ),
             None => {
                 let mut this = self.page.borrow_mut();
                 this.player.message = None;
                 this.publish();
             }
         }
+        None
     }
 
-    fn fail(&self, why: String) {
+    fn fail(&self, why: String) -> Option<String> {
         let mut this = self.page.borrow_mut();
-        this.player.say(why);
+        this.player.say(why.clone());
         this.publish();
+        Some(why)
     }
 
     /// Shows a failure of the page's script (a model URL that could not be fetched): the message
@@ -483,12 +755,21 @@ impl Viewer {
     /// URL): a TOML scene, a PLY, OBJ or OFF model, a glTF, or an environment, parsed here. A
     /// broken one shows its error and the current scene stays.
     pub fn open_file(&self, name: String, bytes: Vec<u8>) {
-        self.open_bytes(name, Rc::new(bytes));
+        self.open_bytes(name, Rc::new(bytes), None);
+    }
+
+    /// [`Viewer::open_file`] as a promise: it resolves once the file's scene (or environment) is
+    /// shown, and rejects with the one-line message where it is not (a broken file, a scene the
+    /// modes cannot trace, a later request that replaced it).
+    pub fn load(&self, name: String, bytes: Vec<u8>) -> js_sys::Promise {
+        let (promise, ends) = Settle::new();
+        self.open_bytes(name, Rc::new(bytes), Some(ends));
+        promise
     }
 
     /// A file's bytes parsed as its name says, a model file on the page's floor; an environment
     /// lights the current scene and those opened after it.
-    fn open_bytes(&self, name: String, bytes: Rc<Vec<u8>>) {
+    fn open_bytes(&self, name: String, bytes: Rc<Vec<u8>>, ends: Option<Settle>) {
         if is_environment_file(&name) {
             return match Environment::decode(&name, &bytes) {
                 Ok(environment) => {
@@ -497,9 +778,20 @@ impl Viewer {
                         this.environment = Some((name, environment.clone()));
                         this.player.relight(Some(environment))
                     };
-                    Page::build(&self.page, request, None);
+                    Page::build(
+                        &self.page,
+                        Pending {
+                            request,
+                            source: None,
+                            settle: ends,
+                        },
+                    );
                 }
-                Err(why) => self.fail(why.in_origin(&name).to_string()),
+                Err(why) => {
+                    let why = why.in_origin(&name).to_string();
+                    self.fail(why.clone());
+                    settle(ends, Err(why));
+                }
             };
         }
         let mut options = ModelOptions::default();
@@ -507,7 +799,7 @@ impl Viewer {
             options.floor = self.page.borrow().floor;
         }
         let loaded = Scene::from_bytes_with(&name, &bytes, &options).map_err(|e| e.to_string());
-        Page::open_scene(&self.page, name.clone(), loaded, Some((name, bytes)));
+        Page::open_scene(&self.page, name.clone(), loaded, Some((name, bytes)), ends);
     }
 
     /// A drag of the pointer by (`dx`, `dy`) CSS pixels: orbit with the primary button, pan with
@@ -548,5 +840,77 @@ impl Viewer {
         drop(page);
         self.set_modes(asked);
         true
+    }
+
+    /// The last status published: `{ frames, backend, adapter, scene, error, lost, busy, samples,
+    /// spp, fps, ... }`.
+    #[wasm_bindgen(getter)]
+    pub fn status(&self) -> JsValue {
+        self.page.borrow().status.clone()
+    }
+
+    /// Calls `listener` with each status published from now on (after the call that published
+    /// it returns); `null` stops it.
+    pub fn on_status(&self, listener: Option<js_sys::Function>) {
+        self.page.borrow_mut().listener = listener;
+    }
+
+    /// The frame shown as a PNG (colour exposed, tone-mapped and sRGB-encoded as on the canvas;
+    /// the other views as `raypipe render --aov` writes them), read back from the GPU.
+    pub async fn screenshot(&self) -> Result<js_sys::Uint8Array, JsError> {
+        // The frame is read back without holding the page across awaits: the tracer is taken
+        // nowhere, so a frame drawn meanwhile only adds a sample.
+        let (ctx, generation) = {
+            let this = self.page.borrow();
+            if this.disposed {
+                return Err(JsError::new("the viewer was disposed"));
+            }
+            if this.gpu != GpuState::Live {
+                return Err(JsError::new("the GPU is lost: no frame to read until it is back"));
+            }
+            (this.screen.ctx.clone(), this.generation)
+        };
+        let read = self.page.borrow_mut().player.read_frame_detached(&ctx);
+        let frame = read.await.map_err(|e| JsError::new(&e.to_string()))?;
+        let this = self.page.borrow();
+        if this.generation != generation {
+            return Err(JsError::new("the GPU was lost while the frame was read"));
+        }
+        let modes = &this.player.modes;
+        let png = frame
+            .aov_image(modes.view, false, &modes.display)
+            .to_png()
+            .map_err(|e| JsError::new(&e))?;
+        Ok(js_sys::Uint8Array::from(png.as_slice()))
+    }
+
+    /// Stops drawing, removes the viewer's listeners and frees its GPU resources (its device is
+    /// destroyed); every later call but `status` does nothing or fails. Other viewers go on.
+    pub fn dispose(&self) {
+        let mut this = self.page.borrow_mut();
+        if this.disposed {
+            return;
+        }
+        this.disposed = true;
+        if let (Some(window), Some(id)) = (web_sys::window(), this.frame_request.take()) {
+            let _ = window.cancel_animation_frame(id);
+        }
+        let this = &mut *this;
+        for (name, listener) in this.canvas_listeners.drain(..) {
+            let _ = this
+                .canvas
+                .remove_event_listener_with_callback(name, listener.as_ref().unchecked_ref());
+        }
+        if let Some(pending) = this.waiting.take() {
+            settle(pending.settle, Err("the viewer was disposed".into()));
+        }
+        this.listener = None;
+        // The frame callback may be the caller (a status listener that disposes): it is dropped
+        // after the current task.
+        let frames = this.frames.clone();
+        wasm_bindgen_futures::spawn_local(async move {
+            frames.borrow_mut().take();
+        });
+        this.screen.ctx.device.destroy();
     }
 }

@@ -71,7 +71,8 @@ pub enum Setting {
     ToneMap(ToneMap),
     Width(u32),
     Height(u32),
-    Backend(WebBackend),
+    /// `None`: WebGPU where the browser has it, else WebGL2 (`auto`).
+    Backend(Option<WebBackend>),
 }
 
 /// The keys, for messages.
@@ -165,7 +166,11 @@ impl Setting {
             "tonemap" => Setting::ToneMap(choice(key, value)?),
             "width" => Setting::Width(number(1..=MAX_SIDE)?),
             "height" => Setting::Height(number(1..=MAX_SIDE)?),
-            "backend" => Setting::Backend(choice(key, value)?),
+            "backend" if value == "auto" => Setting::Backend(None),
+            "backend" => match WebBackend::from_name(value) {
+                Some(backend) => Setting::Backend(Some(backend)),
+                None => return Err(format!("{key}={value}: expected auto, {}", WebBackend::names())),
+            },
             _ => return Err(format!("unknown setting '{key}' (known: {})", KEYS.join(", "))),
         })
     }
@@ -272,7 +277,7 @@ impl StartParams {
             }
             Setting::Width(width) => self.width = width,
             Setting::Height(height) => self.height = height,
-            Setting::Backend(backend) => self.backend = Some(backend),
+            Setting::Backend(backend) => self.backend = backend,
         }
     }
 }
@@ -427,8 +432,13 @@ mod tests {
             assert_eq!(Setting::parse("aov", view.name()), Ok(Setting::View(view)));
         }
         for &backend in WebBackend::ALL {
-            assert_eq!(Setting::parse("backend", backend.name()), Ok(Setting::Backend(backend)));
+            assert_eq!(
+                Setting::parse("backend", backend.name()),
+                Ok(Setting::Backend(Some(backend)))
+            );
         }
+        assert_eq!(Setting::parse("backend", "auto"), Ok(Setting::Backend(None)));
+        assert!(Setting::parse("backend", "webgl").is_err());
         assert_eq!(Setting::parse("paused", "true"), Ok(Setting::Paused(true)));
         assert!(Setting::parse("paused", "yes").is_err());
         assert!(Setting::parse("scene", "").is_err());

@@ -105,6 +105,8 @@ pub struct GpuContext {
     /// Whether shaders may trace the driver's acceleration structures with ray queries
     /// ([`Accel::RayQuery`]).
     pub ray_queries: bool,
+    /// Why the device was lost, once wgpu said so ([`GpuContext::watch_loss`]).
+    lost: Arc<Mutex<Option<String>>>,
 }
 
 impl GpuContext {
@@ -151,6 +153,7 @@ impl GpuContext {
             encoder_timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS),
             subgroups: subgroups.then_some((info.subgroup_min_size, info.subgroup_max_size)),
             ray_queries: features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
+            lost: Arc::default(),
             adapter,
             device,
             queue,
@@ -204,7 +207,44 @@ impl GpuContext {
             log::warn!("GPU error outside an operation: {}", one_line(&error.to_string()));
         }));
         // The device has the features asked for: what a caller's device has, raypipe uses.
-        Ok(Self::from_device(adapter, device, queue))
+        let ctx = Self::from_device(adapter, device, queue);
+        ctx.watch_loss();
+        Ok(ctx)
+    }
+
+    /// Hears of the device's loss (wgpu's device-lost callback, which this replaces): from then
+    /// on the operations of everything made on it fail with [`GpuError::Lost`] rather than with
+    /// wgpu's words for the broken pieces. [`GpuContext::open`] calls it; a caller of
+    /// [`GpuContext::from_device`] with no callback of its own may.
+    pub fn watch_loss(&self) {
+        let lost = self.lost.clone();
+        self.device.set_device_lost_callback(move |reason, message| {
+            let why = match one_line(&message) {
+                line if line.is_empty() => format!("{reason:?}").to_lowercase(),
+                line => line,
+            };
+            log::warn!("the GPU was lost ({why})");
+            *lost.lock().unwrap_or_else(|e| e.into_inner()) = Some(why);
+        });
+    }
+
+    /// Why the device was lost, if it was (and [`GpuContext::watch_loss`] heard of it).
+    pub fn lost(&self) -> Option<String> {
+        self.lost.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+
+    /// `Err(GpuError::Lost)` once the device is lost: checked before work that would make
+    /// resources on it.
+    pub fn live(&self) -> Result<(), GpuError> {
+        match self.lost() {
+            Some(why) => Err(GpuError::Lost { why }),
+            None => Ok(()),
+        }
+    }
+
+    /// `error`, or [`GpuError::Lost`] where the device was lost: what failed then is the loss.
+    pub fn explain(&self, error: GpuError) -> GpuError {
+        self.live().err().unwrap_or(error)
     }
 
     /// One line naming the adapter, its backend and driver.
@@ -265,18 +305,49 @@ impl GpuContext {
 
     /// Runs `f` inside validation and out-of-memory error scopes; a wgpu error becomes an `Err`.
     pub async fn checked<T>(&self, what: &'static str, f: impl FnOnce() -> Result<T, GpuError>) -> Result<T, GpuError> {
-        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scopes = self.error_scopes(what);
         let result = f();
-        let validation = validation.pop().await;
-        let memory = memory.pop().await;
-        if let Some(error) = validation.or(memory) {
-            return Err(GpuError::Operation {
-                what,
-                message: one_line(&error.to_string()),
-            });
-        }
+        scopes.pop().await?;
         result
+    }
+
+    /// Opens validation and out-of-memory error scopes around what is recorded until
+    /// [`ErrorScopes::pop`]: [`GpuContext::checked`] for work whose wait must borrow nothing.
+    pub fn error_scopes(&self, what: &'static str) -> ErrorScopes {
+        ErrorScopes {
+            what,
+            lost: self.lost.clone(),
+            memory: self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory),
+            validation: self.device.push_error_scope(wgpu::ErrorFilter::Validation),
+        }
+    }
+}
+
+/// Error scopes opened by [`GpuContext::error_scopes`].
+pub struct ErrorScopes {
+    what: &'static str,
+    lost: Arc<Mutex<Option<String>>>,
+    memory: wgpu::ErrorScopeGuard,
+    validation: wgpu::ErrorScopeGuard,
+}
+
+impl ErrorScopes {
+    /// Closes the scopes now; the future says whether wgpu reported an error in them.
+    pub fn pop(self) -> impl Future<Output = Result<(), GpuError>> + 'static {
+        let (what, lost) = (self.what, self.lost);
+        let validation = self.validation.pop();
+        let memory = self.memory.pop();
+        async move {
+            let error = validation.await.or(memory.await);
+            match (error, lost.lock().unwrap_or_else(|e| e.into_inner()).clone()) {
+                (None, _) => Ok(()),
+                (Some(_), Some(why)) => Err(GpuError::Lost { why }),
+                (Some(error), None) => Err(GpuError::Operation {
+                    what,
+                    message: one_line(&error.to_string()),
+                }),
+            }
+        }
     }
 }
 
@@ -342,6 +413,55 @@ pub(crate) fn map_future(
         }
     });
     MapFuture { shared }
+}
+
+/// Waits for a buffer mapping made by [`map_future`], after the copies it reads were submitted. A
+/// native device fires the callback in a blocking `poll`; a browser's WebGPU fires it on its own;
+/// WebGL2 (wgpu's GL backend) fires it only in `poll`, which cannot block in a browser: there the
+/// wait polls once per task of the browser's event loop, where the GPU's progress shows.
+pub(crate) async fn wait_mapped(
+    device: &wgpu::Device,
+    mapped: impl Future<Output = Result<(), wgpu::BufferAsyncError>>,
+) -> Result<(), GpuError> {
+    let failed = |e: &dyn std::fmt::Display| GpuError::Readback(e.to_string());
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| failed(&e))?;
+        mapped.await.map_err(|e| failed(&e))
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let mut mapped = std::pin::pin!(mapped);
+        loop {
+            device.poll(wgpu::PollType::Poll).map_err(|e| failed(&e))?;
+            if let Poll::Ready(result) = mapped.as_mut().poll(&mut Context::from_waker(Waker::noop())) {
+                return result.map_err(|e| failed(&e));
+            }
+            next_task().await;
+        }
+    }
+}
+
+/// Resolves in a later task of the browser's event loop (`setTimeout(0)`).
+#[cfg(target_arch = "wasm32")]
+async fn next_task() {
+    use wasm_bindgen::JsCast;
+    let promise = js_sys::Promise::new(&mut |resolve, _| {
+        let set_timeout = js_sys::Reflect::get(&js_sys::global(), &"setTimeout".into())
+            .ok()
+            .and_then(|f| f.dyn_into::<js_sys::Function>().ok());
+        match set_timeout {
+            Some(set_timeout) => {
+                let _ = set_timeout.call2(&wasm_bindgen::JsValue::NULL, &resolve, &0.into());
+            }
+            None => {
+                let _ = resolve.call0(&wasm_bindgen::JsValue::NULL);
+            }
+        }
+    });
+    let _ = wasm_bindgen_futures::JsFuture::from(promise).await;
 }
 
 #[derive(Default)]

@@ -55,6 +55,10 @@ pub enum GpuError {
     },
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
+    /// The device was lost (a driver reset, a GPU removed, a browser's decision): nothing made on
+    /// it works again; a new device must be opened.
+    #[error("the GPU was lost ({why})")]
+    Lost { why: String },
     #[error("WGPU_BACKEND={0:?} names no backend wgpu knows (vulkan, gl, metal, dx12, webgpu)")]
     UnknownBackendEnv(String),
 }

@@ -3,14 +3,16 @@
 //! copy buffer; every wait is a future (a browser cannot block).
 
 use super::GpuError;
-use super::context::map_future;
+use super::context::{map_future, wait_mapped};
 
 /// Bytes per row in a texture-to-buffer copy: `unpadded` rounded up to wgpu's 256-byte alignment.
 pub fn padded_bytes_per_row(unpadded: u32) -> u32 {
     unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
 }
 
-/// A buffer that receives copies of a `width` x `height` texture with `bytes_per_pixel`.
+/// A buffer that receives copies of a `width` x `height` texture with `bytes_per_pixel`. A clone
+/// is a handle on the same buffer.
+#[derive(Clone)]
 pub struct TextureReadback {
     buffer: wgpu::Buffer,
     width: u32,
@@ -79,11 +81,7 @@ pub async fn map_read<T>(
 ) -> Result<T, GpuError> {
     let slice = buffer.slice(..);
     let mapped = map_future(slice, wgpu::MapMode::Read);
-    // Native devices run the callback here; in a browser this returns at once and the future waits.
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
-    mapped.await.map_err(|e| GpuError::Readback(e.to_string()))?;
+    wait_mapped(device, mapped).await?;
     let result = {
         let view = slice
             .get_mapped_range()

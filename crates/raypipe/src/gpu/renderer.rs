@@ -243,6 +243,7 @@ impl Renderer {
         options: RendererOptions,
         depth_bound: u32,
     ) -> Result<Self, GpuError> {
+        ctx.live()?;
         if options.accel.uses_bvh() && scene.primitive_count() > 0 && scene.bvh.is_none() {
             return Err(MissingBvh { accel: options.accel }.into());
         }
@@ -653,6 +654,7 @@ impl Renderer {
         prepare: impl FnOnce(&mut wgpu::CommandEncoder),
         mut sample_done: impl FnMut(u32),
     ) -> Result<TimedFrame, GpuError> {
+        self.ctx.live()?;
         self.restart();
         let mut prepare = Some(prepare);
         let mut gpu_ms = self.timer.as_ref().map(|_| 0.0);
@@ -668,7 +670,8 @@ impl Renderer {
                 Ok(())
             })
             .await?;
-            if let (Some(total), Some(ms)) = (gpu_ms.as_mut(), self.read_gpu_ms().await?) {
+            let ms = self.read_gpu_ms().await.map_err(|e| ctx.explain(e))?;
+            if let (Some(total), Some(ms)) = (gpu_ms.as_mut(), ms) {
                 *total += ms;
             }
             sample_done(sample + 1);
@@ -682,27 +685,38 @@ impl Renderer {
     /// Reads the targets' sums back as a frame: mean radiance, the count's total (rays) or mean
     /// (cost), the centre sample's normal and depth.
     pub async fn read_back(&self) -> Result<Frame, GpuError> {
-        let ctx = &self.ctx;
+        self.read_back_detached().await
+    }
+
+    /// [`Renderer::read_back`] as a future that borrows nothing: the copies are recorded and
+    /// submitted here, so that a host that draws on meanwhile (a web page) reads the frame shown now.
+    pub fn read_back_detached(&self) -> impl Future<Output = Result<Frame, GpuError>> + 'static {
+        let ctx = self.ctx.clone();
         let targets = self.targets();
-        ctx.checked("reading the frame back", || {
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            let [color, surface] = &self.readbacks;
-            color.encode_copy(&mut encoder, &targets.color);
-            surface.encode_copy(&mut encoder, &targets.surface);
-            ctx.queue.submit([encoder.finish()]);
-            Ok(())
-        })
-        .await?;
+        let [color, surface] = self.readbacks.clone();
+        let scopes = ctx.error_scopes("reading the frame back");
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        color.encode_copy(&mut encoder, &targets.color);
+        surface.encode_copy(&mut encoder, &targets.surface);
+        ctx.queue.submit([encoder.finish()]);
+        let copied = scopes.pop();
         let (width, height) = self.size();
-        let mut frame = Frame::new(width, height);
-        let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&self.readbacks[0].read(&ctx.device).await?);
         let samples = targets.samples().max(1);
-        frame.color = sums
-            .into_iter()
-            .map(|sum| crate::image::sample_mean(glam::Vec4::from_array(sum), samples, self.options.count))
-            .collect();
-        frame.surface = bytemuck::pod_collect_to_vec(&self.readbacks[1].read(&ctx.device).await?);
-        Ok(frame)
+        let count = self.options.count;
+        async move {
+            let read = async {
+                copied.await?;
+                let mut frame = Frame::new(width, height);
+                let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&color.read(&ctx.device).await?);
+                frame.color = sums
+                    .into_iter()
+                    .map(|sum| crate::image::sample_mean(glam::Vec4::from_array(sum), samples, count))
+                    .collect();
+                frame.surface = bytemuck::pod_collect_to_vec(&surface.read(&ctx.device).await?);
+                Ok(frame)
+            };
+            read.await.map_err(|e| ctx.explain(e))
+        }
     }
 }
 

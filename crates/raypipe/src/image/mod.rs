@@ -6,7 +6,7 @@ pub mod tonemap;
 
 pub use crate::records::constants::DEPTH_MISS;
 
-use crate::modes::Count;
+use crate::modes::{Aov, Count};
 use glam::Vec4;
 use tonemap::DisplayTransform;
 
@@ -48,6 +48,26 @@ impl FloatImage {
             .iter()
             .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
             .collect()
+    }
+}
+
+impl FloatImage {
+    /// The image as an 8-bit PNG ([`FloatImage::to_bytes`]): one channel grey, three RGB.
+    pub fn to_png(&self) -> Result<Vec<u8>, String> {
+        let color = match self.channels.len() {
+            1 => png::ColorType::Grayscale,
+            3 => png::ColorType::Rgb,
+            n => return Err(format!("cannot write a {n}-channel image as PNG")),
+        };
+        let mut out = Vec::new();
+        let mut encoder = png::Encoder::new(&mut out, self.width, self.height);
+        encoder.set_color(color);
+        encoder.set_depth(png::BitDepth::Eight);
+        let encoded = encoder
+            .write_header()
+            .and_then(|mut writer| writer.write_image_data(&self.to_bytes()).and(writer.finish()));
+        encoded.map_err(|e| format!("cannot encode PNG: {e}"))?;
+        Ok(out)
     }
 }
 
@@ -96,6 +116,18 @@ impl Frame {
             .flat_map(|c| transform.apply([c[0], c[1], c[2]]).map(linear_to_srgb))
             .collect();
         self.image(rgb_names(), data)
+    }
+
+    /// The image `aov` makes of the frame: colour through `transform` for a PNG, or exposed linear
+    /// radiance for a float file (`float`); depth, normals, or the cost's heat map.
+    pub fn aov_image(&self, aov: Aov, float: bool, transform: &DisplayTransform) -> FloatImage {
+        match (aov, float) {
+            (Aov::Color, false) => self.display_with(transform),
+            (Aov::Color, true) => self.exposed_radiance(transform.exposure),
+            (Aov::Depth, _) => self.depth(),
+            (Aov::Normal, _) => self.normals(),
+            (Aov::Cost, _) => heatmap::heatmap(&self.counts(), self.width, self.height),
+        }
     }
 
     /// Linear radiance, for EXR output.

@@ -1,0 +1,54 @@
+//! A lost device (a driver reset, a removed GPU; here `Device::destroy`, which wgpu reports the
+//! same way): every operation after it fails with `GpuError::Lost` and its one line, none panics,
+//! and the device the other tests share goes on.
+
+use crate::common::harness::Test;
+use crate::common::*;
+use raypipe::bvh::morton::MortonBits;
+use raypipe::gpu::{GpuContext, GpuError, Renderer, RendererOptions};
+use raypipe::modes::MemoryMode;
+
+fn assert_lost<T>(result: Result<T, GpuError>, what: &str) {
+    match result {
+        Err(GpuError::Lost { why }) => {
+            let line = GpuError::Lost { why }.to_string();
+            assert!(line.starts_with("the GPU was lost ("), "{what}: {line}");
+            assert!(!line.contains('\n'), "{what}: {line}");
+        }
+        Err(other) => panic!("{what} failed for another reason: {other}"),
+        Ok(_) => panic!("{what} succeeded on a lost device"),
+    }
+}
+
+fn a_lost_device_fails_each_operation_with_one_line(ctx: &GpuContext) {
+    // A device of its own on the shared adapter: the shared one must outlive this test.
+    let own = pollster::block_on(GpuContext::open(ctx.adapter.clone())).expect("a second device");
+    let mut scene = packed("whitted", 16, 12, 1);
+    scene.build_bvh(MortonBits::Bits30);
+    let options = RendererOptions {
+        memory: MemoryMode::Storage,
+        ..Default::default()
+    };
+    let mut renderer = pollster::block_on(Renderer::new(&own, &scene, options)).expect("a renderer");
+    pollster::block_on(renderer.read_frame()).expect("a frame before the loss");
+    assert_eq!(own.lost(), None);
+
+    // wgpu hears of the loss at its next poll (here the frame's read-back), as of a driver reset.
+    own.device.destroy();
+    assert_lost(pollster::block_on(renderer.read_frame()), "a frame");
+    assert!(own.lost().is_some(), "wgpu did not report the loss");
+    assert_lost(pollster::block_on(renderer.read_back()), "a read-back");
+    assert_lost(
+        pollster::block_on(Renderer::new(&own, &scene, options)),
+        "a new renderer",
+    );
+
+    // The shared device is untouched.
+    assert_eq!(ctx.lost(), None);
+    let mut shared = pollster::block_on(Renderer::new(ctx, &scene, options)).expect("a renderer on the shared device");
+    pollster::block_on(shared.read_frame()).expect("a frame on the shared device");
+}
+
+pub fn tests() -> Vec<Test> {
+    raypipe_test_support::tests![gpu a_lost_device_fails_each_operation_with_one_line]
+}

@@ -1,0 +1,141 @@
+// Types of raypipe's JavaScript API (raypipe.js).
+
+/** The browser API a viewer traces through: WebGPU where the browser has it, else WebGL2 (`auto`). */
+export type Backend = "auto" | "webgpu" | "webgl2";
+/** The acceleration: brute force, or the LBVH walked with a stack, stacklessly or by threads. */
+export type Accel = "brute" | "stack" | "stackless" | "threaded";
+export type Builder = "lbvh" | "sah";
+export type Memory = "uniform" | "storage" | "texture";
+export type Pipeline = "fragment" | "compute";
+export type View = "color" | "depth" | "normal" | "cost";
+export type ToneMap = "none" | "neutral" | "aces";
+
+/** Settings a running viewer changes (`viewer.set`), by the page's URL names. */
+export interface Settings {
+  /** A built-in scene: `whitted`, `sphere-8k`, `torus-5k`, `random:N[:SEED]`, `bounce:N[:SEED]`. */
+  scene?: string;
+  accel?: Accel;
+  builder?: Builder;
+  memory?: Memory;
+  pipeline?: Pipeline;
+  /** Bounces per ray. */
+  depth?: number;
+  aov?: View;
+  /** Stops: radiance times 2^EV before the tone map. */
+  exposure?: number;
+  tonemap?: ToneMap;
+  paused?: boolean;
+  /** Whether a model file stands on a checker floor. */
+  floor?: boolean;
+  /** Seconds into the motion. */
+  time?: number;
+  /** Scene seconds per second. */
+  speed?: number;
+  /** Samples per pixel a still frame gathers, one per frame. */
+  spp?: number;
+}
+
+/** What a viewer starts with. */
+export interface ViewerOptions extends Settings {
+  backend?: Backend;
+  /** The canvas's size in pixels (960 x 540 unless given). */
+  width?: number;
+  height?: number;
+  /** A model or scene file to load once the viewer runs, by URL. */
+  model?: string;
+  /** An environment (.hdr, .exr) to light every scene with, by URL, loaded before the model. */
+  environment?: string;
+  /** `false`: no orbit, pan, dolly or keys on the canvas (the page drives the viewer itself). */
+  input?: boolean;
+  /** `false`: a bad option is shown in `status.error` and skipped, where by default it rejects. */
+  strict?: boolean;
+}
+
+/** What runs, as the viewer publishes it after every frame and change. */
+export interface ViewerStatus {
+  frames: number;
+  backend: "webgpu" | "webgl2";
+  adapter: string;
+  scene: string;
+  /** The one-line message shown, if any. */
+  error: string | null;
+  /** Whether the GPU is lost (until the viewer has drawn again on a new device). */
+  lost: boolean;
+  /** Whether a tracer is being built. */
+  busy: boolean;
+  width: number;
+  height: number;
+  primitives: number;
+  pipeline: Pipeline;
+  accel: Accel;
+  builder: Builder;
+  memory: Memory;
+  /** The memory modes this adapter offers. */
+  memories: Memory[];
+  depth: number;
+  aov: View;
+  exposure: number;
+  tonemap: ToneMap;
+  paused: boolean;
+  floor: boolean;
+  environment: string | null;
+  moving: boolean;
+  time: number;
+  duration: number | null;
+  speed: number;
+  /** Samples per pixel in the frame shown, and the number gathered at most. */
+  samples: number;
+  spp: number;
+  /** Frames per second and milliseconds per frame, by the wall clock. */
+  fps: number;
+  frameMs: number;
+  buildMs: number | null;
+  firstFrameMs: number | null;
+}
+
+export interface ViewerEventMap {
+  status: CustomEvent<ViewerStatus>;
+}
+
+export declare class Viewer extends EventTarget {
+  /** The canvas it draws on. */
+  readonly canvas: HTMLCanvasElement;
+  /** What runs; `null` once disposed. */
+  readonly status: ViewerStatus | null;
+  /** Changes settings; throws the line of any refused (after applying the others). */
+  set(settings: Settings): void;
+  /** Opens a model, scene or environment; resolves once it is shown, rejects with the one-line message. */
+  load(source: string | URL | Blob | ArrayBuffer | ArrayBufferView, name?: string): Promise<void>;
+  /** The frame shown as a PNG. */
+  screenshot(): Promise<Blob>;
+  /** A key by its `KeyboardEvent.code`; whether the viewer used it. */
+  key(code: string, pressed: boolean): boolean;
+  /** Stops drawing and frees its GPU resources and listeners. */
+  dispose(): void;
+  addEventListener<K extends keyof ViewerEventMap>(
+    type: K,
+    listener: (this: Viewer, event: ViewerEventMap[K]) => void,
+    options?: boolean | AddEventListenerOptions,
+  ): void;
+  addEventListener(type: string, listener: EventListenerOrEventListenerObject | null, options?: boolean | AddEventListenerOptions): void;
+  removeEventListener<K extends keyof ViewerEventMap>(
+    type: K,
+    listener: (this: Viewer, event: ViewerEventMap[K]) => void,
+    options?: boolean | EventListenerOptions,
+  ): void;
+  removeEventListener(type: string, listener: EventListenerOrEventListenerObject | null, options?: boolean | EventListenerOptions): void;
+}
+
+/** A viewer on a canvas, or on a canvas made inside a container. Rejects with the one-line reason. */
+export declare function createViewer(element: HTMLElement, options?: ViewerOptions): Promise<Viewer>;
+
+/** Loads the wasm module (once); createViewer calls it. */
+export declare function ready(): Promise<unknown>;
+
+/** The settings' lists and limits, and the file types `load` opens. */
+export declare function choices(): Promise<{
+  choices: { accel: Accel[]; builder: Builder[]; memory: Memory[]; pipeline: Pipeline[]; aov: View[]; tonemap: ToneMap[] };
+  accept: string;
+  maxDepth: number;
+  maxSpp: number;
+}>;

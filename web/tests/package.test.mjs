@@ -1,0 +1,253 @@
+// The npm package (scripts/build-web.sh --package), as a user gets it: packed by `npm pack`,
+// installed into a scratch folder, imported by its bare name through an import map (no bundler),
+// on a page with two viewers (WebGL2 and WebGPU) in headless Chromium. Both draw the CPU
+// reference's image (their screenshots, compared by `raypipe diff --tolerance color`); a lost WebGL2
+// context (WEBGL_lose_context) and a destroyed WebGPU device are reported and recovered, the same
+// image again; dispose() of one leaves the other drawing. The declarations type-check a usage file
+// (tsc --noEmit) and name the lists the module offers.
+//
+// Needs the package built (scripts/build-web.sh --package target/web-package, or
+// RAYPIPE_PACKAGE_DIR), the native binary (target/release/raypipe, or RAYPIPE_BIN) and Chromium.
+import { test, before, after } from "node:test";
+import assert from "node:assert/strict";
+import { execFileSync, spawnSync } from "node:child_process";
+import fs from "node:fs";
+import path from "node:path";
+import { fileURLToPath } from "node:url";
+import { launch, serve } from "../harness.mjs";
+
+const web = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..");
+const root = path.resolve(web, "..");
+const built = process.env.RAYPIPE_PACKAGE_DIR ?? path.join(root, "target/web-package");
+const raypipe = process.env.RAYPIPE_BIN ?? path.join(root, "target/release/raypipe");
+const scratch = path.join(root, "target/package-test");
+const COMPILE_MS = 240_000;
+const SIZE = { width: 96, height: 72 };
+
+let server;
+let browser;
+let page;
+
+const PAGE = `<!doctype html>
+<meta charset="utf-8">
+<link rel="icon" href="data:,">
+<script type="importmap">{ "imports": { "raypipe": "./node_modules/raypipe/raypipe.js" } }</script>
+<div id="left"></div><canvas id="right"></canvas><div id="spare"></div>
+<script type="module">
+  import { createViewer } from "raypipe";
+  window.createViewer = createViewer;
+</script>
+`;
+
+before(async () => {
+  for (const needed of [path.join(built, "package.json"), raypipe]) {
+    assert.ok(fs.existsSync(needed), `${needed} is missing: run scripts/build-web.sh --package target/web-package and cargo build --release`);
+  }
+  fs.rmSync(scratch, { recursive: true, force: true });
+  fs.mkdirSync(scratch, { recursive: true });
+  const packed = execFileSync("npm", ["pack", built, "--pack-destination", scratch, "--json", "--loglevel=error"], { encoding: "utf8" });
+  const tarball = path.join(scratch, JSON.parse(packed)[0].filename);
+  fs.writeFileSync(path.join(scratch, "package.json"), JSON.stringify({ name: "scratch", private: true, type: "module" }));
+  execFileSync("npm", ["install", "--no-audit", "--no-fund", "--loglevel=error", tarball], { cwd: scratch });
+  fs.writeFileSync(path.join(scratch, "index.html"), PAGE);
+  server = await serve({ "/": scratch });
+  browser = await launch();
+  page = await browser.newPage({ viewport: { width: 800, height: 600 }, deviceScaleFactor: 1 });
+  page.errors = [];
+  page.on("pageerror", (error) => page.errors.push(`uncaught: ${error.message}`));
+  page.on("console", (message) => {
+    if (message.type() === "error") page.errors.push(`console: ${message.text()}`);
+  });
+  // The devices the page opens, so that the test can destroy one as a driver reset would.
+  await page.addInitScript(() => {
+    window.gpuDevices = [];
+    if (navigator.gpu) {
+      const requestDevice = GPUAdapter.prototype.requestDevice;
+      GPUAdapter.prototype.requestDevice = async function (...args) {
+        const device = await requestDevice.apply(this, args);
+        window.gpuDevices.push(device);
+        return device;
+      };
+    }
+  });
+  await page.goto(`${server.origin}/index.html`);
+  await page.waitForFunction(() => window.createViewer, null, { timeout: 30_000 });
+});
+
+after(async () => {
+  await browser?.close();
+  server?.close();
+});
+
+/// Waits until viewer `name`'s status satisfies `condition`, failing at once on an error it does not expect.
+async function until(name, condition, what, { arg = null, timeout = COMPILE_MS } = {}) {
+  const source = condition.toString();
+  try {
+    await page.waitForFunction(([name, source, arg]) => {
+      const status = window.viewers[name].status;
+      if (status == null) return false;
+      if (status.error != null && !source.includes("error")) throw new Error(status.error);
+      return new Function("s", "arg", `return (${source})(s, arg)`)(status, arg);
+    }, [name, source, arg], { timeout, polling: 100 });
+  } catch (error) {
+    const now = await page.evaluate((name) => JSON.stringify(window.viewers[name].status), name);
+    throw new Error(`waiting for ${what}: ${error.message.split("\n")[0]}; status ${now}; errors ${page.errors}`);
+  }
+  return page.evaluate((name) => ({ ...window.viewers[name].status }), name);
+}
+
+const SETTLED = (s) => s.frames >= 2 && !s.busy && s.samples >= s.spp && !s.lost;
+
+/// Viewer `name`'s screenshot() against the CPU reference of whitted.
+async function assertShowsWhitted(name, label) {
+  const png = await page.evaluate(async (name) => {
+    const blob = await window.viewers[name].screenshot();
+    if (blob.type !== "image/png") throw new Error(`screenshot() gave ${blob.type}`);
+    return [...new Uint8Array(await blob.arrayBuffer())];
+  }, name);
+  const actual = path.join(scratch, `${label}-actual.png`);
+  fs.writeFileSync(actual, Buffer.from(png));
+  const expected = path.join(scratch, "whitted-reference.png");
+  if (!fs.existsSync(expected)) {
+    execFileSync(raypipe, ["render", "whitted", "--device", "cpu", "--width", `${SIZE.width}`, "--height", `${SIZE.height}`, "-q", "-o", expected]);
+  }
+  const difference = path.join(scratch, `${label}-difference.png`);
+  const run = spawnSync(raypipe, ["diff", actual, expected, "--tolerance", "color", "--out", difference], { encoding: "utf8" });
+  assert.equal(run.status, 0, `${label}: ${run.stdout}${run.stderr} (kept ${actual} and ${difference})`);
+}
+
+test("two viewers (WebGL2 in a container, WebGPU on a canvas) draw, survive a lost GPU, and dispose alone", async () => {
+  await page.evaluate(async (size) => {
+    const options = { scene: "whitted", spp: 1, ...size };
+    window.viewers = {
+      webgl2: await window.createViewer(document.getElementById("left"), { ...options, backend: "webgl2" }),
+      webgpu: await window.createViewer(document.getElementById("right"), { ...options, backend: "webgpu" }),
+    };
+    window.heard = { webgl2: 0, webgpu: 0 };
+    for (const [name, viewer] of Object.entries(window.viewers)) {
+      viewer.addEventListener("status", (event) => {
+        if (event.detail.frames != null) window.heard[name] += 1;
+      });
+    }
+  }, SIZE);
+  for (const name of ["webgl2", "webgpu"]) {
+    const status = await until(name, SETTLED, `the ${name} viewer's first frame`);
+    assert.equal(status.backend, name);
+    assert.equal(status.lost, false);
+    await assertShowsWhitted(name, `${name}-first`);
+  }
+  assert.ok(await page.evaluate(() => window.heard.webgl2 > 0 && window.heard.webgpu > 0), "no status event");
+  assert.equal(await page.evaluate(() => document.querySelectorAll("#left > canvas").length), 1);
+
+  // WebGL2: the context lost, then restored.
+  await page.evaluate(() => {
+    window.loseContext = window.viewers.webgl2.canvas.getContext("webgl2").getExtension("WEBGL_lose_context");
+    window.loseContext.loseContext();
+  });
+  const lostGl = await until("webgl2", (s) => s.lost && s.error != null, "the lost WebGL2 context");
+  assert.match(lostGl.error, /GPU was lost/);
+  await page.evaluate(() => window.loseContext.restoreContext());
+  const back = await until("webgl2", (s, frames) => !s.lost && s.error == null && s.frames > frames && s.samples >= 1, "the WebGL2 viewer again", { arg: lostGl.frames });
+  assert.equal(back.scene, "whitted");
+  await assertShowsWhitted("webgl2", "webgl2-restored");
+
+  // WebGPU: the device destroyed, as a driver reset loses it; a new one is opened.
+  await page.evaluate(() => window.gpuDevices.at(-1).destroy());
+  const lostGpu = await until("webgpu", (s) => s.lost && s.error != null, "the lost WebGPU device");
+  assert.match(lostGpu.error, /GPU was lost/);
+  await until("webgpu", (s, frames) => !s.lost && s.error == null && s.frames > frames && s.samples >= 1, "the WebGPU viewer again", { arg: lostGpu.frames });
+  assert.ok(await page.evaluate(() => window.gpuDevices.length >= 2), "no new device was asked for");
+  await assertShowsWhitted("webgpu", "webgpu-restored");
+
+  // dispose(): the container's canvas goes, the other viewer draws on.
+  await page.evaluate(() => window.viewers.webgl2.dispose());
+  assert.equal(await page.evaluate(() => document.querySelectorAll("#left > canvas").length), 0);
+  assert.equal(await page.evaluate(() => window.viewers.webgl2.status), null);
+  const before = await page.evaluate(() => window.viewers.webgpu.status.frames);
+  await page.evaluate(() => window.viewers.webgpu.set({ spp: 64 }));
+  await until("webgpu", (s, frames) => s.frames >= frames + 5, "frames after the other's dispose()", { arg: before, timeout: 60_000 });
+  await assert.rejects(() => page.evaluate(() => window.viewers.webgl2.screenshot()), /disposed/);
+  assert.deepEqual(page.errors, []);
+});
+
+test("load() resolves when the file is shown and rejects with its line; bad options reject createViewer", async () => {
+  await page.evaluate(() => {
+    window.viewers.webgpu.set({ spp: 1 });
+  });
+  const broken = await page.evaluate(async () => {
+    try {
+      const ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n" +
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 oops\n0 1 0\n3 0 1 2\n";
+      await window.viewers.webgpu.load(new TextEncoder().encode(ply), "broken.ply");
+      return null;
+    } catch (error) {
+      return error.message;
+    }
+  });
+  assert.match(broken ?? "", /^broken\.ply:11: /);
+  assert.ok(!broken.includes("\n"));
+  const opened = await page.evaluate(async () => {
+    const obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    await window.viewers.webgpu.load(new Blob([obj]), "tetrahedron.obj");
+    return { ...window.viewers.webgpu.status };
+  });
+  assert.equal(opened.scene, "tetrahedron.obj");
+  assert.equal(opened.primitives, 4);
+  const refused = await page.evaluate(async () => {
+    try {
+      await window.createViewer(document.getElementById("spare"), { scene: "whitted", accel: "fastest" });
+      return null;
+    } catch (error) {
+      return error.message;
+    }
+  });
+  assert.match(refused ?? "", /^accel=fastest: expected one of /);
+  assert.equal(await page.evaluate(() => document.querySelectorAll("#spare > canvas").length), 0);
+  const setRefused = await page.evaluate(() => {
+    try {
+      window.viewers.webgpu.set({ depth: 1000 });
+      return null;
+    } catch (error) {
+      return error.message;
+    }
+  });
+  assert.match(setRefused ?? "", /^depth=1000: /);
+  assert.deepEqual(page.errors, []);
+});
+
+test("the declarations type-check a usage file and name the lists the module offers", async () => {
+  fs.writeFileSync(path.join(scratch, "usage.ts"), `import { createViewer, choices, type ViewerStatus } from "raypipe";
+const viewer = await createViewer(document.body, { backend: "webgl2", scene: "whitted", spp: 4, input: false });
+viewer.addEventListener("status", (event) => { const s: ViewerStatus = event.detail; console.log(s.fps, s.lost); });
+viewer.set({ accel: "stack", exposure: 1, tonemap: "aces" });
+await viewer.load("model.glb");
+const png: Blob = await viewer.screenshot();
+const { maxSpp } = await choices();
+console.log(png.size, maxSpp);
+viewer.dispose();
+`);
+  fs.writeFileSync(path.join(scratch, "tsconfig.json"), JSON.stringify({
+    compilerOptions: { target: "es2022", module: "es2022", moduleResolution: "bundler", strict: true, noEmit: true, lib: ["es2022", "dom"] },
+    files: ["usage.ts"],
+  }));
+  const tsc = spawnSync(path.join(web, "node_modules/.bin/tsc"), ["-p", scratch], { encoding: "utf8" });
+  assert.equal(tsc.status, 0, `tsc: ${tsc.stdout}${tsc.stderr}`);
+  // A wrong setting must not type-check.
+  fs.writeFileSync(path.join(scratch, "usage.ts"), `import { createViewer } from "raypipe";
+const viewer = await createViewer(document.body);
+viewer.set({ accel: "fastest" });
+`);
+  const wrong = spawnSync(path.join(web, "node_modules/.bin/tsc"), ["-p", scratch], { encoding: "utf8" });
+  assert.notEqual(wrong.status, 0, "tsc took accel: \"fastest\"");
+
+  // Every union of names in the declarations is the module's own list.
+  const declarations = fs.readFileSync(path.join(scratch, "node_modules/raypipe/raypipe.d.ts"), "utf8");
+  const offered = await page.evaluate(async () => (await import("raypipe")).choices());
+  const unions = { accel: "Accel", builder: "Builder", memory: "Memory", pipeline: "Pipeline", aov: "View", tonemap: "ToneMap" };
+  for (const [key, type] of Object.entries(unions)) {
+    const line = declarations.match(new RegExp(`export type ${type} = ([^;]+);`));
+    assert.ok(line, `raypipe.d.ts has no type ${type}`);
+    const names = [...line[1].matchAll(/"([^"]+)"/g)].map((m) => m[1]);
+    assert.deepEqual(names.sort(), [...offered.choices[key]].sort(), `${type} in raypipe.d.ts`);
+  }
+});
