@@ -164,6 +164,10 @@ impl GpuContext {
     /// Opens a device on `adapter` with every limit it offers (large scenes need its real buffer and
     /// texture limits, ray queries its acceleration structures' limits), timestamp queries and ray
     /// queries where it has them.
+    ///
+    /// On GL, the devices of one adapter share its context, where wgpu binds the vertex array of
+    /// the device opened last: dropping a second device there leaves the first drawing nothing.
+    /// Open one device per GL adapter, or keep the later ones alive.
     pub async fn open(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         if let Some(warning) = driver_warning(&info) {
