@@ -2,8 +2,8 @@
 # Installs Mesa's software GPU drivers, so raypipe has an adapter on a machine without a GPU:
 # lavapipe (Vulkan) and llvmpipe (OpenGL through EGL); and, for the viewer's tests, a virtual X
 # display (Xvfb) with imagemagick to capture its screen; and a C++ compiler for FLIP (`nv-flip`, which
-# `raypipe diff` builds from source); and, for the web page's tests, Chromium and Node.js. Debian and
-# Ubuntu; run as root.
+# `raypipe diff` builds from source); and, for the web page's tests, Chromium, Firefox ESR (run on
+# the virtual display: headless, it has no WebGL2 here) and Node.js. Debian and Ubuntu; run as root.
 #
 # Debian 12's own Mesa (22.3) miscompiles the tracer's ray loop (it ends the loop with rays still on
 # the stack, so reflections and refractions go missing); Mesa 25 from bookworm-backports is correct.
@@ -16,7 +16,7 @@ export DEBIAN_FRONTEND=noninteractive
 packages="mesa-vulkan-drivers libgl1-mesa-dri libegl-mesa0 libglx-mesa0 libegl1"
 window_packages="xvfb xauth imagemagick xdotool libxkbcommon-x11-0"
 build_packages="g++"
-browser_packages="chromium"
+browser_packages="chromium firefox-esr"
 . /etc/os-release
 if [ "${VERSION_CODENAME:-}" = bookworm ]; then
   echo "deb http://deb.debian.org/debian bookworm-backports main" > /etc/apt/sources.list.d/bookworm-backports.list

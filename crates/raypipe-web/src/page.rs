@@ -126,6 +126,7 @@ pub async fn start(canvas: web_sys::HtmlCanvasElement, query: String, strict: bo
     let page = open(canvas, params, errors).await.map_err(|why| JsError::new(&why))?;
     let page = Rc::new(RefCell::new(page));
     Page::watch_canvas(&page);
+    Page::watch_device(&page);
     page.borrow_mut().publish();
     animate(&page);
     Ok(Viewer { page })
@@ -334,9 +335,8 @@ impl Page {
             (this.gpu == GpuState::Live).then(|| this.screen.ctx.lost()).flatten()
         };
         if let Some(why) = lost {
-            // WebGPU: a new adapter and device at once.
-            Page::lose(page, format!("the GPU was lost ({why})"));
-            Page::restore(page);
+            // Heard of by the frame before the watch's task ran.
+            Page::device_lost(page, why);
             return;
         }
         if page.borrow().webgl_context_lost() {
@@ -396,6 +396,32 @@ impl Page {
         }
     }
 
+    /// Acts on the loss of the current device as soon as wgpu reports it, not at the next
+    /// animation frame, which may not come (see [`Page::restore`]).
+    fn watch_device(page: &Rc<RefCell<Page>>) {
+        let (lost, generation) = {
+            let this = page.borrow();
+            (this.screen.ctx.when_lost(), this.generation)
+        };
+        let weak = Rc::downgrade(page);
+        wasm_bindgen_futures::spawn_local(async move {
+            let Some(why) = lost.await else { return };
+            let current = weak.upgrade().filter(|page| page.borrow().generation == generation);
+            if let Some(page) = current {
+                Page::device_lost(&page, why);
+            }
+        });
+    }
+
+    /// wgpu says the device is lost. WebGPU: a new adapter and device at once. WebGL2 waits for
+    /// its context's restoration.
+    fn device_lost(page: &Rc<RefCell<Page>>, why: String) {
+        Page::lose(page, format!("the GPU was lost ({why})"));
+        if page.borrow().backend == WebBackend::WebGpu {
+            Page::restore(page);
+        }
+    }
+
     /// The device is gone: nothing is drawn or built until [`Page::restore`] opens another.
     fn lose(page: &Rc<RefCell<Page>>, why: String) {
         let mut this = page.borrow_mut();
@@ -441,6 +467,7 @@ impl Page {
                     }
                 }
             };
+            Page::watch_device(&page);
             let built = request.build(&ctx).await;
             let waiting = {
                 let mut this = page.borrow_mut();
@@ -465,6 +492,12 @@ impl Page {
                     this.waiting.take()
                 }
             };
+            if page.borrow().gpu == GpuState::Live {
+                // Drawn now, not at the next animation frame: Firefox (ESR 153) gives a page no
+                // animation frame again once a device that presented to one of its canvases is
+                // destroyed, a plain WebGPU page too.
+                Page::frame(&page);
+            }
             if let Some(pending) = waiting {
                 Page::build(&page, pending);
             }

@@ -9,7 +9,7 @@ use crate::error::one_line;
 use crate::modes::{Accel, MemoryMode};
 use std::future::Future;
 use std::pin::Pin;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, Weak};
 use std::task::{Context, Poll, Waker};
 
 /// A backend a caller can ask for; without one, `WGPU_BACKEND` or wgpu's default order decides.
@@ -106,7 +106,49 @@ pub struct GpuContext {
     /// ([`Accel::RayQuery`]).
     pub ray_queries: bool,
     /// Why the device was lost, once wgpu said so ([`GpuContext::watch_loss`]).
-    lost: Arc<Mutex<Option<String>>>,
+    lost: Arc<Mutex<Loss>>,
+}
+
+/// What a context knows of its device's loss, and who waits to hear of it.
+#[derive(Debug, Default)]
+struct Loss {
+    why: Option<String>,
+    /// The tasks awaiting [`GpuContext::when_lost`].
+    waiting: Vec<Waker>,
+}
+
+impl Loss {
+    fn why(loss: &Mutex<Loss>) -> Option<String> {
+        loss.lock().unwrap_or_else(|e| e.into_inner()).why.clone()
+    }
+}
+
+impl Drop for Loss {
+    /// Gone with the device, never lost: its waiters hear `None`.
+    fn drop(&mut self) {
+        self.waiting.drain(..).for_each(Waker::wake);
+    }
+}
+
+/// [`GpuContext::when_lost`]'s future.
+pub struct WhenLost(Weak<Mutex<Loss>>);
+
+impl Future for WhenLost {
+    type Output = Option<String>;
+
+    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<String>> {
+        let Some(loss) = self.0.upgrade() else {
+            return Poll::Ready(None);
+        };
+        let mut loss = loss.lock().unwrap_or_else(|e| e.into_inner());
+        match &loss.why {
+            Some(why) => Poll::Ready(Some(why.clone())),
+            None => {
+                loss.waiting.push(cx.waker().clone());
+                Poll::Pending
+            }
+        }
+    }
 }
 
 impl GpuContext {
@@ -228,13 +270,22 @@ impl GpuContext {
                 line => line,
             };
             log::warn!("the GPU was lost ({why})");
-            *lost.lock().unwrap_or_else(|e| e.into_inner()) = Some(why);
+            let mut loss = lost.lock().unwrap_or_else(|e| e.into_inner());
+            loss.why = Some(why);
+            loss.waiting.drain(..).for_each(Waker::wake);
         });
     }
 
     /// Why the device was lost, if it was (and [`GpuContext::watch_loss`] heard of it).
     pub fn lost(&self) -> Option<String> {
-        self.lost.lock().unwrap_or_else(|e| e.into_inner()).clone()
+        Loss::why(&self.lost)
+    }
+
+    /// Resolves with why the device was lost when [`GpuContext::watch_loss`] hears of it, or with
+    /// `None` once the device and every clone of this context are gone. For a program that must
+    /// act on a loss while it draws nothing (a browser may stop its animation frames then).
+    pub fn when_lost(&self) -> WhenLost {
+        WhenLost(Arc::downgrade(&self.lost))
     }
 
     /// `Err(GpuError::Lost)` once the device is lost: checked before work that would make
@@ -330,7 +381,7 @@ impl GpuContext {
 /// Error scopes opened by [`GpuContext::error_scopes`].
 pub struct ErrorScopes {
     what: &'static str,
-    lost: Arc<Mutex<Option<String>>>,
+    lost: Arc<Mutex<Loss>>,
     memory: wgpu::ErrorScopeGuard,
     validation: wgpu::ErrorScopeGuard,
 }
@@ -343,7 +394,7 @@ impl ErrorScopes {
         let memory = self.memory.pop();
         async move {
             let error = validation.await.or(memory.await);
-            match (error, lost.lock().unwrap_or_else(|e| e.into_inner()).clone()) {
+            match (error, Loss::why(&lost)) {
                 (None, _) => Ok(()),
                 (Some(_), Some(why)) => Err(GpuError::Lost { why }),
                 (Some(error), None) => Err(GpuError::Operation {
