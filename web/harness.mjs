@@ -125,7 +125,12 @@ class FirefoxPage {
       screenshot: async ({ path: file }) => (await element()).screenshot({ path: file }),
       isVisible: async () => (await element()).isVisible(),
       evaluate: async (fn, arg) => (await element()).evaluate(fn, arg),
-      fill: async (value) => (await element()).evaluate((input, value) => { input.value = value; }, value),
+      // As Playwright's: the field focused (the page leaves a focused field alone), its value, `input`.
+      fill: async (value) => (await element()).evaluate((input, value) => {
+        input.focus();
+        input.value = value;
+        input.dispatchEvent(new Event("input", { bubbles: true }));
+      }, value),
       dispatchEvent: async (type) => (await element()).evaluate((input, type) => input.dispatchEvent(new Event(type, { bubbles: true })), type),
       uncheck: async () => (await element()).evaluate((input) => {
         if (input.checked) input.click();

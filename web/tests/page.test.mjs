@@ -1,12 +1,14 @@
 // The page in headless Chromium, on WebGPU (SwiftShader's Vulkan) and on WebGL2 (ANGLE on
-// SwiftShader): its canvas against the native CPU reference (`raypipe render --device cpu`) of the
+// SwiftShader), or in Firefox (RAYPIPE_BROWSER=firefox, under xvfb-run: WebGPU on its wgpu over
+// lavapipe, WebGL2 on llvmpipe): its canvas against the native CPU reference (`raypipe render --device cpu`) of the
 // same scene and size, compared by `raypipe diff --tolerance color`, the GPU-against-CPU colour
 // tolerance of the Rust tests (Tolerance::COLOR in src/image/diff.rs); switches, motion, broken
 // files and a browser without either API. On a failure the screenshot and the difference image stay
 // in target/web-test/.
 //
 // Needs the page built (scripts/build-web.sh target/web, or RAYPIPE_WEB_DIR), the native binary
-// (target/release/raypipe, or RAYPIPE_BIN) and Chromium (/usr/bin/chromium, or CHROMIUM).
+// (target/release/raypipe, or RAYPIPE_BIN) and the browser (/usr/bin/chromium, or CHROMIUM;
+// /usr/bin/firefox-esr, or FIREFOX).
 import { test, before, after, describe } from "node:test";
 import assert from "node:assert/strict";
 import { execFileSync, spawnSync } from "node:child_process";
@@ -442,7 +444,7 @@ test("a bad URL setting is reported and the rest applies", async () => {
   assert.equal(status.error, "accel=bvh: expected one of brute, stack, stackless, threaded");
   assert.equal(status.width, 64);
   // The walk the page takes where the URL names none: the stack walk on a software adapter, as
-  // Chromium's SwiftShader is here.
+  // Chromium's SwiftShader and Firefox's llvmpipe are here.
   assert.equal(status.accel, "stack");
   await shows(page, status.error);
   await page.close();
