@@ -88,6 +88,12 @@ impl App {
 
     fn draw(&mut self, event_loop: &ActiveEventLoop) {
         let Some(gpu) = &mut self.gpu else { return };
+        // A device lost (a driver reset, an unplugged GPU): said in one line, and the program ends.
+        if let Err(lost) = gpu.ctx.live() {
+            eprintln!("error: {lost}");
+            event_loop.exit();
+            return;
+        }
         let Some(texture) = next_texture(&gpu.surface, &gpu.ctx.device, &gpu.config) else {
             return;
         };

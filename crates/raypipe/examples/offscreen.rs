@@ -29,6 +29,8 @@ async fn run(path: &str) -> Result<(), Box<dyn Error>> {
         })
         .await?;
     let ctx = GpuContext::from_device(adapter, device, queue);
+    // A device lost later (a driver reset): every operation fails with GpuError::Lost's one line.
+    ctx.watch_loss();
 
     // The scene, packed into the records the shader reads, with its BVH built on the CPU.
     let mut scene = Scene::load("whitted")?;
