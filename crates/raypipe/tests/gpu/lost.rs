@@ -1,12 +1,26 @@
 //! A lost device (a driver reset, a removed GPU; here `Device::destroy`, which wgpu reports the
 //! same way): every operation after it fails with `GpuError::Lost` and its one line, none panics,
-//! and the device the other tests share goes on.
+//! `when_lost()` wakes its task, and the device the other tests share goes on.
 
 use crate::common::harness::Test;
 use crate::common::*;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{GpuContext, GpuError, Renderer, RendererOptions};
 use raypipe::modes::MemoryMode;
+use std::future::Future;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::task::{Context, Poll, Wake, Waker};
+
+/// A waker that records that it was woken.
+#[derive(Default)]
+struct Woken(AtomicBool);
+
+impl Wake for Woken {
+    fn wake(self: Arc<Self>) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+}
 
 fn assert_lost<T>(result: Result<T, GpuError>, what: &str) {
     match result {
@@ -33,10 +47,18 @@ fn a_lost_device_fails_each_operation_with_one_line(ctx: &GpuContext) {
     pollster::block_on(renderer.read_frame()).expect("a frame before the loss");
     assert_eq!(own.lost(), None);
 
-    // wgpu hears of the loss at its next poll (here the frame's read-back), as of a driver reset.
+    // wgpu hears of the loss at its next poll (here the frame's read-back), as of a driver reset;
+    // a task awaiting when_lost() is woken then.
+    let mut when_lost = std::pin::pin!(own.when_lost());
+    let woken = Arc::new(Woken::default());
+    let waker = Waker::from(woken.clone());
+    let mut cx = Context::from_waker(&waker);
+    assert_eq!(when_lost.as_mut().poll(&mut cx), Poll::Pending);
     own.device.destroy();
     assert_lost(pollster::block_on(renderer.read_frame()), "a frame");
     assert!(own.lost().is_some(), "wgpu did not report the loss");
+    assert!(woken.0.load(Ordering::SeqCst), "when_lost's task was not woken");
+    assert_eq!(when_lost.as_mut().poll(&mut cx), Poll::Ready(own.lost()));
     assert_lost(pollster::block_on(renderer.read_back()), "a read-back");
     assert_lost(
         pollster::block_on(Renderer::new(&own, &scene, options)),
@@ -50,6 +72,14 @@ fn a_lost_device_fails_each_operation_with_one_line(ctx: &GpuContext) {
     drop(renderer);
     if own.info.backend == wgpu::Backend::Gl {
         std::mem::forget(own);
+    }
+
+    // A device gone without a loss: when_lost() ends with None. (Not on GL, as above.)
+    if ctx.info.backend != wgpu::Backend::Gl {
+        let other = pollster::block_on(GpuContext::open(ctx.adapter.clone())).expect("a third device");
+        let when_lost = other.when_lost();
+        drop(other);
+        assert_eq!(pollster::block_on(when_lost), None);
     }
 
     // The shared device is untouched.
