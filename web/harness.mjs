@@ -115,8 +115,7 @@ class FirefoxPage {
     const file = path.join(this.files, name);
     fs.writeFileSync(file, buffer);
     const input = await this.page.$(selector);
-    await input.uploadFile(file);
-    await input.evaluate((element) => element.dispatchEvent(new Event("change", { bubbles: true })));
+    await input.uploadFile(file); // fires `input` and `change`, as a user's choice does
   }
 
   locator(selector) {

@@ -416,22 +416,24 @@ impl Page {
     /// wgpu says the device is lost. WebGPU: a new adapter and device at once. WebGL2 waits for
     /// its context's restoration.
     fn device_lost(page: &Rc<RefCell<Page>>, why: String) {
-        Page::lose(page, format!("the GPU was lost ({why})"));
-        if page.borrow().backend == WebBackend::WebGpu {
+        // Heard of twice (by a frame and by the watch's task), it is restored once.
+        if Page::lose(page, format!("the GPU was lost ({why})")) && page.borrow().backend == WebBackend::WebGpu {
             Page::restore(page);
         }
     }
 
     /// The device is gone: nothing is drawn or built until [`Page::restore`] opens another.
-    fn lose(page: &Rc<RefCell<Page>>, why: String) {
+    /// Whether the viewer was not lost already (nor disposed).
+    fn lose(page: &Rc<RefCell<Page>>, why: String) -> bool {
         let mut this = page.borrow_mut();
         if this.disposed || this.gpu == GpuState::Lost {
-            return;
+            return false;
         }
         this.gpu = GpuState::Lost;
         this.player
             .say(format!("{why}; the viewer shows the scene again when it can"));
         this.publish();
+        true
     }
 
     /// Opens a new device on the canvas (the same backend) and builds the tracer of the scene as
@@ -448,7 +450,7 @@ impl Page {
         let page = page.clone();
         wasm_bindgen_futures::spawn_local(async move {
             let opened = screen_on(&canvas, Some(backend), size).await;
-            let (ctx, request) = {
+            let (ctx, request, generation) = {
                 let mut this = page.borrow_mut();
                 if this.disposed {
                     return;
@@ -458,7 +460,7 @@ impl Page {
                         this.screen = screen;
                         this.generation += 1;
                         this.gpu = GpuState::Restoring;
-                        (this.screen.ctx.clone(), this.player.restore_request())
+                        (this.screen.ctx.clone(), this.player.restore_request(), this.generation)
                     }
                     Err(why) => {
                         this.player.say(format!("the GPU was lost and no new one opens: {why}"));
@@ -471,7 +473,8 @@ impl Page {
             let built = request.build(&ctx).await;
             let waiting = {
                 let mut this = page.borrow_mut();
-                if this.disposed || this.gpu != GpuState::Restoring {
+                // Lost again meanwhile: the restoration of the device opened since is the one.
+                if this.disposed || this.gpu != GpuState::Restoring || this.generation != generation {
                     return;
                 }
                 match built {

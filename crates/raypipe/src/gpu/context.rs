@@ -144,7 +144,9 @@ impl Future for WhenLost {
         match &loss.why {
             Some(why) => Poll::Ready(Some(why.clone())),
             None => {
-                loss.waiting.push(cx.waker().clone());
+                if !loss.waiting.iter().any(|waiting| waiting.will_wake(cx.waker())) {
+                    loss.waiting.push(cx.waker().clone());
+                }
                 Poll::Pending
             }
         }
