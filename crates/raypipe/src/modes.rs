@@ -16,6 +16,9 @@ pub enum Accel {
     /// The linear BVH, walked without a stack along escape links, in fixed depth-first order.
     #[default]
     Threaded,
+    /// The linear BVH collapsed into compressed 8-wide nodes (Ylitie et al. 2017), walked with a
+    /// stack of node groups, children in the order of the ray's octant.
+    Wide,
     /// The driver's own acceleration structures (a BLAS of triangles, one of spheres as boxes, a
     /// TLAS over them) walked by ray queries: ray-tracing hardware where the GPU has it. Vulkan,
     /// DX12 and Metal adapters with ray queries only.
@@ -42,6 +45,11 @@ impl_choice!(
             "the linear BVH, walked without a stack along escape links, in fixed depth-first order"
         ),
         (
+            Wide,
+            "wide",
+            "the linear BVH collapsed into compressed 8-wide nodes (Ylitie et al. 2017), children in the order of the ray's octant"
+        ),
+        (
             RayQuery,
             "rayquery",
             "the driver's acceleration structures, walked by ray queries (adapters with ray queries only)"
@@ -61,7 +69,7 @@ impl Accel {
     }
 
     /// The walks over the BVH, without brute force.
-    pub const BVH: [Accel; 3] = [Accel::Stack, Accel::Stackless, Accel::Threaded];
+    pub const BVH: [Accel; 4] = [Accel::Stack, Accel::Stackless, Accel::Threaded, Accel::Wide];
 }
 
 /// The order the driver's bottom-level structures hold their primitives in, with

@@ -8,8 +8,11 @@ use raypipe::bvh::lbvh::{Hierarchy, LbvhBuilder};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::{build_binned_sah, sah_cost};
 use raypipe::bvh::threaded::{self, GpuThreadedNode, threaded_nodes};
+use raypipe::bvh::wide::{self, GpuWideTexel, NODE_TEXELS, WideTree};
 use raypipe::bvh::{Bvh, centroid_codes};
-use raypipe::cpu::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
+use raypipe::cpu::accel::{
+    brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded, traverse_wide,
+};
 use raypipe::cpu::admit::Primitives;
 use raypipe::cpu::intersect::{Hit, HitKind, Ray};
 use raypipe::records::packed::primitive_boxes;
@@ -66,6 +69,14 @@ fn check_all_builders(boxes: &[Aabb]) -> Result<(), TestCaseError> {
             bits,
             boxes.len()
         );
+        let packed = PackedBvh::new(bvh);
+        prop_assert_eq!(
+            wide::validate(&packed.wide_tree(), boxes),
+            Ok(()),
+            "wide LBVH {:?} over {} boxes",
+            bits,
+            boxes.len()
+        );
     }
     let sah = build_binned_sah(boxes);
     prop_assert_eq!(sah.validate(boxes), Ok(()), "binned SAH over {} boxes", boxes.len());
@@ -74,6 +85,13 @@ fn check_all_builders(boxes: &[Aabb]) -> Result<(), TestCaseError> {
         threaded::validate(&frame, &threaded, boxes),
         Ok(()),
         "threaded binned SAH over {} boxes",
+        boxes.len()
+    );
+    let packed = PackedBvh::new(sah);
+    prop_assert_eq!(
+        wide::validate(&packed.wide_tree(), boxes),
+        Ok(()),
+        "wide binned SAH over {} boxes",
         boxes.len()
     );
     Ok(())
@@ -131,6 +149,7 @@ fn zero_one_and_two_primitives() {
         let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
         assert_eq!(bvh.nodes.len(), (2 * n).saturating_sub(1));
         bvh.validate(&boxes).unwrap();
+        wide::validate(&PackedBvh::new(bvh).wide_tree(), &boxes).unwrap();
     }
 }
 
@@ -159,6 +178,46 @@ fn a_corrupted_tree_fails_validation() {
     corruptions.push(("a wrong parent", b));
     for (what, corrupted) in corruptions {
         assert!(corrupted.validate(&boxes).is_err(), "{what} passed validation");
+    }
+}
+
+#[test]
+fn a_corrupted_wide_tree_fails_validation() {
+    let boxes = spheres_to_boxes(
+        &(0..200)
+            .map(|i| (Vec3::new(i as f32, (i % 7) as f32, (i % 3) as f32), 0.4))
+            .collect::<Vec<_>>(),
+    );
+    let (bvh, _) = Bvh::build_lbvh(&boxes, MortonBits::Bits30);
+    let packed = PackedBvh::new(bvh);
+    let tree = packed.wide_tree();
+    wide::validate(&tree, &boxes).unwrap();
+    let root = tree.root as usize;
+    let node = tree.node(tree.root);
+    assert_eq!(node.slots, 0xff, "the root of 200 primitives has eight children");
+    let slot = node.slots.trailing_zeros() as usize;
+    let mut corruptions: Vec<(&str, Vec<GpuWideTexel>)> = Vec::new();
+    let mut c = packed.wide_texels.clone();
+    // The root's first slot's high x corner brought down to its low one.
+    let low_x = (node.lo[0][slot / 4] >> (8 * (slot % 4))) & 0xff;
+    c[root + 3].words[2 + slot / 4] &= !(0xff << (8 * (slot % 4)));
+    c[root + 3].words[2 + slot / 4] |= low_x << (8 * (slot % 4));
+    corruptions.push(("a box that no longer holds its primitives", c));
+    let mut c = packed.wide_texels.clone();
+    c[root + 1].words[0] += NODE_TEXELS;
+    corruptions.push(("a child base one node off", c));
+    let mut c = packed.wide_texels.clone();
+    c[0].words[1] = c[0].words[0];
+    corruptions.push(("a primitive in two leaves", c));
+    let mut c = packed.wide_texels.clone();
+    c[root].words[0] = (f32::from_bits(c[root].words[0]) + 1.0).to_bits();
+    corruptions.push(("a node frame moved along x", c));
+    for (what, corrupted) in corruptions {
+        let tree = WideTree {
+            texels: &corrupted,
+            ..tree
+        };
+        assert!(wide::validate(&tree, &boxes).is_err(), "{what} passed validation");
     }
 }
 
@@ -280,7 +339,7 @@ fn a_u64_key_refuses_63_bit_codes() {
 
 type Traversal = fn(&PackedBvh, &Primitives, &Ray, Hit, bool) -> Hit;
 
-const TRAVERSALS: [(&str, Traversal); 3] = [
+const TRAVERSALS: [(&str, Traversal); 4] = [
     ("stack", |t, p, ray, best, shadow| {
         traverse_stack(t.threaded_tree(), p, ray, best, shadow)
     }),
@@ -289,6 +348,9 @@ const TRAVERSALS: [(&str, Traversal); 3] = [
     }),
     ("threaded", |t, p, ray, best, shadow| {
         traverse_threaded(t.threaded_tree(), p, ray, best, shadow)
+    }),
+    ("wide", |t, p, ray, best, shadow| {
+        traverse_wide(t.wide_tree(), p, ray, best, shadow)
     }),
 ];
 

@@ -34,6 +34,7 @@ fn host_layouts() -> Vec<&'static StructLayout> {
         LAYOUTS,
         raypipe::gpu::build::LAYOUTS,
         raypipe::gpu::threaded::LAYOUTS,
+        raypipe::gpu::wide::LAYOUTS,
         raypipe::gpu::display::LAYOUTS,
         raypipe::gpu::deform::LAYOUTS,
     ]
@@ -133,6 +134,7 @@ fn every_shader_variant_validates() {
 fn the_build_layout_skinning_and_display_shaders_validate() {
     let mut sources = vec![
         ("threaded layout".to_string(), raypipe::gpu::threaded::shader_source()),
+        ("wide collapse".to_string(), raypipe::gpu::wide::shader_source()),
         ("display".to_string(), raypipe::gpu::display::shader_source()),
         ("skinning".to_string(), raypipe::gpu::deform::shader_source()),
     ];
@@ -177,6 +179,8 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
     }
     let count = storage_buffers(&raypipe::gpu::threaded::shader_source());
     assert!(count <= 8, "the threaded layout binds {count} storage buffers");
+    let count = storage_buffers(&raypipe::gpu::wide::shader_source());
+    assert!(count <= 8, "the wide collapse binds {count} storage buffers");
     let scene = PackedScene::new(&builtin::whitted()).unwrap();
     for &accel in Accel::ALL {
         let source = compose(&ShaderConfig {
@@ -244,6 +248,8 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
         one("LEAF_BIT", LEAF_BIT as f64),
         one("MAX_QUANTUM", MAX_QUANTUM as f64),
         one("TINY_EXTENT", TINY_EXTENT as f64),
+        one("WIDE_SPAN", raypipe::bvh::wide::SPAN as f64),
+        one("WIDE_NODE_TEXELS", raypipe::bvh::wide::NODE_TEXELS as f64),
     ];
     records.extend(raypipe::scene::Wrap::ALL.map(|w| one(w.wgsl_name(), w.code() as f64)));
     let mut tracer = records.clone();
@@ -264,6 +270,8 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
     build.push(one("GROUP", raypipe::gpu::build::GROUP as f64));
     build.push(one("DIGIT_BITS", raypipe::gpu::build::DIGIT_BITS as f64));
     build.push(one("DIGITS", (1u32 << raypipe::gpu::build::DIGIT_BITS) as f64));
+    let mut wide = records.clone();
+    wide.push(one("GROUP", raypipe::gpu::wide::GROUP as f64));
     let mut threaded = records;
     threaded.push(one("GROUP", raypipe::gpu::threaded::GROUP as f64));
     let mut display: Vec<_> = raypipe::modes::Aov::ALL
@@ -282,6 +290,7 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
             raypipe::gpu::threaded::shader_source(),
             threaded,
         ),
+        ("wide collapse".into(), raypipe::gpu::wide::shader_source(), wide),
         ("display".into(), raypipe::gpu::display::shader_source(), display),
     ]
 }

@@ -11,6 +11,7 @@ pub mod sah;
 pub mod sort;
 pub mod threaded;
 pub mod validate;
+pub mod wide;
 
 use aabb::Aabb;
 use layout::{GpuNode, NONE};
@@ -40,11 +41,15 @@ pub struct BuildTimings {
     /// The tree laid out again as the stack and threaded walks read it (16-byte nodes in depth-first
     /// order, `gpu::threaded`), where a per-frame GPU rebuild does that; zero elsewhere.
     pub layout: f64,
+    /// The tree collapsed into the wide walk's compressed 8-wide nodes (`bvh::wide`): on the GPU
+    /// where a per-frame rebuild for the wide walk does it, on the CPU wherever the host packs a
+    /// tree.
+    pub collapse: f64,
 }
 
 impl BuildTimings {
     pub fn total(&self) -> f64 {
-        self.morton + self.sort + self.hierarchy + self.bounds + self.links + self.layout
+        self.morton + self.sort + self.hierarchy + self.bounds + self.links + self.layout + self.collapse
     }
 }
 

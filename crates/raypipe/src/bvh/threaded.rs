@@ -117,7 +117,7 @@ impl QuantizationFrame {
 }
 
 /// Subnormals as zero: GPUs may flush them, and the two devices must quantize alike.
-fn flush_subnormal(v: Vec3) -> Vec3 {
+pub(crate) fn flush_subnormal(v: Vec3) -> Vec3 {
     Vec3::select(v.cmplt(Vec3::splat(f32::MIN_POSITIVE)), Vec3::ZERO, v)
 }
 
@@ -135,7 +135,7 @@ pub fn quantum_for(extent: f32) -> f32 {
     power_of_two(exponent)
 }
 
-const fn power_of_two(exponent: i32) -> f32 {
+pub(crate) const fn power_of_two(exponent: i32) -> f32 {
     f32::from_bits(((exponent + 127) as u32) << 23)
 }
 

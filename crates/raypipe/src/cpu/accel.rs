@@ -8,6 +8,7 @@ use super::intersect::{
 };
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::{GpuThreadedNode, LEAF_BIT, QuantizationFrame, ThreadedTree};
+use crate::bvh::wide::{NODE_TEXELS, WIDTH, WideTree};
 use glam::Vec3;
 
 /// Brute force: every ray against every primitive (`accel_brute.wgsl`).
@@ -236,4 +237,116 @@ pub fn traverse_stackless(nodes: &[GpuNode], primitives: &Primitives, ray: &Ray,
         }
     }
     hit
+}
+
+/// A group of a wide node's children waiting to be visited (Ylitie et al.'s node and triangle
+/// groups): where they are stored, the slots the ray hit as bits `slot ^ octant` (so the highest
+/// bit is the nearest child), and the slots of the same kind that the node holds, to find a
+/// child's place among them.
+#[derive(Clone, Copy, Default)]
+struct ChildGroup {
+    base: u32,
+    hits: u32,
+    kind_mask: u32,
+}
+
+impl ChildGroup {
+    /// Takes the nearest hit child: the texel of an internal child, the word of a leaf's primitive.
+    fn take_nearest(&mut self, octant: u32, stride: u32) -> u32 {
+        let bit = 31 - self.hits.leading_zeros();
+        self.hits &= !(1 << bit);
+        let slot = bit ^ octant;
+        self.base + stride * (self.kind_mask & ((1 << slot) - 1)).count_ones()
+    }
+}
+
+/// The closest primitive hit that beats `best`; with `shadow`, the first hit nearer than best.t
+/// (`traverse_wide` in `accel_wide.wgsl`) over the compressed wide BVH of [`wide`]: each node's
+/// eight boxes tested at once, its hit leaves tested at once, its hit internal children visited
+/// nearest first in the order of the ray's octant, the rest waiting on a stack as one group.
+///
+/// [`wide`]: crate::bvh::wide
+pub fn traverse_wide(tree: WideTree, primitives: &Primitives, ray: &Ray, best: Hit, shadow: bool) -> Hit {
+    let mut hit = best;
+    if primitives.count() == 0 {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    let octant = ray_octant(ray.dir);
+    // The root, as a group of one internal child in slot 0.
+    let mut nodes = ChildGroup {
+        base: tree.root,
+        hits: 1 << octant,
+        kind_mask: 1,
+    };
+    let capacity = tree.stack_size as usize;
+    let mut stack: Vec<ChildGroup> = Vec::with_capacity(capacity);
+    loop {
+        let mut leaves = ChildGroup::default();
+        if nodes.hits != 0 {
+            let texel = nodes.take_nearest(octant, NODE_TEXELS);
+            if nodes.hits != 0 {
+                assert!(
+                    stack.len() < capacity,
+                    "the BVH stack of {capacity} overflowed: the tree is deeper than its stated depth"
+                );
+                stack.push(nodes);
+            }
+            let node = tree.node(texel);
+            // The ray in the node's frame, where its children's corners are whole quanta.
+            let origin = (ray.origin - Vec3::from_array(node.origin)) * node.inverse_quantum();
+            let node_inv_dir = inv_dir * node.quantum();
+            let mut hit_slots = 0;
+            for slot in 0..WIDTH {
+                if node.slots & (1 << slot) != 0 {
+                    let (lo, hi) = node.corners(slot);
+                    if intersect_box(lo, hi, origin, node_inv_dir, hit.t) >= 0.0 {
+                        hit_slots |= 1 << slot;
+                    }
+                }
+            }
+            nodes = ChildGroup {
+                base: node.child_base,
+                hits: octant_bits(hit_slots & node.imask(), octant),
+                kind_mask: node.imask(),
+            };
+            leaves = ChildGroup {
+                base: node.leaf_base,
+                hits: octant_bits(hit_slots & node.leaf_mask(), octant),
+                kind_mask: node.leaf_mask(),
+            };
+        } else if let Some(waiting) = stack.pop() {
+            nodes = waiting;
+        } else {
+            break;
+        }
+        while leaves.hits != 0 {
+            let word = leaves.take_nearest(octant, 1);
+            if hit_primitive(primitives, tree.word(word), ray, &mut hit) && shadow {
+                return hit;
+            }
+        }
+    }
+    hit
+}
+
+/// The ray's octant: bit k set where its direction's component k is not negative.
+fn ray_octant(dir: Vec3) -> u32 {
+    (dir.x >= 0.0) as u32 | ((dir.y >= 0.0) as u32) << 1 | ((dir.z >= 0.0) as u32) << 2
+}
+
+/// A mask of slots moved to the bits `slot ^ octant`: pairs, then pairs of pairs, then halves
+/// swapped where the octant's bits say.
+fn octant_bits(mask: u32, octant: u32) -> u32 {
+    let mut bits = mask;
+    if octant & 1 != 0 {
+        bits = (bits & 0x55) << 1 | (bits >> 1) & 0x55;
+    }
+    if octant & 2 != 0 {
+        bits = (bits & 0x33) << 2 | (bits >> 2) & 0x33;
+    }
+    if octant & 4 != 0 {
+        bits = (bits & 0x0f) << 4 | (bits >> 4) & 0x0f;
+    }
+    bits
 }

@@ -1,6 +1,8 @@
 //! The tracer for one pixel: the twin of `shaders/trace.wgsl`, loop for loop.
 
-use super::accel::{brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded};
+use super::accel::{
+    brute_closest, brute_occluded, traverse_stack, traverse_stackless, traverse_threaded, traverse_wide,
+};
 use super::admit::{Primitives, RayQuery};
 use super::brdf::sample_specular;
 use super::environment::escaped_radiance;
@@ -114,6 +116,7 @@ impl<'a> Tracer<'a> {
             Accel::Stack => traverse_stack(bvh.threaded_tree(), &primitives, ray, best, false),
             Accel::Stackless => traverse_stackless(&bvh.nodes, &primitives, ray, best, false),
             Accel::Threaded => traverse_threaded(bvh.threaded_tree(), &primitives, ray, best, false),
+            Accel::Wide => traverse_wide(bvh.wide_tree(), &primitives, ray, best, false),
         }
     }
 
@@ -134,6 +137,7 @@ impl<'a> Tracer<'a> {
             Accel::Stack => traverse_stack(bvh.threaded_tree(), &primitives, ray, none, true),
             Accel::Stackless => traverse_stackless(&bvh.nodes, &primitives, ray, none, true),
             Accel::Threaded => traverse_threaded(bvh.threaded_tree(), &primitives, ray, none, true),
+            Accel::Wide => traverse_wide(bvh.wide_tree(), &primitives, ray, none, true),
         };
         hit.kind != HitKind::None
     }

@@ -733,6 +733,7 @@ impl GpuLbvhBuilder {
             triangles: self.buffers.triangles.clone(),
             nodes: self.buffers.nodes.clone(),
             threaded_nodes: None,
+            wide: None,
             bvh_frame: None,
             triangle_normals: None,
         }

@@ -17,6 +17,7 @@ pub mod shader;
 pub mod threaded;
 pub mod timing;
 pub mod upload;
+pub mod wide;
 
 pub use context::{Backend, GpuContext};
 pub use display::{Display, Shown};

@@ -19,6 +19,7 @@ use super::renderer::Renderer;
 use super::shader::RecordKind;
 use super::threaded::GpuThreadedLayout;
 use super::upload::SharedBuffers;
+use super::wide::GpuWideCollapse;
 use super::{GpuContext, GpuError};
 use crate::bvh::BuildTimings;
 use crate::bvh::lbvh::LbvhBuilder;
@@ -33,6 +34,8 @@ pub struct SceneRebuild {
     builder: GpuLbvhBuilder,
     /// For the walks that read the 16-byte depth-first nodes.
     layout: Option<GpuThreadedLayout>,
+    /// For the wide walk: the collapse into compressed 8-wide nodes.
+    wide: Option<GpuWideCollapse>,
     /// Skinning and morphing, for a scene whose motion is glTF animation.
     deform: Option<GpuDeform>,
     /// Whether the walk reads a BVH: brute force moves the primitives but builds nothing.
@@ -56,7 +59,15 @@ impl SceneRebuild {
             Accel::Stack | Accel::Threaded => {
                 Some(GpuThreadedLayout::new(ctx, &builder.buffers().nodes, packed.primitive_count()).await?)
             }
-            Accel::Brute | Accel::Stackless | Accel::RayQuery => None,
+            Accel::Brute | Accel::Stackless | Accel::Wide | Accel::RayQuery => None,
+        };
+        let wide = match accel {
+            Accel::Wide => {
+                let depth = depth_bound(builder.count(), builder.bits());
+                let nodes = &builder.buffers().nodes;
+                Some(GpuWideCollapse::new(ctx, nodes, packed.primitive_count(), depth).await?)
+            }
+            _ => None,
         };
         let deform = match &scene.motion {
             Some(motion) => GpuDeform::new(ctx, motion, &builder.buffers().triangles, &packed.triangle_normals).await?,
@@ -65,6 +76,7 @@ impl SceneRebuild {
         Ok(Self {
             builder,
             layout,
+            wide,
             deform,
             builds: accel.uses_bvh(),
         })
@@ -120,11 +132,15 @@ impl SceneRebuild {
         if let Some(layout) = &self.layout {
             layout.encode(encoder);
         }
+        if let Some(wide) = &self.wide {
+            wide.encode(encoder);
+        }
     }
 
     /// Like [`SceneRebuild::encode`], refitting the last tree built instead of building anew:
     /// the skinning pass, the boxes recomputed bottom-up over the moved primitives, and the
-    /// refitted boxes written into the threaded layout, whose order stands.
+    /// refitted boxes written into the threaded layout, whose order stands. The wide nodes are
+    /// collapsed anew: which children a node opens follows their boxes.
     pub fn encode_refit(&self, encoder: &mut wgpu::CommandEncoder) {
         if let Some(deform) = &self.deform {
             deform.encode(encoder);
@@ -135,6 +151,9 @@ impl SceneRebuild {
         self.builder.encode_refit(encoder);
         if let Some(layout) = &self.layout {
             layout.encode_boxes(encoder);
+        }
+        if let Some(wide) = &self.wide {
+            wide.encode(encoder);
         }
     }
 
@@ -148,6 +167,7 @@ impl SceneRebuild {
         SharedBuffers {
             threaded_nodes: self.layout.as_ref().map(|l| l.threaded.clone()),
             bvh_frame: self.layout.as_ref().map(|l| l.frame.clone()),
+            wide: self.wide.as_ref().map(|w| w.texels.clone()),
             triangle_normals: self.deform.as_ref().map(|d| d.triangle_normals.clone()),
             ..self.builder.shared_buffers()
         }
@@ -157,7 +177,13 @@ impl SceneRebuild {
         &self.builder
     }
 
-    /// GPU time of the last skinning pass and of the last refit (with its threaded layout), where
+    /// The wide collapse, with the wide walk.
+    pub fn wide(&self) -> Option<&GpuWideCollapse> {
+        self.wide.as_ref()
+    }
+
+    /// GPU time of the last skinning pass and of the last refit (with its threaded layout or wide
+    /// collapse), where
     /// they ran and the adapter has timestamps.
     pub async fn read_skinning_ms(&self) -> Result<Option<f64>, GpuError> {
         match &self.deform {
@@ -174,7 +200,11 @@ impl SceneRebuild {
             Some(layout) => layout.read_ms(self.builder.context()).await?.unwrap_or(0.0),
             None => 0.0,
         };
-        Ok(Some(refit + layout))
+        let collapse = match &self.wide {
+            Some(wide) => wide.read_ms(self.builder.context()).await?.unwrap_or(0.0),
+            None => 0.0,
+        };
+        Ok(Some(refit + layout + collapse))
     }
 
     /// GPU time of each phase of the last rebuild submitted and finished (zeros without timestamp
@@ -186,6 +216,9 @@ impl SceneRebuild {
         let mut timings = self.builder.read_timings().await?;
         if let Some(layout) = &self.layout {
             timings.layout = layout.read_ms(self.builder.context()).await?.unwrap_or(0.0);
+        }
+        if let Some(wide) = &self.wide {
+            timings.collapse = wide.read_ms(self.builder.context()).await?.unwrap_or(0.0);
         }
         Ok(timings)
     }
@@ -234,8 +267,8 @@ impl CpuRebuild {
         if !self.builds {
             return None;
         }
-        let timings = self.builder.build(&packed.primitive_boxes(), self.bits);
-        packed.set_bvh(self.builder.to_bvh());
+        let mut timings = self.builder.build(&packed.primitive_boxes(), self.bits);
+        timings.collapse = packed.set_bvh(self.builder.to_bvh());
         Some(timings)
     }
 
@@ -263,7 +296,7 @@ impl CpuRebuild {
         let start = web_time::Instant::now();
         let mut kinds = RecordKind::moved(step.moved).to_vec();
         if step.build.is_some() {
-            kinds.extend([RecordKind::Node, RecordKind::ThreadedNode]);
+            kinds.extend([RecordKind::Node, RecordKind::ThreadedNode, RecordKind::Wide]);
         }
         renderer.write_records(packed, &kinds)?;
         Ok(start.elapsed().as_secs_f64() * 1e3)

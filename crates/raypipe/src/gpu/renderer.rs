@@ -282,7 +282,7 @@ impl Renderer {
         }
         let tree_written = kinds
             .iter()
-            .any(|k| matches!(k, RecordKind::Node | RecordKind::ThreadedNode));
+            .any(|k| matches!(k, RecordKind::Node | RecordKind::ThreadedNode | RecordKind::Wide));
         if self.confinement.is_some() && tree_written {
             // The walks test the new tree's boxes from now on.
             self.confinement = Confinement::new(scene, &self.globals.camera);

@@ -34,6 +34,7 @@ const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
 const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
 const ACCEL_STACKLESS: &str = include_str!("shaders/accel_stackless.wgsl");
 const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
+const ACCEL_WIDE: &str = include_str!("shaders/accel_wide.wgsl");
 const ACCEL_RAYQUERY: &str = include_str!("shaders/accel_rayquery.wgsl");
 const ADMIT: &str = include_str!("shaders/admit.wgsl");
 const MAPS: &str = include_str!("shaders/maps.wgsl");
@@ -58,10 +59,12 @@ pub enum RecordKind {
     Node,
     /// The BVH depth-first in 16-byte nodes (the stack and threaded walks').
     ThreadedNode,
+    /// The BVH collapsed into compressed 8-wide nodes, texel by texel (the wide walk's).
+    Wide,
 }
 
 impl RecordKind {
-    pub const ALL: [RecordKind; 9] = [
+    pub const ALL: [RecordKind; 10] = [
         RecordKind::Sphere,
         RecordKind::Triangle,
         RecordKind::TriangleNormals,
@@ -71,6 +74,7 @@ impl RecordKind {
         RecordKind::Shading,
         RecordKind::Node,
         RecordKind::ThreadedNode,
+        RecordKind::Wide,
     ];
 
     /// The records a motion rewrote.
@@ -94,6 +98,7 @@ impl RecordKind {
             RecordKind::Shading => "shading",
             RecordKind::Node => "node",
             RecordKind::ThreadedNode => "threaded_node",
+            RecordKind::Wide => "wide",
         }
     }
 }
@@ -321,6 +326,7 @@ pub fn compose(config: &ShaderConfig) -> String {
         Accel::Stack => ACCEL_STACK,
         Accel::Stackless => ACCEL_STACKLESS,
         Accel::Threaded => ACCEL_THREADED,
+        Accel::Wide => ACCEL_WIDE,
         Accel::RayQuery => ACCEL_RAYQUERY,
     };
     source.push('\n');

@@ -5,6 +5,7 @@ use super::shader::{RecordArray, RecordKind, texture_pixels_binding};
 use super::{Capacity, GpuContext, GpuError};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
+use crate::bvh::wide::GpuWideTexel;
 use crate::modes::{Accel, MemoryMode};
 use crate::records::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene, TexelFormat, TexturePixels};
 use wgpu::util::DeviceExt;
@@ -22,6 +23,8 @@ pub struct SharedBuffers {
     pub nodes: wgpu::Buffer,
     /// For the stack and threaded walks.
     pub threaded_nodes: Option<wgpu::Buffer>,
+    /// For the wide walk: the compressed wide nodes' texels.
+    pub wide: Option<wgpu::Buffer>,
     /// The threaded nodes' frame, a `GpuBvhFrame` the renderer copies into its globals.
     pub bvh_frame: Option<wgpu::Buffer>,
     /// Where skinning on the GPU rewrites the triangles' shading normals.
@@ -150,6 +153,7 @@ pub fn upload(
             (Some(shared), RecordKind::Triangle) => Some(shared.triangles.clone()),
             (Some(shared), RecordKind::Node) => Some(shared.nodes.clone()),
             (Some(shared), RecordKind::ThreadedNode) => shared.threaded_nodes.clone(),
+            (Some(shared), RecordKind::Wide) => shared.wide.clone(),
             (Some(shared), RecordKind::TriangleNormals) => shared.triangle_normals.clone(),
             _ => None,
         };
@@ -364,6 +368,7 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn Rec
     // A scene whose BVH is rebuilt on the GPU has none of its own: its node arrays come shared.
     static NO_NODES: Vec<GpuNode> = Vec::new();
     static NO_THREADED_NODES: Vec<GpuThreadedNode> = Vec::new();
+    static NO_WIDE_TEXELS: Vec<GpuWideTexel> = Vec::new();
     let bvh = scene.bvh.as_ref();
     match accel {
         // The driver's structures reach the shader beside these (`super::rayquery`).
@@ -373,6 +378,7 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn Rec
             bvh.map_or(&NO_THREADED_NODES, |b| &b.threaded_nodes),
         )),
         Accel::Stackless => records.push((RecordKind::Node, bvh.map_or(&NO_NODES, |b| &b.nodes))),
+        Accel::Wide => records.push((RecordKind::Wide, bvh.map_or(&NO_WIDE_TEXELS, |b| &b.wide_texels))),
     }
     records
 }

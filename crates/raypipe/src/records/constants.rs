@@ -3,6 +3,7 @@
 
 use crate::bvh::layout::{LEAF, NONE};
 use crate::bvh::threaded::{LEAF_BIT, MAX_QUANTUM, TINY_EXTENT};
+use crate::bvh::wide::{NODE_TEXELS, SPAN};
 use std::fmt::Write;
 
 /// Where a ray that hits nothing ends.
@@ -99,6 +100,7 @@ pub fn wgsl() -> String {
         ("NO_HIT", NO_HIT),
         ("MAX_QUANTUM", MAX_QUANTUM as f32),
         ("TINY_EXTENT", TINY_EXTENT),
+        ("WIDE_SPAN", SPAN),
         ("MIN_FOOTPRINT_COSINE", MIN_FOOTPRINT_COSINE),
     ] {
         writeln!(out, "const {name}: f32 = {};", float_literal(value)).unwrap();
@@ -107,6 +109,7 @@ pub fn wgsl() -> String {
         ("LEAF", LEAF),
         ("NONE", NONE),
         ("LEAF_BIT", LEAF_BIT),
+        ("WIDE_NODE_TEXELS", NODE_TEXELS),
         ("R2_STEP_X", R2_STEP[0]),
         ("R2_STEP_Y", R2_STEP[1]),
         ("MODEL_WHITTED", MODEL_WHITTED),

@@ -16,6 +16,7 @@ pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, ShadingTexel, TexelFormat, Textur
 use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame};
+use crate::bvh::wide::GpuWideTexel;
 use crate::scene::Camera;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -363,4 +364,5 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, tex_coord, transform_v, sampling]),
     struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
     struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
+    struct_layout!(GpuWideTexel, "WideTexel", [words]),
 ];

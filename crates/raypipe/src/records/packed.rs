@@ -8,6 +8,7 @@ use crate::bvh::aabb::Aabb;
 use crate::bvh::layout::{GpuNode, NONE};
 use crate::bvh::morton::MortonBits;
 use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree, threaded_nodes};
+use crate::bvh::wide::{GpuWideTexel, WideTree, leaf_texels, wide_texels};
 use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
 use crate::modes::Builder;
@@ -23,8 +24,8 @@ use crate::scene::{
 };
 use glam::{Vec2, Vec3};
 
-/// The BVH over a packed scene's primitives (spheres, then triangles), in the two layouts the walks
-/// read.
+/// The BVH over a packed scene's primitives (spheres, then triangles), in the three layouts the
+/// walks read.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PackedBvh {
     /// The build layout, with parent and escape links: the stackless walk's.
@@ -35,17 +36,40 @@ pub struct PackedBvh {
     pub threaded_nodes: Vec<GpuThreadedNode>,
     /// The frame the threaded nodes' boxes are quantized in.
     pub frame: QuantizationFrame,
+    /// The same tree collapsed into compressed 8-wide nodes, as the wide walk reads it.
+    pub wide_texels: Vec<GpuWideTexel>,
+    /// How many primitives the tree holds: where the wide tree's root starts.
+    pub primitive_count: usize,
 }
 
 impl PackedBvh {
     pub fn new(bvh: Bvh) -> Self {
+        Self::timed(bvh).0
+    }
+
+    /// [`PackedBvh::new`], with the wide collapse's wall-clock time in milliseconds.
+    pub fn timed(bvh: Bvh) -> (Self, f64) {
         let depth = bvh.max_depth();
         let (frame, threaded_nodes) = threaded_nodes(&bvh.nodes);
-        Self {
+        let start = web_time::Instant::now();
+        let wide_texels = wide_texels(&bvh.nodes, bvh.primitive_count);
+        let collapse_ms = start.elapsed().as_secs_f64() * 1e3;
+        let packed = Self {
             nodes: bvh.nodes,
             depth,
             threaded_nodes,
             frame,
+            wide_texels,
+            primitive_count: bvh.primitive_count,
+        };
+        (packed, collapse_ms)
+    }
+
+    pub fn wide_tree(&self) -> WideTree<'_> {
+        WideTree {
+            texels: &self.wide_texels,
+            root: leaf_texels(self.primitive_count),
+            stack_size: self.depth.max(1),
         }
     }
 
@@ -264,20 +288,22 @@ impl PackedScene {
             Builder::Lbvh => Bvh::build_lbvh(&boxes, bits),
             Builder::Sah => Bvh::build_binned_sah(&boxes),
         };
-        self.set_bvh(bvh);
-        timings
+        let collapse = self.set_bvh(bvh);
+        BuildTimings { collapse, ..timings }
     }
 
-    /// Attaches a BVH over this scene's primitives (in their order).
-    pub fn set_bvh(&mut self, bvh: Bvh) {
+    /// Attaches a BVH over this scene's primitives (in their order), laid out for every walk.
+    /// Returns the wide collapse's time, in milliseconds.
+    pub fn set_bvh(&mut self, bvh: Bvh) -> f64 {
         assert_eq!(
             bvh.primitive_count,
             self.primitive_count(),
             "a BVH over another scene's primitives"
         );
-        let bvh = PackedBvh::new(bvh);
+        let (bvh, collapse) = PackedBvh::timed(bvh);
         self.globals.bvh_frame = GpuBvhFrame::new(&bvh.frame);
         self.bvh = Some(bvh);
+        collapse
     }
 
     /// Points the camera at a `width` x `height` image.

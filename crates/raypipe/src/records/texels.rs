@@ -6,6 +6,7 @@ use super::{
 };
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
+use crate::bvh::wide::GpuWideTexel;
 use bytemuck::Pod;
 
 /// What a record's texels hold.
@@ -186,6 +187,15 @@ impl GpuRecord for GpuThreadedNode {
     fn push_texels(&self, out: &mut Vec<[u32; 4]>) {
         let [x, y, z] = self.bounds;
         out.push([x, y, z, self.link]);
+    }
+}
+
+impl GpuRecord for GpuWideTexel {
+    const WGSL_TYPE: &'static str = "WideTexel";
+    // Texels of words already: the wide walk loads five for a node, one for four leaves.
+    const TEXEL_FORMAT: TexelFormat = TexelFormat::Bits;
+    fn push_texels(&self, out: &mut Vec<[u32; 4]>) {
+        out.push(self.words);
     }
 }
 

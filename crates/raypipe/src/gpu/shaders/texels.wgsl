@@ -61,3 +61,8 @@ fn node_from_texels(t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>) -> BvhNode {
 fn threaded_node_from_texels(t0: vec4<u32>) -> ThreadedNode {
     return ThreadedNode(t0.xyz, t0.w);
 }
+
+// The wide BVH's texels are words already: one rgba32uint texel.
+fn wide_from_texels(t0: vec4<u32>) -> WideTexel {
+    return WideTexel(t0);
+}

@@ -161,6 +161,12 @@ struct BvhNode {
 // A node of the threaded BVH (src/bvh/threaded.rs), in depth-first order: 16-bit box corners in
 // quanta of the globals' frame (min.x | min.y << 16, min.z | max.x << 16, max.y | max.z << 16) and
 // one link: the node after the subtree for an internal node, LEAF_BIT | primitive for a leaf.
+// A texel of the compressed wide BVH (src/bvh/wide.rs): leaf words four a texel, then nodes of
+// five texels, whose bits wide.rs sets out.
+struct WideTexel {
+    words: vec4<u32>,
+}
+
 struct ThreadedNode {
     bounds: vec3<u32>,
     link: u32,
@@ -189,6 +195,13 @@ struct BuildParams {
 }
 
 // The threaded layout kernels' parameters (src/gpu/threaded.rs).
+struct CollapseParams {
+    // Primitives: n.
+    primitive_count: u32,
+    // Where the nodes start: the texels of the leaf words before them.
+    root_texel: u32,
+}
+
 struct LayoutParams {
     // Nodes: 2n - 1 for n primitives.
     node_count: u32,

@@ -1,0 +1,124 @@
+// Compressed wide BVH traversal (src/bvh/wide.rs, after Ylitie, Karras and Laine 2017): a node's
+// eight boxes tested at once in the node's own frame, its hit leaves tested at once, its hit
+// internal children visited nearest first in the order of the ray's octant, the others waiting on
+// the stack as one group (a base, the hit slots as bits slot ^ octant, and the slots of their kind).
+// Mirrored by src/cpu/accel.rs.
+
+// Takes a group's nearest hit child: the texel of an internal child (stride WIDE_NODE_TEXELS), the word of a
+// leaf's primitive (stride 1).
+fn take_nearest(base: u32, hits: ptr<function, u32>, kind_mask: u32, octant: u32, stride: u32) -> u32 {
+    let bit = firstLeadingBit(*hits);
+    *hits &= ~(1u << bit);
+    let slot = bit ^ octant;
+    return base + stride * countOneBits(kind_mask & ((1u << slot) - 1u));
+}
+
+// The ray's octant: bit k set where its direction's component k is not negative.
+fn ray_octant(dir: vec3<f32>) -> u32 {
+    return u32(dir.x >= 0.0) | (u32(dir.y >= 0.0) << 1u) | (u32(dir.z >= 0.0) << 2u);
+}
+
+// A mask of slots moved to the bits slot ^ octant.
+fn octant_bits(mask: u32, octant: u32) -> u32 {
+    var bits = mask;
+    if ((octant & 1u) != 0u) {
+        bits = ((bits & 0x55u) << 1u) | ((bits >> 1u) & 0x55u);
+    }
+    if ((octant & 2u) != 0u) {
+        bits = ((bits & 0x33u) << 2u) | ((bits >> 2u) & 0x33u);
+    }
+    if ((octant & 4u) != 0u) {
+        bits = ((bits & 0x0fu) << 4u) | ((bits >> 4u) & 0x0fu);
+    }
+    return bits;
+}
+
+fn wide_texel(i: u32) -> vec4<u32> {
+    return load_wide(i).words;
+}
+
+fn traverse_wide(ray: Ray, best: Hit, shadow: bool) -> Hit {
+    var hit = best;
+    let count = primitive_count();
+    if (count == 0u) {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    let octant = ray_octant(ray.dir);
+    // The group being visited; first the root, as one internal child in slot 0 after the leaf words.
+    var node_base = (count + 3u) / 4u;
+    var node_hits = 1u << octant;
+    var node_mask = 1u;
+    // Waiting groups: base, and hits | kind mask << 8.
+    var stack_base: array<u32, BVH_STACK_SIZE>;
+    var stack_hits: array<u32, BVH_STACK_SIZE>;
+    var size = 0u;
+    loop {
+        var leaf_base = 0u;
+        var leaf_hits = 0u;
+        var leaf_mask = 0u;
+        if (node_hits != 0u) {
+            let texel = take_nearest(node_base, &node_hits, node_mask, octant, WIDE_NODE_TEXELS);
+            if (node_hits != 0u) {
+                stack_base[size] = node_base;
+                stack_hits[size] = node_hits | (node_mask << 8u);
+                size += 1u;
+            }
+            let t0 = wide_texel(texel);
+            let t1 = wide_texel(texel + 1u);
+            let t2 = wide_texel(texel + 2u);
+            let t3 = wide_texel(texel + 3u);
+            let t4 = wide_texel(texel + 4u);
+            // The ray in the node's frame, where its children's corners are whole quanta.
+            let exponents = (vec3<u32>(t0.w, t0.w >> 8u, t0.w >> 16u)) & vec3<u32>(0xffu);
+            let quantum = bitcast<vec3<f32>>(exponents << vec3<u32>(23u));
+            let inverse_quantum = bitcast<vec3<f32>>((vec3<u32>(254u) - exponents) << vec3<u32>(23u));
+            let origin = (ray.origin - bitcast<vec3<f32>>(t0.xyz)) * inverse_quantum;
+            let node_inv_dir = inv_dir * quantum;
+            let imask = t0.w >> 24u;
+            let slots = t1.z;
+            var hit_slots = 0u;
+            for (var slot = 0u; slot < 8u; slot++) {
+                if ((slots & (1u << slot)) != 0u) {
+                    let upper = slot >= 4u;
+                    let shift = vec3<u32>(8u * (slot & 3u));
+                    let lo_words = select(vec3<u32>(t2.x, t2.z, t3.x), vec3<u32>(t2.y, t2.w, t3.y), upper);
+                    let hi_words = select(vec3<u32>(t3.z, t4.x, t4.z), vec3<u32>(t3.w, t4.y, t4.w), upper);
+                    let lo = vec3<f32>((lo_words >> shift) & vec3<u32>(0xffu));
+                    let hi = vec3<f32>((hi_words >> shift) & vec3<u32>(0xffu));
+                    if (intersect_box(lo, hi, origin, node_inv_dir, hit.t) >= 0.0) {
+                        hit_slots |= 1u << slot;
+                    }
+                }
+            }
+            node_base = t1.x;
+            node_hits = octant_bits(hit_slots & imask, octant);
+            node_mask = imask;
+            leaf_base = t1.y;
+            leaf_mask = slots & ~imask;
+            leaf_hits = octant_bits(hit_slots & leaf_mask, octant);
+        } else if (size > 0u) {
+            size -= 1u;
+            node_base = stack_base[size];
+            node_hits = stack_hits[size] & 0xffu;
+            node_mask = stack_hits[size] >> 8u;
+        } else {
+            break;
+        }
+        while (leaf_hits != 0u) {
+            let word = take_nearest(leaf_base, &leaf_hits, leaf_mask, octant, 1u);
+            if (hit_primitive(wide_texel(word / 4u)[word % 4u], ray, &hit) && shadow) {
+                return hit;
+            }
+        }
+    }
+    return hit;
+}
+
+fn accel_closest(ray: Ray, best: Hit) -> Hit {
+    return traverse_wide(ray, best, false);
+}
+
+fn accel_occluded(ray: Ray, t_max: f32) -> bool {
+    return traverse_wide(ray, Hit(t_max, HIT_NONE, 0u), true).kind != HIT_NONE;
+}
