@@ -165,10 +165,10 @@ for (const backend of ["webgpu", "webgl2"]) {
 
   describe(`the page on ${backend}`, () => {
     for (const memory of memories) {
-      test(`whitted and random:2000 (threaded, ${memory} memory) equal the CPU reference`, async () => {
-        for (const scene of ["whitted", "random:2000"]) {
+      test(`whitted and random:2000 (threaded and wide, ${memory} memory) equal the CPU reference`, async () => {
+        for (const [scene, accel] of [["whitted", "threaded"], ["random:2000", "threaded"], ["random:2000", "wide"]]) {
           const page = await open(
-            `scene=${scene}&accel=threaded&memory=${memory}&width=${size.width}&height=${size.height}&backend=${backend}&spp=1`,
+            `scene=${scene}&accel=${accel}&memory=${memory}&width=${size.width}&height=${size.height}&backend=${backend}&spp=1`,
           );
           const status = await until(page, SETTLED, `${scene} on ${backend}`);
           assert.equal(status.backend, backend);
@@ -176,7 +176,8 @@ for (const backend of ["webgpu", "webgl2"]) {
           assert.equal(status.error, null);
           assert.deepEqual(await page.locator("#frame").evaluate((c) => [c.width, c.height, c.clientWidth, c.clientHeight]),
             [size.width, size.height, size.width, size.height]);
-          const shot = await screenshot(page, `${backend}-${memory}-${scene.replace(":", "_")}`);
+          assert.equal(status.accel, accel);
+          const shot = await screenshot(page, `${backend}-${memory}-${accel}-${scene.replace(":", "_")}`);
           assertSimilar(shot, reference(scene, size.width, size.height));
           assert.deepEqual(page.errors, []);
           await page.close();
@@ -441,7 +442,7 @@ test("a browser with neither WebGPU nor WebGL2 gets one line on the page", async
 test("a bad URL setting is reported and the rest applies", async () => {
   const page = await open("scene=whitted&accel=bvh&width=64&height=48&backend=webgl2&spp=1");
   const status = await until(page, (s) => s.frames >= 1 && s.error != null, "a frame");
-  assert.equal(status.error, "accel=bvh: expected one of brute, stack, stackless, threaded");
+  assert.equal(status.error, "accel=bvh: expected one of brute, stack, stackless, threaded, wide");
   assert.equal(status.width, 64);
   // The walk the page takes where the URL names none: the stack walk on a software adapter, as
   // Chromium's SwiftShader and Firefox's llvmpipe are here.

@@ -134,6 +134,8 @@ struct BuildPhases {
     links: f64,
     /// The 16-byte depth-first layout of the stack and threaded walks.
     layout: f64,
+    /// The collapse into the wide walk's compressed 8-wide nodes.
+    collapse: f64,
 }
 
 impl BuildPhases {
@@ -146,6 +148,7 @@ impl BuildPhases {
             bounds: phase(|b| b.bounds),
             links: phase(|b| b.links),
             layout: phase(|b| b.layout),
+            collapse: phase(|b| b.collapse),
         })
     }
 }

@@ -348,11 +348,12 @@ fn render_sequence(
             let b = &outcome.builds[steady..];
             // The GPU's merges write the bounds and links with the hierarchy.
             crate::say!(
-                "BVH build per frame (median): morton {:.3} ms, sort {:.3} ms, hierarchy with bounds and links {:.3} ms, 16-byte layout {:.3} ms, total {:.3} ms",
+                "BVH build per frame (median): morton {:.3} ms, sort {:.3} ms, hierarchy with bounds and links {:.3} ms, 16-byte layout {:.3} ms, 8-wide collapse {:.3} ms, total {:.3} ms",
                 median(b.iter().map(|t| t.morton)),
                 median(b.iter().map(|t| t.sort)),
                 median(b.iter().map(|t| t.hierarchy + t.bounds + t.links)),
                 median(b.iter().map(|t| t.layout)),
+                median(b.iter().map(|t| t.collapse)),
                 median(b.iter().map(|t| t.total())),
             );
         }

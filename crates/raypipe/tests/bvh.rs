@@ -197,19 +197,19 @@ fn a_corrupted_wide_tree_fails_validation() {
     assert_eq!(node.slots, 0xff, "the root of 200 primitives has eight children");
     let slot = node.slots.trailing_zeros() as usize;
     let mut corruptions: Vec<(&str, Vec<GpuWideTexel>)> = Vec::new();
-    let mut c = packed.wide_texels.clone();
+    let mut c = packed.wide_texels().clone();
     // The root's first slot's high x corner brought down to its low one.
     let low_x = (node.lo[0][slot / 4] >> (8 * (slot % 4))) & 0xff;
     c[root + 3].words[2 + slot / 4] &= !(0xff << (8 * (slot % 4)));
     c[root + 3].words[2 + slot / 4] |= low_x << (8 * (slot % 4));
     corruptions.push(("a box that no longer holds its primitives", c));
-    let mut c = packed.wide_texels.clone();
+    let mut c = packed.wide_texels().clone();
     c[root + 1].words[0] += NODE_TEXELS;
     corruptions.push(("a child base one node off", c));
-    let mut c = packed.wide_texels.clone();
+    let mut c = packed.wide_texels().clone();
     c[0].words[1] = c[0].words[0];
     corruptions.push(("a primitive in two leaves", c));
-    let mut c = packed.wide_texels.clone();
+    let mut c = packed.wide_texels().clone();
     c[root].words[0] = (f32::from_bits(c[root].words[0]) + 1.0).to_bits();
     corruptions.push(("a node frame moved along x", c));
     for (what, corrupted) in corruptions {

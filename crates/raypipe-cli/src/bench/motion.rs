@@ -50,12 +50,14 @@ struct MotionRow {
     /// queries, the driver's BLAS and TLAS build (GPU timestamps between passes, 0 where the
     /// device has none).
     build_ms: f64,
+    /// With the wide walk: the tree collapsed into compressed 8-wide nodes, after the build.
+    collapse_ms: f64,
     /// Writing the moved records and nodes to the GPU (the CPU path; 0 on the GPU path).
     upload_ms: f64,
     trace_ms: f64,
-    /// eval + skin + build + upload + trace.
+    /// eval + skin + build + collapse + upload + trace.
     frame_ms: f64,
-    /// (skin + build) / frame: the share of the frame that moving the scene costs.
+    /// (skin + build + collapse) / frame: the share of the frame that moving the scene costs.
     motion_share: f64,
     /// With --refit: the refit (and layout) time, and the refitted tree's trace time over the
     /// fresh tree's at the last frame.
@@ -88,6 +90,7 @@ struct FrameTimes {
     eval: f64,
     skin: f64,
     build: f64,
+    collapse: f64,
     upload: f64,
     trace: f64,
 }
@@ -257,7 +260,8 @@ impl MotionRow {
             part(|f| f.upload),
             part(|f| f.trace),
         );
-        let frame_ms = eval + skin + build + upload + trace;
+        let collapse = part(|f| f.collapse);
+        let frame_ms = eval + skin + build + collapse + upload + trace;
         let (refit_ms, refit_trace_ratio_last, refit_loses_from_frame) = summarize_refits(refits);
         let on_gpu = options.memory == MemoryMode::Storage;
         Self {
@@ -275,10 +279,11 @@ impl MotionRow {
             eval_ms: eval,
             skin_ms: skin,
             build_ms: build,
+            collapse_ms: collapse,
             upload_ms: upload,
             trace_ms: trace,
             frame_ms,
-            motion_share: (skin + build) / frame_ms,
+            motion_share: (skin + build + collapse) / frame_ms,
             refit_ms,
             refit_trace_ratio_last,
             refit_loses_from_frame,
@@ -306,13 +311,14 @@ fn print_table(
         args.fps
     );
     crate::say!(
-        "{:>9} {:>10} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>6}",
+        "{:>9} {:>10} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>6}",
         "pipeline",
         "accel",
         "memory",
         "eval",
         "skin",
         "build",
+        "collapse",
         "upload",
         "trace",
         "frame",
@@ -322,13 +328,14 @@ fn print_table(
     );
     for r in rows {
         crate::say!(
-            "{:>9} {:>10} {:>8} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>6.1}% {:>8} {:>6}",
+            "{:>9} {:>10} {:>8} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>6.1}% {:>8} {:>6}",
             r.pipeline,
             r.accel,
             r.memory,
             r.eval_ms,
             r.skin_ms,
             r.build_ms,
+            r.collapse_ms,
             r.upload_ms,
             r.trace_ms,
             r.frame_ms,
@@ -394,10 +401,11 @@ fn gpu_point(
             upload = elapsed_ms(start);
         }
         let traced = block_on(renderer.render_samples(args.spp, |encoder| rebuild.encode(encoder)))?;
-        let build = if options.accel.needs_ray_queries() {
-            block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0)
+        let (build, collapse) = if options.accel.needs_ray_queries() {
+            (block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0), 0.0)
         } else {
-            block_on(rebuild.read_timings())?.total()
+            let timings = block_on(rebuild.read_timings())?;
+            (timings.total() - timings.collapse, timings.collapse)
         };
         let skin = block_on(rebuild.read_skinning_ms())?.unwrap_or(0.0);
         let trace = traced.gpu_ms.unwrap_or(0.0);
@@ -438,6 +446,7 @@ fn gpu_point(
                 eval,
                 skin: skin + upload,
                 build,
+                collapse,
                 upload: 0.0,
                 trace,
             });
@@ -469,10 +478,10 @@ fn cpu_point(
         let skin = (step.pose_ms - eval).max(0.0);
         let upload = rebuild.write(&step, &packed, &mut renderer)?;
         let traced = block_on(renderer.render_samples(args.spp, |_| {}))?;
-        let build = match step.build {
-            Some(timings) => timings.total(),
+        let (build, collapse) = match step.build {
+            Some(timings) => (timings.total() - timings.collapse, timings.collapse),
             // Ray queries: the driver's structures, built on the GPU as the records were written.
-            None => block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0),
+            None => (block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0), 0.0),
         };
         if k >= args.warmup {
             first.get_or_insert(traced.frame);
@@ -480,6 +489,7 @@ fn cpu_point(
                 eval,
                 skin,
                 build,
+                collapse,
                 upload,
                 trace: traced.gpu_ms.unwrap_or(0.0),
             });

@@ -236,17 +236,15 @@ fn octant_cost(offset: Vec3, slot: usize) -> f32 {
     signed(offset.x, 0) + signed(offset.y, 1) + signed(offset.z, 2)
 }
 
-/// The wide node made from binary node `index` whose children are `slots`, its internal children
-/// from texel `child_base` and its leaves from word `leaf_base`.
-fn wide_node(nodes: &[GpuNode], index: u32, slots: &[Option<u32>; WIDTH], child_base: u32, leaf_base: u32) -> WideNode {
+/// The wide node made from binary node `index` whose children are `slots`, but for where its
+/// children are stored.
+fn wide_node(nodes: &[GpuNode], index: u32, slots: &[Option<u32>; WIDTH]) -> WideNode {
     let node = &nodes[index as usize];
     let bounds = super::node_box(node);
     let extent = bounds.max - bounds.min;
     let exponents = [extent.x, extent.y, extent.z].map(quantum_exponent);
     let mut wide = WideNode {
         origin: node.min,
-        child_base,
-        leaf_base,
         ..WideNode::default()
     };
     let mut imask = 0;
@@ -278,52 +276,60 @@ fn quantize(origin: Vec3, exponents: [u32; 3], bounds: Aabb) -> ([u32; 3], [u32;
     (q(lo), q(hi))
 }
 
-/// The wide BVH of `nodes` (the root first) over `primitive_count` primitives, as its texels.
+/// The wide BVH of `nodes` (the root first) over `primitive_count` primitives, as its texels,
+/// [`capacity_texels`] of them.
 pub fn wide_texels(nodes: &[GpuNode], primitive_count: usize) -> Vec<GpuWideTexel> {
     let root = leaf_texels(primitive_count);
     let mut texels = vec![GpuWideTexel::default(); root as usize];
     if nodes.is_empty() {
         return texels;
     }
-    let mut leaves = vec![0u32; primitive_count];
+    let mut leaves = Vec::with_capacity(primitive_count);
     let mut level = vec![0u32];
     let mut next_texel = root + NODE_TEXELS;
-    let mut next_leaf = 0u32;
     while !level.is_empty() {
-        let collapsed: Vec<[Option<u32>; WIDTH]> = level
+        // Each node made in parallel; then, in order, each takes room for its children after
+        // those of the nodes before it on its level.
+        let mut made: Vec<(WideNode, [u32; WIDTH])> = level
             .par_iter()
             .with_min_len(256)
-            .map(|&b| collapse(nodes, b))
+            .map(|&b| {
+                let slots = collapse(nodes, b);
+                let mut below = [0u32; WIDTH];
+                for (slot, child) in slots.iter().enumerate() {
+                    // An internal child's binary node, a leaf's primitive.
+                    if let Some(child) = *child {
+                        let node = &nodes[child as usize];
+                        below[slot] = if node.is_leaf() { node.left } else { child };
+                    }
+                }
+                (wide_node(nodes, b, &slots), below)
+            })
             .collect();
-        // Each node's children come after those of the nodes before it on its level.
-        let mut bases = Vec::with_capacity(level.len());
-        let mut next_level = Vec::new();
-        for slots in &collapsed {
-            bases.push((next_texel, next_leaf));
-            for &child in slots.iter().flatten() {
-                let child_node = &nodes[child as usize];
-                if child_node.is_leaf() {
-                    leaves[next_leaf as usize] = child_node.left;
-                    next_leaf += 1;
-                } else {
+        let mut next_level = Vec::with_capacity(level.len() * 4);
+        for (node, below) in &mut made {
+            (node.child_base, node.leaf_base) = (next_texel, leaves.len() as u32);
+            for (slot, &child) in below.iter().enumerate() {
+                if node.imask() & (1 << slot) != 0 {
                     next_level.push(child);
                     next_texel += NODE_TEXELS;
+                } else if node.slots & (1 << slot) != 0 {
+                    leaves.push(child);
                 }
             }
         }
-        let made: Vec<WideNode> = level
-            .par_iter()
-            .zip(&collapsed)
-            .zip(&bases)
-            .with_min_len(256)
-            .map(|((&b, slots), &(child_base, leaf_base))| wide_node(nodes, b, slots, child_base, leaf_base))
-            .collect();
-        texels.extend_from_slice(bytemuck::cast_slice(&made));
+        texels.extend(made.iter().flat_map(|(node, _)| {
+            let texels: [GpuWideTexel; NODE_TEXELS as usize] = bytemuck::cast(*node);
+            texels
+        }));
         level = next_level;
     }
     for (texel, words) in texels.iter_mut().zip(leaves.chunks(4)) {
         texel.words[..words.len()].copy_from_slice(words);
     }
+    // As long as any tree over as many primitives may need, as the GPU's is: a renderer whose
+    // scene moves rewrites its array in place each frame, whatever the new tree's node count.
+    texels.resize(capacity_texels(primitive_count) as usize, GpuWideTexel::default());
     texels
 }
 

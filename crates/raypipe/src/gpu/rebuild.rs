@@ -231,6 +231,8 @@ pub struct CpuRebuild {
     bits: MortonBits,
     /// Whether the walk reads a BVH: brute force moves the primitives but builds nothing.
     builds: bool,
+    /// Whether the walk reads the wide BVH, which is collapsed from each tree built.
+    collapses: bool,
 }
 
 /// What one [`CpuRebuild::move_to`] changed, and what it took on the CPU.
@@ -251,6 +253,7 @@ impl CpuRebuild {
             builder: LbvhBuilder::new(),
             bits: MortonBits::Bits30,
             builds: accel.uses_bvh(),
+            collapses: accel == Accel::Wide,
         };
         let first = rebuild.build(packed);
         (rebuild, first)
@@ -268,7 +271,10 @@ impl CpuRebuild {
             return None;
         }
         let mut timings = self.builder.build(&packed.primitive_boxes(), self.bits);
-        timings.collapse = packed.set_bvh(self.builder.to_bvh());
+        packed.set_bvh(self.builder.to_bvh());
+        if self.collapses {
+            timings.collapse = packed.bvh.as_ref().map_or(0.0, |bvh| bvh.collapse());
+        }
         Some(timings)
     }
 

@@ -378,7 +378,7 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn Rec
             bvh.map_or(&NO_THREADED_NODES, |b| &b.threaded_nodes),
         )),
         Accel::Stackless => records.push((RecordKind::Node, bvh.map_or(&NO_NODES, |b| &b.nodes))),
-        Accel::Wide => records.push((RecordKind::Wide, bvh.map_or(&NO_WIDE_TEXELS, |b| &b.wide_texels))),
+        Accel::Wide => records.push((RecordKind::Wide, bvh.map_or(&NO_WIDE_TEXELS, |b| b.wide_texels()))),
     }
     records
 }

@@ -23,6 +23,7 @@ use crate::scene::{
     TextureTransform, Triangle,
 };
 use glam::{Vec2, Vec3};
+use std::sync::OnceLock;
 
 /// The BVH over a packed scene's primitives (spheres, then triangles), in the three layouts the
 /// walks read.
@@ -36,38 +37,43 @@ pub struct PackedBvh {
     pub threaded_nodes: Vec<GpuThreadedNode>,
     /// The frame the threaded nodes' boxes are quantized in.
     pub frame: QuantizationFrame,
-    /// The same tree collapsed into compressed 8-wide nodes, as the wide walk reads it.
-    pub wide_texels: Vec<GpuWideTexel>,
+    /// The same tree collapsed into compressed 8-wide nodes, as the wide walk reads it: made the
+    /// first time it is asked for, as only that walk reads it.
+    wide: OnceLock<Vec<GpuWideTexel>>,
     /// How many primitives the tree holds: where the wide tree's root starts.
     pub primitive_count: usize,
 }
 
 impl PackedBvh {
     pub fn new(bvh: Bvh) -> Self {
-        Self::timed(bvh).0
-    }
-
-    /// [`PackedBvh::new`], with the wide collapse's wall-clock time in milliseconds.
-    pub fn timed(bvh: Bvh) -> (Self, f64) {
         let depth = bvh.max_depth();
         let (frame, threaded_nodes) = threaded_nodes(&bvh.nodes);
-        let start = web_time::Instant::now();
-        let wide_texels = wide_texels(&bvh.nodes, bvh.primitive_count);
-        let collapse_ms = start.elapsed().as_secs_f64() * 1e3;
-        let packed = Self {
+        Self {
             nodes: bvh.nodes,
             depth,
             threaded_nodes,
             frame,
-            wide_texels,
+            wide: OnceLock::new(),
             primitive_count: bvh.primitive_count,
-        };
-        (packed, collapse_ms)
+        }
+    }
+
+    /// The wide BVH's texels, collapsed from the nodes the first time they are asked for.
+    pub fn wide_texels(&self) -> &Vec<GpuWideTexel> {
+        self.wide.get_or_init(|| wide_texels(&self.nodes, self.primitive_count))
+    }
+
+    /// Collapses the wide BVH now, where it was not yet; returns the time that took, in
+    /// milliseconds.
+    pub fn collapse(&self) -> f64 {
+        let start = web_time::Instant::now();
+        self.wide_texels();
+        start.elapsed().as_secs_f64() * 1e3
     }
 
     pub fn wide_tree(&self) -> WideTree<'_> {
         WideTree {
-            texels: &self.wide_texels,
+            texels: self.wide_texels(),
             root: leaf_texels(self.primitive_count),
             stack_size: self.depth.max(1),
         }
@@ -288,22 +294,20 @@ impl PackedScene {
             Builder::Lbvh => Bvh::build_lbvh(&boxes, bits),
             Builder::Sah => Bvh::build_binned_sah(&boxes),
         };
-        let collapse = self.set_bvh(bvh);
-        BuildTimings { collapse, ..timings }
+        self.set_bvh(bvh);
+        timings
     }
 
-    /// Attaches a BVH over this scene's primitives (in their order), laid out for every walk.
-    /// Returns the wide collapse's time, in milliseconds.
-    pub fn set_bvh(&mut self, bvh: Bvh) -> f64 {
+    /// Attaches a BVH over this scene's primitives (in their order).
+    pub fn set_bvh(&mut self, bvh: Bvh) {
         assert_eq!(
             bvh.primitive_count,
             self.primitive_count(),
             "a BVH over another scene's primitives"
         );
-        let (bvh, collapse) = PackedBvh::timed(bvh);
+        let bvh = PackedBvh::new(bvh);
         self.globals.bvh_frame = GpuBvhFrame::new(&bvh.frame);
         self.bvh = Some(bvh);
-        collapse
     }
 
     /// Points the camera at a `width` x `height` image.

@@ -135,7 +135,7 @@ fn rewritten_texture_frames_match_the_gpu_rebuild(ctx: &GpuContext) {
     let mut scene = Scene::load("bounce:1200:3").unwrap();
     scene.settings.width = 64;
     scene.settings.height = 48;
-    for accel in [Accel::Threaded, Accel::Stackless] {
+    for accel in [Accel::Threaded, Accel::Stackless, Accel::Wide] {
         let on_gpu = gpu_frames(ctx, &scene, accel, 3);
         let rewritten = rewritten_frames(ctx, &scene, accel, MemoryMode::Texture, 3);
         assert_ne!(rewritten[0], rewritten[2], "the spheres move");
@@ -159,7 +159,7 @@ fn gpu_rebuilt_animated_frames_match_the_cpu(ctx: &GpuContext) {
     let mut scene = bending_cylinder();
     scene.settings.width = 48;
     scene.settings.height = 40;
-    for accel in [Accel::Threaded, Accel::Stackless] {
+    for accel in [Accel::Threaded, Accel::Stackless, Accel::Wide] {
         let on_gpu = gpu_frames(ctx, &scene, accel, 4);
         let on_cpu = cpu_frames(&scene, accel, 4);
         assert_ne!(on_cpu[0], on_cpu[3], "the cylinder bends");
@@ -179,7 +179,7 @@ fn gpu_refitted_animated_frames_match_the_cpu(ctx: &GpuContext) {
     let mut scene = bending_cylinder();
     scene.settings.width = 48;
     scene.settings.height = 40;
-    for accel in [Accel::Threaded, Accel::Stackless] {
+    for accel in [Accel::Threaded, Accel::Stackless, Accel::Wide] {
         let refitted = gpu_frames_refitting(ctx, &scene, accel, 4, true);
         let on_cpu = cpu_frames(&scene, accel, 4);
         for (k, (g, c)) in refitted.iter().zip(&on_cpu).enumerate() {

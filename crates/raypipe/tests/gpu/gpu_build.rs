@@ -8,10 +8,12 @@ use raypipe::bvh::layout::GpuNode;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::bvh::sah::sah_cost;
 use raypipe::bvh::threaded::threaded_nodes;
+use raypipe::bvh::wide::{self, WideTree};
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::gpu::GpuContext;
 use raypipe::gpu::build::{BuildVariant, Codes, GpuLbvhBuilder, SiblingBoxes};
 use raypipe::gpu::threaded::GpuThreadedLayout;
+use raypipe::gpu::wide::GpuWideCollapse;
 use raypipe::records::{GpuSphere, PackedScene};
 use raypipe::rng::SplitMix64;
 
@@ -72,6 +74,59 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
     assert_eq!(nodes.len(), cpu.nodes.len(), "{what}: node counts");
     assert_eq!(first_difference, None, "{what}: first differing node");
     check_threaded_layout(builder, &cpu.nodes, &what);
+    check_wide_collapse(builder, &cpu.nodes, &what);
+}
+
+/// The wide BVH of the GPU's nodes, collapsed on the GPU, against the CPU's of the same nodes.
+/// The GPU places nodes and leaves in the order its counters hand out, so the trees are compared
+/// as the walks see them: every node's frame, slots and boxes, and its children's, depth first.
+fn check_wide_collapse(builder: &GpuLbvhBuilder, nodes: &[GpuNode], what: &str) {
+    let ctx = builder.context();
+    let n = builder.count();
+    let depth = raypipe::gpu::build::depth_bound(n, builder.bits());
+    let collapse = block_on(GpuWideCollapse::new(ctx, &builder.buffers().nodes, n, depth)).unwrap();
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    collapse.encode(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    let gpu_texels = block_on(collapse.read(ctx)).unwrap();
+    let cpu_texels = wide::wide_texels(nodes, n);
+    let tree = |texels| WideTree {
+        texels,
+        root: wide::leaf_texels(n),
+        stack_size: depth,
+    };
+    if n == 0 {
+        return;
+    }
+    let (gpu, cpu) = (walk_order(&tree(&gpu_texels)), walk_order(&tree(&cpu_texels)));
+    let first_difference = gpu.iter().zip(&cpu).position(|(g, c)| g != c);
+    assert_eq!(first_difference, None, "{what}: first differing word of the wide trees");
+    assert_eq!(gpu.len(), cpu.len(), "{what}: wide trees' sizes");
+}
+
+/// A wide tree as the walks see it: each node's words but where its children are stored, then
+/// its children in slot order (a leaf's primitive, an internal child's own words).
+fn walk_order(tree: &WideTree) -> Vec<u32> {
+    let mut words = Vec::new();
+    let mut pending = vec![tree.root];
+    while let Some(texel) = pending.pop() {
+        let node = tree.node(texel);
+        let mut own: Vec<u32> = bytemuck::cast_slice(&[node]).to_vec();
+        own[4] = 0; // child_base
+        own[5] = 0; // leaf_base
+        words.extend(own);
+        for slot in (0..wide::WIDTH).rev() {
+            if node.slots & (1 << slot) == 0 {
+                continue;
+            }
+            if node.imask() & (1 << slot) != 0 {
+                pending.push(node.child(slot));
+            } else {
+                words.push(tree.word(node.child(slot)));
+            }
+        }
+    }
+    words
 }
 
 /// The threaded layout of the GPU's nodes, laid out on the GPU, against the CPU's of the same nodes.
