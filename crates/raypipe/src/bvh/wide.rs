@@ -185,35 +185,47 @@ fn doubled_centre(node: &GpuNode) -> Vec3 {
     Vec3::from_array(node.min) + Vec3::from_array(node.max)
 }
 
-/// The children of the wide node made from binary node `index`, by slot (binary node indices).
-fn collapse(nodes: &[GpuNode], index: u32) -> [Option<u32>; WIDTH] {
-    let node = &nodes[index as usize];
-    let mut children = [0u32; WIDTH];
+/// A child of a node being collapsed: its binary node, and a copy of it.
+#[derive(Clone, Copy, Default)]
+struct Child {
+    index: u32,
+    node: GpuNode,
+}
+
+/// The wide node made from binary node `index`, but for where its children are stored, and below
+/// each slot an internal child's binary node or a leaf's primitive.
+fn collapse(nodes: &[GpuNode], index: u32) -> (WideNode, [u32; WIDTH]) {
+    let node = nodes[index as usize];
+    let child = |index: u32| Child {
+        index,
+        node: nodes[index as usize],
+    };
+    let mut children = [Child::default(); WIDTH];
     let mut count = 1;
-    children[0] = index;
+    children[0] = Child { index, node };
     if !node.is_leaf() {
-        (children[0], children[1], count) = (node.left, node.right, 2);
+        (children[0], children[1], count) = (child(node.left), child(node.right), 2);
     }
+    // The largest internal child (the first of equals) gives way to its two, until there are eight
+    // or only leaves.
     while count < WIDTH {
-        // The largest internal child (the first of equals) gives way to its two.
         let mut widest = None;
         let mut widest_extent = 0.0;
-        for (i, &child) in children[..count].iter().enumerate() {
-            let child = &nodes[child as usize];
-            if !child.is_leaf() && (widest.is_none() || extent_sum(child) > widest_extent) {
-                (widest, widest_extent) = (Some(i), extent_sum(child));
+        for (i, c) in children[..count].iter().enumerate() {
+            if !c.node.is_leaf() && (widest.is_none() || extent_sum(&c.node) > widest_extent) {
+                (widest, widest_extent) = (Some(i), extent_sum(&c.node));
             }
         }
         let Some(i) = widest else { break };
-        let opened = &nodes[children[i] as usize];
-        (children[i], children[count]) = (opened.left, opened.right);
+        let opened = children[i].node;
+        (children[i], children[count]) = (child(opened.left), child(opened.right));
         count += 1;
     }
     // Each child in turn takes the free slot whose octant its centre lies furthest into.
-    let centre = doubled_centre(node);
-    let mut slots = [None; WIDTH];
-    for &child in &children[..count] {
-        let offset = doubled_centre(&nodes[child as usize]) - centre;
+    let centre = doubled_centre(&node);
+    let mut slots: [Option<Child>; WIDTH] = [None; WIDTH];
+    for c in &children[..count] {
+        let offset = doubled_centre(&c.node) - centre;
         let mut best = None;
         let mut best_cost = 0.0;
         for (slot, taken) in slots.iter().enumerate() {
@@ -225,9 +237,36 @@ fn collapse(nodes: &[GpuNode], index: u32) -> [Option<u32>; WIDTH] {
                 (best, best_cost) = (Some(slot), cost);
             }
         }
-        slots[best.expect("a free slot for each of at most eight children")] = Some(child);
+        slots[best.expect("a free slot for each of at most eight children")] = Some(*c);
     }
-    slots
+    // The children's boxes in the node's frame.
+    let origin = Vec3::from_array(node.min);
+    let extent = Vec3::from_array(node.max) - origin;
+    let exponents = [extent.x, extent.y, extent.z].map(quantum_exponent);
+    let mut wide = WideNode {
+        origin: node.min,
+        ..WideNode::default()
+    };
+    let mut imask = 0;
+    let mut below = [0; WIDTH];
+    for (slot, c) in slots.iter().enumerate() {
+        let Some(c) = c else { continue };
+        wide.slots |= 1 << slot;
+        below[slot] = if c.node.is_leaf() {
+            c.node.left
+        } else {
+            imask |= 1 << slot;
+            c.index
+        };
+        let (lo, hi) = quantize(origin, exponents, super::node_box(&c.node));
+        let (word, shift) = (slot / 4, 8 * (slot % 4));
+        for axis in 0..3 {
+            wide.lo[axis][word] |= lo[axis] << shift;
+            wide.hi[axis][word] |= hi[axis] << shift;
+        }
+    }
+    wide.exponents = exponents[0] | exponents[1] << 8 | exponents[2] << 16 | imask << 24;
+    (wide, below)
 }
 
 /// How far `offset` lies along slot s's diagonal (its components signed by s's bits).
@@ -236,100 +275,64 @@ fn octant_cost(offset: Vec3, slot: usize) -> f32 {
     signed(offset.x, 0) + signed(offset.y, 1) + signed(offset.z, 2)
 }
 
-/// The wide node made from binary node `index` whose children are `slots`, but for where its
-/// children are stored.
-fn wide_node(nodes: &[GpuNode], index: u32, slots: &[Option<u32>; WIDTH]) -> WideNode {
-    let node = &nodes[index as usize];
-    let bounds = super::node_box(node);
-    let extent = bounds.max - bounds.min;
-    let exponents = [extent.x, extent.y, extent.z].map(quantum_exponent);
-    let mut wide = WideNode {
-        origin: node.min,
-        ..WideNode::default()
-    };
-    let mut imask = 0;
-    for (slot, child) in slots.iter().enumerate() {
-        let Some(child) = *child else { continue };
-        let child = &nodes[child as usize];
-        wide.slots |= 1 << slot;
-        if !child.is_leaf() {
-            imask |= 1 << slot;
-        }
-        let (lo, hi) = quantize(bounds.min, exponents, super::node_box(child));
-        let (word, shift) = (slot / 4, 8 * (slot % 4));
-        for axis in 0..3 {
-            wide.lo[axis][word] |= lo[axis] << shift;
-            wide.hi[axis][word] |= hi[axis] << shift;
-        }
-    }
-    wide.exponents = exponents[0] | exponents[1] << 8 | exponents[2] << 16 | imask << 24;
-    wide
-}
-
 /// A child box's corners in quanta of a node's frame, rounded outwards by one unit more than
-/// needed, as [`super::threaded::QuantizationFrame::quantize`] does.
+/// needed, as [`super::threaded::QuantizationFrame::quantize`] does: `clamp(floor(lo) - 1, 0,
+/// 255)` and `clamp(ceil(hi) + 1, 0, 255)`, as the GPU computes them, in integers (the quanta are
+/// never negative once subnormals are flushed, and floor and ceil are library calls on x86-64's
+/// baseline).
 fn quantize(origin: Vec3, exponents: [u32; 3], bounds: Aabb) -> ([u32; 3], [u32; 3]) {
     let inverse = Vec3::from_array(exponents.map(|e| f32::from_bits((254 - e) << 23)));
-    let lo = flush_subnormal(flush_subnormal(bounds.min - origin) * inverse).floor() - Vec3::ONE;
-    let hi = flush_subnormal(flush_subnormal(bounds.max - origin) * inverse).ceil() + Vec3::ONE;
-    let q = |v: Vec3| v.to_array().map(|c| c.clamp(0.0, MAX_QUANTUM as f32) as u32);
-    (q(lo), q(hi))
+    let lo = flush_subnormal(flush_subnormal(bounds.min - origin) * inverse).to_array();
+    let hi = flush_subnormal(flush_subnormal(bounds.max - origin) * inverse).to_array();
+    let below = |q: f32| if q >= 1.0 { (q as u32 - 1).min(MAX_QUANTUM) } else { 0 };
+    let above = |q: f32| {
+        let whole = q.min(2.0 * MAX_QUANTUM as f32) as u32;
+        (whole + u32::from((whole as f32) < q) + 1).min(MAX_QUANTUM)
+    };
+    (lo.map(below), hi.map(above))
 }
 
 /// The wide BVH of `nodes` (the root first) over `primitive_count` primitives, as its texels,
-/// [`capacity_texels`] of them.
+/// [`capacity_texels`] of them: as many as any tree over as many primitives may need, as the
+/// GPU's, so that a renderer whose scene moves rewrites its array in place each frame.
 pub fn wide_texels(nodes: &[GpuNode], primitive_count: usize) -> Vec<GpuWideTexel> {
-    let root = leaf_texels(primitive_count);
-    let mut texels = vec![GpuWideTexel::default(); root as usize];
+    let root = leaf_texels(primitive_count) as usize;
+    let mut texels: Vec<GpuWideTexel> = bytemuck::zeroed_vec(capacity_texels(primitive_count) as usize);
     if nodes.is_empty() {
         return texels;
     }
+    let (leaf_words, node_texels) = texels.split_at_mut(root);
+    let node_words: &mut [WideNode] = bytemuck::cast_slice_mut(node_texels);
     let mut leaves = Vec::with_capacity(primitive_count);
-    let mut level = vec![0u32];
-    let mut next_texel = root + NODE_TEXELS;
+    // The binary node of each wide node, in the order they are placed: level after level.
+    let mut queue = Vec::with_capacity(node_capacity(primitive_count) as usize);
+    queue.push(0u32);
+    let mut level = 0..1;
     while !level.is_empty() {
-        // Each node made in parallel; then, in order, each takes room for its children after
-        // those of the nodes before it on its level.
-        let mut made: Vec<(WideNode, [u32; WIDTH])> = level
-            .par_iter()
-            .with_min_len(256)
-            .map(|&b| {
-                let slots = collapse(nodes, b);
-                let mut below = [0u32; WIDTH];
-                for (slot, child) in slots.iter().enumerate() {
-                    // An internal child's binary node, a leaf's primitive.
-                    if let Some(child) = *child {
-                        let node = &nodes[child as usize];
-                        below[slot] = if node.is_leaf() { node.left } else { child };
-                    }
-                }
-                (wide_node(nodes, b, &slots), below)
-            })
-            .collect();
-        let mut next_level = Vec::with_capacity(level.len() * 4);
-        for (node, below) in &mut made {
-            (node.child_base, node.leaf_base) = (next_texel, leaves.len() as u32);
+        let made = &mut node_words[level.clone()];
+        let mut below = vec![[0u32; WIDTH]; made.len()];
+        made.par_iter_mut()
+            .zip(&mut below)
+            .zip(&queue[level.clone()])
+            .with_min_len(512)
+            .for_each(|((wide, below), &binary)| (*wide, *below) = collapse(nodes, binary));
+        // In order, each node's children after those of the nodes before it.
+        for (wide, below) in made.iter_mut().zip(&below) {
+            wide.child_base = (root + NODE_TEXELS as usize * queue.len()) as u32;
+            wide.leaf_base = leaves.len() as u32;
             for (slot, &child) in below.iter().enumerate() {
-                if node.imask() & (1 << slot) != 0 {
-                    next_level.push(child);
-                    next_texel += NODE_TEXELS;
-                } else if node.slots & (1 << slot) != 0 {
+                if wide.imask() & (1 << slot) != 0 {
+                    queue.push(child);
+                } else if wide.slots & (1 << slot) != 0 {
                     leaves.push(child);
                 }
             }
         }
-        texels.extend(made.iter().flat_map(|(node, _)| {
-            let texels: [GpuWideTexel; NODE_TEXELS as usize] = bytemuck::cast(*node);
-            texels
-        }));
-        level = next_level;
+        level = level.end..queue.len();
     }
-    for (texel, words) in texels.iter_mut().zip(leaves.chunks(4)) {
+    for (texel, words) in leaf_words.iter_mut().zip(leaves.chunks(4)) {
         texel.words[..words.len()].copy_from_slice(words);
     }
-    // As long as any tree over as many primitives may need, as the GPU's is: a renderer whose
-    // scene moves rewrites its array in place each frame, whatever the new tree's node count.
-    texels.resize(capacity_texels(primitive_count) as usize, GpuWideTexel::default());
     texels
 }
 

@@ -33,6 +33,38 @@ fn octant_bits(mask: u32, octant: u32) -> u32 {
     return bits;
 }
 
+// A word's four bytes as floats, the lowest first.
+fn bytes(word: u32) -> vec4<f32> {
+    return vec4<f32>((vec4<u32>(word) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(0xffu));
+}
+
+// `intersect_box` for four boxes at once, whose low and high corners are the bytes of `lo` and
+// `hi` (x, y, z words): bit i set where the ray enters box i by t_max. Component for component the
+// arithmetic of intersect_box, so the CPU's box-by-box test finds the same boxes.
+fn slab_hits(lo: vec3<u32>, hi: vec3<u32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> u32 {
+    var t_enter = vec4<f32>(0.0);
+    var t_exit = vec4<f32>(t_max);
+    var near = array<vec4<f32>, 3>();
+    var far = array<vec4<f32>, 3>();
+    for (var axis = 0u; axis < 3u; axis++) {
+        let t0 = (bytes(lo[axis]) - origin[axis]) * inv_dir[axis];
+        let t1 = (bytes(hi[axis]) - origin[axis]) * inv_dir[axis];
+        let swap = t1 < t0;
+        near[axis] = select(t0, t1, swap);
+        far[axis] = select(t1, t0, swap);
+    }
+    // larger(larger(x, y), larger(z, 0)) and smaller(smaller(x, y), smaller(z, t_max)), as
+    // intersect_box: b where it is the larger (smaller), else a.
+    let near_xy = select(near[0], near[1], near[1] > near[0]);
+    let near_z0 = select(near[2], t_enter, t_enter > near[2]);
+    t_enter = select(near_xy, near_z0, near_z0 > near_xy);
+    let far_xy = select(far[0], far[1], far[1] < far[0]);
+    let far_zt = select(far[2], t_exit, t_exit < far[2]);
+    t_exit = select(far_xy, far_zt, far_zt < far_xy);
+    let enters = vec4<u32>(t_enter <= t_exit);
+    return enters.x | (enters.y << 1u) | (enters.z << 2u) | (enters.w << 3u);
+}
+
 fn wide_texel(i: u32) -> vec4<u32> {
     return load_wide(i).words;
 }
@@ -53,11 +85,29 @@ fn traverse_wide(ray: Ray, best: Hit, shadow: bool) -> Hit {
     var stack_base: array<u32, BVH_STACK_SIZE>;
     var stack_hits: array<u32, BVH_STACK_SIZE>;
     var size = 0u;
+    // The hit leaves of the last node visited, nearest first.
+    var leaf_base = 0u;
+    var leaf_hits = 0u;
+    var leaf_mask = 0u;
+    // Two loops (Aila and Laine's while-while): the inner one visits nodes until the ray has
+    // leaves to test, the outer one tests them. SwiftShader and llvmpipe run a loop's whole body
+    // for every step any of its lanes takes, so the primitive tests are kept out of the node
+    // steps, and a step that resumes a waiting group visits a node too. The nodes and primitives
+    // tested, and their order, are those of one loop (src/cpu/accel.rs).
     loop {
-        var leaf_base = 0u;
-        var leaf_hits = 0u;
-        var leaf_mask = 0u;
-        if (node_hits != 0u) {
+        loop {
+            if (leaf_hits != 0u) {
+                break;
+            }
+            if (node_hits == 0u) {
+                if (size == 0u) {
+                    break;
+                }
+                size -= 1u;
+                node_base = stack_base[size];
+                node_hits = stack_hits[size] & 0xffu;
+                node_mask = stack_hits[size] >> 8u;
+            }
             let texel = take_nearest(node_base, &node_hits, node_mask, octant, WIDE_NODE_TEXELS);
             if (node_hits != 0u) {
                 stack_base[size] = node_base;
@@ -76,39 +126,29 @@ fn traverse_wide(ray: Ray, best: Hit, shadow: bool) -> Hit {
             let origin = (ray.origin - bitcast<vec3<f32>>(t0.xyz)) * inverse_quantum;
             let node_inv_dir = inv_dir * quantum;
             let imask = t0.w >> 24u;
+            // Slots 0-3, then 4-7: each axis's four corners in one word, tested four at a time.
             let slots = t1.z;
-            var hit_slots = 0u;
-            for (var slot = 0u; slot < 8u; slot++) {
-                if ((slots & (1u << slot)) != 0u) {
-                    let upper = slot >= 4u;
-                    let shift = vec3<u32>(8u * (slot & 3u));
-                    let lo_words = select(vec3<u32>(t2.x, t2.z, t3.x), vec3<u32>(t2.y, t2.w, t3.y), upper);
-                    let hi_words = select(vec3<u32>(t3.z, t4.x, t4.z), vec3<u32>(t3.w, t4.y, t4.w), upper);
-                    let lo = vec3<f32>((lo_words >> shift) & vec3<u32>(0xffu));
-                    let hi = vec3<f32>((hi_words >> shift) & vec3<u32>(0xffu));
-                    if (intersect_box(lo, hi, origin, node_inv_dir, hit.t) >= 0.0) {
-                        hit_slots |= 1u << slot;
-                    }
-                }
-            }
+            box_tests += countOneBits(slots);
+            let low = slab_hits(vec3<u32>(t2.x, t2.z, t3.x), vec3<u32>(t3.z, t4.x, t4.z), origin, node_inv_dir, hit.t);
+            let high = slab_hits(vec3<u32>(t2.y, t2.w, t3.y), vec3<u32>(t3.w, t4.y, t4.w), origin, node_inv_dir, hit.t);
+            let hit_slots = (low | (high << 4u)) & slots;
             node_base = t1.x;
             node_hits = octant_bits(hit_slots & imask, octant);
             node_mask = imask;
             leaf_base = t1.y;
             leaf_mask = slots & ~imask;
             leaf_hits = octant_bits(hit_slots & leaf_mask, octant);
-        } else if (size > 0u) {
-            size -= 1u;
-            node_base = stack_base[size];
-            node_hits = stack_hits[size] & 0xffu;
-            node_mask = stack_hits[size] >> 8u;
-        } else {
+        }
+        if (leaf_hits == 0u) {
             break;
         }
-        while (leaf_hits != 0u) {
+        loop {
             let word = take_nearest(leaf_base, &leaf_hits, leaf_mask, octant, 1u);
             if (hit_primitive(wide_texel(word / 4u)[word % 4u], ray, &hit) && shadow) {
                 return hit;
+            }
+            if (leaf_hits == 0u) {
+                break;
             }
         }
     }
