@@ -74,7 +74,7 @@ const backends = options.backends.split(",");
 for (const b of backends) if (!["webgl2", "webgpu"].includes(b)) fail(`--backends: unknown ${b} (webgl2, webgpu)`);
 if (![undefined, "storage", "texture"].includes(options["webgpu-memory"])) fail("--webgpu-memory: storage or texture");
 const walks = options.accel.split(",");
-const WALKS = ["brute", "stack", "stackless", "threaded"];
+const WALKS = ["brute", "stack", "stackless", "threaded", "wide"];
 for (const a of walks) if (!WALKS.includes(a)) fail(`--accel: unknown ${a} (${WALKS.join(", ")})`);
 // What each round measures of raypipe's page, in this order.
 const builders = options.builder.split(",");

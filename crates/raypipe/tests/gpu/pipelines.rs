@@ -32,7 +32,8 @@ fn compute_equals_fragment(ctx: &GpuContext) {
         count,
         ..Default::default()
     };
-    // Every walk; then, on the threaded walk, the other memory modes (uniform arrays hold
+    // Every walk; then, on the threaded walk (and the wide one, whose boxes the shader tests four at
+    // a time), the other memory modes (uniform arrays hold
     // whitted's BVH, not the cloud's), costs, and several samples.
     let mut cases = Vec::new();
     for scene in [&whitted, &cloud] {
@@ -40,6 +41,7 @@ fn compute_equals_fragment(ctx: &GpuContext) {
             cases.push((scene, options(accel, MemoryMode::Storage, Count::Rays), 1));
         }
         cases.push((scene, options(Accel::Threaded, MemoryMode::Storage, Count::Cost), 1));
+        cases.push((scene, options(Accel::Wide, MemoryMode::Storage, Count::Cost), 1));
         cases.push((scene, options(Accel::Threaded, MemoryMode::Storage, Count::Rays), 3));
     }
     cases.push((&tall, options(Accel::Stack, MemoryMode::Storage, Count::Rays), 1));
@@ -47,6 +49,7 @@ fn compute_equals_fragment(ctx: &GpuContext) {
         cases.push((&whitted, options(Accel::Threaded, memory, Count::Rays), 2));
         if memory != MemoryMode::Uniform {
             cases.push((&cloud, options(Accel::Threaded, memory, Count::Rays), 1));
+            cases.push((&cloud, options(Accel::Wide, memory, Count::Rays), 1));
         }
     }
     for (scene, fragment_options, samples) in cases {

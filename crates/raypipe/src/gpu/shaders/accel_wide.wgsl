@@ -4,13 +4,28 @@
 // the stack as one group (a base, the hit slots as bits slot ^ octant, and the slots of their kind).
 // Mirrored by src/cpu/accel.rs.
 
+// The bits set in an 8-bit mask, and the highest of them: WebGL2's GLSL ES 3.0 has neither
+// countOneBits (bitCount) nor firstLeadingBit (findMSB).
+fn count_bits(mask: u32) -> u32 {
+    let pairs = mask - ((mask >> 1u) & 0x55u);
+    let nibbles = (pairs & 0x33u) + ((pairs >> 2u) & 0x33u);
+    return (nibbles + (nibbles >> 4u)) & 0x0fu;
+}
+
+fn highest_bit(mask: u32) -> u32 {
+    let four = select(0u, 4u, mask >= 16u);
+    let rest = mask >> four;
+    let two = select(0u, 2u, rest >= 4u);
+    return four + two + select(0u, 1u, (rest >> two) >= 2u);
+}
+
 // Takes a group's nearest hit child: the texel of an internal child (stride WIDE_NODE_TEXELS), the word of a
 // leaf's primitive (stride 1).
 fn take_nearest(base: u32, hits: ptr<function, u32>, kind_mask: u32, octant: u32, stride: u32) -> u32 {
-    let bit = firstLeadingBit(*hits);
+    let bit = highest_bit(*hits);
     *hits &= ~(1u << bit);
     let slot = bit ^ octant;
-    return base + stride * countOneBits(kind_mask & ((1u << slot) - 1u));
+    return base + stride * count_bits(kind_mask & ((1u << slot) - 1u));
 }
 
 // The ray's octant: bit k set where its direction's component k is not negative.
@@ -128,7 +143,7 @@ fn traverse_wide(ray: Ray, best: Hit, shadow: bool) -> Hit {
             let imask = t0.w >> 24u;
             // Slots 0-3, then 4-7: each axis's four corners in one word, tested four at a time.
             let slots = t1.z;
-            box_tests += countOneBits(slots);
+            box_tests += count_bits(slots);
             let low = slab_hits(vec3<u32>(t2.x, t2.z, t3.x), vec3<u32>(t3.z, t4.x, t4.z), origin, node_inv_dir, hit.t);
             let high = slab_hits(vec3<u32>(t2.y, t2.w, t3.y), vec3<u32>(t3.w, t4.y, t4.w), origin, node_inv_dir, hit.t);
             let hit_slots = (low | (high << 4u)) & slots;
