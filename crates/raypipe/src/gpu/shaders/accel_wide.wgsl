@@ -53,31 +53,50 @@ fn bytes(word: u32) -> vec4<f32> {
     return vec4<f32>((vec4<u32>(word) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(0xffu));
 }
 
+// One axis's slabs of four boxes whose corners are the bytes of `lo` and `hi`, as intersect_box
+// computes them: where the ray enters (near) and leaves (far) each.
+fn slabs(lo: u32, hi: u32, origin: f32, inv_dir: f32, near: ptr<function, vec4<f32>>, far: ptr<function, vec4<f32>>) {
+    let t0 = (bytes(lo) - origin) * inv_dir;
+    let t1 = (bytes(hi) - origin) * inv_dir;
+    let swap = t1 < t0;
+    *near = select(t0, t1, swap);
+    *far = select(t1, t0, swap);
+}
+
 // `intersect_box` for four boxes at once, whose low and high corners are the bytes of `lo` and
 // `hi` (x, y, z words): bit i set where the ray enters box i by t_max. Component for component the
-// arithmetic of intersect_box, so the CPU's box-by-box test finds the same boxes.
+// arithmetic of intersect_box, so the CPU's box-by-box test finds the same boxes. Written out axis by
+// axis: SwiftShader keeps an array, or a vector indexed by a variable, in memory.
 fn slab_hits(lo: vec3<u32>, hi: vec3<u32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> u32 {
-    var t_enter = vec4<f32>(0.0);
-    var t_exit = vec4<f32>(t_max);
-    var near = array<vec4<f32>, 3>();
-    var far = array<vec4<f32>, 3>();
-    for (var axis = 0u; axis < 3u; axis++) {
-        let t0 = (bytes(lo[axis]) - origin[axis]) * inv_dir[axis];
-        let t1 = (bytes(hi[axis]) - origin[axis]) * inv_dir[axis];
-        let swap = t1 < t0;
-        near[axis] = select(t0, t1, swap);
-        far[axis] = select(t1, t0, swap);
-    }
+    var near_x: vec4<f32>;
+    var far_x: vec4<f32>;
+    var near_y: vec4<f32>;
+    var far_y: vec4<f32>;
+    var near_z: vec4<f32>;
+    var far_z: vec4<f32>;
+    slabs(lo.x, hi.x, origin.x, inv_dir.x, &near_x, &far_x);
+    slabs(lo.y, hi.y, origin.y, inv_dir.y, &near_y, &far_y);
+    slabs(lo.z, hi.z, origin.z, inv_dir.z, &near_z, &far_z);
     // larger(larger(x, y), larger(z, 0)) and smaller(smaller(x, y), smaller(z, t_max)), as
     // intersect_box: b where it is the larger (smaller), else a.
-    let near_xy = select(near[0], near[1], near[1] > near[0]);
-    let near_z0 = select(near[2], t_enter, t_enter > near[2]);
-    t_enter = select(near_xy, near_z0, near_z0 > near_xy);
-    let far_xy = select(far[0], far[1], far[1] < far[0]);
-    let far_zt = select(far[2], t_exit, t_exit < far[2]);
-    t_exit = select(far_xy, far_zt, far_zt < far_xy);
+    let zero = vec4<f32>(0.0);
+    let t_far = vec4<f32>(t_max);
+    let near_xy = select(near_x, near_y, near_y > near_x);
+    let near_z0 = select(near_z, zero, zero > near_z);
+    let t_enter = select(near_xy, near_z0, near_z0 > near_xy);
+    let far_xy = select(far_x, far_y, far_y < far_x);
+    let far_zt = select(far_z, t_far, t_far < far_z);
+    let t_exit = select(far_xy, far_zt, far_zt < far_xy);
     let enters = vec4<u32>(t_enter <= t_exit);
     return enters.x | (enters.y << 1u) | (enters.z << 2u) | (enters.w << 3u);
+}
+
+// Word `i` of the array: a leaf's primitive. Picked by selects, not by indexing the texel with a
+// variable, which SwiftShader does through memory.
+fn wide_word(i: u32) -> u32 {
+    let texel = wide_texel(i / 4u);
+    let lane = i % 4u;
+    return select(select(texel.x, texel.y, lane == 1u), select(texel.z, texel.w, lane == 3u), lane >= 2u);
 }
 
 fn wide_texel(i: u32) -> vec4<u32> {
@@ -159,7 +178,7 @@ fn traverse_wide(ray: Ray, best: Hit, shadow: bool) -> Hit {
         }
         loop {
             let word = take_nearest(leaf_base, &leaf_hits, leaf_mask, octant, 1u);
-            if (hit_primitive(wide_texel(word / 4u)[word % 4u], ray, &hit) && shadow) {
+            if (hit_primitive(wide_word(word), ray, &hit) && shadow) {
                 return hit;
             }
             if (leaf_hits == 0u) {
