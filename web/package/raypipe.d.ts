@@ -2,8 +2,8 @@
 
 /** The browser API a viewer traces through: WebGPU where the browser has it, else WebGL2 (`auto`). */
 export type Backend = "auto" | "webgpu" | "webgl2";
-/** The acceleration: brute force, or the LBVH walked with a stack, stacklessly or by threads. */
-export type Accel = "brute" | "stack" | "stackless" | "threaded";
+/** The acceleration: brute force, or the LBVH walked with a stack, stacklessly, by threads, or collapsed into compressed 8-wide nodes. */
+export type Accel = "brute" | "stack" | "stackless" | "threaded" | "wide";
 export type Builder = "lbvh" | "sah";
 export type Memory = "uniform" | "storage" | "texture";
 export type Pipeline = "fragment" | "compute";
