@@ -231,9 +231,9 @@ fn a_moving_scene_in_texture_memory_is_the_storage_one(_: &GpuContext) {
 }
 
 /// Keys and a drag through the X server (xdotool): `B` switches the acceleration (from the threaded
-/// walk to the next the adapter offers: ray queries where it has them, else brute force) and the
-/// image stays, a drag orbits and the image changes; `P` saves each state.
-fn synthetic_input_switches_and_orbits(ctx: &GpuContext) {
+/// walk to the next, the wide walk) and the image stays, a drag orbits and the image changes; `P`
+/// saves each state.
+fn synthetic_input_switches_and_orbits(_ctx: &GpuContext) {
     let dir = test_dir("view-input");
     let expected = rendered(&dir, "whitted", &[]);
     let script = format!(
@@ -261,7 +261,7 @@ fn synthetic_input_switches_and_orbits(ctx: &GpuContext) {
         "screenshots missing: {log} {}",
         String::from_utf8_lossy(&output.stderr)
     );
-    let next = if ctx.ray_queries { "rayquery" } else { "brute" };
+    let next = "wide";
     assert!(
         log.contains(&format!("acceleration {next} ")),
         "B did not switch to {next}: {log}"
