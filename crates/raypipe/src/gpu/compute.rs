@@ -25,6 +25,28 @@ pub fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType, dynamic_offset: b
     }
 }
 
+/// A bind group of whole buffers, bound at 0, 1, 2, ... in the order given.
+pub fn buffers_bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, buffer)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
 /// Compiles `source` and returns a maker of its kernels by entry point, all bound by `layout`.
 ///
 /// Workgroup memory is not zeroed first: every kernel writes its slots before it reads them. Where

@@ -3,7 +3,7 @@
 //! [`crate::bvh::threaded::threaded_nodes`], so a rebuilt tree reaches the stack and threaded walks
 //! with no round trip to the host.
 
-use super::compute::{buffer_entry, grid, kernels, storage_buffer};
+use super::compute::{buffer_entry, buffers_bind_group, grid, kernels, storage_buffer};
 use super::readback::read_buffer;
 use super::shader::records_source;
 use super::timing::PassTimestamps;
@@ -85,18 +85,12 @@ impl GpuThreadedLayout {
             });
             let kernel = kernels(device, "threaded layout", shader_source(), &layout);
             let (order_kernel, nodes_kernel) = (kernel("depth_first_order"), kernel("threaded_nodes"));
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("threaded layout"),
-                layout: &layout,
-                entries: &[&params, nodes, &order, &threaded, &frame]
-                    .iter()
-                    .enumerate()
-                    .map(|(i, buffer)| wgpu::BindGroupEntry {
-                        binding: i as u32,
-                        resource: buffer.as_entire_binding(),
-                    })
-                    .collect::<Vec<_>>(),
-            });
+            let bind_group = buffers_bind_group(
+                device,
+                "threaded layout",
+                &layout,
+                &[&params, nodes, &order, &threaded, &frame],
+            );
             Ok(Self {
                 order: order_kernel,
                 nodes: nodes_kernel,

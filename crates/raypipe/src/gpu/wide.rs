@@ -7,7 +7,7 @@
 //! dispatch; the host records as many levels as the deepest tree the build can make
 //! ([`super::build::depth_bound`]), those past the tree's end dispatching no workgroup.
 
-use super::compute::{buffer_entry, kernels, storage_buffer};
+use super::compute::{buffer_entry, buffers_bind_group, kernels, storage_buffer};
 use super::readback::read_buffer;
 use super::shader::records_source;
 use super::timing::PassTimestamps;
@@ -114,18 +114,7 @@ impl GpuWideCollapse {
                     label: Some(label),
                     entries: &entries,
                 });
-                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(label),
-                    layout: &layout,
-                    entries: &buffers[..count]
-                        .iter()
-                        .enumerate()
-                        .map(|(i, buffer)| wgpu::BindGroupEntry {
-                            binding: i as u32,
-                            resource: buffer.as_entire_binding(),
-                        })
-                        .collect::<Vec<_>>(),
-                });
+                let group = buffers_bind_group(device, label, &layout, &buffers[..count]);
                 (layout, group)
             };
             let (sizing_layout, bind_group) = bound("wide collapse sizing", buffers.len());
