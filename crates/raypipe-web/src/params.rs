@@ -386,7 +386,7 @@ mod tests {
         assert_eq!(
             errors,
             [
-                "accel=bvh: expected one of brute, stack, stackless, threaded",
+                "accel=bvh: expected one of brute, stack, stackless, threaded, wide",
                 "width=0: expected a whole number in 1..=8192",
                 "depth=33: expected a whole number in 0..=32",
                 "unknown setting 'colour' (known: scene, model, environment, accel, builder, memory, pipeline, depth, aov, paused, floor, time, speed, spp, exposure, tonemap, width, height, backend)",
@@ -418,7 +418,7 @@ mod tests {
         assert_eq!(
             Setting::parse("accel", "rayquery"),
             Err(
-                "accel=rayquery: no browser offers ray queries yet; expected one of brute, stack, stackless, threaded"
+                "accel=rayquery: no browser offers ray queries yet; expected one of brute, stack, stackless, threaded, wide"
                     .into()
             )
         );

@@ -13,7 +13,7 @@ pub trait Choice: Copy + PartialEq + std::fmt::Debug + 'static {
     fn from_name(name: &str) -> Option<Self> {
         Self::ALL.iter().copied().find(|v| v.name() == name)
     }
-    /// The names, for messages: "brute, stack, stackless, threaded".
+    /// The names, for messages: "brute, stack, stackless, threaded, wide".
     fn names() -> String {
         Self::ALL.iter().map(|v| v.name()).collect::<Vec<_>>().join(", ")
     }
