@@ -34,7 +34,7 @@
 //! children the CPU chooses. Level by level, so that each level's nodes collapse in parallel.
 
 use super::aabb::Aabb;
-use super::layout::GpuNode;
+use super::layout::{GpuNode, LEAF};
 use super::threaded::{TINY_EXTENT, flush_subnormal, power_of_two};
 use super::validate::InvalidTree;
 use bytemuck::{Pod, Zeroable};
@@ -175,90 +175,103 @@ pub fn quantum_exponent(extent: f32) -> u32 {
     (exponent + 127) as u32
 }
 
-/// A box's extent summed over the axes: the collapse's measure of a child's size.
-fn extent_sum(node: &GpuNode) -> f32 {
-    (node.max[0] - node.min[0]) + (node.max[1] - node.min[1]) + (node.max[2] - node.min[2])
-}
-
-/// Twice a box's centre, per axis: sums, exact alike on every device.
-fn doubled_centre(node: &GpuNode) -> Vec3 {
-    Vec3::from_array(node.min) + Vec3::from_array(node.max)
-}
-
-/// A child of a node being collapsed: its binary node, and a copy of it.
+/// A child of a node being collapsed: its binary node's box and children, read once.
 #[derive(Clone, Copy, Default)]
 struct Child {
+    /// The binary node.
     index: u32,
-    node: GpuNode,
+    /// Internal: the binary node's children. Leaf: its primitive, and [`LEAF`].
+    left: u32,
+    right: u32,
+    min: Vec3,
+    max: Vec3,
+    /// The box's extent summed over the axes (half its perimeter): the collapse's measure of a
+    /// child's size. Sums of differences come out bit for bit alike on every device.
+    extent: f32,
+}
+
+impl Child {
+    fn read(nodes: &[GpuNode], index: u32) -> Self {
+        let node = &nodes[index as usize];
+        let (min, max) = (Vec3::from_array(node.min), Vec3::from_array(node.max));
+        let size = max - min;
+        Self {
+            index,
+            left: node.left,
+            right: node.right,
+            min,
+            max,
+            extent: (size.x + size.y) + size.z,
+        }
+    }
+
+    fn is_leaf(&self) -> bool {
+        self.right == LEAF
+    }
 }
 
 /// The wide node made from binary node `index`, but for where its children are stored, and below
-/// each slot an internal child's binary node or a leaf's primitive.
+/// each slot an internal child's binary node or a leaf's primitive. Each binary node it reaches is
+/// read once.
 fn collapse(nodes: &[GpuNode], index: u32) -> (WideNode, [u32; WIDTH]) {
-    let node = nodes[index as usize];
-    let child = |index: u32| Child {
-        index,
-        node: nodes[index as usize],
-    };
+    let node = Child::read(nodes, index);
     let mut children = [Child::default(); WIDTH];
     let mut count = 1;
-    children[0] = Child { index, node };
+    children[0] = node;
     if !node.is_leaf() {
-        (children[0], children[1], count) = (child(node.left), child(node.right), 2);
+        (children[0], children[1], count) = (Child::read(nodes, node.left), Child::read(nodes, node.right), 2);
     }
     // The largest internal child (the first of equals) gives way to its two, until there are eight
     // or only leaves.
     while count < WIDTH {
-        let mut widest = None;
-        let mut widest_extent = 0.0;
+        let mut widest: Option<usize> = None;
         for (i, c) in children[..count].iter().enumerate() {
-            if !c.node.is_leaf() && (widest.is_none() || extent_sum(&c.node) > widest_extent) {
-                (widest, widest_extent) = (Some(i), extent_sum(&c.node));
+            if !c.is_leaf() && widest.is_none_or(|w| c.extent > children[w].extent) {
+                widest = Some(i);
             }
         }
         let Some(i) = widest else { break };
-        let opened = children[i].node;
-        (children[i], children[count]) = (child(opened.left), child(opened.right));
+        let opened = children[i];
+        (children[i], children[count]) = (Child::read(nodes, opened.left), Child::read(nodes, opened.right));
         count += 1;
     }
-    // Each child in turn takes the free slot whose octant its centre lies furthest into.
-    let centre = doubled_centre(&node);
-    let mut slots: [Option<Child>; WIDTH] = [None; WIDTH];
-    for c in &children[..count] {
-        let offset = doubled_centre(&c.node) - centre;
-        let mut best = None;
-        let mut best_cost = 0.0;
-        for (slot, taken) in slots.iter().enumerate() {
-            if taken.is_some() {
-                continue;
-            }
-            let cost = octant_cost(offset, slot);
-            if best.is_none() || cost > best_cost {
-                (best, best_cost) = (Some(slot), cost);
-            }
+    // Each child in turn takes the free slot whose octant its centre lies furthest into (the first
+    // of equals).
+    let centre = node.min + node.max;
+    let mut slot_child = [usize::MAX; WIDTH];
+    let mut free = (1u32 << WIDTH) - 1;
+    for (i, c) in children[..count].iter().enumerate() {
+        let costs = octant_costs((c.min + c.max) - centre);
+        let mut best = free.trailing_zeros() as usize;
+        let mut best_cost = costs[best];
+        // Without branches: which slot wins is a coin toss to a branch predictor.
+        for (slot, &cost) in costs.iter().enumerate() {
+            let better = free & (1 << slot) != 0 && cost > best_cost;
+            best = if better { slot } else { best };
+            best_cost = if better { cost } else { best_cost };
         }
-        slots[best.expect("a free slot for each of at most eight children")] = Some(*c);
+        free &= !(1 << best);
+        slot_child[best] = i;
     }
     // The children's boxes in the node's frame.
-    let origin = Vec3::from_array(node.min);
-    let extent = Vec3::from_array(node.max) - origin;
+    let extent = node.max - node.min;
     let exponents = [extent.x, extent.y, extent.z].map(quantum_exponent);
     let mut wide = WideNode {
-        origin: node.min,
+        origin: node.min.to_array(),
         ..WideNode::default()
     };
     let mut imask = 0;
     let mut below = [0; WIDTH];
-    for (slot, c) in slots.iter().enumerate() {
-        let Some(c) = c else { continue };
+    for (slot, &i) in slot_child.iter().enumerate() {
+        let Some(c) = children.get(i) else { continue };
         wide.slots |= 1 << slot;
-        below[slot] = if c.node.is_leaf() {
-            c.node.left
+        below[slot] = if c.is_leaf() {
+            c.left
         } else {
             imask |= 1 << slot;
             c.index
         };
-        let (lo, hi) = quantize(origin, exponents, super::node_box(&c.node));
+        let (lo, hi) = quantize(node.min, exponents, Aabb::new(c.min, c.max));
         let (word, shift) = (slot / 4, 8 * (slot % 4));
         for axis in 0..3 {
             wide.lo[axis][word] |= lo[axis] << shift;
@@ -269,10 +282,13 @@ fn collapse(nodes: &[GpuNode], index: u32) -> (WideNode, [u32; WIDTH]) {
     (wide, below)
 }
 
-/// How far `offset` lies along slot s's diagonal (its components signed by s's bits).
-fn octant_cost(offset: Vec3, slot: usize) -> f32 {
-    let signed = |v: f32, bit: usize| if slot & (1 << bit) != 0 { v } else { -v };
-    signed(offset.x, 0) + signed(offset.y, 1) + signed(offset.z, 2)
+/// How far `offset` lies along each slot's diagonal: slot s's cost is the sum of the components,
+/// each signed by s's bit for its axis, added x, y, then z.
+fn octant_costs(offset: Vec3) -> [f32; WIDTH] {
+    std::array::from_fn(|slot| {
+        let signed = |v: f32, bit: usize| if slot & (1 << bit) != 0 { v } else { -v };
+        (signed(offset.x, 0) + signed(offset.y, 1)) + signed(offset.z, 2)
+    })
 }
 
 /// A child box's corners in quanta of a node's frame, rounded outwards by one unit more than
