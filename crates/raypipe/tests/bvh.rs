@@ -219,6 +219,27 @@ fn a_corrupted_wide_tree_fails_validation() {
         };
         assert!(wide::validate(&tree, &boxes).is_err(), "{what} passed validation");
     }
+    // A walk visiting a node at depth d has d groups waiting: the stack must be as deep as the
+    // deepest node, and no deeper is asked.
+    let deepest = deepest_wide_node(&tree, tree.root);
+    assert!(deepest >= 2 && deepest <= tree.stack_size, "depth {deepest}");
+    let stack = |stack_size| WideTree { stack_size, ..tree };
+    wide::validate(&stack(deepest), &boxes).unwrap();
+    assert!(
+        wide::validate(&stack(deepest - 1), &boxes).is_err(),
+        "a stack of {} passed a tree {deepest} deep",
+        deepest - 1
+    );
+}
+
+/// The depth of the deepest node below the one at `texel` (0 for that node).
+fn deepest_wide_node(tree: &WideTree, texel: u32) -> u32 {
+    let node = tree.node(texel);
+    (0..wide::WIDTH)
+        .filter(|&slot| node.imask() & (1 << slot) != 0)
+        .map(|slot| 1 + deepest_wide_node(tree, node.child(slot)))
+        .max()
+        .unwrap_or(0)
 }
 
 #[test]

@@ -388,7 +388,8 @@ fn check_node(
     {
         return Err(format!("a child at texel {texel}, which starts no node"));
     }
-    if depth > tree.stack_size.max(1) + 1 {
+    // Visiting a node at depth d leaves at most d groups waiting (one for each node above it).
+    if depth > tree.stack_size.max(1) {
         return Err(format!(
             "node at texel {texel}: deeper than the stack of {}",
             tree.stack_size
