@@ -58,12 +58,12 @@ fn is_binary_leaf(node: BvhNode) -> bool {
     return node.right == LEAF;
 }
 
-// `extent_sum` in wide.rs: half the perimeter, adds only.
+// `Child::extent` in wide.rs: half the perimeter, adds only, x, y, then z.
 fn extent_sum(node: BvhNode) -> f32 {
     return (node.max.x - node.min.x) + (node.max.y - node.min.y) + (node.max.z - node.min.z);
 }
 
-// `octant_cost` in wide.rs.
+// One slot's entry of `octant_costs` in wide.rs.
 fn octant_cost(offset: vec3<f32>, slot: u32) -> f32 {
     let x = select(-offset.x, offset.x, (slot & 1u) != 0u);
     let y = select(-offset.y, offset.y, (slot & 2u) != 0u);
