@@ -9,8 +9,9 @@ use raypipe::bvh::BuildTimings;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::{self, Count};
 use raypipe::gpu::region::TracedPixels;
-use raypipe::gpu::{Backend, CpuRebuild, GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{CpuRebuild, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
+use raypipe::modes::Backend;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
@@ -112,7 +113,7 @@ pub fn build_renderer(
 ) -> anyhow::Result<Renderer> {
     let spinner = progress_bar(progress, 0, "{spinner} compiling the tracer, {elapsed}");
     let renderer = match rebuild {
-        Some(rebuild) => block_on(Renderer::with_rebuild(ctx, scene, rebuild, options)),
+        Some(rebuild) => block_on(rebuild.renderer(ctx, scene, options)),
         None => block_on(Renderer::new(ctx, scene, options)),
     };
     spinner.finish_and_clear();

@@ -4,9 +4,10 @@
 use crate::args::choice;
 use anyhow::bail;
 use clap::Args;
-use raypipe::gpu::Backend;
-use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE, ToneMap};
+use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE};
+use raypipe::modes::Backend;
 use raypipe::modes::{Accel, Aov, Builder, MemoryMode, Pipeline};
+use raypipe::scene::ToneMap;
 use raypipe::scene::animation::ClipChoice;
 use raypipe::scene::is_model_file;
 use raypipe::scene::model::{Floor, MeshAs, ModelOptions, Normals};

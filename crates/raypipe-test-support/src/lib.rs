@@ -7,7 +7,8 @@
 //! GPU, models, display or validator is missing is reported as *ignored*, with the reason, in the
 //! summary a newcomer sees. `RAYPIPE_REQUIRE_GPU=1`, `RAYPIPE_REQUIRE_MODELS=1`,
 //! `RAYPIPE_REQUIRE_DISPLAY=1` (window tests: Xvfb) and `RAYPIPE_REQUIRE_VALIDATOR=1` turn a
-//! missing one into a failure.
+//! missing one into a failure; `RAYPIPE_ONLY_GPU_TESTS=1` runs the tests that need a GPU alone, and
+//! `RAYPIPE_TEST_TIMES=1` prints each test's time.
 //!
 //! And [`models`]: test models written by independent writers in every format the loaders read.
 
@@ -175,9 +176,19 @@ impl Resources {
     }
 }
 
-/// Runs `tests` as libtest would, with the GPU and the models opened once.
-pub fn run(tests: Vec<Test>) -> ExitCode {
+/// Runs `tests` as libtest would, with the GPU and the models opened once. Under
+/// `RAYPIPE_ONLY_GPU_TESTS=1` only the tests that need a GPU run: how a second backend repeats
+/// what depends on the backend and nothing else.
+pub fn run(mut tests: Vec<Test>) -> ExitCode {
     let args = Arguments::from_args();
+    if required("RAYPIPE_ONLY_GPU_TESTS") {
+        let before = tests.len();
+        tests.retain(|t| t.body.needs().gpu);
+        eprintln!(
+            "RAYPIPE_ONLY_GPU_TESTS=1: the {} tests that need no GPU are left out",
+            before - tests.len()
+        );
+    }
     let any = |need: fn(Needs) -> bool| tests.iter().any(|t| need(t.body.needs()));
     let gpu = if any(|n| n.gpu) {
         pollster::block_on(GpuContext::new(None)).unwrap_or_else(|e| panic!("opening the GPU failed: {e}"))
@@ -213,6 +224,16 @@ pub fn run(tests: Vec<Test>) -> ExitCode {
     libtest_mimic::run(&args, trials).exit_code()
 }
 
+/// Under `RAYPIPE_TEST_TIMES=1`, each test's wall time on stderr when it ends, passed or not: where
+/// a suite's time goes (on a software adapter, mostly into compiling pipelines the first time).
+struct Clock(&'static str, std::time::Instant);
+
+impl Drop for Clock {
+    fn drop(&mut self) {
+        eprintln!("{:8.2} s {}", self.1.elapsed().as_secs_f64(), self.0);
+    }
+}
+
 /// A trial that runs `test`'s body, or, where something it needs is missing, is ignored with the
 /// reason (a failure where the reason's variable requires it).
 fn trial(test: Test, resources: &Arc<Resources>) -> Trial {
@@ -230,6 +251,7 @@ fn trial(test: Test, resources: &Arc<Resources>) -> Trial {
         let models = || resources.models.as_deref().expect("checked above");
         let _turn = (needs.gpu && gpu().info.backend == wgpu::Backend::Gl)
             .then(|| ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner()));
+        let _clock = required("RAYPIPE_TEST_TIMES").then(|| Clock(test.name, std::time::Instant::now()));
         match test.body {
             Body::Plain(f) => f(),
             Body::Gpu(f) | Body::GpuWindow(f) => f(gpu()),

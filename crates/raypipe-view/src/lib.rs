@@ -20,10 +20,11 @@ pub use camera::CameraControl;
 pub use player::{Clock, FlyKeys, FrameReport, Player, Screen, Timings, TracerRequest, overlay_pass, surface_config};
 pub use tracer::{TraceError, Tracer, next_texture, present_format};
 
-use raypipe::gpu::{Backend, GpuContext, GpuError};
+use raypipe::gpu::{GpuContext, GpuError};
 use raypipe::image::Frame;
 use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::Aov;
+use raypipe::modes::Backend;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::{Environment, Scene};
 use std::path::{Path, PathBuf};

@@ -2,9 +2,9 @@
 
 use crate::Modes;
 use raypipe::Choice;
-use raypipe::image::tonemap::ToneMap;
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
+use raypipe::scene::ToneMap;
 
 /// What the panel shows.
 pub struct Readout<'a> {

@@ -92,7 +92,7 @@ impl Tracer {
             return Err(ModesError::BuilderCannotFollowMotion(modes.builder).into());
         } else if modes.memory == MemoryMode::Storage {
             let rebuild = SceneRebuild::new(ctx, &scene, &packed, modes.accel, MortonBits::Bits30).await?;
-            let renderer = Renderer::with_rebuild(ctx, &packed, &rebuild, options).await?;
+            let renderer = rebuild.renderer(ctx, &packed, options).await?;
             let rebuild = Box::new(rebuild);
             (renderer, None, Motion::OnGpu { rebuild, packed })
         } else {

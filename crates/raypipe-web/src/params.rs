@@ -4,10 +4,11 @@
 
 use raypipe::Choice;
 use raypipe::choice::impl_choice;
-use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE, ToneMap};
+use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE};
 use raypipe::modes::Aov;
 use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
 use raypipe::scene::MAX_DEPTH_LIMIT;
+use raypipe::scene::ToneMap;
 use raypipe::scene::environment::ENVIRONMENT_EXTENSIONS;
 use raypipe::scene::model::Floor;
 

@@ -23,11 +23,14 @@
 //! # }
 //! ```
 //!
-//! Data flows scene → BVH → GPU records → (GPU upload → full-screen triangle → fragment shader) or
-//! (CPU reference tracer, function by function the shader's twin) → frame. Modules depend
-//! downwards only, in this order: `choice`, `rng`, `parallel`, `error` and `modes` at the bottom;
-//! then `bvh`, `mesh`, `scene`; `records` (what crosses to the GPU); `image` (frames and their
-//! comparison); and the two tracers, `cpu` and `gpu`, which use all of these and not each other.
+//! Data flows scene → GPU records (the packed scene, which builds its BVH over the packed
+//! primitives) → (GPU upload → full-screen triangle → fragment shader) or (CPU reference tracer,
+//! function by function the shader's twin) → frame. Modules use lower layers only, in this order:
+//! `choice`, `constants` (the numbers both tracers agree on), `parallel` and `rng` at the bottom;
+//! `modes`; `error`; `input`; `bvh`; `mesh`; `scene` (a model, with no GPU codes); `records` (the
+//! one encoding of a scene for the GPU); `image` (frames and their comparison); and the two
+//! tracers, `cpu` and `gpu`, which use all of these and not each other. No files of one folder
+//! use each other in a circle. The crate's test `tests/cpu/layers.rs` holds both.
 //!
 //! The library prints nothing and reads no flags: notices go through the `log` crate, errors are
 //! typed ([`error`], [`gpu::GpuError`]), and it builds for `wasm32-unknown-unknown`.
@@ -40,6 +43,7 @@
 
 pub mod bvh;
 pub mod choice;
+pub mod constants;
 pub mod cpu;
 pub mod error;
 pub mod gpu;

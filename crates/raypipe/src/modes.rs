@@ -4,7 +4,9 @@
 
 use crate::choice::impl_choice;
 
-/// How a ray finds its closest primitive. The default is the fastest measured mode (docs/BENCHMARKS.md).
+/// How a ray finds its closest primitive. The default is the threaded walk; on the software
+/// adapters measured so far the stack walk is faster (docs/BENCHMARKS.md), and the default stays
+/// until a real GPU has been measured (a software rasterizer measures algorithms, not GPUs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Accel {
     /// Every ray against every primitive.
@@ -230,4 +232,39 @@ pub enum Count {
     Rays,
     /// The cost of its primary ray (BVH nodes tested; spheres tested for brute force), as the shader's cost variant.
     Cost,
+}
+
+/// A backend a caller can ask for; without one, `WGPU_BACKEND` or wgpu's default order decides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// Vulkan (lavapipe here).
+    Vulkan,
+    /// OpenGL or GLES (llvmpipe through EGL here).
+    Gl,
+    /// Metal (Apple).
+    Metal,
+    /// Direct3D 12 (Windows).
+    Dx12,
+}
+
+impl_choice!(
+    Backend,
+    [
+        (Vulkan, "vulkan", "Vulkan"),
+        (Gl, "gl", "OpenGL or OpenGL ES, through EGL (WebGL2 in a browser)"),
+        (Metal, "metal", "Metal"),
+        (Dx12, "dx12", "Direct3D 12"),
+    ]
+);
+
+impl Backend {
+    /// wgpu's flag for the backend.
+    pub fn backends(self) -> wgpu::Backends {
+        match self {
+            Backend::Vulkan => wgpu::Backends::VULKAN,
+            Backend::Gl => wgpu::Backends::GL,
+            Backend::Metal => wgpu::Backends::METAL,
+            Backend::Dx12 => wgpu::Backends::DX12,
+        }
+    }
 }

@@ -377,12 +377,12 @@ fn gpu_point(
     let motion = scene.motion.as_ref().expect("a moving scene");
     let mut packed = PackedScene::new(scene)?;
     let rebuild = block_on(SceneRebuild::new(ctx, scene, &packed, options.accel, BITS))?;
-    let mut renderer = block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options))?;
+    let mut renderer = block_on(rebuild.renderer(ctx, &packed, options))?;
     // A second tree, built once and then only refitted, with a renderer of its own.
     let mut refitting = if args.refit && options.accel.uses_bvh() {
         let own = PackedScene::new(scene)?;
         let rebuild = block_on(SceneRebuild::new(ctx, scene, &own, options.accel, BITS))?;
-        let renderer = block_on(Renderer::with_rebuild(ctx, &own, &rebuild, options))?;
+        let renderer = block_on(rebuild.renderer(ctx, &own, options))?;
         Some((own, rebuild, renderer))
     } else {
         None

@@ -5,8 +5,9 @@
 use super::intersect::{Hit, HitKind, Ray, closer_primitive, count_box_tests, intersect_sphere, intersect_triangle};
 use super::maps::{surface_alpha, triangle_attributes};
 use super::shade::normalize_scaled;
+use crate::constants::MIN_WEIGHT;
 use crate::records::constants::{
-    MATERIAL_INDEX_MASK, MIN_WEIGHT, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
+    MATERIAL_INDEX_MASK, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
 };
 use crate::records::{GpuSphere, GpuTriangle, PackedScene};
 use std::cell::Cell;

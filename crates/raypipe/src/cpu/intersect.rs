@@ -1,7 +1,7 @@
 //! Ray-primitive intersection: the twin of `shaders/intersect.wgsl`.
 
-pub use crate::records::constants::NO_HIT;
-use crate::records::constants::{PARALLEL_EPSILON, TINY_DIRECTION};
+pub use crate::constants::NO_HIT;
+use crate::constants::{PARALLEL_EPSILON, TINY_DIRECTION};
 use crate::records::{GpuPlane, GpuSphere, GpuTriangle};
 use glam::{Vec3, Vec3Swizzles};
 

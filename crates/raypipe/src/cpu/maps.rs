@@ -5,19 +5,18 @@ use super::intersect::{Ray, triangle_uvt, v3};
 use crate::bvh::layout::NONE;
 use crate::records::constants::{
     ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, ATTRIBUTE_UV0, ATTRIBUTE_UV1, FILTER_MAGNIFY_NEAREST, FILTER_MINIFY_NEAREST,
-    FILTER_MIPMAP_LINEAR, FILTER_MIPMAP_NEAREST, MIP_LEVELS_MASK,
+    FILTER_MIPMAP_LINEAR, FILTER_MIPMAP_NEAREST, MIP_LEVELS_MASK, WRAP_MIRROR, WRAP_REPEAT,
 };
 use crate::records::{AttributeTexel, GpuMaterial, GpuTextureMap, GpuTriangle, PackedScene};
-use crate::scene::Wrap;
 use glam::{UVec2, Vec2, Vec3, Vec4};
 
 /// A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
 /// clamp, [0, 2] for mirror (the second copy mirrored).
 pub fn fold_coordinate(c: f32, wrap: u32) -> f32 {
-    if wrap == Wrap::Repeat.code() {
+    if wrap == WRAP_REPEAT {
         return c - c.floor();
     }
-    if wrap == Wrap::Mirror.code() {
+    if wrap == WRAP_MIRROR {
         return c - 2.0 * (c * 0.5).floor();
     }
     c.clamp(0.0, 1.0)
@@ -25,10 +24,10 @@ pub fn fold_coordinate(c: f32, wrap: u32) -> f32 {
 
 /// Column or row `i` of an axis of `size` texels, where `i` may lie one outside the folded period.
 pub fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
-    if wrap == Wrap::Repeat.code() {
+    if wrap == WRAP_REPEAT {
         return (i + size) % size;
     }
-    if wrap == Wrap::Mirror.code() {
+    if wrap == WRAP_MIRROR {
         let period = 2 * size;
         let m = (i + period) % period;
         return if m >= size { period - 1 - m } else { m };

@@ -7,9 +7,10 @@ use super::maps::{
     Attributes, has_coordinates, map_coordinates, sample_map, sample_texture, texture_lod, triangle_attributes,
 };
 use crate::bvh::layout::NONE;
+use crate::constants::{RAY_BIAS, T_FAR};
 use crate::records::constants::{
     ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF,
-    RAY_BIAS, T_FAR, TRIANGLE_ALPHA_BLEND,
+    TRIANGLE_ALPHA_BLEND,
 };
 use crate::records::{GpuLight, GpuMaterial, GpuTriangle, PackedScene};
 use glam::{Vec2, Vec3};

@@ -11,11 +11,11 @@ use super::shade::{
     Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface, normal_mapped,
     offset_origin, reflect, refracted_direction, surface_at, surface_material,
 };
+pub use crate::constants::T_FAR;
+use crate::constants::{MAX_BLEND_LAYERS, MIN_FOOTPRINT_COSINE, MIN_WEIGHT, R2_STEP, ray_stack_size};
 use crate::error::MissingBvh;
 use crate::modes::Accel;
 use crate::records::GpuMaterial;
-pub use crate::records::constants::T_FAR;
-use crate::records::constants::{MAX_BLEND_LAYERS, MIN_FOOTPRINT_COSINE, MIN_WEIGHT, R2_STEP, ray_stack_size};
 use crate::records::constants::{MODEL_GLTF, MODEL_UNLIT};
 use crate::records::{PackedBvh, PackedScene};
 use glam::{UVec2, Vec2, Vec3};

@@ -4,48 +4,13 @@
 //! awaits them. An adapter can be asked for a surface (WebGL2 has none to offer before its canvas).
 
 use super::GpuError;
-use crate::choice::{Choice, impl_choice};
+use crate::choice::Choice;
 use crate::error::one_line;
-use crate::modes::{Accel, MemoryMode};
+use crate::modes::{Accel, Backend, MemoryMode};
 use std::future::Future;
 use std::pin::Pin;
 use std::sync::{Arc, Mutex, Weak};
 use std::task::{Context, Poll, Waker};
-
-/// A backend a caller can ask for; without one, `WGPU_BACKEND` or wgpu's default order decides.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Backend {
-    /// Vulkan (lavapipe here).
-    Vulkan,
-    /// OpenGL or GLES (llvmpipe through EGL here).
-    Gl,
-    /// Metal (Apple).
-    Metal,
-    /// Direct3D 12 (Windows).
-    Dx12,
-}
-
-impl_choice!(
-    Backend,
-    [
-        (Vulkan, "vulkan", "Vulkan"),
-        (Gl, "gl", "OpenGL or OpenGL ES, through EGL (WebGL2 in a browser)"),
-        (Metal, "metal", "Metal"),
-        (Dx12, "dx12", "Direct3D 12"),
-    ]
-);
-
-impl Backend {
-    /// wgpu's flag for the backend.
-    pub fn backends(self) -> wgpu::Backends {
-        match self {
-            Backend::Vulkan => wgpu::Backends::VULKAN,
-            Backend::Gl => wgpu::Backends::GL,
-            Backend::Metal => wgpu::Backends::METAL,
-            Backend::Dx12 => wgpu::Backends::DX12,
-        }
-    }
-}
 
 /// An instance over `backends`, or over `WGPU_BACKEND`'s where it is set.
 pub fn instance(backends: wgpu::Backends) -> wgpu::Instance {

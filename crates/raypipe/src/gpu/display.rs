@@ -5,9 +5,10 @@
 use super::GpuContext;
 use super::renderer::{FrameTargets, target_entry};
 use crate::Choice;
-use crate::image::tonemap::{DisplayTransform, ToneMap};
+use crate::image::tonemap::DisplayTransform;
 use crate::modes::Aov;
 use crate::records::StructLayout;
+use crate::scene::ToneMap;
 use crate::struct_layout;
 
 const DISPLAY: &str = include_str!("shaders/display.wgsl");

@@ -1,7 +1,7 @@
 //! What can go wrong on the GPU, typed so that callers word their own messages and hints.
 
-use super::context::Backend;
 use crate::error::MissingBvh;
+use crate::modes::Backend;
 use crate::modes::{MemoryMode, Pipeline};
 use std::fmt;
 

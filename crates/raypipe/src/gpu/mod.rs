@@ -19,7 +19,7 @@ pub mod timing;
 pub mod upload;
 pub mod wide;
 
-pub use context::{Backend, GpuContext};
+pub use context::GpuContext;
 pub use display::{Display, Shown};
 pub use error::{Capacity, GpuError};
 pub use rebuild::{CpuRebuild, CpuStep, SceneRebuild};

@@ -15,7 +15,7 @@
 
 use super::build::{GpuLbvhBuilder, depth_bound};
 use super::deform::GpuDeform;
-use super::renderer::Renderer;
+use super::renderer::{Renderer, RendererOptions};
 use super::shader::RecordKind;
 use super::threaded::GpuThreadedLayout;
 use super::upload::SharedBuffers;
@@ -160,6 +160,18 @@ impl SceneRebuild {
     /// A bound on the depth of every tree this rebuild can make: the walk's stack size.
     pub fn depth_bound(&self) -> u32 {
         depth_bound(self.builder.count(), self.builder.bits())
+    }
+
+    /// A renderer of `scene` (the packing this rebuild was made for) that traces what this rebuild
+    /// writes: record [`SceneRebuild::encode`] before [`Renderer::encode`] in the same encoder.
+    /// Storage memory only.
+    pub async fn renderer(
+        &self,
+        ctx: &GpuContext,
+        scene: &PackedScene,
+        options: RendererOptions,
+    ) -> Result<Renderer, GpuError> {
+        Renderer::with_shared_buffers(ctx, scene, &self.shared_buffers(), self.depth_bound(), options).await
     }
 
     /// What a renderer reads in place of the scene's own spheres and nodes.

@@ -14,7 +14,6 @@
 
 use super::rayquery::AccelStructures;
 use super::readback::TextureReadback;
-use super::rebuild::SceneRebuild;
 use super::region::{BoxCover, TracedPixels};
 use super::shader::{RecordKind, SceneFeatures, ShaderConfig, compose, ray_query_binding};
 use super::threaded::encode_frame_copy;
@@ -259,8 +258,8 @@ impl Renderer {
     }
 
     /// The records a motion moved (`scene` as [`PackedScene::apply`] left it): those this renderer
-    /// holds, such as triangles' normals; the ones it reads from a [`SceneRebuild`] are that
-    /// rebuild's to write ([`SceneRebuild::write_moved`]). The samples start again.
+    /// holds, such as triangles' normals; the ones it reads from a [`SceneRebuild`](super::SceneRebuild) are
+    /// that rebuild's to write ([`SceneRebuild::write_moved`](super::SceneRebuild::write_moved)). The samples start again.
     pub fn write_moved(&mut self, scene: &PackedScene, moved: MovedRecords) -> Result<(), GpuError> {
         self.write_records(scene, RecordKind::moved(moved))
     }
@@ -299,19 +298,20 @@ impl Renderer {
         Ok(())
     }
 
-    /// A renderer whose spheres and nodes are `rebuild`'s, rebuilt on the GPU before each frame:
-    /// record [`SceneRebuild::encode`] before [`Renderer::encode`] in the same encoder.
-    pub async fn with_rebuild(
+    /// A renderer whose spheres and nodes are `shared`, written by compute passes before each
+    /// frame (a [`SceneRebuild`](super::SceneRebuild) makes one: its `renderer`), over trees at
+    /// most `depth_bound` deep.
+    pub async fn with_shared_buffers(
         ctx: &GpuContext,
         scene: &PackedScene,
-        rebuild: &SceneRebuild,
+        shared: &SharedBuffers,
+        depth_bound: u32,
         options: RendererOptions,
     ) -> Result<Self, GpuError> {
         if options.memory != MemoryMode::Storage {
             return Err(GpuError::RebuildNeedsStorage { memory: options.memory });
         }
-        let shared = rebuild.shared_buffers();
-        Self::create(ctx, scene, options, Some(&shared), rebuild.depth_bound()).await
+        Self::create(ctx, scene, options, Some(shared), depth_bound).await
     }
 
     async fn create(

@@ -6,9 +6,10 @@
 //! (a full-screen triangle's vertex and fragment stages, or a compute kernel) around it.
 
 use crate::bvh::layout::NONE;
+use crate::constants::ray_stack_size;
 use crate::modes::{Accel, MemoryMode, Pipeline};
 use crate::records::constants::{
-    MODEL_GLTF, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED, ray_stack_size,
+    MODEL_GLTF, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
 };
 use crate::records::packed::{MovedRecords, PackedScene};
 use crate::records::{TexelFormat, constants};

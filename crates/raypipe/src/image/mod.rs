@@ -4,7 +4,7 @@ pub mod diff;
 pub mod heatmap;
 pub mod tonemap;
 
-pub use crate::records::constants::DEPTH_MISS;
+pub use crate::constants::DEPTH_MISS;
 
 use crate::modes::{Aov, Count};
 use glam::Vec4;

@@ -2,42 +2,11 @@
 //! 2^EV) and a tone map that rolls the highlights off into [0, 1]. The display pass's twin is
 //! `display_transform` in shaders/display.wgsl.
 
-use crate::choice::impl_choice;
+use crate::scene::ToneMap;
 
 /// The largest exposure either way, in stops: 2^64 times the brightest half float is still a
 /// finite f32.
 pub const MAX_EXPOSURE: f32 = 64.0;
-
-/// How exposed radiance is brought into [0, 1].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum ToneMap {
-    /// Clipped at 1: the paper's images, and the TOML scenes' as they have always been.
-    #[default]
-    None,
-    /// Khronos PBR Neutral: colours below 0.76 pass nearly unchanged (less a small toe), brighter
-    /// ones compress toward white and desaturate.
-    Neutral,
-    /// ACES's reference and output transforms in Stephen Hill's fit, in and out of ACES's AP1
-    /// primaries: a filmic curve that darkens mid-tones and shifts hues less than a per-channel one.
-    Aces,
-}
-
-impl_choice!(
-    ToneMap,
-    [
-        (None, "none", "radiance clipped at 1, as the paper's images are"),
-        (
-            Neutral,
-            "neutral",
-            "Khronos PBR Neutral: base colours as they are, highlights rolled off to white"
-        ),
-        (
-            Aces,
-            "aces",
-            "ACES filmic (Hill's fit of the reference and output transforms)"
-        ),
-    ]
-);
 
 /// Exposure and tone map together: what the display pass and PNG output apply to a pixel's mean
 /// radiance before sRGB encoding. EXR output takes the exposure alone.

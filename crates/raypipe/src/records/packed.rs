@@ -15,7 +15,7 @@ use crate::modes::Builder;
 use crate::records::constants::{
     ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, ATTRIBUTE_UV0, ATTRIBUTE_UV1, LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT,
     LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, MODEL_UNLIT, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK,
-    TRIANGLE_SINGLE_SIDED,
+    TRIANGLE_SINGLE_SIDED, filter_code, wrap_code,
 };
 use crate::records::texels::GpuRecord;
 use crate::scene::{
@@ -507,11 +507,11 @@ fn texture_map_record(
         offset: stored.offset,
         width: texture.width,
         height: texture.height,
-        wrap: texture.wrap[0].code() | texture.wrap[1].code() << 8,
+        wrap: wrap_code(texture.wrap[0]) | wrap_code(texture.wrap[1]) << 8,
         transform_u,
         tex_coord,
         transform_v,
-        sampling: stored.levels | texture.filter.code(),
+        sampling: stored.levels | filter_code(texture.filter),
     }
 }
 

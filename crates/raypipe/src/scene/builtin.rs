@@ -2,8 +2,8 @@
 
 use super::{Camera, Checker, Light, Material, Plane, RenderSettings, Scene, Sphere};
 use crate::error::InputError;
-use crate::image::tonemap::ToneMap;
 use crate::rng::SplitMix64;
+use crate::scene::ToneMap;
 use glam::Vec3;
 use std::f32::consts::{PI, TAU};
 

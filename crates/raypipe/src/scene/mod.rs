@@ -24,8 +24,8 @@ pub use material::{AlphaMode, Material, Pbr, TextureMap, TextureTransform, Volum
 pub use motion::{Bounce, Motion, Moved};
 pub use texture::{Filter, TexelFilter, Texture, Wrap};
 
+use crate::choice::impl_choice;
 use crate::error::{Element, InputError};
-use crate::image::tonemap::ToneMap;
 use crate::modes::Accel;
 use glam::{Quat, Vec2, Vec3, Vec4};
 use material::validate_material;
@@ -43,6 +43,38 @@ pub struct Camera {
     /// Vertical field of view in degrees.
     pub fov_degrees: f32,
 }
+
+/// How exposed radiance is brought into [0, 1] for the screen and PNG files (applied by
+/// [`crate::image::tonemap::DisplayTransform`] and the display pass; the traced radiance never).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum ToneMap {
+    /// Clipped at 1: the paper's images, and the TOML scenes' as they have always been.
+    #[default]
+    None,
+    /// Khronos PBR Neutral: colours below 0.76 pass nearly unchanged (less a small toe), brighter
+    /// ones compress toward white and desaturate.
+    Neutral,
+    /// ACES's reference and output transforms in Stephen Hill's fit, in and out of ACES's AP1
+    /// primaries: a filmic curve that darkens mid-tones and shifts hues less than a per-channel one.
+    Aces,
+}
+
+impl_choice!(
+    ToneMap,
+    [
+        (None, "none", "radiance clipped at 1, as the paper's images are"),
+        (
+            Neutral,
+            "neutral",
+            "Khronos PBR Neutral: base colours as they are, highlights rolled off to white"
+        ),
+        (
+            Aces,
+            "aces",
+            "ACES filmic (Hill's fit of the reference and output transforms)"
+        ),
+    ]
+);
 
 /// Render settings a scene may carry; command-line flags override them.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,8 +9,8 @@ use super::{
 };
 use crate::bvh::aabb::Aabb;
 use crate::error::InputError;
-use crate::image::tonemap::ToneMap;
 use crate::mesh::{self, Mesh};
+use crate::scene::ToneMap;
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -619,7 +619,7 @@ impl Framing {
             return None;
         }
         let reach = self.center.abs().max_element() + 4.0 * self.radius;
-        let gap = (FLOOR_GAP * self.radius).max(2.0 * crate::records::constants::RAY_BIAS * reach);
+        let gap = (FLOOR_GAP * self.radius).max(2.0 * crate::constants::RAY_BIAS * reach);
         Some(Plane {
             point: Vec3::new(0.0, self.bounds.min.y - gap, 0.0),
             normal: Vec3::Y,

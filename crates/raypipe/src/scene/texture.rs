@@ -21,19 +21,6 @@ pub enum Wrap {
 
 impl Wrap {
     pub const ALL: [Wrap; 3] = [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror];
-
-    /// The number the records carry, and its name in the shader's preamble.
-    pub fn code(self) -> u32 {
-        self as u32
-    }
-
-    pub fn wgsl_name(self) -> &'static str {
-        match self {
-            Wrap::Repeat => "WRAP_REPEAT",
-            Wrap::Clamp => "WRAP_CLAMP",
-            Wrap::Mirror => "WRAP_MIRROR",
-        }
-    }
 }
 
 /// How texels are read within a level: the one nearest the point, or the four around it blended.
@@ -64,23 +51,6 @@ impl Default for Filter {
             minify: TexelFilter::Linear,
             mipmaps: Some(TexelFilter::Linear),
         }
-    }
-}
-
-impl Filter {
-    /// The bits the records carry (`FILTER_*` in records/constants.rs).
-    pub fn code(self) -> u32 {
-        use crate::records::constants::{
-            FILTER_MAGNIFY_NEAREST, FILTER_MINIFY_NEAREST, FILTER_MIPMAP_LINEAR, FILTER_MIPMAP_NEAREST,
-        };
-        let nearest = |f: TexelFilter, bit: u32| if f == TexelFilter::Nearest { bit } else { 0 };
-        nearest(self.magnify, FILTER_MAGNIFY_NEAREST)
-            | nearest(self.minify, FILTER_MINIFY_NEAREST)
-            | match self.mipmaps {
-                None => 0,
-                Some(TexelFilter::Nearest) => FILTER_MIPMAP_NEAREST,
-                Some(TexelFilter::Linear) => FILTER_MIPMAP_LINEAR,
-            }
     }
 }
 

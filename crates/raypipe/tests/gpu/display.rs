@@ -9,10 +9,11 @@ use raypipe::cpu::Count;
 use raypipe::gpu::readback::TextureReadback;
 use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions, Shown};
 use raypipe::image::heatmap::color_scale;
-use raypipe::image::tonemap::{DisplayTransform, ToneMap};
+use raypipe::image::tonemap::DisplayTransform;
 use raypipe::image::{FloatImage, Frame};
 use raypipe::modes::Accel;
 use raypipe::modes::Aov;
+use raypipe::scene::ToneMap;
 
 /// The frame `renderer` traces with `samples` samples per pixel, and the display pass's 8-bit image
 /// of it in `format`.

@@ -36,7 +36,7 @@ fn gpu_frames_refitting(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u3
         accel,
         ..Default::default()
     };
-    let mut renderer = block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options)).unwrap();
+    let mut renderer = block_on(rebuild.renderer(ctx, &packed, options)).unwrap();
     (0..count)
         .map(|frame| {
             if let Some(moved) = rebuild.move_to(scene, &mut packed, time_of(frame)).unwrap() {
@@ -303,7 +303,7 @@ fn gpu_skinned_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path)
                     pipeline,
                     ..Default::default()
                 };
-                let mut renderer = block_on(Renderer::with_rebuild(ctx, &packed, &rebuild, options)).unwrap();
+                let mut renderer = block_on(rebuild.renderer(ctx, &packed, options)).unwrap();
                 let gpu = block_on(renderer.read_frame_after(|encoder| rebuild.encode(encoder)))
                     .unwrap()
                     .frame;

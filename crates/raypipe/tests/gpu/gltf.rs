@@ -338,7 +338,7 @@ fn khronos_models_on_the_floor_match_the_cpu(ctx: &GpuContext, models: &std::pat
 /// single-sided quad turned away from the camera, over a glossy floor (whose reflected rays cull back
 /// faces too), lit by a point and a directional light. What its materials read back, and its image
 /// in every memory mode, walk and pipeline against the CPU's; the CPU's own answers are worked out
-/// in tests/alpha.rs.
+/// in tests/cpu/alpha.rs.
 fn alpha_and_sides_match_the_cpu(ctx: &GpuContext) {
     use serde_json::json;
     let mut b = GltfBuilder::default();
@@ -436,7 +436,7 @@ fn alpha_and_sides_match_the_cpu(ctx: &GpuContext) {
 
 /// A quad with vertex colours, a base colour map on its second coordinate set and a normal map
 /// on MikkTSpace's tangents, lit by a point light: GPU against CPU (the CPU's answers for each
-/// are worked out in tests/materials.rs).
+/// are worked out in tests/cpu/materials.rs).
 fn vertex_attributes_match_the_cpu(ctx: &GpuContext) {
     let file = parse(&attribute_quad().gltf(), Files::None, &mut Vec::new()).unwrap();
     let mut scene = gltf_scene(&file, "attributes.gltf", &ModelOptions::default()).unwrap();

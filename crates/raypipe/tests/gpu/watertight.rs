@@ -1,6 +1,6 @@
 //! Watertight ray-triangle intersection in the fragment shader: from inside closed, finely
 //! tessellated meshes, rotated and far from the origin, every one of a million primary rays hits, as
-//! on the CPU (tests/watertight.rs).
+//! on the CPU (tests/cpu/watertight.rs).
 
 use crate::common::closed::{cases, misses};
 use crate::common::harness::Test;

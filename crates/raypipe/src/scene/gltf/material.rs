@@ -522,7 +522,7 @@ mod tests {
 
     #[test]
     fn images_that_are_neither_png_nor_jpeg_are_refused() {
-        // The size check before decoding is in tests/gltf.rs (a_huge_texture_is_refused_...).
+        // The size check before decoding is in tests/files/gltf.rs (a_huge_texture_is_refused_...).
         assert!(
             decode_image(b"GIF89a", None, MAX_TEXELS)
                 .unwrap_err()

@@ -2,9 +2,8 @@
 //! that cannot be written or are written by several renders at once, a closed or full standard
 //! output. Each ends in exit 0 with a whole file, or exit 2 with one short line; never a panic.
 
-mod common;
-use common::test_dir;
-use common::{assert_clean_error, raypipe, raypipe_on_a_terminal, render_on_cpu};
+use crate::common::test_dir;
+use crate::common::{assert_clean_error, raypipe, raypipe_on_a_terminal, render_on_cpu};
 use raypipe_cli::io;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

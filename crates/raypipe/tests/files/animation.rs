@@ -2,9 +2,8 @@
 //! bent by hand, a morph target halfway, clamping and looping at both ends, and hostile files
 //! refused with one line.
 
-mod common;
-
-use common::gltf_file::{BEND_HEIGHT, GltfBuilder, morphing_quad, skinned_cylinder};
+use crate::common::gltf_file::{BEND_HEIGHT, GltfBuilder, morphing_quad, skinned_cylinder};
+use crate::common::harness::Test;
 use glam::{Quat, Vec3};
 use raypipe::scene::animation::{Interpolation, Sampler};
 use raypipe::scene::gltf::{Files, GltfScene, parse};
@@ -304,8 +303,8 @@ fn moving_records_in_place_equals_packing_anew() {
     );
 }
 
-fn main() -> std::process::ExitCode {
-    common::harness::run(raypipe_test_support::tests![
+pub fn tests() -> Vec<Test> {
+    raypipe_test_support::tests![
         plain step_linear_and_cubic_samplers_at_keys_and_between,
         plain rotations_are_slerped_and_normalized,
         plain a_two_bone_cylinder_bends_as_posed_by_hand,
@@ -316,5 +315,5 @@ fn main() -> std::process::ExitCode {
         plain weights_that_do_not_sum_to_one_are_normalized_with_a_notice,
         models the_animated_samples_move,
         plain moving_records_in_place_equals_packing_anew,
-    ])
+    ]
 }

@@ -231,6 +231,7 @@ fn constant_values(module: &naga::Module, expression: naga::Handle<naga::Express
 fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
     use raypipe::bvh::layout::{LEAF, NONE};
     use raypipe::bvh::threaded::{LEAF_BIT, MAX_QUANTUM, TINY_EXTENT};
+    use raypipe::constants::*;
     use raypipe::records::constants::*;
     let one = |name: &str, value: f64| (name.to_string(), vec![value]);
     let mut records = vec![
@@ -251,7 +252,14 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
         one("WIDE_SPAN", raypipe::bvh::wide::SPAN as f64),
         one("WIDE_NODE_TEXELS", raypipe::bvh::wide::NODE_TEXELS as f64),
     ];
-    records.extend(raypipe::scene::Wrap::ALL.map(|w| one(w.wgsl_name(), w.code() as f64)));
+    records.extend(
+        [
+            ("WRAP_REPEAT", WRAP_REPEAT),
+            ("WRAP_CLAMP", WRAP_CLAMP),
+            ("WRAP_MIRROR", WRAP_MIRROR),
+        ]
+        .map(|(name, code)| one(name, code as f64)),
+    );
     let mut tracer = records.clone();
     tracer.push(one("COMPUTE_TILE", raypipe::gpu::shader::COMPUTE_TILE as f64));
     tracer.push(one("TEXELS_PER_ROW", TEXELS_PER_ROW as f64));

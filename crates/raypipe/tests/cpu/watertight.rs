@@ -2,8 +2,7 @@
 //! tessellated meshes, rotated and far from the origin, every one of a million primary rays hits.
 //! (The GPU's twin of this test is in the `gpu` harness.)
 
-mod common;
-use common::closed::{cases, misses};
+use crate::common::closed::{cases, misses};
 use raypipe::modes::Accel;
 
 #[test]

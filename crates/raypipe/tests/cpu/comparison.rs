@@ -1,8 +1,7 @@
 //! The comparison harness itself: it must pass equal images and fail perturbed ones, or every
 //! GPU-against-CPU test above proves nothing.
 
-mod common;
-use common::{packed, render_cpu};
+use crate::common::{packed, render_cpu};
 use raypipe::image::FloatImage;
 use raypipe::image::diff::{Tolerance, compare};
 use raypipe::modes::Accel;

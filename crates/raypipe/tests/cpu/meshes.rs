@@ -2,9 +2,8 @@
 //! mutation of a file makes a parser panic. (The shared scans load in the `gpu` harness; the command
 //! line's messages for broken files are the CLI's tests.)
 
-mod common;
-use common::models::{self, TestModel, every_format};
-use common::test_dir;
+use crate::common::models::{self, TestModel, every_format};
+use crate::common::test_dir;
 use glam::Vec3;
 use proptest::prelude::*;
 use raypipe::bvh::aabb::Aabb;
@@ -304,7 +303,7 @@ proptest! {
 /// each format with its own reason.
 #[test]
 fn a_sparse_gigabyte_is_refused_by_its_header() {
-    let dir = common::test_dir("sparse-models");
+    let dir = crate::common::test_dir("sparse-models");
     for (name, expected) in [
         ("zeros.ply", "zeros.ply:1: expected 'ply': not a PLY file"),
         ("zeros.off", "zeros.off:1: expected the keyword OFF"),

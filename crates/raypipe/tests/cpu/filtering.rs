@@ -2,9 +2,9 @@
 //! out; a checker floor to the horizon filtered, not aliased, at one sample per pixel; and the
 //! sampler's NEAREST filters obeyed.
 
-mod common;
-
-use common::{checker_floor, checker_texture, hit_rows, quad_triangles, red_deviation, render_cpu, unlit_textured};
+use crate::common::{
+    checker_floor, checker_texture, hit_rows, quad_triangles, red_deviation, render_cpu, unlit_textured,
+};
 use glam::{Vec2, Vec3};
 use raypipe::image::Frame;
 use raypipe::modes::Accel;

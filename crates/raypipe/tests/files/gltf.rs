@@ -2,10 +2,9 @@
 //! instances, cameras, lights, materials and textures, the three ways to pack a file, and hostile
 //! files that must end in one line naming the element.
 
-mod common;
-
-use common::gltf_file::{GltfBuilder, Packing, glb, textured_quad};
-use common::test_dir;
+use crate::common::gltf_file::{GltfBuilder, Packing, glb, textured_quad};
+use crate::common::harness::Test;
+use crate::common::test_dir;
 use glam::Vec3;
 use raypipe::scene::Scene;
 use raypipe::scene::gltf::{Files, GltfScene, parse};
@@ -308,7 +307,7 @@ fn textures_keep_their_texels_and_wrap_modes() {
 }
 
 fn colours_second_coordinates_and_tangents_are_read() {
-    use common::gltf_file::attribute_quad;
+    use crate::common::gltf_file::attribute_quad;
     let file = read(&attribute_quad());
     let primitive = &file.primitives[0];
     let colors = primitive.colors.as_ref().unwrap();
@@ -777,10 +776,13 @@ fn generated_files_pass_the_khronos_validator(root: &std::path::Path) {
         ("instancing", instanced(json!({ "translation": [0, 0, -1] }))),
         ("materials", glass_and_lamp()),
         ("textured", textured_quad(2.0, [10497, 33071])),
-        ("framed", common::gltf_file::framed_textured_quad(2.0, [33648, 10497])),
-        ("skinned", common::gltf_file::skinned_cylinder(6).0),
-        ("morphing", common::gltf_file::morphing_quad(0.5)),
-        ("attributes", common::gltf_file::attribute_quad()),
+        (
+            "framed",
+            crate::common::gltf_file::framed_textured_quad(2.0, [33648, 10497]),
+        ),
+        ("skinned", crate::common::gltf_file::skinned_cylinder(6).0),
+        ("morphing", crate::common::gltf_file::morphing_quad(0.5)),
+        ("attributes", crate::common::gltf_file::attribute_quad()),
     ];
     for (stem, builder) in &builders {
         for packing in [Packing::DataUris, Packing::ExternalFiles, Packing::Glb] {
@@ -819,8 +821,8 @@ fn generated_files_pass_the_khronos_validator(root: &std::path::Path) {
     );
 }
 
-fn main() -> std::process::ExitCode {
-    common::harness::run(raypipe_test_support::tests![
+pub fn tests() -> Vec<Test> {
+    raypipe_test_support::tests![
         plain node_hierarchy_places_triangles_as_by_hand,
         plain a_matrix_node_equals_its_trs_twin,
         plain a_mirroring_node_turns_the_winding,
@@ -844,5 +846,5 @@ fn main() -> std::process::ExitCode {
         plain images_without_a_source_or_a_type,
         plain the_generated_skinned_mesh_loads_and_bends,
         validator generated_files_pass_the_khronos_validator,
-    ])
+    ]
 }

@@ -4,7 +4,8 @@
 //! matches these on the GPU in tests/gpu/display.rs.
 
 use raypipe::image::Frame;
-use raypipe::image::tonemap::{DisplayTransform, ToneMap, aces_hill, pbr_neutral};
+use raypipe::image::tonemap::{DisplayTransform, aces_hill, pbr_neutral};
+use raypipe::scene::ToneMap;
 
 /// PBR Neutral by its specification: F90 = 0.04, Ks = 0.8 - F90, Kd = 0.15.
 fn neutral_formula(c: [f64; 3]) -> [f64; 3] {

@@ -1,8 +1,7 @@
 //! Samples per pixel on the CPU reference: the sequence the shader shares, one sample as the
 //! unjittered image, and many samples as the supersampled image they estimate.
 
-mod common;
-use common::{assert_images_match, packed};
+use crate::common::{assert_images_match, packed};
 use glam::{UVec2, Vec2};
 use raypipe::cpu::trace::{Tracer, sample_offset};
 use raypipe::cpu::{Count, render_with};

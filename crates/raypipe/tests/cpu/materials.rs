@@ -3,9 +3,7 @@
 //! falloff and the range window; the spot cone's smooth edge; directional light and its parallel
 //! shadow rays; a texture transform's texel. The GPU matches the CPU in tests/gpu/.
 
-mod common;
-
-use common::{centre, plane_scene, quad_triangles};
+use crate::common::{centre, plane_scene, quad_triangles};
 use glam::{Quat, Vec2, Vec3};
 use raypipe::modes::Accel;
 use raypipe::records::PackedScene;

@@ -4,9 +4,7 @@
 //! opaque or double-sided and checks that the answer changes, so that it fails where the feature is
 //! broken. The GPU matches the CPU on these scenes in tests/gpu/gltf.rs.
 
-mod common;
-
-use common::quad_triangles;
+use crate::common::quad_triangles;
 use glam::{Vec2, Vec3};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::intersect::Ray;

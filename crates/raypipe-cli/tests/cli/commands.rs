@@ -1,10 +1,9 @@
 //! The command line: renders write files, diff exits by threshold, and bad input ends with one line
 //! on stderr and exit code 2, never a panic.
 
-mod common;
+use crate::common::{assert_clean_error, raypipe};
+use crate::common::{models, test_dir};
 // The binary's own image reader, to read back what it wrote.
-use common::{assert_clean_error, raypipe};
-use common::{models, test_dir};
 use raypipe_cli::io;
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -574,7 +573,7 @@ fn sequence(spec: &str, dir_name: &str, ranges: &[&str]) -> Vec<(String, Vec<u8>
 #[test]
 fn a_split_sequence_equals_one_run_byte_for_byte() {
     let mut specs = vec!["bounce:40".to_string()];
-    if let Some(models) = common::harness::models_dir() {
+    if let Some(models) = crate::common::harness::models_dir() {
         specs.push(models.join("gltf/RiggedSimple.gltf").to_string_lossy().to_string());
     }
     for (k, spec) in specs.iter().enumerate() {

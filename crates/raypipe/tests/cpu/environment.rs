@@ -3,9 +3,7 @@
 //! whose colour is a known function of direction), the white furnace, and the occlusion texture's
 //! share of the environment's light. The GPU matches the CPU in tests/gpu/.
 
-mod common;
-
-use common::{centre, plane_scene, render_cpu};
+use crate::common::{centre, plane_scene, render_cpu};
 use glam::Vec3;
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, Count};
