@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes an animated skinned mesh of about N triangles as one .glb: the benchmark content of
-`raypipe bench FILE --motion` (scripts/gpu-bench.sh) and a test input (crates/raypipe/tests/gltf.rs
+`raypipe bench FILE --motion` (scripts/gpu-bench.sh) and a test input (crates/raypipe/tests/files/gltf.rs
 loads it and runs it through the Khronos glTF-Validator).
 
 The mesh is a tube along y (SIDES around, RINGS along) with file normals, bound to a chain of

@@ -1,4 +1,4 @@
-// Twins of the host records in src/records/mod.rs. tests/layout.rs parses this file with naga and
+// Twins of the host records in src/records/mod.rs. tests/cpu/layout.rs parses this file with naga and
 // checks every struct's size and member offsets against the Rust ones. Tail padding is implicit here.
 
 // The camera basis and image size: rewritten alone when the camera moves or the image is resized.
