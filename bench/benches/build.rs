@@ -8,7 +8,7 @@ use raypipe::bvh::aabb::Aabb;
 use raypipe::bvh::lbvh::{Hierarchy, LbvhBuilder};
 use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::GpuContext;
-use raypipe::gpu::build::GpuLbvhBuilder;
+use raypipe::gpu::builders::lbvh::GpuLbvhBuilder;
 use raypipe_bench::random_boxes;
 use std::time::Duration;
 
@@ -129,7 +129,7 @@ fn gpu_builder(c: &mut Criterion) {
             b.iter_custom(|iterations| {
                 (0..iterations)
                     .map(|_| {
-                        let timings = pollster::block_on(builder.build(raypipe::gpu::build::Codes::Computed))
+                        let timings = pollster::block_on(builder.build(raypipe::gpu::builders::lbvh::Codes::Computed))
                             .expect("the build runs");
                         Duration::from_secs_f64(timings.total() / 1e3)
                     })

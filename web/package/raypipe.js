@@ -7,6 +7,7 @@
 //
 // The tracer is the wasm module beside this file (raypipe_web.js, raypipe_web_bg.wasm); each viewer
 // has its own adapter and device. Types: raypipe.d.ts.
+import { Gestures } from "./gestures.js";
 import init, { controls, start } from "./raypipe_web.js";
 
 let module = null;
@@ -168,22 +169,29 @@ export class Viewer extends EventTarget {
     this.#listeners.push([target, type, listener, options]);
   }
 
-  /// Drag to orbit (other buttons pan), wheel to dolly, keys while the canvas has the focus.
+  /// One pointer drags (the primary button orbits, the others pan); two pinch to dolly and move
+  /// together to pan; the wheel dollies; keys act while the canvas has the focus. Pointers are
+  /// told apart by id and captured, a cancelled one is let go, and the canvas takes touches itself
+  /// (`touch-action: none`), so that a finger's drag does not scroll the page.
   #listen() {
     const canvas = this.canvas;
     if (!canvas.hasAttribute("tabindex")) canvas.tabIndex = 0;
-    let last = null;
+    canvas.style.touchAction = "none";
+    const gestures = new Gestures();
+    const release = (event) => gestures.release(event.pointerId);
     this.#on(canvas, "pointerdown", (event) => {
-      last = { x: event.clientX, y: event.clientY, pan: event.button !== 0 };
+      gestures.down(event.pointerId, event.clientX, event.clientY, event.button);
       canvas.setPointerCapture(event.pointerId);
       canvas.focus();
     });
     this.#on(canvas, "pointermove", (event) => {
-      if (!last || !this.#inner) return;
-      this.#inner.drag(event.clientX - last.x, event.clientY - last.y, last.pan);
-      last = { ...last, x: event.clientX, y: event.clientY };
+      const actions = gestures.move(event.pointerId, event.clientX, event.clientY);
+      for (const action of this.#inner ? actions : []) {
+        if (action.drag) this.#inner.drag(...action.drag);
+        else this.#inner.dolly(action.dolly);
+      }
     });
-    this.#on(canvas, "pointerup", () => { last = null; });
+    for (const type of ["pointerup", "pointercancel", "lostpointercapture"]) this.#on(canvas, type, release);
     this.#on(canvas, "contextmenu", (event) => event.preventDefault());
     this.#on(canvas, "wheel", (event) => {
       event.preventDefault();

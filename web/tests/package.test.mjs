@@ -4,7 +4,8 @@
 // (RAYPIPE_BROWSER=firefox, under xvfb-run). Both draw the CPU reference's image (their
 // screenshots, compared by `raypipe diff --tolerance color`); a lost WebGL2 context
 // (WEBGL_lose_context) and a destroyed WebGPU device are reported and recovered, the same image
-// again; dispose() of one leaves the other drawing. The declarations type-check a usage file
+// again; dispose() of one leaves the other drawing; both canvases take touches themselves
+// (touch-action: none; the gestures are tests/gestures.test.mjs's). The declarations type-check a usage file
 // (tsc --noEmit) and name the lists the module offers.
 //
 // Needs the package built (scripts/build-web.sh --package target/web-package, or
@@ -145,6 +146,11 @@ test("two viewers (WebGL2 in a container, WebGPU on a canvas) draw, survive a lo
   }
   assert.ok(await page.evaluate(() => window.heard.webgl2 > 0 && window.heard.webgpu > 0), "no status event");
   assert.equal(await page.evaluate(() => document.querySelectorAll("#left > canvas").length), 1);
+  // The canvases take touches themselves: a finger's drag turns the camera, not the page.
+  assert.deepEqual(
+    await page.evaluate(() => [...document.querySelectorAll("canvas")].map((c) => getComputedStyle(c).touchAction)),
+    ["none", "none"],
+  );
 
   // WebGL2: the context lost, then restored.
   await page.evaluate(() => {

@@ -499,11 +499,15 @@ fn time_frames(
         if driver_builds {
             renderer.rebuild_structures();
         }
-        let timed = block_on(renderer.render_samples(args.spp, |encoder| {
-            if let Some(rebuild) = rebuild {
-                rebuild.encode(encoder);
-            }
-        }))?;
+        let timed = block_on(renderer.render_samples(
+            args.spp,
+            |encoder| {
+                if let Some(rebuild) = rebuild {
+                    rebuild.encode(encoder);
+                }
+            },
+            |_| {},
+        ))?;
         let wall = start.elapsed().as_secs_f64() * 1e3;
         if frame >= args.warmup {
             measured.times.push(timed.gpu_ms.unwrap_or(wall));

@@ -8,7 +8,7 @@ use pollster::block_on;
 use raypipe::bvh::BuildTimings;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::{self, Count};
-use raypipe::gpu::region::TracedPixels;
+use raypipe::gpu::trace::region::TracedPixels;
 use raypipe::gpu::{CpuRebuild, GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::modes::Backend;
@@ -146,7 +146,7 @@ pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Re
             );
             let start = Instant::now();
             let timed =
-                block_on(renderer.render_samples_with(options.samples, |_| {}, |done| bar.set_position(done as u64)));
+                block_on(renderer.render_samples(options.samples, |_| {}, |done| bar.set_position(done as u64)));
             bar.finish_and_clear();
             let timed = timed?;
             let traced = renderer.traced_region();
@@ -243,7 +243,8 @@ pub fn render_frames(
                     renderer.write_moved(&packed, moved)?;
                 }
                 let start = Instant::now();
-                let timed = block_on(renderer.render_samples(options.samples, |encoder| rebuild.encode(encoder)))?;
+                let timed =
+                    block_on(renderer.render_samples(options.samples, |encoder| rebuild.encode(encoder), |_| {}))?;
                 let wall = start.elapsed().as_secs_f64() * 1e3;
                 if options.accel.uses_bvh() {
                     outcome.builds.push(block_on(rebuild.read_timings())?);

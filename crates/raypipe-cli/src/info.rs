@@ -1,4 +1,4 @@
-use raypipe::gpu::context::{describe, instance};
+use raypipe::gpu::device::context::{describe, instance};
 use std::process::ExitCode;
 
 pub fn run() -> anyhow::Result<ExitCode> {

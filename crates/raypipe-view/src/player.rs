@@ -344,7 +344,7 @@ impl Player {
             self.tracer.encode(&mut encoder);
             ctx.queue.submit([encoder.finish()]);
         }
-        self.tracer.renderer.read_back_detached()
+        self.tracer.renderer.read_back()
     }
 
     /// Whether the scene moves now (it has motion and is not paused).

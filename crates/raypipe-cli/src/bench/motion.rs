@@ -400,7 +400,7 @@ fn gpu_point(
             // Bounce moves its spheres on the CPU: that is its "skinning", with the write.
             upload = elapsed_ms(start);
         }
-        let traced = block_on(renderer.render_samples(args.spp, |encoder| rebuild.encode(encoder)))?;
+        let traced = block_on(renderer.render_samples(args.spp, |encoder| rebuild.encode(encoder), |_| {}))?;
         let (build, collapse) = if options.accel.needs_ray_queries() {
             (block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0), 0.0)
         } else {
@@ -413,13 +413,17 @@ fn gpu_point(
             if let Some(moved) = refit_rebuild.move_to(scene, own, t)? {
                 refit_renderer.write_moved(own, moved)?;
             }
-            let refitted = block_on(refit_renderer.render_samples(args.spp, |encoder| {
-                if k == 0 {
-                    refit_rebuild.encode(encoder);
-                } else {
-                    refit_rebuild.encode_refit(encoder);
-                }
-            }))?;
+            let refitted = block_on(refit_renderer.render_samples(
+                args.spp,
+                |encoder| {
+                    if k == 0 {
+                        refit_rebuild.encode(encoder);
+                    } else {
+                        refit_rebuild.encode_refit(encoder);
+                    }
+                },
+                |_| {},
+            ))?;
             if k == args.warmup {
                 // The refitted tree must give the fresh one's image.
                 let color = compare(&refitted.frame.display(), &traced.frame.display())?;
@@ -477,7 +481,7 @@ fn cpu_point(
         // Posing evaluates the clips again before it skins.
         let skin = (step.pose_ms - eval).max(0.0);
         let upload = rebuild.write(&step, &packed, &mut renderer)?;
-        let traced = block_on(renderer.render_samples(args.spp, |_| {}))?;
+        let traced = block_on(renderer.render_samples(args.spp, |_| {}, |_| {}))?;
         let (build, collapse) = match step.build {
             Some(timings) => (timings.total() - timings.collapse, timings.collapse),
             // Ray queries: the driver's structures, built on the GPU as the records were written.

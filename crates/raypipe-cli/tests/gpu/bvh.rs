@@ -5,7 +5,7 @@
 use crate::common::harness::Test;
 use crate::common::raypipe;
 use raypipe::gpu::GpuContext;
-use raypipe::gpu::build::BuildVariant;
+use raypipe::gpu::builders::lbvh::BuildVariant;
 use serde_json::Value;
 
 fn bvh_json(args: &[&str]) -> Value {

@@ -39,7 +39,7 @@ pub struct BuildTimings {
     /// writes them; their time is then in `bounds`.
     pub links: f64,
     /// The tree laid out again as the stack and threaded walks read it (16-byte nodes in depth-first
-    /// order, `gpu::threaded`), where a per-frame GPU rebuild does that; zero elsewhere.
+    /// order, `gpu::builders::threaded_layout`), where a per-frame GPU rebuild does that; zero elsewhere.
     pub layout: f64,
     /// The tree collapsed into the wide walk's compressed 8-wide nodes (`bvh::wide`): on the GPU
     /// where a per-frame rebuild for the wide walk does it, on the CPU wherever the host packs a

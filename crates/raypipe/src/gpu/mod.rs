@@ -1,27 +1,16 @@
-//! The GPU side: a context (adapter and device, for a surface or none), the renderer that traces
-//! into its targets in the fragment shader, the display pass that shows them, the per-frame LBVH
-//! rebuild in compute passes (with skinning and morphing before it), and readback for the callers that need pixels.
+//! The GPU side, in three layers and the moving scene over them: the device (context, errors,
+//! read-back, timing, compute helpers), the GPU builders (the per-frame LBVH, its threaded layout
+//! and wide collapse, skinning and morphing, the driver's ray-query structures), and the tracer
+//! (the renderer that traces into its targets in the fragment shader or a compute kernel, its
+//! shader's composition, the scene's upload, the traced region, the display pass); `rebuild` drives
+//! a moving scene's builders before each frame. `preamble` is the WGSL every pipeline starts from.
 
-pub mod build;
-pub mod compute;
-pub mod context;
-pub mod deform;
-pub mod display;
-mod error;
-pub mod rayquery;
-pub mod readback;
+pub mod builders;
+pub mod device;
+pub mod preamble;
 pub mod rebuild;
-pub mod region;
-pub mod renderer;
-pub mod shader;
-pub mod threaded;
-pub mod timing;
-pub mod upload;
-pub mod wide;
+pub mod trace;
 
-pub use context::GpuContext;
-pub use display::{Display, Shown};
-pub use error::{Capacity, GpuError};
+pub use device::{Capacity, GpuContext, GpuError};
 pub use rebuild::{CpuRebuild, CpuStep, SceneRebuild};
-pub use renderer::{Renderer, RendererOptions, TimedFrame};
-pub use shader::RecordKind;
+pub use trace::{Display, RecordKind, Renderer, RendererOptions, Shown, TimedFrame};

@@ -6,25 +6,25 @@
 //! ([`GpuDeform`]): the host writes a few matrices a frame, and no vertex crosses to the GPU.
 //!
 //! `render --frames`, `bench --rebuild` and a live viewer use it the same way:
-//! [`SceneRebuild::move_to`] a time, [`SceneRebuild::encode`], then [`super::Renderer::encode`]
-//! (or `read_frame_after`).
+//! [`SceneRebuild::move_to`] a time, [`SceneRebuild::encode`], then [`crate::gpu::Renderer::encode`]
+//! (or [`crate::gpu::Renderer::render_samples`] with the rebuild as its `prepare`).
 //!
 //! Where the shader reads uniform or texture memory (WebGL2's route), no compute pass can write
 //! its records: [`CpuRebuild`] poses the scene and builds its LBVH on the CPU, then rewrites the
 //! records that changed ([`CpuRebuild::write`]). The CPU reference uses its first half alone.
 
-use super::build::{GpuLbvhBuilder, depth_bound};
-use super::deform::GpuDeform;
-use super::renderer::{Renderer, RendererOptions};
-use super::shader::RecordKind;
-use super::threaded::GpuThreadedLayout;
-use super::upload::SharedBuffers;
-use super::wide::GpuWideCollapse;
-use super::{GpuContext, GpuError};
 use crate::bvh::BuildTimings;
 use crate::bvh::lbvh::LbvhBuilder;
 use crate::bvh::morton::MortonBits;
 use crate::error::InputError;
+use crate::gpu::builders::deform::GpuDeform;
+use crate::gpu::builders::lbvh::{GpuLbvhBuilder, depth_bound};
+use crate::gpu::builders::shared::SharedBuffers;
+use crate::gpu::builders::threaded_layout::GpuThreadedLayout;
+use crate::gpu::builders::wide_collapse::GpuWideCollapse;
+use crate::gpu::trace::renderer::{Renderer, RendererOptions};
+use crate::gpu::trace::shader::RecordKind;
+use crate::gpu::{GpuContext, GpuError};
 use crate::modes::Accel;
 use crate::records::packed::MovedRecords;
 use crate::records::{GpuSphere, PackedScene};
@@ -85,7 +85,7 @@ impl SceneRebuild {
     /// Moves the primitives to `t` seconds of `scene`'s motion (`scene` as loaded) for the next
     /// [`SceneRebuild::encode`]. Skinning on the GPU needs only the frame's matrices; other motion
     /// moves `packed`'s records on the CPU and writes them here, and the records returned are those
-    /// a renderer must rewrite ([`super::Renderer::write_moved`]).
+    /// a renderer must rewrite ([`crate::gpu::Renderer::write_moved`]).
     pub fn move_to(&self, scene: &Scene, packed: &mut PackedScene, t: f32) -> Result<Option<MovedRecords>, InputError> {
         if let Some(deform) = &self.deform {
             deform.write_pose(t)?;
@@ -111,7 +111,7 @@ impl SceneRebuild {
 
     /// The primitives a motion moved in `scene`, for the next build and for the renderers that
     /// read them from here. (Moved triangles' normals live with the renderer:
-    /// [`super::Renderer::write_records`].)
+    /// [`crate::gpu::Renderer::write_records`].)
     pub fn write_moved(&self, scene: &PackedScene, moved: MovedRecords) {
         match moved {
             MovedRecords::Spheres => self.builder.write_spheres(&scene.spheres),
@@ -128,7 +128,8 @@ impl SceneRebuild {
         if !self.builds {
             return;
         }
-        self.builder.encode(encoder, super::build::Codes::Computed);
+        self.builder
+            .encode(encoder, crate::gpu::builders::lbvh::Codes::Computed);
         if let Some(layout) = &self.layout {
             layout.encode(encoder);
         }

@@ -76,7 +76,7 @@ fn without_comments_and_tests(text: &str) -> String {
 }
 
 /// Every path the code names from `crate::` or `super::`, resolved from `module` to a path from
-/// the crate's root; `crate::{a::b, c}` gives both.
+/// the crate's root; a group (`crate::{a::b, c::{d, e}}`) gives each of its paths.
 fn named_paths(module: &ModulePath, code: &str) -> Vec<ModulePath> {
     let mut paths = Vec::new();
     let bytes = code.as_bytes();
@@ -95,30 +95,55 @@ fn named_paths(module: &ModulePath, code: &str) -> Vec<ModulePath> {
             base.pop();
             tail = more;
         }
-        if let Some(group) = tail.strip_prefix('{') {
-            let group = &group[..group.find('}').unwrap_or(group.len())];
-            for item in group.split(',') {
-                paths.push(join(&base, item));
-            }
-        } else {
-            let end = tail
-                .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
-                .unwrap_or(tail.len());
-            paths.push(join(&base, &tail[..end]));
-        }
+        use_tree(base, tail, &mut paths);
     }
     paths
 }
 
-fn join(base: &ModulePath, path: &str) -> ModulePath {
-    let mut joined = base.clone();
-    joined.extend(
-        path.split("::")
-            .map(str::trim)
-            .filter(|s| !s.is_empty() && *s != "self")
-            .map(String::from),
-    );
-    joined
+/// The paths of a use tree that starts at `text`, below `path`.
+fn use_tree(mut path: ModulePath, text: &str, paths: &mut Vec<ModulePath>) {
+    let mut rest = text.trim_start();
+    loop {
+        if let Some(group) = rest.strip_prefix('{') {
+            for item in group_items(group) {
+                use_tree(path.clone(), item, paths);
+            }
+            return;
+        }
+        let end = rest
+            .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .unwrap_or(rest.len());
+        if !rest[..end].is_empty() && &rest[..end] != "self" {
+            path.push(rest[..end].to_string());
+        }
+        match rest[end..].strip_prefix("::") {
+            Some(more) => rest = more,
+            None => break,
+        }
+    }
+    paths.push(path);
+}
+
+/// A group's items, up to its closing brace: split at its own commas, not its inner groups'.
+fn group_items(group: &str) -> Vec<&str> {
+    let (mut items, mut depth, mut from) = (Vec::new(), 0, 0);
+    for (i, c) in group.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' if depth == 0 => {
+                items.push(&group[from..i]);
+                return items;
+            }
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                items.push(&group[from..i]);
+                from = i + 1;
+            }
+            _ => {}
+        }
+    }
+    items.push(&group[from..]);
+    items
 }
 
 /// A folder's `pub use child::{A, B as C}`: the path each re-exported name stands for.
@@ -282,7 +307,7 @@ fn the_checker_sees_circles_and_re_exports() {
         Source {
             module: module(&["gpu", "b"]),
             file: "gpu/b".into(),
-            code: "use super::B;\nuse crate::{records::X, gpu::Alpha};".into(),
+            code: "use super::B;\nuse crate::{records::X, gpu::{Alpha, a::Gamma}};".into(),
         },
     ];
     let exports = re_exports(&sources);
@@ -301,8 +326,13 @@ fn the_checker_sees_circles_and_re_exports() {
     );
     assert_eq!(
         named(&sources[2]),
-        vec![module(&["gpu", "a"]), vec![], module(&["gpu", "a"])],
-        "re-exports lead to the defining file; crate::{{..}} gives each path"
+        vec![
+            module(&["gpu", "a"]),
+            vec![],
+            module(&["gpu", "a"]),
+            module(&["gpu", "a"])
+        ],
+        "re-exports lead to the defining file; a group, nested too, gives each path"
     );
     let found = circles(&dependencies(&sources));
     assert_eq!(

@@ -3,9 +3,9 @@
 
 use raypipe::Choice;
 use raypipe::bvh::morton::MortonBits;
-use raypipe::gpu::build::{BuildVariant, SiblingBoxes, SortRanking};
-use raypipe::gpu::shader::{SceneFeatures, ShaderConfig, compose};
-use raypipe::gpu::upload::{TEXELS_PER_ROW, record_arrays};
+use raypipe::gpu::builders::lbvh::{BuildVariant, SiblingBoxes, SortRanking};
+use raypipe::gpu::trace::shader::{SceneFeatures, ShaderConfig, compose};
+use raypipe::gpu::trace::upload::{TEXELS_PER_ROW, record_arrays};
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
 use raypipe::records::{LAYOUTS, PackedScene, StructLayout};
 use raypipe::scene::{Scene, builtin};
@@ -32,11 +32,11 @@ fn parse(source: &str) -> naga::Module {
 fn host_layouts() -> Vec<&'static StructLayout> {
     [
         LAYOUTS,
-        raypipe::gpu::build::LAYOUTS,
-        raypipe::gpu::threaded::LAYOUTS,
-        raypipe::gpu::wide::LAYOUTS,
-        raypipe::gpu::display::LAYOUTS,
-        raypipe::gpu::deform::LAYOUTS,
+        raypipe::gpu::builders::lbvh::LAYOUTS,
+        raypipe::gpu::builders::threaded_layout::LAYOUTS,
+        raypipe::gpu::builders::wide_collapse::LAYOUTS,
+        raypipe::gpu::trace::display::LAYOUTS,
+        raypipe::gpu::builders::deform::LAYOUTS,
     ]
     .into_iter()
     .flatten()
@@ -47,9 +47,9 @@ fn host_layouts() -> Vec<&'static StructLayout> {
 fn every_host_struct_matches_its_wgsl_twin() {
     let host_layouts = host_layouts();
     let mut seen = Vec::new();
-    let types = parse(&raypipe::gpu::shader::records_source());
-    let display = parse(&raypipe::gpu::display::shader_source());
-    let deform = parse(&raypipe::gpu::deform::shader_source());
+    let types = parse(&raypipe::gpu::preamble::records_source());
+    let display = parse(&raypipe::gpu::trace::display::shader_source());
+    let deform = parse(&raypipe::gpu::builders::deform::shader_source());
     for (_, ty) in types
         .types
         .iter()
@@ -133,16 +133,22 @@ fn every_shader_variant_validates() {
 #[test]
 fn the_build_layout_skinning_and_display_shaders_validate() {
     let mut sources = vec![
-        ("threaded layout".to_string(), raypipe::gpu::threaded::shader_source()),
-        ("wide collapse".to_string(), raypipe::gpu::wide::shader_source()),
-        ("display".to_string(), raypipe::gpu::display::shader_source()),
-        ("skinning".to_string(), raypipe::gpu::deform::shader_source()),
+        (
+            "threaded layout".to_string(),
+            raypipe::gpu::builders::threaded_layout::shader_source(),
+        ),
+        (
+            "wide collapse".to_string(),
+            raypipe::gpu::builders::wide_collapse::shader_source(),
+        ),
+        ("display".to_string(), raypipe::gpu::trace::display::shader_source()),
+        ("skinning".to_string(), raypipe::gpu::builders::deform::shader_source()),
     ];
     for bits in [MortonBits::Bits30, MortonBits::Bits63] {
         for variant in build_variants() {
             sources.push((
                 format!("LBVH build, {}-bit codes, {variant:?}", bits.total_bits()),
-                raypipe::gpu::build::shader_source(bits, variant),
+                raypipe::gpu::builders::lbvh::shader_source(bits, variant),
             ));
         }
     }
@@ -173,13 +179,13 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
     };
     for bits in [MortonBits::Bits30, MortonBits::Bits63] {
         for variant in build_variants() {
-            let count = storage_buffers(&raypipe::gpu::build::shader_source(bits, variant));
+            let count = storage_buffers(&raypipe::gpu::builders::lbvh::shader_source(bits, variant));
             assert!(count <= 8, "the LBVH build binds {count} storage buffers");
         }
     }
-    let count = storage_buffers(&raypipe::gpu::threaded::shader_source());
+    let count = storage_buffers(&raypipe::gpu::builders::threaded_layout::shader_source());
     assert!(count <= 8, "the threaded layout binds {count} storage buffers");
-    let count = storage_buffers(&raypipe::gpu::wide::shader_source());
+    let count = storage_buffers(&raypipe::gpu::builders::wide_collapse::shader_source());
     assert!(count <= 8, "the wide collapse binds {count} storage buffers");
     let scene = PackedScene::new(&builtin::whitted()).unwrap();
     for &accel in Accel::ALL {
@@ -261,7 +267,7 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
         .map(|(name, code)| one(name, code as f64)),
     );
     let mut tracer = records.clone();
-    tracer.push(one("COMPUTE_TILE", raypipe::gpu::shader::COMPUTE_TILE as f64));
+    tracer.push(one("COMPUTE_TILE", raypipe::gpu::trace::shader::COMPUTE_TILE as f64));
     tracer.push(one("TEXELS_PER_ROW", TEXELS_PER_ROW as f64));
     let source = compose(&ShaderConfig {
         pipeline: Pipeline::Compute,
@@ -275,13 +281,13 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
         features: SceneFeatures::ALL,
     });
     let mut build = records.clone();
-    build.push(one("GROUP", raypipe::gpu::build::GROUP as f64));
-    build.push(one("DIGIT_BITS", raypipe::gpu::build::DIGIT_BITS as f64));
-    build.push(one("DIGITS", (1u32 << raypipe::gpu::build::DIGIT_BITS) as f64));
+    build.push(one("GROUP", raypipe::gpu::builders::lbvh::GROUP as f64));
+    build.push(one("DIGIT_BITS", raypipe::gpu::builders::lbvh::DIGIT_BITS as f64));
+    build.push(one("DIGITS", (1u32 << raypipe::gpu::builders::lbvh::DIGIT_BITS) as f64));
     let mut wide = records.clone();
-    wide.push(one("GROUP", raypipe::gpu::wide::GROUP as f64));
+    wide.push(one("GROUP", raypipe::gpu::builders::wide_collapse::GROUP as f64));
     let mut threaded = records;
-    threaded.push(one("GROUP", raypipe::gpu::threaded::GROUP as f64));
+    threaded.push(one("GROUP", raypipe::gpu::builders::threaded_layout::GROUP as f64));
     let mut display: Vec<_> = raypipe::modes::Aov::ALL
         .iter()
         .map(|&v| one(&format!("DISPLAY_{}", v.name().to_uppercase()), v as u32 as f64))
@@ -289,17 +295,22 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
     let stops = raypipe::image::heatmap::STOPS;
     display.push(one("HEAT_STOP_COUNT", stops.len() as f64));
     display.push(("HEAT_STOPS".into(), stops.iter().flatten().map(|&c| c as f64).collect()));
-    let build_source = raypipe::gpu::build::shader_source(MortonBits::Bits63, build_variants().next().unwrap());
+    let build_source =
+        raypipe::gpu::builders::lbvh::shader_source(MortonBits::Bits63, build_variants().next().unwrap());
     vec![
         ("tracer".into(), source, tracer),
         ("build".into(), build_source, build),
         (
             "threaded layout".into(),
-            raypipe::gpu::threaded::shader_source(),
+            raypipe::gpu::builders::threaded_layout::shader_source(),
             threaded,
         ),
-        ("wide collapse".into(), raypipe::gpu::wide::shader_source(), wide),
-        ("display".into(), raypipe::gpu::display::shader_source(), display),
+        (
+            "wide collapse".into(),
+            raypipe::gpu::builders::wide_collapse::shader_source(),
+            wide,
+        ),
+        ("display".into(), raypipe::gpu::trace::display::shader_source(), display),
     ]
 }
 

@@ -6,7 +6,7 @@ use crate::common::*;
 use pollster::block_on;
 use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::Count;
-use raypipe::gpu::readback::TextureReadback;
+use raypipe::gpu::device::readback::TextureReadback;
 use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions, Shown};
 use raypipe::image::heatmap::color_scale;
 use raypipe::image::tonemap::DisplayTransform;
@@ -25,7 +25,9 @@ fn displayed(
     cost_max: f32,
     transform: DisplayTransform,
 ) -> (Frame, Vec<u8>) {
-    let frame = block_on(renderer.render_samples(samples, |_| {})).unwrap().frame;
+    let frame = block_on(renderer.render_samples(samples, |_| {}, |_| {}))
+        .unwrap()
+        .frame;
     let ctx = renderer.context();
     let (width, height) = renderer.size();
     // A target larger than the frame, as a window with room for a panel: the frame is at its corner.

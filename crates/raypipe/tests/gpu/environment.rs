@@ -64,7 +64,7 @@ fn environment_matches_the_cpu_in_every_memory_mode_and_pipeline(ctx: &GpuContex
     );
 }
 
-/// Pixels outside the rectangle the scene's box projects to are not traced (src/gpu/region.rs):
+/// Pixels outside the rectangle the scene's box projects to are not traced (src/gpu/trace/region.rs):
 /// they must read the environment as a traced miss does.
 fn skipped_pixels_read_the_environment(ctx: &GpuContext) {
     let mut scene = raypipe::scene::Scene {

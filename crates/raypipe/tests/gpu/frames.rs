@@ -7,7 +7,7 @@ use glam::Vec3;
 use pollster::block_on;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
-use raypipe::gpu::build::depth_bound;
+use raypipe::gpu::builders::lbvh::depth_bound;
 use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
 use raypipe::image::Frame;
 use raypipe::modes::Pipeline;
@@ -42,13 +42,17 @@ fn gpu_frames_refitting(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u3
             if let Some(moved) = rebuild.move_to(scene, &mut packed, time_of(frame)).unwrap() {
                 renderer.write_moved(&packed, moved).unwrap();
             }
-            block_on(renderer.read_frame_after(|encoder| {
-                if refit && frame > 0 {
-                    rebuild.encode_refit(encoder);
-                } else {
-                    rebuild.encode(encoder);
-                }
-            }))
+            block_on(renderer.render_samples(
+                1,
+                |encoder| {
+                    if refit && frame > 0 {
+                        rebuild.encode_refit(encoder);
+                    } else {
+                        rebuild.encode(encoder);
+                    }
+                },
+                |_| {},
+            ))
             .unwrap()
             .frame
         })
@@ -304,7 +308,7 @@ fn gpu_skinned_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path)
                     ..Default::default()
                 };
                 let mut renderer = block_on(rebuild.renderer(ctx, &packed, options)).unwrap();
-                let gpu = block_on(renderer.read_frame_after(|encoder| rebuild.encode(encoder)))
+                let gpu = block_on(renderer.render_samples(1, |encoder| rebuild.encode(encoder), |_| {}))
                     .unwrap()
                     .frame;
                 assert_frames_match(&format!("skinned-{name}-{t}-{pipeline:?}"), &gpu, &cpu);

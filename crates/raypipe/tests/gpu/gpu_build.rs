@@ -11,9 +11,9 @@ use raypipe::bvh::threaded::threaded_nodes;
 use raypipe::bvh::wide::{self, WideTree};
 use raypipe::bvh::{Bvh, centroid_codes};
 use raypipe::gpu::GpuContext;
-use raypipe::gpu::build::{BuildVariant, Codes, GpuLbvhBuilder, SiblingBoxes};
-use raypipe::gpu::threaded::GpuThreadedLayout;
-use raypipe::gpu::wide::GpuWideCollapse;
+use raypipe::gpu::builders::lbvh::{BuildVariant, Codes, GpuLbvhBuilder, SiblingBoxes};
+use raypipe::gpu::builders::threaded_layout::GpuThreadedLayout;
+use raypipe::gpu::builders::wide_collapse::GpuWideCollapse;
 use raypipe::records::{GpuSphere, PackedScene};
 use raypipe::rng::SplitMix64;
 
@@ -83,7 +83,7 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
 fn check_wide_collapse(builder: &GpuLbvhBuilder, nodes: &[GpuNode], what: &str) {
     let ctx = builder.context();
     let n = builder.count();
-    let depth = raypipe::gpu::build::depth_bound(n, builder.bits());
+    let depth = raypipe::gpu::builders::lbvh::depth_bound(n, builder.bits());
     let collapse = block_on(GpuWideCollapse::new(ctx, &builder.buffers().nodes, n, depth)).unwrap();
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     collapse.encode(&mut encoder);

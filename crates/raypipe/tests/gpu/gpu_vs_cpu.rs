@@ -58,7 +58,9 @@ fn sixteen_samples_agree(ctx: &GpuContext) {
             ..Default::default()
         };
         let mut gpu = renderer(ctx, &scene, options);
-        let frame = pollster::block_on(gpu.render_samples(16, |_| {})).unwrap().frame;
+        let frame = pollster::block_on(gpu.render_samples(16, |_| {}, |_| {}))
+            .unwrap()
+            .frame;
         assert_eq!(gpu.samples(), 16);
         let cpu = raypipe::cpu::render_with(&scene, Accel::Threaded, count, 16, &|| {}).unwrap();
         let name = format!("spp-16-{memory}-{count:?}");
@@ -197,7 +199,7 @@ fn sah_trees_trace_as_the_lbvh_does(ctx: &GpuContext) {
 }
 
 /// The fragment tracer runs only on the pixels the BVH's boxes project to
-/// (`raypipe::gpu::region`); a shader that traces nothing gives the others the background. A small
+/// (`raypipe::gpu::trace::region`); a shader that traces nothing gives the others the background. A small
 /// cluster (a mirror among them) off the frame's centre, four jittered samples so that the misses
 /// accumulate too, every walk and both memory modes: the CPU's image and rays. Then the camera
 /// moved by `set_camera`: turned away (no pixel traced), and inside the root box (its projection
@@ -238,7 +240,7 @@ fn pixels_outside_the_projected_box_match_the_cpu(ctx: &GpuContext) {
             let mut gpu = renderer(ctx, &scene, options);
             let traced = gpu.traced_region().pixel_count();
             assert!(traced > 0 && traced * 4 < pixels, "{name}: traced {traced} pixels");
-            let frame = pollster::block_on(gpu.render_samples(4, |_| {})).unwrap().frame;
+            let frame = pollster::block_on(gpu.render_samples(4, |_| {}, |_| {})).unwrap().frame;
             let cpu = raypipe::cpu::render_with(&scene, accel, Count::Rays, 4, &|| {}).unwrap();
             assert_frames_match(&name, &frame, &cpu);
             assert_eq!(frame.rays(), cpu.rays(), "{name}: rays");
@@ -247,7 +249,7 @@ fn pixels_outside_the_projected_box_match_the_cpu(ctx: &GpuContext) {
                 gpu.set_camera(camera);
                 let traced = gpu.traced_region().pixel_count();
                 assert_eq!(traced > 0, any_traced, "{name}-{view}: traced {traced} pixels");
-                let frame = pollster::block_on(gpu.render_samples(2, |_| {})).unwrap().frame;
+                let frame = pollster::block_on(gpu.render_samples(2, |_| {}, |_| {})).unwrap().frame;
                 let cpu = raypipe::cpu::render_with(moved, accel, Count::Rays, 2, &|| {}).unwrap();
                 assert_frames_match(&format!("{name}-{view}"), &frame, &cpu);
                 assert_eq!(frame.rays(), cpu.rays(), "{name}-{view}: rays");

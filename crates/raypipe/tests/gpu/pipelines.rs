@@ -10,7 +10,7 @@ use raypipe::modes::{Accel, Count, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 
 fn frame(ctx: &GpuContext, scene: &PackedScene, options: RendererOptions, samples: u32) -> Frame {
-    pollster::block_on(renderer(ctx, scene, options).render_samples(samples, |_| {}))
+    pollster::block_on(renderer(ctx, scene, options).render_samples(samples, |_| {}, |_| {}))
         .unwrap_or_else(|e| panic!("{options:?} failed on {}: {e}", ctx.describe()))
         .frame
 }

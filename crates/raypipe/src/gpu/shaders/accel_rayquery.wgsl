@@ -1,4 +1,4 @@
-// Ray queries over the driver's acceleration structures (src/gpu/rayquery.rs). The driver walks its
+// Ray queries over the driver's acceleration structures (src/gpu/builders/rayquery.rs). The driver walks its
 // own tree and tests the opaque triangles itself; the triangles whose hits the shader decides
 // (single-sided, alpha MASK or BLEND) and the spheres' boxes come back as candidates, which the
 // walks' own hit test (hit_primitive, admit.wgsl) takes or leaves. Its CPU twin is brute force

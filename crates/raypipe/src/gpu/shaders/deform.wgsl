@@ -1,14 +1,14 @@
 // Skinning and morphing on the GPU: each frame, the animated primitives' vertices posed from their
 // rest pose and written into the triangle records the LBVH build and the tracer read, with their
 // shading normals. The CPU twin is scene/animation.rs (`Rig::deform`, `CornerNormals::corners`);
-// the host side is src/gpu/deform.rs, which writes the frame's matrices and morph weights.
+// the host side is src/gpu/builders/deform.rs, which writes the frame's matrices and morph weights.
 //
 // Three kernels, one dispatch each: deform_vertices (morph, then skin or carry by the node),
 // gather_triangles (corners into the records; the file's normals, or each face's normal and
 // corner angles for smooth normals), smooth_normals (per corner, the angle-weighted normals of the
 // faces around its position that bend less than the crease).
 
-// From the preamble (src/gpu/deform.rs): GROUP, and the normal sources NORMALS_FLAT, NORMALS_FILE,
+// From the preamble (src/gpu/builders/deform.rs): GROUP, and the normal sources NORMALS_FLAT, NORMALS_FILE,
 // NORMALS_SMOOTH. Triangle, TriangleNormals and NONE are the tracer's (types.wgsl).
 
 struct DeformParams {

@@ -21,7 +21,7 @@ struct DisplayParams {
 
 // DISPLAY_COLOR, DISPLAY_DEPTH, DISPLAY_NORMAL and DISPLAY_COST (modes::Aov's numbers),
 // TONE_MAP_NONE, TONE_MAP_NEUTRAL and TONE_MAP_ACES (tonemap::ToneMap's) and HEAT_STOPS
-// (heatmap.rs's STOPS) come from the preamble (src/gpu/display.rs).
+// (heatmap.rs's STOPS) come from the preamble (src/gpu/trace/display.rs).
 
 @group(0) @binding(0) var<uniform> params: DisplayParams;
 @group(0) @binding(1) var color_target: texture_2d<u32>;

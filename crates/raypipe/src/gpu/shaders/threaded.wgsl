@@ -12,7 +12,7 @@
 // The quantization frame, as the globals hold it.
 @group(0) @binding(4) var<storage, read_write> frame: BvhFrame;
 
-// GROUP (invocations per workgroup) comes from the preamble (src/gpu/threaded.rs); MAX_QUANTUM
+// GROUP (invocations per workgroup) comes from the preamble (src/gpu/builders/threaded_layout.rs); MAX_QUANTUM
 // and TINY_EXTENT (below which an extent gets a quantum of 1) from src/bvh/threaded.rs.
 const MIN_NORMAL: f32 = 0x1p-126f;
 

@@ -365,7 +365,7 @@ fn summed(pixel: vec2<u32>, sample_color: vec4<f32>, sample_surface: vec4<f32>) 
 }
 
 // The sums of a pixel whose primary ray misses the box around the scene's primitives (outside the
-// rectangle it projects to, src/gpu/region.rs; the tracer never runs there): what sample_pixel
+// rectangle it projects to, src/gpu/trace/region.rs; the tracer never runs there): what sample_pixel
 // gives such a ray, what it escapes to and one ray, without tracing it.
 fn miss_pixel(pixel: vec2<u32>) -> PixelSums {
     // Added to zero, as trace_task adds it to the pixel's colour.

@@ -26,7 +26,7 @@ struct Counters {
 // The next level's dispatch: workgroups x, y, z.
 @group(0) @binding(5) var<storage, read_write> dispatch: array<u32, 3>;
 
-// GROUP (invocations per workgroup) comes from the preamble (src/gpu/wide.rs); WIDE_SPAN,
+// GROUP (invocations per workgroup) comes from the preamble (src/gpu/builders/wide_collapse.rs); WIDE_SPAN,
 // WIDE_NODE_TEXELS and TINY_EXTENT from src/bvh.
 const MIN_NORMAL: f32 = 0x1p-126f;
 const MAX_GROUPS_X: u32 = 65535u;

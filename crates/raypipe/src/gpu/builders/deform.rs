@@ -10,12 +10,12 @@
 //! the rest pose's positions, where the CPU groups by the posed ones (they differ only where
 //! vertices that coincide at rest part).
 
-use super::compute::{grid, storage_buffer};
-use super::readback::read_buffer;
-use super::shader::records_source;
-use super::timing::PassTimestamps;
-use super::{GpuContext, GpuError};
 use crate::error::{Element, InputError};
+use crate::gpu::device::compute::{grid, storage_buffer};
+use crate::gpu::device::readback::read_buffer;
+use crate::gpu::device::timing::PassTimestamps;
+use crate::gpu::preamble::records_source;
+use crate::gpu::{GpuContext, GpuError};
 use crate::records::{GpuTriangleNormals, StructLayout};
 use crate::scene::animation::{
     Animated, CornerNormals, InstancePose, MAX_INFLUENCES, PlacedInstance, RestPrimitive, Rig,
@@ -28,7 +28,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
-const DEFORM: &str = include_str!("shaders/deform.wgsl");
+const DEFORM: &str = include_str!("../shaders/deform.wgsl");
 /// Invocations per workgroup.
 const GROUP: u32 = 256;
 
@@ -141,7 +141,7 @@ pub const LAYOUTS: &[StructLayout] = &[
 
 /// The kernels' WGSL with its preamble.
 pub fn shader_source() -> String {
-    let mut preamble = format!("// Generated: src/gpu/deform.rs.\nconst GROUP: u32 = {GROUP}u;\n");
+    let mut preamble = format!("// Generated: src/gpu/builders/deform.rs.\nconst GROUP: u32 = {GROUP}u;\n");
     for source in NormalSource::ALL {
         preamble += &format!("const {}: u32 = {}u;\n", source.wgsl_name(), source as u32);
     }

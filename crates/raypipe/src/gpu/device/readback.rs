@@ -2,8 +2,8 @@
 //! benchmarks. A window or a canvas never reads back. Texture rows are padded to 256 bytes in the
 //! copy buffer; every wait is a future (a browser cannot block).
 
-use super::GpuError;
 use super::context::{map_future, wait_mapped};
+use crate::gpu::GpuError;
 
 /// Bytes per row in a texture-to-buffer copy: `unpadded` rounded up to wgpu's 256-byte alignment.
 pub fn padded_bytes_per_row(unpadded: u32) -> u32 {

@@ -2,34 +2,17 @@
 //! rgba32uint for records of integers only).
 
 use super::shader::{RecordArray, RecordKind, texture_pixels_binding};
-use super::{Capacity, GpuContext, GpuError};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
 use crate::bvh::wide::GpuWideTexel;
+use crate::gpu::builders::shared::SharedBuffers;
+use crate::gpu::{Capacity, GpuContext, GpuError};
 use crate::modes::{Accel, MemoryMode};
 use crate::records::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene, TexelFormat, TexturePixels};
 use wgpu::util::DeviceExt;
 
 /// Texture rows are 2048 texels wide: the smallest maximum texture size WebGL2 guarantees.
 pub const TEXELS_PER_ROW: u32 = 2048;
-
-/// Buffers that already live on the GPU and replace the scene's own in storage memory: the
-/// primitives and nodes of a [`super::rebuild::SceneRebuild`], rebuilt there every frame, and the
-/// threaded nodes and their quantization frame laid out from them.
-#[derive(Clone, Debug)]
-pub struct SharedBuffers {
-    pub spheres: wgpu::Buffer,
-    pub triangles: wgpu::Buffer,
-    pub nodes: wgpu::Buffer,
-    /// For the stack and threaded walks.
-    pub threaded_nodes: Option<wgpu::Buffer>,
-    /// For the wide walk: the compressed wide nodes' texels.
-    pub wide: Option<wgpu::Buffer>,
-    /// The threaded nodes' frame, a `GpuBvhFrame` the renderer copies into its globals.
-    pub bvh_frame: Option<wgpu::Buffer>,
-    /// Where skinning on the GPU rewrites the triangles' shading normals.
-    pub triangle_normals: Option<wgpu::Buffer>,
-}
 
 /// The scene's arrays on the GPU, ready to bind.
 pub struct SceneResources {
@@ -371,7 +354,7 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn Rec
     static NO_WIDE_TEXELS: Vec<GpuWideTexel> = Vec::new();
     let bvh = scene.bvh.as_ref();
     match accel {
-        // The driver's structures reach the shader beside these (`super::rayquery`).
+        // The driver's structures reach the shader beside these (`crate::gpu::builders::rayquery`).
         Accel::Brute | Accel::RayQuery => {}
         Accel::Stack | Accel::Threaded => records.push((
             RecordKind::ThreadedNode,

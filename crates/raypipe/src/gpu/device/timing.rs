@@ -1,7 +1,7 @@
 //! GPU time of passes from timestamp queries: a begin and an end timestamp per pass.
 
 use super::readback::map_read;
-use super::{GpuContext, GpuError};
+use crate::gpu::{GpuContext, GpuError};
 
 /// Timestamps around `passes` render or compute passes, resolved into a buffer the host reads.
 pub struct PassTimestamps {

@@ -1,22 +1,22 @@
 //! The compressed wide BVH collapsed on the GPU (`shaders/wide.wgsl`) from the node array a
-//! [`GpuLbvhBuilder`](super::build::GpuLbvhBuilder) builds there: the per-frame twin of
+//! [`GpuLbvhBuilder`](super::lbvh::GpuLbvhBuilder) builds there: the per-frame twin of
 //! [`crate::bvh::wide::wide_texels`], so a rebuilt tree reaches the wide walk with no round trip to
 //! the host.
 //!
 //! One level of wide nodes a dispatch, each sized by the level before it through an indirect
 //! dispatch; the host records as many levels as the deepest tree the build can make
-//! ([`super::build::depth_bound`]), those past the tree's end dispatching no workgroup.
+//! ([`super::lbvh::depth_bound`]), those past the tree's end dispatching no workgroup.
 
-use super::compute::{buffer_entry, buffers_bind_group, kernels, storage_buffer};
-use super::readback::read_buffer;
-use super::shader::records_source;
-use super::timing::PassTimestamps;
-use super::{GpuContext, GpuError};
 use crate::bvh::wide::{GpuWideTexel, capacity_texels, leaf_texels, node_capacity};
+use crate::gpu::device::compute::{buffer_entry, buffers_bind_group, kernels, storage_buffer};
+use crate::gpu::device::readback::read_buffer;
+use crate::gpu::device::timing::PassTimestamps;
+use crate::gpu::preamble::records_source;
+use crate::gpu::{GpuContext, GpuError};
 use crate::records::StructLayout;
 use crate::struct_layout;
 
-const COLLAPSE: &str = include_str!("shaders/wide.wgsl");
+const COLLAPSE: &str = include_str!("../shaders/wide.wgsl");
 /// Invocations per workgroup, one wide node each.
 pub const GROUP: u32 = 64;
 
@@ -39,7 +39,7 @@ pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
 /// The collapse kernels' WGSL.
 pub fn shader_source() -> String {
     format!(
-        "// Generated: src/gpu/wide.rs.\nconst GROUP: u32 = {GROUP}u;\n{}\n{COLLAPSE}",
+        "// Generated: src/gpu/builders/wide_collapse.rs.\nconst GROUP: u32 = {GROUP}u;\n{}\n{COLLAPSE}",
         records_source()
     )
 }

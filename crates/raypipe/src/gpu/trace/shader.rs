@@ -7,42 +7,35 @@
 
 use crate::bvh::layout::NONE;
 use crate::constants::ray_stack_size;
+use crate::gpu::preamble::records_source;
 use crate::modes::{Accel, MemoryMode, Pipeline};
+use crate::records::TexelFormat;
 use crate::records::constants::{
     MODEL_GLTF, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
 };
 use crate::records::packed::{MovedRecords, PackedScene};
-use crate::records::{TexelFormat, constants};
 use std::fmt::Write;
 
 /// The side of the compute pipeline's square workgroups, in pixels (compute.wgsl's, from the
 /// preamble).
 pub const COMPUTE_TILE: u32 = 8;
 
-/// The records shared with the host.
-pub const TYPES: &str = include_str!("shaders/types.wgsl");
-
-/// What every shader module starts from: the constants shared with the CPU reference, and the
-/// records shared with the host.
-pub fn records_source() -> String {
-    format!("{}\n{TYPES}", constants::wgsl())
-}
-const TEXELS: &str = include_str!("shaders/texels.wgsl");
-const FULLSCREEN: &str = include_str!("shaders/fullscreen.wgsl");
-const COMPUTE: &str = include_str!("shaders/compute.wgsl");
-const INTERSECT: &str = include_str!("shaders/intersect.wgsl");
-const ACCEL_BRUTE: &str = include_str!("shaders/accel_brute.wgsl");
-const ACCEL_STACK: &str = include_str!("shaders/accel_stack.wgsl");
-const ACCEL_STACKLESS: &str = include_str!("shaders/accel_stackless.wgsl");
-const ACCEL_THREADED: &str = include_str!("shaders/accel_threaded.wgsl");
-const ACCEL_WIDE: &str = include_str!("shaders/accel_wide.wgsl");
-const ACCEL_RAYQUERY: &str = include_str!("shaders/accel_rayquery.wgsl");
-const ADMIT: &str = include_str!("shaders/admit.wgsl");
-const MAPS: &str = include_str!("shaders/maps.wgsl");
-const BRDF: &str = include_str!("shaders/brdf.wgsl");
-const ENVIRONMENT: &str = include_str!("shaders/environment.wgsl");
-const SHADE: &str = include_str!("shaders/shade.wgsl");
-const TRACE: &str = include_str!("shaders/trace.wgsl");
+const TEXELS: &str = include_str!("../shaders/texels.wgsl");
+const FULLSCREEN: &str = include_str!("../shaders/fullscreen.wgsl");
+const COMPUTE: &str = include_str!("../shaders/compute.wgsl");
+const INTERSECT: &str = include_str!("../shaders/intersect.wgsl");
+const ACCEL_BRUTE: &str = include_str!("../shaders/accel_brute.wgsl");
+const ACCEL_STACK: &str = include_str!("../shaders/accel_stack.wgsl");
+const ACCEL_STACKLESS: &str = include_str!("../shaders/accel_stackless.wgsl");
+const ACCEL_THREADED: &str = include_str!("../shaders/accel_threaded.wgsl");
+const ACCEL_WIDE: &str = include_str!("../shaders/accel_wide.wgsl");
+const ACCEL_RAYQUERY: &str = include_str!("../shaders/accel_rayquery.wgsl");
+const ADMIT: &str = include_str!("../shaders/admit.wgsl");
+const MAPS: &str = include_str!("../shaders/maps.wgsl");
+const BRDF: &str = include_str!("../shaders/brdf.wgsl");
+const ENVIRONMENT: &str = include_str!("../shaders/environment.wgsl");
+const SHADE: &str = include_str!("../shaders/shade.wgsl");
+const TRACE: &str = include_str!("../shaders/trace.wgsl");
 
 /// The scene's record arrays, each read by the shader through `load_<name>(i)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -122,7 +115,7 @@ pub fn texture_pixels_binding(arrays: &[RecordArray]) -> u32 {
     arrays.iter().map(|a| a.binding).max().unwrap_or(0) + 1
 }
 
-/// Where ray queries' two bindings start ([`crate::gpu::rayquery::AccelStructures`]): after the
+/// Where ray queries' two bindings start ([`crate::gpu::builders::rayquery::AccelStructures`]): after the
 /// textures' texels.
 pub fn ray_query_binding(arrays: &[RecordArray]) -> u32 {
     texture_pixels_binding(arrays) + 1

@@ -1,18 +1,18 @@
 //! The threaded BVH laid out on the GPU (`shaders/threaded.wgsl`) from the node array a
-//! [`GpuLbvhBuilder`](super::build::GpuLbvhBuilder) builds there: the per-frame twin of
+//! [`GpuLbvhBuilder`](super::lbvh::GpuLbvhBuilder) builds there: the per-frame twin of
 //! [`crate::bvh::threaded::threaded_nodes`], so a rebuilt tree reaches the stack and threaded walks
 //! with no round trip to the host.
 
-use super::compute::{buffer_entry, buffers_bind_group, grid, kernels, storage_buffer};
-use super::readback::read_buffer;
-use super::shader::records_source;
-use super::timing::PassTimestamps;
-use super::{GpuContext, GpuError};
 use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame};
+use crate::gpu::device::compute::{buffer_entry, buffers_bind_group, grid, kernels, storage_buffer};
+use crate::gpu::device::readback::read_buffer;
+use crate::gpu::device::timing::PassTimestamps;
+use crate::gpu::preamble::records_source;
+use crate::gpu::{GpuContext, GpuError};
 use crate::records::{GpuBvhFrame, GpuGlobals, StructLayout};
 use crate::struct_layout;
 
-const LAYOUT: &str = include_str!("shaders/threaded.wgsl");
+const LAYOUT: &str = include_str!("../shaders/threaded.wgsl");
 /// Invocations per workgroup, one node each.
 pub const GROUP: u32 = 256;
 const FRAME_BYTES: u64 = std::mem::size_of::<GpuBvhFrame>() as u64;
@@ -31,7 +31,7 @@ pub const LAYOUTS: &[StructLayout] = &[struct_layout!(LayoutParams, "LayoutParam
 /// The layout kernels' WGSL.
 pub fn shader_source() -> String {
     format!(
-        "// Generated: src/gpu/threaded.rs.\nconst GROUP: u32 = {GROUP}u;\n{}\n{LAYOUT}",
+        "// Generated: src/gpu/builders/threaded_layout.rs.\nconst GROUP: u32 = {GROUP}u;\n{}\n{LAYOUT}",
         records_source()
     )
 }

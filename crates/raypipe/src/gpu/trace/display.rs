@@ -2,16 +2,16 @@
 //! target, a window's surface texture or an offscreen one, as a screen shows them. The frame lands
 //! at the target's top-left corner, one fragment per pixel; the rest of the target is cleared.
 
-use super::GpuContext;
 use super::renderer::{FrameTargets, target_entry};
 use crate::Choice;
+use crate::gpu::GpuContext;
 use crate::image::tonemap::DisplayTransform;
 use crate::modes::Aov;
 use crate::records::StructLayout;
 use crate::scene::ToneMap;
 use crate::struct_layout;
 
-const DISPLAY: &str = include_str!("shaders/display.wgsl");
+const DISPLAY: &str = include_str!("../shaders/display.wgsl");
 
 /// The pass's parameters (`DisplayParams` in display.wgsl).
 #[repr(C)]
@@ -49,7 +49,7 @@ pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
 /// map's stops), then display.wgsl.
 pub fn shader_source() -> String {
     use std::fmt::Write;
-    let mut out = String::from("// Generated: src/gpu/display.rs.\n");
+    let mut out = String::from("// Generated: src/gpu/trace/display.rs.\n");
     let names = Aov::ALL
         .iter()
         .map(|&view| ("DISPLAY", view.name(), view as u32))

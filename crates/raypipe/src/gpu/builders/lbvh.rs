@@ -6,23 +6,23 @@
 //! Morton codes are 30-bit or 63-bit, as on the CPU; the width picks the key type the kernels are
 //! compiled with.
 
-use super::Capacity;
-use super::compute::{buffer_entry, grid, kernels, storage_buffer};
-use super::readback::read_buffer;
-use super::shader::records_source;
-use super::timing::PassTimestamps;
-use super::upload::SharedBuffers;
-use super::{GpuContext, GpuError};
+use super::shared::SharedBuffers;
 use crate::bvh::BuildTimings;
 use crate::bvh::layout::GpuNode;
 use crate::bvh::morton::MortonBits;
+use crate::gpu::Capacity;
+use crate::gpu::device::compute::{buffer_entry, grid, kernels, storage_buffer};
+use crate::gpu::device::readback::read_buffer;
+use crate::gpu::device::timing::PassTimestamps;
+use crate::gpu::preamble::records_source;
+use crate::gpu::{GpuContext, GpuError};
 use crate::modes::MemoryMode;
 use crate::records::{GpuSphere, GpuTriangle, PackedScene, StructLayout};
 use crate::struct_layout;
 use std::num::NonZeroU64;
 
-const LBVH: &str = include_str!("shaders/lbvh.wgsl");
-const RADIX_SORT: &str = include_str!("shaders/radix_sort.wgsl");
+const LBVH: &str = include_str!("../shaders/lbvh.wgsl");
+const RADIX_SORT: &str = include_str!("../shaders/radix_sort.wgsl");
 
 /// Invocations per workgroup.
 pub const GROUP: u32 = 256;
@@ -339,7 +339,7 @@ fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, p.y, high); }"
         }
     };
     format!(
-        "// Generated: the build's sizes (src/gpu/build.rs) and {}-bit Morton codes.
+        "// Generated: the build's sizes (src/gpu/builders/lbvh.rs) and {}-bit Morton codes.
 const GROUP: u32 = {GROUP}u;
 const DIGIT_BITS: u32 = {DIGIT_BITS}u;
 const DIGITS: u32 = {DIGITS}u;

@@ -17,9 +17,9 @@
 //! (spheres first, then triangles, as the BVH walks name them) of each BLAS primitive: an instance's
 //! custom index is where its BLAS's names start.
 
-use super::timing::PassTimestamps;
-use super::{GpuContext, GpuError};
 use crate::bvh::morton::{MortonBits, centroid_codes};
+use crate::gpu::device::timing::PassTimestamps;
+use crate::gpu::{GpuContext, GpuError};
 use crate::modes::BlasOrder;
 use crate::records::PackedScene;
 use crate::records::constants::MATERIAL_INDEX_MASK;

@@ -3,9 +3,9 @@
 //! Start-up is async, as a browser needs it: the command line blocks on these futures, a web page
 //! awaits them. An adapter can be asked for a surface (WebGL2 has none to offer before its canvas).
 
-use super::GpuError;
 use crate::choice::Choice;
 use crate::error::one_line;
+use crate::gpu::GpuError;
 use crate::modes::{Accel, Backend, MemoryMode};
 use std::future::Future;
 use std::pin::Pin;
