@@ -183,17 +183,9 @@ pub fn validate(
     nodes: &[GpuThreadedNode],
     primitive_boxes: &[Aabb],
 ) -> Result<(), InvalidTree> {
-    first_violation(frame, nodes, primitive_boxes).map_err(InvalidTree)
-}
-
-fn first_violation(
-    frame: &QuantizationFrame,
-    nodes: &[GpuThreadedNode],
-    primitive_boxes: &[Aabb],
-) -> Result<(), String> {
     let n = primitive_boxes.len();
     if nodes.len() != (2 * n).saturating_sub(1) {
-        return Err(format!("{} nodes for {n} primitives", nodes.len()));
+        return Err(format!("{} nodes for {n} primitives", nodes.len()).into());
     }
     if n == 0 {
         return Ok(());
@@ -201,7 +193,7 @@ fn first_violation(
     let mut seen = vec![false; n];
     match check_subtree(frame, nodes, primitive_boxes, &mut seen, 0)? {
         (end, _) if end == nodes.len() => Ok(()),
-        (end, _) => Err(format!("the tree ends at node {end} of {}", nodes.len())),
+        (end, _) => Err(format!("the tree ends at node {end} of {}", nodes.len()).into()),
     }
 }
 
@@ -212,26 +204,21 @@ fn check_subtree(
     primitive_boxes: &[Aabb],
     seen: &mut [bool],
     index: usize,
-) -> Result<(usize, Aabb), String> {
+) -> Result<(usize, Aabb), InvalidTree> {
     let node = nodes
         .get(index)
-        .ok_or(format!("a subtree starts at node {index} of {}", nodes.len()))?;
+        .ok_or_else(|| format!("a subtree starts at node {index} of {}", nodes.len()))?;
     let (end, bounds) = if node.is_leaf() {
         let primitive = node.primitive() as usize;
         if primitive >= seen.len() || std::mem::replace(&mut seen[primitive], true) {
-            return Err(format!(
-                "node {index}: primitive {primitive} is out of range or in two leaves"
-            ));
+            return Err(format!("node {index}: primitive {primitive} is out of range or in two leaves").into());
         }
         (index + 1, primitive_boxes[primitive])
     } else {
         let (left_end, left) = check_subtree(frame, nodes, primitive_boxes, seen, index + 1)?;
         let (end, right) = check_subtree(frame, nodes, primitive_boxes, seen, left_end)?;
         if node.link as usize != end {
-            return Err(format!(
-                "node {index}: link {} but its subtree ends at {end}",
-                node.link
-            ));
+            return Err(format!("node {index}: link {} but its subtree ends at {end}", node.link).into());
         }
         (end, left.union(right))
     };
@@ -240,9 +227,7 @@ fn check_subtree(
     for axis in 0..3 {
         let exact = |q: Vec3| frame.origin[axis] as f64 + q[axis] as f64 * frame.quantum[axis] as f64;
         if exact(lo) > bounds.min[axis] as f64 || exact(hi) < bounds.max[axis] as f64 {
-            return Err(format!(
-                "node {index}: its quantized box does not hold its primitives on axis {axis}"
-            ));
+            return Err(format!("node {index}: its quantized box does not hold its primitives on axis {axis}").into());
         }
     }
     Ok((end, bounds))

@@ -367,7 +367,7 @@ pub fn validate(tree: &WideTree, primitive_boxes: &[Aabb]) -> Result<(), Invalid
         return Ok(());
     }
     let mut seen = vec![false; n];
-    check_node(tree, primitive_boxes, &mut seen, tree.root, 0).map_err(InvalidTree)?;
+    check_node(tree, primitive_boxes, &mut seen, tree.root, 0)?;
     match seen.iter().position(|&s| !s) {
         Some(missing) => Err(InvalidTree(format!("primitive {missing} is in no leaf"))),
         None => Ok(()),
@@ -381,19 +381,16 @@ fn check_node(
     seen: &mut [bool],
     texel: u32,
     depth: u32,
-) -> Result<Aabb, String> {
+) -> Result<Aabb, InvalidTree> {
     if texel < tree.root
         || !(texel - tree.root).is_multiple_of(NODE_TEXELS)
         || texel as usize + NODE_TEXELS as usize > tree.texels.len()
     {
-        return Err(format!("a child at texel {texel}, which starts no node"));
+        return Err(format!("a child at texel {texel}, which starts no node").into());
     }
     // Visiting a node at depth d leaves at most d groups waiting (one for each node above it).
     if depth > tree.stack_size.max(1) {
-        return Err(format!(
-            "node at texel {texel}: deeper than the stack of {}",
-            tree.stack_size
-        ));
+        return Err(format!("node at texel {texel}: deeper than the stack of {}", tree.stack_size).into());
     }
     let node = tree.node(texel);
     if node.slots == 0 || node.slots > 0xff || node.imask() & !node.slots != 0 {
@@ -401,7 +398,8 @@ fn check_node(
             "node at texel {texel}: slots {:#x}, imask {:#x}",
             node.slots,
             node.imask()
-        ));
+        )
+        .into());
     }
     let mut bounds: Option<Aabb> = None;
     for slot in 0..WIDTH {
@@ -414,15 +412,13 @@ fn check_node(
         } else {
             let words = tree.texels.len() as u32 * 4;
             if child >= tree.root * 4 || child >= words {
-                return Err(format!(
-                    "node at texel {texel}: leaf word {child} is past the leaf words"
-                ));
+                return Err(format!("node at texel {texel}: leaf word {child} is past the leaf words").into());
             }
             let primitive = tree.word(child) as usize;
             if primitive >= seen.len() || std::mem::replace(&mut seen[primitive], true) {
-                return Err(format!(
-                    "node at texel {texel}: primitive {primitive} is out of range or in two leaves"
-                ));
+                return Err(
+                    format!("node at texel {texel}: primitive {primitive} is out of range or in two leaves").into(),
+                );
             }
             primitive_boxes[primitive]
         };
@@ -434,7 +430,8 @@ fn check_node(
             if exact(lo) > below.min[axis] as f64 || exact(hi) < below.max[axis] as f64 {
                 return Err(format!(
                     "node at texel {texel}: slot {slot}'s box does not hold its primitives on axis {axis}"
-                ));
+                )
+                .into());
             }
         }
         bounds = Some(bounds.map_or(below, |b| b.union(below)));

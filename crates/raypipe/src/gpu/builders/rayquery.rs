@@ -179,10 +179,7 @@ impl AccelStructures {
             ),
         ] {
             if needed > allowed {
-                return Err(GpuError::Operation {
-                    what: "building the driver's acceleration structures",
-                    message: format!("{needed} {what}, where the adapter allows {allowed}"),
-                });
+                return Err(GpuError::Limit { what, needed, allowed });
             }
         }
         let input = wgpu::BufferUsages::BLAS_INPUT | wgpu::BufferUsages::COPY_DST;

@@ -17,6 +17,14 @@ pub enum GpuError {
     /// wgpu reported a validation or out-of-memory error while `what` ran.
     #[error("{what} failed on the GPU: {message}")]
     Operation { what: &'static str, message: String },
+    /// The scene needs more of something than the adapter's limits allow (the driver's
+    /// acceleration structures' instances or primitives, say).
+    #[error("the scene needs {needed} {what}, where the adapter allows {allowed}")]
+    Limit {
+        what: &'static str,
+        needed: u64,
+        allowed: u64,
+    },
     /// One of the scene's record arrays does not fit the memory mode on this adapter.
     #[error("scene too big for {memory} memory: {records} {array} records need {needed}, the adapter allows {allowed}")]
     TooBig {
