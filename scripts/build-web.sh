@@ -25,8 +25,16 @@ target/tool/raypipe-wasm-bindgen target/wasm32-unknown-unknown/release/raypipe_w
 wasm="$out/raypipe_web_bg.wasm"
 if [ -x web/node_modules/.bin/wasm-opt ]; then
   before=$(stat -c %s "$wasm")
-  web/node_modules/.bin/wasm-opt -Oz --strip-debug --strip-producers "$wasm" -o "$wasm.opt"
-  mv "$wasm.opt" "$wasm"
+  # wasm-opt takes half a minute or more: its output is kept by the input's hash, so the page and
+  # the package (and a rebuild of an unchanged module) shrink the module once.
+  shrunk="target/wasm-opt/$(sha256sum "$wasm" | cut -c1-32).wasm"
+  if [ ! -f "$shrunk" ]; then
+    mkdir -p target/wasm-opt
+    web/node_modules/.bin/wasm-opt -Oz --strip-debug --strip-producers "$wasm" -o "$shrunk.part"
+    mv "$shrunk.part" "$shrunk"
+    ls -t target/wasm-opt/*.wasm | tail -n +5 | xargs -r rm -f
+  fi
+  cp "$shrunk" "$wasm"
   echo "wasm-opt -Oz: $before -> $(stat -c %s "$wasm") bytes"
 else
   echo "web/node_modules/.bin/wasm-opt is missing (npm ci --prefix web): the module stays unshrunk, $(stat -c %s "$wasm") bytes"
