@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Checks that a change left raypipe's images alone: renders every built-in scene and the Bunny with
 # two builds (say, before and after a restructuring) on the CPU reference, on Vulkan and on GL, in
-# storage and texture memory, with every BVH walk (or those in $WALKS, say WALKS=stack), and compares
-# each pair with `raypipe diff --tolerance exact` (every channel of every pixel equal). Prints one line
-# per image and exits 1 if any differs.
+# storage and texture memory, with every BVH walk (or those in $WALKS, say WALKS=stack), and the
+# scenes or model files in $SCENES besides (say three glTF samples); compares each pair with
+# `raypipe diff --tolerance exact` (every channel of every pixel equal). Prints one line per image and
+# exits 1 if any differs.
 #
 #   scripts/same-images.sh OLD_RAYPIPE NEW_RAYPIPE [WIDTH HEIGHT]
 #
@@ -22,6 +23,9 @@ bunny=../shared/models/bunny.ply
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 scenes=(whitted sphere-8k torus-5k random:2000 bounce:100 "$bunny")
+# More scenes or model files (glTF samples, say), separated by spaces, in $SCENES.
+read -r -a more <<< "${SCENES:-}"
+scenes+=("${more[@]}")
 # device, backend (for WGPU_BACKEND), memory
 routes=("cpu - storage" "gpu vulkan storage" "gpu vulkan texture" "gpu gl storage" "gpu gl texture")
 read -r -a walks <<< "${WALKS:-threaded stack stackless}"

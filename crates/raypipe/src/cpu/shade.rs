@@ -15,6 +15,17 @@ use crate::records::constants::{
 use crate::records::{GpuLight, GpuMaterial, GpuTriangle, PackedScene};
 use glam::{Vec2, Vec3};
 
+/// The frame a hit is shaded in, all three facing the viewer: the geometric normal (which side new
+/// rays start on), the shading normal (interpolated and normal-mapped: lighting, reflection and
+/// refraction use it), and the direction from the surface to the viewer. Twin of `ShadingFrame` in
+/// shade.wgsl.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingFrame {
+    pub normal: Vec3,
+    pub shading: Vec3,
+    pub view: Vec3,
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {
     pub position: Vec3,
@@ -272,18 +283,16 @@ fn lit(light: &GpuLight, arrival: &LightArrival) -> bool {
 }
 
 /// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
-/// Phong times the light's E. `normal` (geometric) and `shading` face the viewer; `view` points
-/// from the surface to the viewer. `shadow_ray` casts a shadow ray (and counts it): `None` where something blocks it, else the
+/// Phong times the light's E, in the hit's `frame`. `shadow_ray` casts a shadow ray (and counts it): `None` where something blocks it, else the
 /// share of the light that blended triangles let through (`occluded` and `shadowed`).
 pub fn direct_light(
     scene: &PackedScene,
     surface: &Surface,
-    normal: Vec3,
-    shading: Vec3,
-    view: Vec3,
+    frame: ShadingFrame,
     material: &GpuMaterial,
     mut shadow_ray: impl FnMut(&Ray, f32) -> Option<f32>,
 ) -> Vec3 {
+    let ShadingFrame { normal, shading, view } = frame;
     let globals = &scene.globals.scene;
     let albedo = v3(material.color);
     let mut color = globals.ambient * albedo;
@@ -325,17 +334,15 @@ pub fn gltf_surface(material: &GpuMaterial) -> GltfSurface {
 /// A glTF surface's direct light: the ambient light (the environment's irradiance, where the
 /// scene has one) on its diffuse share, times `ambient_share`; plus, for every light that it faces
 /// and that nothing blocks, E times the BRDF times the cosine. Arguments as [`direct_light`]'s.
-#[allow(clippy::too_many_arguments)]
 pub fn gltf_direct_light(
     scene: &PackedScene,
     surface: &Surface,
-    normal: Vec3,
-    shading: Vec3,
-    view: Vec3,
+    frame: ShadingFrame,
     material: &GpuMaterial,
     ambient_share: f32,
     mut shadow_ray: impl FnMut(&Ray, f32) -> Option<f32>,
 ) -> Vec3 {
+    let ShadingFrame { normal, shading, view } = frame;
     let s = gltf_surface(material);
     let diffuse = s.base * ((1.0 - s.metallic) * (1.0 - s.transmission));
     let info = &scene.globals.scene;

@@ -8,8 +8,8 @@ use super::brdf::sample_specular;
 use super::environment::escaped_radiance;
 use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
 use super::shade::{
-    Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface, normal_mapped,
-    offset_origin, reflect, refracted_direction, surface_at, surface_material,
+    ShadingFrame, Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface,
+    normal_mapped, offset_origin, reflect, refracted_direction, surface_at, surface_material,
 };
 pub use crate::constants::T_FAR;
 use crate::constants::{MAX_BLEND_LAYERS, MIN_FOOTPRINT_COSINE, MIN_WEIGHT, R2_STEP, ray_stack_size};
@@ -201,6 +201,7 @@ impl<'a> Tracer<'a> {
             -surface.curvature
         };
         let view = -ray.dir;
+        let frame = ShadingFrame { normal, shading, view };
         // A ray that leaves a volume lost light on its way through it (Beer-Lambert).
         let mut arrived = *task;
         if material.model == MODEL_GLTF && material.volume != 0 && !entering {
@@ -235,31 +236,16 @@ impl<'a> Tracer<'a> {
         };
         let light = if gltf {
             let share = ambient_share(scene, &surface, &material);
-            gltf_direct_light(
-                scene,
-                &surface,
-                normal,
-                shading,
-                view,
-                &material,
-                share,
-                &mut shadow_ray,
-            )
+            gltf_direct_light(scene, &surface, frame, &material, share, &mut shadow_ray)
         } else {
-            direct_light(scene, &surface, normal, shading, view, &material, &mut shadow_ray)
+            direct_light(scene, &surface, frame, &material, &mut shadow_ray)
         };
         result.color += covered.weight * (light + v3(material.emission));
         if task.depth >= self.scene.max_depth {
             return branches;
         }
         if gltf {
-            let sent = self.gltf_branches(
-                &covered,
-                &surface,
-                [normal, shading, view],
-                &material,
-                (entering, cone, curvature),
-            );
+            let sent = self.gltf_branches(&covered, &surface, frame, &material, (entering, cone, curvature));
             return Branches {
                 through: branches.through,
                 ..sent
@@ -313,17 +299,17 @@ impl<'a> Tracer<'a> {
     /// or, rough, in the reflected ray's mirror image through the surface; across a volume's
     /// surface (KHR_materials_volume) it refracts about the sampled microfacet normal, and reflects
     /// where it cannot (total internal reflection). A ray inside a volume sees the back faces of
-    /// single-sided triangles. `frame` is the facing geometric normal, the facing shading normal
-    /// and the view direction; `arrival` whether the ray enters, and its cone and the surface's
-    /// curvature where it meets it.
+    /// single-sided triangles. `frame` is the hit's, facing the ray; `arrival` whether the ray
+    /// enters, and its cone and the surface's curvature where it meets it.
     fn gltf_branches(
         &mut self,
         task: &RayTask,
         surface: &Surface,
-        [normal, shading, view]: [Vec3; 3],
+        frame: ShadingFrame,
         material: &GpuMaterial,
         (entering, cone, curvature): (bool, Vec2, f32),
     ) -> Branches {
+        let ShadingFrame { normal, shading, view } = frame;
         let s = gltf_surface(material);
         let sample = sample_specular(&s, shading, view, self.random_pair());
         let depth = task.depth + 1;

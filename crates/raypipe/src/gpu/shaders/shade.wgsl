@@ -4,6 +4,13 @@
 // Secondary rays start RAY_BIAS (from the preamble) times the hit's reach off the surface, to escape
 // it; the offset scales with the scene, so a scene renders alike at any size in the accepted range.
 
+// The twin of `ShadingFrame` in cpu/shade.rs, which says what it holds.
+struct ShadingFrame {
+    normal: vec3<f32>,
+    shading: vec3<f32>,
+    view: vec3<f32>,
+}
+
 struct Surface {
     position: vec3<f32>,
     // Geometric, unit, pointing out of the primitive: it decides inside and outside, and which side
@@ -257,10 +264,11 @@ fn lit(light: Light, arrival: LightArrival) -> bool {
     return light.kind == LIGHT_CONSTANT || max3(arrival.irradiance) > 0.0;
 }
 
-// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and Phong
-// times the light's E. `normal` (geometric) and `shading` face the viewer; `view` points from the
-// surface to the viewer.
-fn direct_light(surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material) -> vec3<f32> {
+// The twin of `direct_light` in cpu/shade.rs, which says what it does.
+fn direct_light(surface: Surface, frame: ShadingFrame, material: Material) -> vec3<f32> {
+    let normal = frame.normal;
+    let shading = frame.shading;
+    let view = frame.view;
     var color = globals.scene.ambient * material.color;
     let origin = offset_origin(surface, normal);
     for (var i = 0u; i < globals.scene.light_count; i++) {
@@ -291,10 +299,11 @@ fn gltf_surface(material: Material) -> GltfSurface {
         material.specular_factor, material.specular_color);
 }
 
-// A glTF surface's direct light: the ambient light (the environment's irradiance, where the scene
-// has one) on its diffuse share, times ambient_share; plus, for every light that it faces and that
-// nothing blocks, E times the BRDF times the cosine.
-fn gltf_direct_light(surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material, share: f32) -> vec3<f32> {
+// The twin of `gltf_direct_light` in cpu/shade.rs, which says what it does.
+fn gltf_direct_light(surface: Surface, frame: ShadingFrame, material: Material, share: f32) -> vec3<f32> {
+    let normal = frame.normal;
+    let shading = frame.shading;
+    let view = frame.view;
     let s = gltf_surface(material);
     let diffuse = s.base * ((1.0 - s.metallic) * (1.0 - s.transmission));
     var ambient = vec3<f32>(globals.scene.ambient);

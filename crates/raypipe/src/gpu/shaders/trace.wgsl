@@ -166,6 +166,7 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     let shading = select(-surface.shading, surface.shading, entering);
     let curvature = select(-surface.curvature, surface.curvature, entering);
     let view = -ray.dir;
+    let frame = ShadingFrame(normal, shading, view);
     // A ray that leaves a volume lost light on its way through it (Beer-Lambert).
     var arrived = task;
     let volume = HAS_VOLUMES && material.model == MODEL_GLTF && material.volume != 0u;
@@ -190,16 +191,16 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     let gltf = HAS_GLTF_MATERIALS && material.model == MODEL_GLTF;
     var light: vec3<f32>;
     if (gltf) {
-        light = gltf_direct_light(surface, normal, shading, view, material, ambient_share(surface, material));
+        light = gltf_direct_light(surface, frame, material, ambient_share(surface, material));
     } else {
-        light = direct_light(surface, normal, shading, view, material);
+        light = direct_light(surface, frame, material);
     }
     (*result).color += covered.weight * (light + material.emission);
     if (!HAS_SECONDARY_RAYS || task.depth >= MAX_DEPTH) {
         return branches;
     }
     if (gltf) {
-        let sent = gltf_branches(covered, surface, normal, shading, view, material, entering, cone, curvature);
+        let sent = gltf_branches(covered, surface, frame, material, entering, cone, curvature);
         branches.reflected = sent.reflected;
         branches.refracted = sent.refracted;
         return branches;
@@ -234,14 +235,11 @@ fn trace_task(task: RayTask, result: ptr<function, PixelTrace>) -> Branches {
     return branches;
 }
 
-// A glTF surface's rays: the reflected one weighted by the Fresnel term (drawn from the GGX lobe
-// where the surface is rough), and the transmitted one of KHR_materials_transmission. A thin wall's
-// transmitted ray goes on in the incoming direction, or, rough, in the reflected ray's mirror image
-// through the surface; across a volume's surface (KHR_materials_volume) it refracts about the
-// sampled microfacet normal, and reflects where it cannot (total internal reflection). A ray inside
-// a volume sees the back faces of single-sided triangles. `cone` is the ray's cone where it meets the
-// surface, `curvature` the surface's seen from the ray's side.
-fn gltf_branches(task: RayTask, surface: Surface, normal: vec3<f32>, shading: vec3<f32>, view: vec3<f32>, material: Material, entering: bool, cone: vec2<f32>, curvature: f32) -> Branches {
+// The twin of `Tracer::gltf_branches` in cpu/trace.rs, which says what it does.
+fn gltf_branches(task: RayTask, surface: Surface, frame: ShadingFrame, material: Material, entering: bool, cone: vec2<f32>, curvature: f32) -> Branches {
+    let normal = frame.normal;
+    let shading = frame.shading;
+    let view = frame.view;
     let s = gltf_surface(material);
     let sample = sample_specular(s, shading, view, random_pair());
     let depth = task.depth + 1u;
