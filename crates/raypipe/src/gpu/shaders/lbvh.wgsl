@@ -1,11 +1,11 @@
 // The LBVH build in compute passes: the phases of src/bvh/lbvh.rs, giving the same node array for
 // the same Morton codes. Every kernel runs 256 invocations per workgroup; large dispatches are 2D.
 //
-// src/gpu/builders/lbvh.rs prepends the build's sizes and what depends on the code width: CELLS (grid cells per axis), the `Pair`
+// src/gpu/builders/lbvh/source.rs prepends the build's sizes and what depends on the code width: CELLS (grid cells per axis), the `Pair`
 // type that holds a code and its primitive, and its accessors `pair`, `pair_primitive` and
 // `code_word` (the code's low or high 32 bits; 30-bit codes have no high word, it reads 0).
 
-// From the preamble (src/gpu/builders/lbvh.rs): GROUP invocations per workgroup; BLOCK items per block in
+// From the preamble (src/gpu/builders/lbvh/source.rs): GROUP invocations per workgroup; BLOCK items per block in
 // the reduction kernels, ITEMS per invocation, GROUP apart; MERGE_RUN leaves per invocation of the
 // merges and SIBLING_BOXES_IN_NODES (`merge`). The sort is in radix_sort.wgsl.
 

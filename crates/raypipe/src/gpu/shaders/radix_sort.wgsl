@@ -4,7 +4,7 @@
 // workgroup ranks its tile's pairs by digit, learns how many pairs of each digit the tiles before
 // it hold by decoupled look-back, and scatters.
 //
-// The preamble (src/gpu/builders/lbvh.rs) chooses how a tile is ranked (`SortRanking`): in sort_pass, with
+// The preamble (src/gpu/builders/lbvh/source.rs) chooses how a tile is ranked (`SortRanking`): in sort_pass, with
 // subgroup ballots where the adapter has them, or with "lane groups" of 16 invocations that compare
 // digits through workgroup memory; or in sort_pass_runs, where each invocation counts its own run
 // (CPU adapters). Either way it defines SORT_GROUP (invocations per workgroup), SORT_ITEMS (pairs per
@@ -15,7 +15,7 @@
 // While the sort runs, `climb` holds its words (the merges use it afterwards): each pass's digit
 // starts; each pass's tile ticket; then the look-back words of two passes, a pass's tile by tile.
 
-// DIGIT_BITS and DIGITS (1 << DIGIT_BITS) come from the preamble (src/gpu/builders/lbvh.rs).
+// DIGIT_BITS and DIGITS (1 << DIGIT_BITS) come from the preamble (src/gpu/builders/lbvh/source.rs).
 
 // A look-back word: a flag in the top two bits, a count of pairs below.
 const NOT_READY: u32 = 0u;

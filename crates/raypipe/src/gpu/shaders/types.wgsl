@@ -185,7 +185,7 @@ fn quantized_max(node: ThreadedNode) -> vec3<f32> {
     return vec3<f32>(vec3<u32>(node.bounds.y >> 16u, node.bounds.z & 0xffffu, node.bounds.z >> 16u));
 }
 
-// The LBVH build's parameters, one per sort pass at a 256-byte stride (src/gpu/builders/lbvh.rs).
+// The LBVH build's parameters, one per sort pass at a 256-byte stride (src/gpu/builders/lbvh/source.rs).
 struct BuildParams {
     // Primitives: spheres, then triangles.
     count: u32,

@@ -326,7 +326,7 @@ fn code_word(p: Pair, high: bool) -> u32 { return select(p.x, p.y, high); }"
         }
     };
     format!(
-        "// Generated: the build's sizes (src/gpu/builders/lbvh.rs) and {}-bit Morton codes.
+        "// Generated: the build's sizes (src/gpu/builders/lbvh/source.rs) and {}-bit Morton codes.
 const GROUP: u32 = {GROUP}u;
 const DIGIT_BITS: u32 = {DIGIT_BITS}u;
 const DIGITS: u32 = {DIGITS}u;
