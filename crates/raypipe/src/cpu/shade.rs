@@ -283,8 +283,9 @@ fn lit(light: &GpuLight, arrival: &LightArrival) -> bool {
 }
 
 /// Ambient plus, for every light that the surface faces and that nothing blocks, Lambert and
-/// Phong times the light's E, in the hit's `frame`. `shadow_ray` casts a shadow ray (and counts it): `None` where something blocks it, else the
-/// share of the light that blended triangles let through (`occluded` and `shadowed`).
+/// Phong times the light's E, in the hit's `frame`. `shadow_ray` casts a shadow ray (and counts
+/// it): `None` where something blocks it, else the share of the light that blended triangles let
+/// through (`occluded` and `shadowed`).
 pub fn direct_light(
     scene: &PackedScene,
     surface: &Surface,

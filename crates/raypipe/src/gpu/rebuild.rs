@@ -18,7 +18,7 @@ use crate::bvh::lbvh::LbvhBuilder;
 use crate::bvh::morton::MortonBits;
 use crate::error::InputError;
 use crate::gpu::builders::deform::GpuDeform;
-use crate::gpu::builders::lbvh::{GpuLbvhBuilder, depth_bound};
+use crate::gpu::builders::lbvh::{Codes, GpuLbvhBuilder, depth_bound};
 use crate::gpu::builders::shared::SharedBuffers;
 use crate::gpu::builders::threaded_layout::GpuThreadedLayout;
 use crate::gpu::builders::wide_collapse::GpuWideCollapse;
@@ -128,8 +128,7 @@ impl SceneRebuild {
         if !self.builds {
             return;
         }
-        self.builder
-            .encode(encoder, crate::gpu::builders::lbvh::Codes::Computed);
+        self.builder.encode(encoder, Codes::Computed);
         if let Some(layout) = &self.layout {
             layout.encode(encoder);
         }

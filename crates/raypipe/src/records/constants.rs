@@ -37,7 +37,8 @@ pub const ATTRIBUTE_UV1: u32 = 2;
 pub const ATTRIBUTE_COLOR: u32 = 4;
 pub const ATTRIBUTE_TANGENT: u32 = 8;
 
-/// `GpuLight::kind` (by `scene::LightKind` in `records/packed.rs`): the paper's light, E its colour everywhere.
+/// `GpuLight::kind` (by `scene::LightKind`, in `records/packed.rs`): the paper's light, E its colour
+/// everywhere.
 pub const LIGHT_CONSTANT: u32 = 0;
 /// A KHR_lights_punctual point light: candela, inverse-square.
 pub const LIGHT_POINT: u32 = 1;
@@ -81,8 +82,9 @@ pub fn filter_code(filter: Filter) -> u32 {
         }
 }
 
-/// The constants above and the tracers' shared numbers ([`crate::constants`]) as WGSL declarations. Floats print in Rust's shortest round-trip form, so
-/// the shader's literal is the same f32.
+/// The constants above and the tracers' shared numbers ([`crate::constants`]) as WGSL
+/// declarations. Floats print in Rust's shortest round-trip form, so the shader's literal is the
+/// same f32.
 pub fn wgsl() -> String {
     let mut out = String::from("// Generated: the constants shared with the CPU reference (records/constants.rs).\n");
     for (name, value) in [

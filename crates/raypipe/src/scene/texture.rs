@@ -19,10 +19,6 @@ pub enum Wrap {
     Mirror,
 }
 
-impl Wrap {
-    pub const ALL: [Wrap; 3] = [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror];
-}
-
 /// How texels are read within a level: the one nearest the point, or the four around it blended.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum TexelFilter {

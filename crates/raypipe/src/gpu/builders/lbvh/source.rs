@@ -8,8 +8,8 @@ use crate::gpu::preamble::records_source;
 use crate::records::StructLayout;
 use crate::struct_layout;
 
-pub(super) const LBVH: &str = include_str!("../../shaders/lbvh.wgsl");
-pub(super) const RADIX_SORT: &str = include_str!("../../shaders/radix_sort.wgsl");
+const LBVH: &str = include_str!("../../shaders/lbvh.wgsl");
+const RADIX_SORT: &str = include_str!("../../shaders/radix_sort.wgsl");
 
 /// Invocations per workgroup.
 pub const GROUP: u32 = 256;
@@ -18,7 +18,7 @@ pub const GROUP: u32 = 256;
 /// 1,024, 21 to 24 ms with 8,192.
 pub(super) const BLOCK: u32 = 8192;
 /// Where `scratch` holds the centroid bounds (6 words), and where the per-block words start.
-pub(super) const SCRATCH_BOUNDS: u32 = 0;
+const SCRATCH_BOUNDS: u32 = 0;
 pub(super) const SCRATCH_BLOCKS: u32 = 8;
 const _: () = assert!(SCRATCH_BOUNDS + 6 <= SCRATCH_BLOCKS);
 
@@ -33,13 +33,13 @@ pub enum Codes {
 
 /// The radix sort's digit, in bits (radix_sort.wgsl's, from the preamble).
 pub const DIGIT_BITS: u32 = 8;
-pub(super) const DIGITS: u64 = 1 << DIGIT_BITS;
+const DIGITS: u64 = 1 << DIGIT_BITS;
 /// Pairs per invocation of the kernel that counts every pass's digits.
 pub(super) const HISTOGRAM_ITEMS: u32 = 16;
 /// Lane groups per sort workgroup, at most: their digit counts fill 8 KiB of workgroup memory.
-pub(super) const LANE_GROUPS: u32 = 8;
+const LANE_GROUPS: u32 = 8;
 /// The lane group of the path without subgroups.
-pub(super) const SHARED_LANE_WIDTH: u32 = 16;
+const SHARED_LANE_WIDTH: u32 = 16;
 
 /// Passes of the radix sort over codes of each width: even numbers, so that the sorted pairs end
 /// where they started, in pairs A.
@@ -300,15 +300,15 @@ impl BuildVariant {
 }
 
 /// Leaves per invocation of the merges on CPU adapters.
-pub(super) const MERGE_RUN: u32 = 32;
+const MERGE_RUN: u32 = 32;
 /// The tile of lane groups, whose ranks fill 4 KiB of workgroup memory.
-pub(super) const LANE_TILE: u32 = 1024;
+const LANE_TILE: u32 = 1024;
 /// The tile of [`SortRanking::Runs`]: on lavapipe, the sort of 1M pairs took 86 to 92 ms with tiles
 /// of 1,024, 50 to 58 with 4,096 and 49 to 52 with 8,192.
-pub(super) const RUNS_TILE: u32 = 8192;
+const RUNS_TILE: u32 = 8192;
 
 /// What lbvh.wgsl needs to know of the code width: the grid, and the (code, primitive) pair.
-pub(super) fn key_preamble(bits: MortonBits) -> String {
+fn key_preamble(bits: MortonBits) -> String {
     let pair = match bits {
         MortonBits::Bits30 => {
             "// A 30-bit code and its primitive.

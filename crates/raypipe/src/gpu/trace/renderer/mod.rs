@@ -139,8 +139,10 @@ impl Renderer {
     }
 
     /// The records a motion moved (`scene` as [`PackedScene::apply`] left it): those this renderer
-    /// holds, such as triangles' normals; the ones it reads from a [`SceneRebuild`](crate::gpu::SceneRebuild) are
-    /// that rebuild's to write ([`SceneRebuild::write_moved`](crate::gpu::SceneRebuild::write_moved)). The samples start again.
+    /// holds, such as triangles' normals; the ones it reads from a
+    /// [`SceneRebuild`](crate::gpu::SceneRebuild) are that rebuild's to write
+    /// ([`SceneRebuild::write_moved`](crate::gpu::SceneRebuild::write_moved)). The samples start
+    /// again.
     pub fn write_moved(&mut self, scene: &PackedScene, moved: MovedRecords) -> Result<(), GpuError> {
         self.write_records(scene, RecordKind::moved(moved))
     }

@@ -16,7 +16,7 @@ pub(super) fn tracer_stage(pipeline: Pipeline) -> wgpu::ShaderStages {
 
 /// f32 bits in an integer format: colour-renderable on every backend, read back bit for bit.
 pub const TARGET_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
-pub(super) const TARGET_BYTES_PER_PIXEL: u32 = 16;
+const TARGET_BYTES_PER_PIXEL: u32 = 16;
 
 /// The tracer's outputs, one texel per pixel: colour (rgb linear radiance, a the count, both summed
 /// over the samples so far) and surface (xyz first-hit normal, w its distance or `DEPTH_MISS`, of
@@ -122,11 +122,10 @@ impl Accumulation {
     }
 }
 
-/// Found before anything is allocated: past the adapter's limits wgpu would fail later, with its own
-/// words, after the other targets took their memory.
 /// Whether a renderer of `width` x `height` fits a device of `limits`: within its largest texture,
 /// and each frame target's read-back buffer within its largest buffer. Checked before anything is
-/// allocated.
+/// allocated: past the adapter's limits wgpu would fail later, with its own words, after the other
+/// targets took their memory.
 pub fn check_frame_size(limits: &wgpu::Limits, width: u32, height: u32) -> Result<(), GpuError> {
     let max = limits.max_texture_dimension_2d;
     if width == 0 || height == 0 || width > max || height > max {
