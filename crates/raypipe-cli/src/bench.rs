@@ -11,8 +11,7 @@ use clap::Args;
 use pollster::block_on;
 use raypipe::Choice;
 use raypipe::bvh::BuildTimings;
-use raypipe::bvh::morton::MortonBits;
-use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{GpuContext, MovingScene, Renderer, RendererOptions, TreeUpdate};
 use raypipe::image::Frame;
 use raypipe::image::diff::{Tolerance, compare};
 use raypipe::modes::Backend;
@@ -192,7 +191,7 @@ fn scene(
     };
     (scene.settings.width, scene.settings.height) = size;
     let mut packed = PackedScene::new(&scene)?;
-    packed.build_bvh_with(builder, MortonBits::Bits30);
+    packed.build_bvh_with(builder);
     Ok((scene, packed))
 }
 
@@ -231,26 +230,36 @@ impl Reference {
     }
 }
 
-/// One rebuild per walk that reads a tree, with --rebuild: it writes the count's primitives into
-/// its own buffers (the stack and threaded walks also lay out its tree), shared by the walk's
-/// pipelines and memories.
-fn rebuild_for(
-    ctx: &GpuContext,
-    args: &BenchArgs,
-    scene: &Scene,
-    packed: &PackedScene,
-    accel: Accel,
-) -> anyhow::Result<Option<SceneRebuild>> {
-    if !(args.rebuild && accel.uses_bvh()) {
-        return Ok(None);
+/// What a point times: a renderer over the tree built once, or with --rebuild (for a walk that
+/// reads a tree) a moving scene whose tree the GPU builds again before every frame.
+enum Timed {
+    /// Boxed alike: either is large.
+    Still(Box<Renderer>),
+    Rebuilt(Box<MovingScene>),
+}
+
+impl Timed {
+    fn new(
+        ctx: &GpuContext,
+        args: &BenchArgs,
+        scene: &Scene,
+        packed: &PackedScene,
+        options: RendererOptions,
+    ) -> anyhow::Result<Self> {
+        Ok(if args.rebuild && options.accel.uses_bvh() {
+            let moving = block_on(MovingScene::new(ctx, scene, options, TreeUpdate::Rebuild))?;
+            Timed::Rebuilt(Box::new(moving))
+        } else {
+            Timed::Still(Box::new(block_on(Renderer::new(ctx, packed, options))?))
+        })
     }
-    Ok(Some(block_on(SceneRebuild::new(
-        ctx,
-        scene,
-        packed,
-        accel,
-        MortonBits::Bits30,
-    ))?))
+
+    fn renderer(&self) -> &Renderer {
+        match self {
+            Timed::Still(renderer) => renderer,
+            Timed::Rebuilt(moving) => moving.renderer(),
+        }
+    }
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
@@ -288,7 +297,6 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         // Made on first need: a run of brute force alone does not render it.
         let mut reference: Option<Reference> = None;
         for &accel in &accels {
-            let rebuild = rebuild_for(&ctx, &args, &loaded, &packed, accel)?;
             for (&pipeline, &memory) in args
                 .pipeline
                 .iter()
@@ -309,17 +317,16 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     blas_order: args.blas_order,
                     ..options(pipeline, memory, accel)
                 };
-                let renderer =
-                    checked.and_then(|()| crate::device::build_renderer(&ctx, &packed, rebuild.as_ref(), modes, false));
-                let mut renderer = match renderer {
-                    Ok(renderer) => renderer,
+                let timed = checked.and_then(|()| Timed::new(&ctx, &args, &loaded, &packed, modes));
+                let mut timed = match timed {
+                    Ok(timed) => timed,
                     Err(e) => {
                         refused.push(format!("{point}: {}", crate::report::message(&e)));
                         bar.inc(1);
                         continue;
                     }
                 };
-                let frames = time_frames(&args, &mut renderer, rebuild.as_ref(), |frame, total| {
+                let frames = time_frames(&args, &mut timed, |frame, total| {
                     bar.set_message(format!("{point}: frame {frame} of {total}"))
                 })?;
                 rows.push(Row::of_frames(
@@ -479,43 +486,39 @@ struct TimedFrames {
 /// Times `args.frames` frames after `args.warmup` warm-up frames, the rebuild (where there is one;
 /// with rayquery and --rebuild, the driver's structures' build) recorded before each. `progress`
 /// hears of each frame as it starts (1-based).
-fn time_frames(
-    args: &BenchArgs,
-    renderer: &mut Renderer,
-    rebuild: Option<&SceneRebuild>,
-    progress: impl Fn(usize, usize),
-) -> anyhow::Result<TimedFrames> {
+fn time_frames(args: &BenchArgs, timed: &mut Timed, progress: impl Fn(usize, usize)) -> anyhow::Result<TimedFrames> {
     let mut measured = TimedFrames {
         times: Vec::new(),
         builds: Vec::new(),
         driver_builds: Vec::new(),
         rays: 0,
     };
-    let driver_builds = args.rebuild && renderer.options().accel.needs_ray_queries();
+    let driver_builds = args.rebuild && timed.renderer().options().accel.needs_ray_queries();
     let total = args.warmup + args.frames;
     for frame in 0..total {
         progress(frame + 1, total);
         let start = std::time::Instant::now();
-        if driver_builds {
-            renderer.rebuild_structures();
-        }
-        let timed = block_on(renderer.render_samples(
-            args.spp,
-            |encoder| {
-                if let Some(rebuild) = rebuild {
-                    rebuild.encode(encoder);
+        let traced = match timed {
+            Timed::Still(renderer) => {
+                if driver_builds {
+                    renderer.rebuild_structures();
                 }
-            },
-            |_| {},
-        ))?;
+                block_on(renderer.render_samples(args.spp, |_| {}, |_| {}))?
+            }
+            Timed::Rebuilt(moving) => {
+                // Posed where it stands: the tree is built again all the same.
+                moving.pose(0.0)?;
+                block_on(moving.render_samples(args.spp, |_| {}))?
+            }
+        };
         let wall = start.elapsed().as_secs_f64() * 1e3;
         if frame >= args.warmup {
-            measured.times.push(timed.gpu_ms.unwrap_or(wall));
-            measured.rays = timed.frame.rays();
-            if let Some(rebuild) = rebuild {
-                measured.builds.push(block_on(rebuild.read_timings())?);
+            measured.times.push(traced.gpu_ms.unwrap_or(wall));
+            measured.rays = traced.frame.rays();
+            if let Timed::Rebuilt(moving) = timed {
+                measured.builds.extend(block_on(moving.read_gpu_build())?);
             }
-            if let Some(ms) = block_on(renderer.read_structures_build_ms())?.filter(|_| driver_builds) {
+            if let Some(ms) = block_on(timed.renderer().read_structures_build_ms())?.filter(|_| driver_builds) {
                 measured.driver_builds.push(ms);
             }
         }

@@ -6,14 +6,13 @@ use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use pollster::block_on;
 use raypipe::bvh::BuildTimings;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::{self, Count};
 use raypipe::gpu::trace::region::TracedPixels;
-use raypipe::gpu::{CpuRebuild, GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{GpuContext, MovingScene, Renderer, RendererOptions, TreeUpdate};
 use raypipe::image::Frame;
 use raypipe::modes::Backend;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
-use raypipe::records::PackedScene;
+use raypipe::records::{PackedScene, PoseOn, PosedScene};
 use raypipe::scene::Scene;
 use std::time::{Duration, Instant};
 
@@ -102,22 +101,13 @@ pub fn progress_bar(show: bool, len: u64, template: &str) -> ProgressBar {
     bar
 }
 
-/// The GPU renderer for `scene`, over its own tree or `rebuild`'s, with a spinner where `progress`
-/// says while the driver compiles the tracer (seconds on llvmpipe).
-pub fn build_renderer(
-    ctx: &GpuContext,
-    scene: &PackedScene,
-    rebuild: Option<&SceneRebuild>,
-    options: RendererOptions,
-    progress: bool,
-) -> anyhow::Result<Renderer> {
+/// `make` (a renderer's or a moving scene's construction), with a spinner where `progress` says
+/// while the driver compiles the tracer (seconds on llvmpipe).
+pub fn compiling<T, E>(progress: bool, make: impl Future<Output = Result<T, E>>) -> Result<T, E> {
     let spinner = progress_bar(progress, 0, "{spinner} compiling the tracer, {elapsed}");
-    let renderer = match rebuild {
-        Some(rebuild) => block_on(rebuild.renderer(ctx, scene, options)),
-        None => block_on(Renderer::new(ctx, scene, options)),
-    };
+    let made = block_on(make);
     spinner.finish_and_clear();
-    Ok(renderer?)
+    made
 }
 
 /// The CPU reference's frame, with a progress bar on a terminal.
@@ -135,7 +125,7 @@ fn render_cpu(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<Fr
 pub fn render(scene: &PackedScene, options: &RenderOptions) -> anyhow::Result<RenderOutcome> {
     match open_device(options)? {
         Some(ctx) => {
-            let mut renderer = build_renderer(&ctx, scene, None, options.renderer(), options.progress)?;
+            let mut renderer = compiling(options.progress, Renderer::new(&ctx, scene, options.renderer()))?;
             if options.warm_up {
                 block_on(renderer.read_frame())?;
             }
@@ -185,10 +175,10 @@ pub struct FramesOutcome {
 }
 
 /// Renders a moving scene at each of `times` (a frame number and its time in seconds), rebuilding
-/// the BVH every frame, and hands each frame to `emit` with its number. On the GPU a
-/// [`SceneRebuild`] runs in compute passes in the same submission as the frame; this needs storage
-/// memory. On the CPU, one reusable builder serves every frame. Each frame rewrites only the
-/// records its motion moves.
+/// the BVH every frame, and hands each frame to `emit` with its number. On the GPU the library's
+/// [`MovingScene`] rebuilds the tree in compute passes in the frame's submission (storage memory),
+/// or on the CPU before it (uniform and texture memory); the CPU reference poses and builds with
+/// its CPU half. Each frame rewrites only the records its motion moves.
 pub fn render_frames(
     scene: &Scene,
     options: &RenderOptions,
@@ -200,10 +190,7 @@ pub fn render_frames(
         "--aov cost renders single frames; drop --frames"
     );
     ensure!(scene.motion.is_some(), "the scene does not move");
-    let Some(&(_, first_time)) = times.first() else {
-        anyhow::bail!("no frames to render");
-    };
-    let mut packed = PackedScene::new(&scene.at_time(first_time)?)?;
+    ensure!(!times.is_empty(), "no frames to render");
     let mut outcome = FramesOutcome {
         device: String::new(),
         builds: Vec::new(),
@@ -222,33 +209,21 @@ pub fn render_frames(
     };
     match open_device(options)? {
         Some(ctx) => {
-            ensure!(
-                options.memory == MemoryMode::Storage,
-                "--frames rebuilds the BVH on the GPU, which the shader reads from storage memory: use --memory storage"
-            );
             outcome.device = ctx.describe();
             bar.set_message("(compiling the BVH build and the tracer)");
-            let rebuild = block_on(SceneRebuild::new(
-                &ctx,
-                scene,
-                &packed,
-                options.accel,
-                MortonBits::Bits30,
-            ))?;
-            let mut renderer = build_renderer(&ctx, &packed, Some(&rebuild), options.renderer(), options.progress)?;
+            let mut moving = block_on(MovingScene::new(&ctx, scene, options.renderer(), TreeUpdate::Rebuild))?;
             bar.set_message("");
             for &(frame, t) in times {
                 // The first frame too: a skinning pass starts at the scene's time 0.
-                if let Some(moved) = rebuild.move_to(scene, &mut packed, t)? {
-                    renderer.write_moved(&packed, moved)?;
-                }
+                let cost = moving.pose(t)?;
                 let start = Instant::now();
-                let timed =
-                    block_on(renderer.render_samples(options.samples, |encoder| rebuild.encode(encoder), |_| {}))?;
+                let timed = block_on(moving.render_samples(options.samples, |_| {}))?;
                 let wall = start.elapsed().as_secs_f64() * 1e3;
-                if options.accel.uses_bvh() {
-                    outcome.builds.push(block_on(rebuild.read_timings())?);
-                }
+                let build = match cost.cpu_build {
+                    Some(build) => Some(build),
+                    None => block_on(moving.read_gpu_build())?,
+                };
+                outcome.builds.extend(build);
                 outcome.render_ms.push(timed.gpu_ms.unwrap_or(wall));
                 outcome.rays.push(timed.frame.rays());
                 emit(frame, &timed.frame)?;
@@ -257,17 +232,11 @@ pub fn render_frames(
         }
         None => {
             outcome.device = cpu_description();
-            // The records were packed at the first frame's time: its tree is built over them.
-            let (mut rebuild, first) = CpuRebuild::new(&mut packed, options.accel);
-            for (index, &(frame, t)) in times.iter().enumerate() {
-                let build = if index == 0 {
-                    first
-                } else {
-                    rebuild.move_to(scene, &mut packed, t)?.build
-                };
-                outcome.builds.extend(build);
+            let mut posed = PosedScene::new(scene, options.accel, PoseOn::Cpu)?;
+            for &(frame, t) in times {
+                outcome.builds.extend(posed.pose(t)?.build);
                 let start = Instant::now();
-                let frame_image = render_cpu(&packed, options)?;
+                let frame_image = render_cpu(posed.packed(), options)?;
                 outcome.render_ms.push(start.elapsed().as_secs_f64() * 1e3);
                 outcome.rays.push(frame_image.rays());
                 emit(frame, &frame_image)?;

@@ -7,7 +7,6 @@ use crate::scene_args::{MAX_SPP, SceneArgs};
 use anyhow::bail;
 use clap::Args;
 use raypipe::bvh::BuildTimings;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::modes::{Accel, Aov};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
@@ -35,7 +34,8 @@ pub struct RenderArgs {
     #[arg(short, long)]
     quiet: bool,
     /// Render frames of a moving scene (an animated glTF, bounce:N), rebuilding the BVH every
-    /// frame (on the GPU with --memory storage): K for frames 0 to K-1, or A..B for frames A to
+    /// frame (on the GPU with --memory storage, on the CPU with the other memories): K for frames
+    /// 0 to K-1, or A..B for frames A to
     /// B-1 only, so that a sequence splits across machines into the same files. Frame k is at
     /// --time plus k / --fps seconds. Writes the last frame, or every frame when the output name
     /// holds a printf-style number such as frame_%04d.png (numbered by k).
@@ -146,7 +146,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         .map_err(|e| e.in_origin(&args.scene.spec))?;
     let mut packed = PackedScene::new(&posed).map_err(|e| e.in_origin(&args.scene.spec))?;
     let build = options.accel.uses_bvh().then(|| {
-        let mut timings = packed.build_bvh_with(args.scene.builder, MortonBits::default());
+        let mut timings = packed.build_bvh_with(args.scene.builder);
         if options.accel == Accel::Wide {
             // The wide walk's tree, collapsed from the built one.
             timings.collapse = packed.bvh.as_ref().map_or(0.0, |bvh| bvh.collapse());

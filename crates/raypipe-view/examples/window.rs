@@ -5,7 +5,6 @@
 //!
 //! `cargo run --release --example window` (`-- --frames N` closes after N frames).
 
-use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions, Shown};
 use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::Aov;
@@ -70,7 +69,7 @@ impl App {
         (scene.settings.width, scene.settings.height) = (config.width, config.height);
         let camera_distance = (scene.camera.eye - scene.camera.target).length();
         let mut packed = PackedScene::new(&scene)?;
-        packed.build_bvh(MortonBits::Bits30);
+        packed.build_bvh();
         let renderer = pollster::block_on(Renderer::new(&ctx, &packed, RendererOptions::default()))?;
         let display = Display::new(&ctx, format);
         let overlay = overlay_pipeline(&ctx.device, format);

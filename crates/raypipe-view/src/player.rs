@@ -306,7 +306,7 @@ impl Player {
                 if let Some(ms) = pollster::block_on(self.tracer.read_gpu_build_ms()) {
                     self.build_ms = Some(ms);
                 }
-                pollster::block_on(self.tracer.renderer.read_gpu_ms()).ok().flatten()
+                pollster::block_on(self.tracer.renderer().read_gpu_ms()).ok().flatten()
             }
         }
     }
@@ -318,18 +318,18 @@ impl Player {
 
     /// Samples per pixel in the frame shown.
     pub fn gathered(&self) -> u32 {
-        self.tracer.renderer.targets().samples()
+        self.tracer.renderer().targets().samples()
     }
 
     /// Gathers up to `spp` samples per pixel, from the first again.
     pub fn set_spp(&mut self, spp: u32) {
         self.spp = spp.max(1);
-        self.tracer.renderer.restart();
+        self.tracer.renderer_mut().restart();
     }
 
     /// Traces at a new size (the window's or the canvas's); the samples start again.
     pub fn resize(&mut self, width: u32, height: u32) -> Result<(), GpuError> {
-        self.tracer.renderer.resize(width, height)
+        self.tracer.renderer_mut().resize(width, height)
     }
 
     /// The frame shown, read back linear (tracing one sample first where none is).
@@ -339,12 +339,12 @@ impl Player {
 
     /// [`Player::read_frame`] as a future that borrows nothing (a page draws on while it waits).
     pub fn read_frame_detached(&mut self, ctx: &GpuContext) -> impl Future<Output = Result<Frame, GpuError>> + 'static {
-        if self.tracer.renderer.samples() == 0 {
+        if self.tracer.renderer().samples() == 0 {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             self.tracer.encode(&mut encoder);
             ctx.queue.submit([encoder.finish()]);
         }
-        self.tracer.renderer.read_back()
+        self.tracer.renderer().read_back()
     }
 
     /// Whether the scene moves now (it has motion and is not paused).
@@ -385,15 +385,15 @@ impl Player {
             self.seek(self.clock.time + elapsed);
         }
         // Either restarts the samples if it changes anything.
-        self.tracer.renderer.set_camera(&self.camera.camera);
-        if self.scene.motion.is_some() && self.tracer.time != Some(self.clock.time) {
-            match self.tracer.pose(&self.scene, self.clock.time) {
+        self.tracer.renderer_mut().set_camera(&self.camera.camera);
+        if self.scene.motion.is_some() && self.tracer.time() != Some(self.clock.time) {
+            match self.tracer.pose(self.clock.time) {
                 Ok(Some(ms)) => self.build_ms = Some(ms),
                 Ok(None) => {}
                 Err(why) => self.say(why.to_string()),
             }
         }
-        self.tracer.renderer.samples() < self.spp
+        self.tracer.renderer().samples() < self.spp
     }
 
     /// Records the frame into `encoder`: the next sample where `trace`, then the display pass
@@ -476,7 +476,7 @@ impl Player {
             new_scene,
             relit: false,
             scene,
-            size: self.tracer.renderer.size(),
+            size: self.tracer.renderer().size(),
             camera,
             serial: self.requested,
         }
@@ -490,7 +490,7 @@ impl Player {
             new_scene: None,
             relit: false,
             scene: self.scene.clone(),
-            size: self.tracer.renderer.size(),
+            size: self.tracer.renderer().size(),
             camera: self.camera.camera,
             serial: self.requested,
         }

@@ -1,16 +1,15 @@
-//! What the viewer traces with: the scene packed for its modes, a renderer, and for a moving scene
-//! the per-frame rebuild: on the GPU in storage memory, on the CPU otherwise. Rebuilt whole when a
-//! mode changes. Building one is async: a window blocks on it, a web page awaits it.
-//!
-//! A moving scene keeps its packed records: each new time rewrites only the records that move
-//! (spheres, or triangles with their normals), then the BVH over them.
+//! What the viewer traces with: the scene packed for its modes and a renderer, or for a moving
+//! scene the library's [`MovingScene`], which rebuilds its tree on the GPU in storage memory and on
+//! the CPU otherwise. Rebuilt whole when a mode changes. Building one is async: a window blocks on
+//! it, a web page awaits it.
 
 use crate::{Modes, ModesError};
-use raypipe::bvh::morton::MortonBits;
 use raypipe::error::InputError;
-use raypipe::gpu::{CpuRebuild, Display, GpuContext, GpuError, Renderer, RendererOptions, SceneRebuild, Shown};
+use raypipe::gpu::{
+    Display, GpuContext, GpuError, MotionError, MovingScene, Renderer, RendererOptions, Shown, TreeUpdate,
+};
 use raypipe::image::tonemap::DisplayTransform;
-use raypipe::modes::{Aov, MemoryMode};
+use raypipe::modes::Aov;
 use raypipe::records::PackedScene;
 use raypipe::scene::{Camera, Scene};
 
@@ -24,6 +23,8 @@ pub enum TraceError {
     Scene(#[from] InputError),
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Motion(#[from] MotionError),
 }
 
 /// The depth view's far end, in multiples of the distance to the target.
@@ -32,32 +33,17 @@ const DEPTH_FAR: f32 = 3.0;
 const COST_MAX: f32 = 200.0;
 
 pub struct Tracer {
-    pub renderer: Renderer,
+    stage: Stage,
     /// The primitives' count, for the panel.
     pub primitives: usize,
-    /// The BVH's build time on the CPU, where it was built there (once).
+    /// The BVH's build time on the CPU, where it was built there (the last build).
     pub cpu_build_ms: Option<f64>,
-    /// The time of the motion the scene stands at, in seconds; `None` until it first moves.
-    pub time: Option<f32>,
-    motion: Motion,
 }
 
-/// How the tracer's scene moves, if it does.
-enum Motion {
-    Still,
-    /// Storage memory: the primitives and the BVH rebuilt on the GPU before every frame.
-    OnGpu {
-        /// Boxed: it holds the build's buffers and kernels, far more than the other variants.
-        rebuild: Box<SceneRebuild>,
-        /// The records as last posed: each new time rewrites the ones that move.
-        packed: PackedScene,
-    },
-    /// Uniform or texture memory: posed and rebuilt on the CPU, then the records that changed
-    /// rewritten in place.
-    OnCpu {
-        rebuild: CpuRebuild,
-        packed: PackedScene,
-    },
+/// A still scene's renderer, or a moving scene with its own (boxed alike: either is large).
+enum Stage {
+    Still(Box<Renderer>),
+    Moving(Box<MovingScene>),
 }
 
 impl Tracer {
@@ -72,8 +58,6 @@ impl Tracer {
         let mut scene = scene.clone();
         scene.settings.max_depth = modes.depth;
         (scene.settings.width, scene.settings.height) = size;
-        let mut packed = PackedScene::new(&scene)?;
-        packed.set_camera(camera, size.0, size.1);
         let options = RendererOptions {
             pipeline: modes.pipeline,
             memory: modes.memory,
@@ -81,82 +65,79 @@ impl Tracer {
             count: modes.view.count(),
             ..Default::default()
         };
-        let primitives = packed.primitive_count();
-        let (renderer, cpu_build, motion) = if scene.motion.is_none() {
-            let build = modes
-                .accel
-                .uses_bvh()
-                .then(|| packed.build_bvh_with(modes.builder, MortonBits::Bits30));
-            (Renderer::new(ctx, &packed, options).await?, build, Motion::Still)
-        } else if !modes.builder.follows_motion() {
+        if scene.motion.is_none() {
+            let mut packed = PackedScene::new(&scene)?;
+            packed.set_camera(camera, size.0, size.1);
+            let build = modes.accel.uses_bvh().then(|| packed.build_bvh_with(modes.builder));
+            return Ok(Self {
+                primitives: packed.primitive_count(),
+                stage: Stage::Still(Box::new(Renderer::new(ctx, &packed, options).await?)),
+                cpu_build_ms: build.map(|timings| timings.total()),
+            });
+        }
+        if !modes.builder.follows_motion() {
             return Err(ModesError::BuilderCannotFollowMotion(modes.builder).into());
-        } else if modes.memory == MemoryMode::Storage {
-            let rebuild = SceneRebuild::new(ctx, &scene, &packed, modes.accel, MortonBits::Bits30).await?;
-            let renderer = rebuild.renderer(ctx, &packed, options).await?;
-            let rebuild = Box::new(rebuild);
-            (renderer, None, Motion::OnGpu { rebuild, packed })
-        } else {
-            let (rebuild, build) = CpuRebuild::new(&mut packed, modes.accel);
-            let bound = rebuild.depth_bound(primitives);
-            let renderer = Renderer::with_depth_bound(ctx, &packed, options, bound).await?;
-            (renderer, build, Motion::OnCpu { rebuild, packed })
-        };
+        }
+        scene.camera = *camera;
+        let moving = MovingScene::new(ctx, &scene, options, TreeUpdate::Rebuild).await?;
         Ok(Self {
-            renderer,
-            primitives,
-            cpu_build_ms: cpu_build.map(|timings| timings.total()),
-            time: None,
-            motion,
+            primitives: moving.packed().primitive_count(),
+            cpu_build_ms: moving.cpu_build().map(|timings| timings.total()),
+            stage: Stage::Moving(Box::new(moving)),
         })
     }
 
-    /// Records the next sample per pixel; where the scene moves on the GPU, the first after a
-    /// restart poses it (skinning) and rebuilds its BVH first.
-    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        if let Motion::OnGpu { rebuild, .. } = &self.motion
-            && self.renderer.samples() == 0
-        {
-            rebuild.encode(encoder);
+    pub fn renderer(&self) -> &Renderer {
+        match &self.stage {
+            Stage::Still(renderer) => renderer,
+            Stage::Moving(moving) => moving.renderer(),
         }
-        self.renderer.encode(encoder);
     }
 
-    /// Moves the scene (as loaded) to `t` seconds of its motion: the moved records written to the
-    /// GPU rebuild's buffers, or the BVH rebuilt on the CPU and the moved records and nodes
-    /// rewritten. Returns the CPU build's time. The samples start again.
-    pub fn pose(&mut self, scene: &Scene, t: f32) -> Result<Option<f64>, TraceError> {
-        if scene.motion.is_none() {
+    pub fn renderer_mut(&mut self) -> &mut Renderer {
+        match &mut self.stage {
+            Stage::Still(renderer) => renderer,
+            Stage::Moving(moving) => moving.renderer_mut(),
+        }
+    }
+
+    /// The time of the motion the scene stands at, in seconds; `None` until it first moves.
+    pub fn time(&self) -> Option<f32> {
+        match &self.stage {
+            Stage::Still(_) => None,
+            Stage::Moving(moving) => moving.poses().current,
+        }
+    }
+
+    /// Records the next sample per pixel; where the scene moves on the GPU, the first after a
+    /// pose skins it and rebuilds its BVH first.
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        match &mut self.stage {
+            Stage::Still(renderer) => renderer.encode(encoder),
+            Stage::Moving(moving) => moving.encode(encoder),
+        }
+    }
+
+    /// Moves the scene to `t` seconds of its motion ([`MovingScene::pose`]). Returns the CPU
+    /// build's time, where the tree is built there. The samples start again.
+    pub fn pose(&mut self, t: f32) -> Result<Option<f64>, TraceError> {
+        let Stage::Moving(moving) = &mut self.stage else {
             return Ok(None);
+        };
+        let cost = moving.pose(t)?;
+        let ms = cost.cpu_build.map(|timings| timings.total());
+        if ms.is_some() {
+            self.cpu_build_ms = ms;
         }
-        self.time = Some(t);
-        self.renderer.restart();
-        match &mut self.motion {
-            Motion::Still => Ok(None),
-            Motion::OnGpu { rebuild, packed } => {
-                if let Some(moved) = rebuild.move_to(scene, packed, t)? {
-                    self.renderer.write_moved(packed, moved)?;
-                }
-                Ok(None)
-            }
-            Motion::OnCpu { rebuild, packed } => {
-                let step = rebuild.move_to(scene, packed, t)?;
-                rebuild.write(&step, packed, &mut self.renderer)?;
-                Ok(step.build.map(|timings| timings.total()))
-            }
-        }
+        Ok(ms)
     }
 
     /// The GPU time of the last BVH rebuild on the GPU, where the scene is rebuilt there and the
     /// walk reads a tree (with ray queries, the driver's structures' build, where the device times
     /// it); this waits for the frame that ran it.
     pub async fn read_gpu_build_ms(&self) -> Option<f64> {
-        match &self.motion {
-            Motion::OnGpu { .. } if self.renderer.options().accel.needs_ray_queries() => {
-                self.renderer.read_structures_build_ms().await.ok().flatten()
-            }
-            Motion::OnGpu { rebuild, .. } if self.renderer.options().accel.uses_bvh() => {
-                rebuild.read_timings().await.ok().map(|timings| timings.total())
-            }
+        match &self.stage {
+            Stage::Moving(moving) if moving.builds_on_gpu() => moving.read_gpu_build_ms().await.ok().flatten(),
             _ => None,
         }
     }
@@ -180,7 +161,7 @@ impl Tracer {
             cost_max: COST_MAX,
             transform,
         };
-        display.encode(encoder, self.renderer.targets(), target, &shown);
+        display.encode(encoder, self.renderer().targets(), target, &shown);
     }
 }
 

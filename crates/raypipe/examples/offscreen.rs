@@ -4,7 +4,6 @@
 //!
 //! `cargo run --release --example offscreen -- whitted.png`
 
-use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{GpuContext, Renderer, RendererOptions};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
@@ -36,7 +35,7 @@ async fn run(path: &str) -> Result<(), Box<dyn Error>> {
     let mut scene = Scene::load("whitted")?;
     (scene.settings.width, scene.settings.height) = (320, 240);
     let mut packed = PackedScene::new(&scene)?;
-    packed.build_bvh(MortonBits::Bits30);
+    packed.build_bvh();
 
     // Traced in the fragment shader (the default pipeline, threaded walk, storage memory), read back.
     let mut renderer = Renderer::new(&ctx, &packed, RendererOptions::default()).await?;

@@ -6,7 +6,6 @@
 
 use glam::Vec3;
 use raypipe::Accel;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{GpuContext, Renderer, RendererOptions};
 use raypipe::mesh::Mesh;
 use raypipe::records::PackedScene;
@@ -107,7 +106,7 @@ fn scene() -> Result<Scene, Box<dyn Error>> {
 fn main() -> Result<(), Box<dyn Error>> {
     let path = std::env::args().nth(1).unwrap_or_else(|| "scene.png".into());
     let mut packed = PackedScene::new(&scene()?)?;
-    packed.build_bvh(MortonBits::Bits30);
+    packed.build_bvh();
     let frame = match pollster::block_on(GpuContext::new(None))? {
         Some(ctx) => {
             let mut renderer = pollster::block_on(Renderer::new(&ctx, &packed, RendererOptions::default()))?;

@@ -13,7 +13,7 @@
 //! let mut scene = Scene::load("whitted")?;
 //! (scene.settings.width, scene.settings.height) = (320, 240);
 //! let mut packed = PackedScene::new(&scene)?;
-//! packed.build_bvh(MortonBits::Bits30);
+//! packed.build_bvh();
 //! let mut renderer = Renderer::new(&ctx, &packed, RendererOptions::default()).await?;
 //! let frame = renderer.read_frame().await?.frame;
 //! // 320 x 240 RGB bytes, sRGB-encoded: what `raypipe render whitted --width 320 --height 240`
@@ -39,7 +39,9 @@
 //! or build a [`scene::Scene`], pack it ([`records::PackedScene`], with its BVH), make a
 //! [`gpu::Renderer`], and read the frame back or record it into the program's encoder;
 //! `examples/offscreen.rs` does so on one page (`cargo run --release --example offscreen --
-//! out.png`).
+//! out.png`). A moving scene goes to [`gpu::MovingScene`] instead, which poses it at each time,
+//! rebuilds (or refits) its tree on the GPU or the CPU as the memory mode allows, and records that
+//! work before the trace; the CPU reference poses with its CPU half, [`records::PosedScene`].
 
 pub mod bvh;
 pub mod choice;

@@ -10,9 +10,8 @@ use crate::report::median;
 use anyhow::Context;
 use pollster::block_on;
 use raypipe::Choice;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu;
-use raypipe::gpu::{CpuRebuild, GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{GpuContext, MovingScene, RendererOptions, TreeUpdate};
 use raypipe::image::Frame;
 use raypipe::image::diff::{Tolerance, compare};
 use raypipe::modes::{Accel, MemoryMode};
@@ -24,8 +23,6 @@ use serde::Serialize;
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
-
-const BITS: MortonBits = MortonBits::Bits30;
 
 /// One point: the medians of its timed frames.
 #[derive(Serialize, Clone)]
@@ -44,7 +41,8 @@ struct MotionRow {
     moved_on: String,
     /// Evaluating the clip at the frame's time: node transforms, joint matrices, morph weights (CPU).
     eval_ms: f64,
-    /// Posing the vertices: the GPU's skinning pass, or the CPU's skinning and repacking.
+    /// Posing the primitives: the GPU's skinning pass, or the CPU's skinning (or spheres' move)
+    /// and repacking.
     skin_ms: f64,
     /// The BVH build: its GPU passes (and the threaded layout), or the CPU builder; with ray
     /// queries, the driver's BLAS and TLAS build (GPU timestamps between passes, 0 where the
@@ -52,7 +50,7 @@ struct MotionRow {
     build_ms: f64,
     /// With the wide walk: the tree collapsed into compressed 8-wide nodes, after the build.
     collapse_ms: f64,
-    /// Writing the moved records and nodes to the GPU (the CPU path; 0 on the GPU path).
+    /// Writing the moved records to the GPU, and on the CPU path the nodes built there.
     upload_ms: f64,
     trace_ms: f64,
     /// eval + skin + build + collapse + upload + trace.
@@ -152,7 +150,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<ExitCode> {
     let check_time = times[args.warmup];
     let reference = {
         let mut packed = PackedScene::new(&scene.at_time(check_time)?)?;
-        packed.build_bvh(BITS);
+        packed.build_bvh();
         cpu::render(&packed, Accel::Threaded)?
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("{}: cannot create", args.out.display()))?;
@@ -229,11 +227,7 @@ fn time_point(
     times: &[f32],
     check: &Check,
 ) -> anyhow::Result<(Vec<FrameTimes>, Vec<RefitFrame>)> {
-    let (frames, first, refits) = if options.memory == MemoryMode::Storage {
-        gpu_point(ctx, scene, options, args, times)?
-    } else {
-        cpu_point(ctx, scene, options, args, times)?
-    };
+    let (frames, first, refits) = frames_of_point(ctx, scene, options, args, times)?;
     let color = compare(&first.display(), &check.reference.display())?;
     Tolerance::COLOR
         .check(&color)
@@ -364,10 +358,13 @@ fn summarize_refits(refits: &[RefitFrame]) -> (Option<f64>, Option<f64>, Option<
     )
 }
 
-/// Storage memory: the primitives posed (skinned) and the BVH rebuilt on the GPU, in the frame's
-/// submission. Returns the timed frames, the first timed frame's image and, with --refit, the
-/// refit comparison.
-fn gpu_point(
+/// One point's frames through the library's moving scene: in storage memory the primitives
+/// posed (skinned) and the BVH rebuilt on the GPU in the frame's submission, elsewhere (WebGL2's
+/// route) posed and built on the CPU, then the moved records and the nodes rewritten, as the
+/// viewer and the page do. Returns the timed frames, the first timed frame's image and, with
+/// --refit in storage memory, the refit comparison against a second scene whose tree is only
+/// refitted after the first frame.
+fn frames_of_point(
     ctx: &GpuContext,
     scene: &Scene,
     options: RendererOptions,
@@ -375,15 +372,9 @@ fn gpu_point(
     times: &[f32],
 ) -> anyhow::Result<(Vec<FrameTimes>, Frame, Vec<RefitFrame>)> {
     let motion = scene.motion.as_ref().expect("a moving scene");
-    let mut packed = PackedScene::new(scene)?;
-    let rebuild = block_on(SceneRebuild::new(ctx, scene, &packed, options.accel, BITS))?;
-    let mut renderer = block_on(rebuild.renderer(ctx, &packed, options))?;
-    // A second tree, built once and then only refitted, with a renderer of its own.
-    let mut refitting = if args.refit && options.accel.uses_bvh() {
-        let own = PackedScene::new(scene)?;
-        let rebuild = block_on(SceneRebuild::new(ctx, scene, &own, options.accel, BITS))?;
-        let renderer = block_on(rebuild.renderer(ctx, &own, options))?;
-        Some((own, rebuild, renderer))
+    let mut moving = block_on(MovingScene::new(ctx, scene, options, TreeUpdate::Rebuild))?;
+    let mut refitting = if args.refit && options.accel.uses_bvh() && options.memory == MemoryMode::Storage {
+        Some(block_on(MovingScene::new(ctx, scene, options, TreeUpdate::Refit))?)
     } else {
         None
     };
@@ -392,38 +383,26 @@ fn gpu_point(
     let mut first = None;
     for (k, &t) in times.iter().enumerate() {
         let eval = evaluate(motion, t);
-        let start = Instant::now();
-        let moved = rebuild.move_to(scene, &mut packed, t)?;
-        let mut upload = 0.0;
-        if let Some(moved) = moved {
-            renderer.write_moved(&packed, moved)?;
-            // Bounce moves its spheres on the CPU: that is its "skinning", with the write.
-            upload = elapsed_ms(start);
-        }
-        let traced = block_on(renderer.render_samples(args.spp, |encoder| rebuild.encode(encoder), |_| {}))?;
-        let (build, collapse) = if options.accel.needs_ray_queries() {
-            (block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0), 0.0)
-        } else {
-            let timings = block_on(rebuild.read_timings())?;
-            (timings.total() - timings.collapse, timings.collapse)
+        let cost = moving.pose(t)?;
+        let traced = block_on(moving.render_samples(args.spp, |_| {}))?;
+        let build = match cost.cpu_build {
+            Some(timings) => Some(timings),
+            None => block_on(moving.read_gpu_build())?,
         };
-        let skin = block_on(rebuild.read_skinning_ms())?.unwrap_or(0.0);
+        let (build, collapse) = match build {
+            Some(timings) => (timings.total() - timings.collapse, timings.collapse),
+            // Ray queries: the driver's structures, built on the GPU before the trace.
+            None => (
+                block_on(moving.renderer().read_structures_build_ms())?.unwrap_or(0.0),
+                0.0,
+            ),
+        };
+        // Posing evaluates the clips again before it skins (or writes the skinning's matrices).
+        let skin = block_on(moving.read_skinning_ms())?.unwrap_or(0.0) + (cost.pose_ms - eval).max(0.0);
         let trace = traced.gpu_ms.unwrap_or(0.0);
-        if let Some((own, refit_rebuild, refit_renderer)) = &mut refitting {
-            if let Some(moved) = refit_rebuild.move_to(scene, own, t)? {
-                refit_renderer.write_moved(own, moved)?;
-            }
-            let refitted = block_on(refit_renderer.render_samples(
-                args.spp,
-                |encoder| {
-                    if k == 0 {
-                        refit_rebuild.encode(encoder);
-                    } else {
-                        refit_rebuild.encode_refit(encoder);
-                    }
-                },
-                |_| {},
-            ))?;
+        if let Some(refitting) = &mut refitting {
+            refitting.pose(t)?;
+            let refitted = block_on(refitting.render_samples(args.spp, |_| {}))?;
             if k == args.warmup {
                 // The refitted tree must give the fresh one's image.
                 let color = compare(&refitted.frame.display(), &traced.frame.display())?;
@@ -438,7 +417,7 @@ fn gpu_point(
                     frame: k,
                     time: t,
                     build_ms: build,
-                    refit_ms: block_on(refit_rebuild.read_refit_ms())?.unwrap_or(0.0),
+                    refit_ms: block_on(refitting.read_refit_ms())?.unwrap_or(0.0),
                     trace_rebuilt_ms: trace,
                     trace_refitted_ms: refitted.gpu_ms.unwrap_or(0.0),
                 });
@@ -448,58 +427,15 @@ fn gpu_point(
             first.get_or_insert(traced.frame);
             frames.push(FrameTimes {
                 eval,
-                skin: skin + upload,
+                skin,
                 build,
                 collapse,
-                upload: 0.0,
+                upload: cost.upload_ms,
                 trace,
             });
         }
     }
     Ok((frames, first.expect("at least one timed frame"), refits))
-}
-
-/// Uniform or texture memory (WebGL2's route): the primitives posed and the BVH built on the CPU,
-/// then the moved records and the nodes rewritten, as the viewer and the page do.
-fn cpu_point(
-    ctx: &GpuContext,
-    scene: &Scene,
-    options: RendererOptions,
-    args: &BenchArgs,
-    times: &[f32],
-) -> anyhow::Result<(Vec<FrameTimes>, Frame, Vec<RefitFrame>)> {
-    let motion = scene.motion.as_ref().expect("a moving scene");
-    let mut packed = PackedScene::new(scene)?;
-    let (mut rebuild, _) = CpuRebuild::new(&mut packed, options.accel);
-    let bound = rebuild.depth_bound(packed.primitive_count());
-    let mut renderer = block_on(Renderer::with_depth_bound(ctx, &packed, options, bound))?;
-    let mut frames = Vec::new();
-    let mut first = None;
-    for (k, &t) in times.iter().enumerate() {
-        let eval = evaluate(motion, t);
-        let step = rebuild.move_to(scene, &mut packed, t)?;
-        // Posing evaluates the clips again before it skins.
-        let skin = (step.pose_ms - eval).max(0.0);
-        let upload = rebuild.write(&step, &packed, &mut renderer)?;
-        let traced = block_on(renderer.render_samples(args.spp, |_| {}, |_| {}))?;
-        let (build, collapse) = match step.build {
-            Some(timings) => (timings.total() - timings.collapse, timings.collapse),
-            // Ray queries: the driver's structures, built on the GPU as the records were written.
-            None => (block_on(renderer.read_structures_build_ms())?.unwrap_or(0.0), 0.0),
-        };
-        if k >= args.warmup {
-            first.get_or_insert(traced.frame);
-            frames.push(FrameTimes {
-                eval,
-                skin,
-                build,
-                collapse,
-                upload,
-                trace: traced.gpu_ms.unwrap_or(0.0),
-            });
-        }
-    }
-    Ok((frames, first.expect("at least one timed frame"), Vec::new()))
 }
 
 /// motion.csv, motion.json and, with refits, refit.csv in `out`; returns the JSON.

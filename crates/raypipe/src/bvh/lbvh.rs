@@ -157,6 +157,13 @@ crate::choice::impl_choice!(
     ]
 );
 
+/// A bound on the depth of any LBVH over `count` primitives with codes of `bits`: each level of the
+/// radix tree consumes at least one bit of the (code, position) key, which has bits + ceil(log2 n)
+/// bits. Renderers size their traversal stack with it where the tree is rebuilt as the scene moves.
+pub fn depth_bound(count: usize, bits: MortonBits) -> u32 {
+    bits.total_bits() + (count.max(1) as u64).next_power_of_two().trailing_zeros()
+}
+
 /// A reusable LBVH builder: build after build, its buffers keep their capacity. `K` is `u64` for
 /// 30-bit Morton codes and `u128` for 63-bit ones.
 #[derive(Default)]

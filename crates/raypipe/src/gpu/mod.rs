@@ -3,14 +3,17 @@
 //! and wide collapse, skinning and morphing, the driver's ray-query structures), and the tracer
 //! (the renderer that traces into its targets in the fragment shader or a compute kernel, its
 //! shader's composition, the scene's upload, the traced region, the display pass); `rebuild` drives
-//! a moving scene's builders before each frame. `preamble` is the WGSL every pipeline starts from.
+//! the builders before each frame, and `moving` owns a moving scene: its poses, its tree's rebuild on
+//! the GPU or the CPU, and its renderer. `preamble` is the WGSL every pipeline starts from.
 
 pub mod builders;
 pub mod device;
+pub mod moving;
 pub mod preamble;
 pub mod rebuild;
 pub mod trace;
 
 pub use device::{Capacity, GpuContext, GpuError};
-pub use rebuild::{CpuRebuild, CpuStep, SceneRebuild};
+pub use moving::{MotionError, MovingScene, PoseCost, TreeUpdate};
+pub use rebuild::SceneRebuild;
 pub use trace::{Display, RecordKind, Renderer, RendererOptions, Shown, TimedFrame};

@@ -5,25 +5,18 @@
 //! A skinned or morphing glTF scene is posed before the build in the same encoder
 //! ([`GpuDeform`]): the host writes a few matrices a frame, and no vertex crosses to the GPU.
 //!
-//! `render --frames`, `bench --rebuild` and a live viewer use it the same way:
-//! [`SceneRebuild::move_to`] a time, [`SceneRebuild::encode`], then [`crate::gpu::Renderer::encode`]
-//! (or [`crate::gpu::Renderer::render_samples`] with the rebuild as its `prepare`).
-//!
-//! Where the shader reads uniform or texture memory (WebGL2's route), no compute pass can write
-//! its records: [`CpuRebuild`] poses the scene and builds its LBVH on the CPU, then rewrites the
-//! records that changed ([`CpuRebuild::write`]). The CPU reference uses its first half alone.
+//! [`crate::gpu::MovingScene`] drives it for a moving scene; benchmarks and tests of the build
+//! reach it directly.
 
 use crate::bvh::BuildTimings;
-use crate::bvh::lbvh::LbvhBuilder;
+use crate::bvh::lbvh::depth_bound;
 use crate::bvh::morton::MortonBits;
-use crate::error::InputError;
 use crate::gpu::builders::deform::GpuDeform;
-use crate::gpu::builders::lbvh::{Codes, GpuLbvhBuilder, depth_bound};
+use crate::gpu::builders::lbvh::{Codes, GpuLbvhBuilder};
 use crate::gpu::builders::shared::SharedBuffers;
 use crate::gpu::builders::threaded_layout::GpuThreadedLayout;
 use crate::gpu::builders::wide_collapse::GpuWideCollapse;
 use crate::gpu::trace::renderer::{Renderer, RendererOptions};
-use crate::gpu::trace::shader::RecordKind;
 use crate::gpu::{GpuContext, GpuError};
 use crate::modes::Accel;
 use crate::records::packed::MovedRecords;
@@ -44,8 +37,7 @@ pub struct SceneRebuild {
 
 impl SceneRebuild {
     /// Kernels and buffers for `packed`'s primitives, which are written here, and where `scene`
-    /// moves by glTF animation, the skinning pass that poses them. They may move
-    /// ([`SceneRebuild::move_to`]).
+    /// moves by glTF animation, the skinning pass that poses them ([`GpuDeform::write_pose`]).
     pub async fn new(
         ctx: &GpuContext,
         scene: &Scene,
@@ -80,23 +72,6 @@ impl SceneRebuild {
             deform,
             builds: accel.uses_bvh(),
         })
-    }
-
-    /// Moves the primitives to `t` seconds of `scene`'s motion (`scene` as loaded) for the next
-    /// [`SceneRebuild::encode`]. Skinning on the GPU needs only the frame's matrices; other motion
-    /// moves `packed`'s records on the CPU and writes them here, and the records returned are those
-    /// a renderer must rewrite ([`crate::gpu::Renderer::write_moved`]).
-    pub fn move_to(&self, scene: &Scene, packed: &mut PackedScene, t: f32) -> Result<Option<MovedRecords>, InputError> {
-        if let Some(deform) = &self.deform {
-            deform.write_pose(t)?;
-            return Ok(None);
-        }
-        let Some(motion) = &scene.motion else {
-            return Ok(None);
-        };
-        let moved = packed.apply(&motion.moved(scene, t)?);
-        self.write_moved(packed, moved);
-        Ok(Some(moved))
     }
 
     /// The skinning pass, where the scene has one.
@@ -233,90 +208,5 @@ impl SceneRebuild {
             timings.collapse = wide.read_ms(self.builder.context()).await?.unwrap_or(0.0);
         }
         Ok(timings)
-    }
-}
-
-/// A moving scene's per-frame rebuild on the CPU: its records posed in place, the LBVH built over
-/// them (where the walk reads one), and the records that changed rewritten in a renderer.
-pub struct CpuRebuild {
-    builder: LbvhBuilder<u64>,
-    bits: MortonBits,
-    /// Whether the walk reads a BVH: brute force moves the primitives but builds nothing.
-    builds: bool,
-    /// Whether the walk reads the wide BVH, which is collapsed from each tree built.
-    collapses: bool,
-}
-
-/// What one [`CpuRebuild::move_to`] changed, and what it took on the CPU.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CpuStep {
-    pub moved: MovedRecords,
-    /// The motion evaluated and the moved records rewritten, in milliseconds.
-    pub pose_ms: f64,
-    /// The tree's build, by phase, where the walk reads one.
-    pub build: Option<BuildTimings>,
-}
-
-impl CpuRebuild {
-    /// A rebuild for `accel`'s walk with 30-bit Morton codes, as the GPU's rebuild builds; the
-    /// first tree of `packed` is built here, and its timings returned.
-    pub fn new(packed: &mut PackedScene, accel: Accel) -> (Self, Option<BuildTimings>) {
-        let mut rebuild = Self {
-            builder: LbvhBuilder::new(),
-            bits: MortonBits::Bits30,
-            builds: accel.uses_bvh(),
-            collapses: accel == Accel::Wide,
-        };
-        let first = rebuild.build(packed);
-        (rebuild, first)
-    }
-
-    /// A bound on the depth of every tree this rebuild can make over `primitives`: the walk's
-    /// stack size for a renderer made before the scene moves ([`Renderer::with_depth_bound`]).
-    pub fn depth_bound(&self, primitives: usize) -> u32 {
-        depth_bound(primitives, self.bits)
-    }
-
-    /// Builds the tree over `packed`'s primitives where they stand, and gives it to `packed`.
-    pub fn build(&mut self, packed: &mut PackedScene) -> Option<BuildTimings> {
-        if !self.builds {
-            return None;
-        }
-        let mut timings = self.builder.build(&packed.primitive_boxes(), self.bits);
-        packed.set_bvh(self.builder.to_bvh());
-        if self.collapses {
-            timings.collapse = packed.bvh.as_ref().map_or(0.0, |bvh| bvh.collapse());
-        }
-        Some(timings)
-    }
-
-    /// Moves `packed`'s records to `t` seconds of `scene`'s motion (`scene` as loaded) and builds
-    /// the tree over them.
-    pub fn move_to(&mut self, scene: &Scene, packed: &mut PackedScene, t: f32) -> Result<CpuStep, InputError> {
-        let motion = scene
-            .motion
-            .as_ref()
-            .ok_or_else(|| InputError::new("the scene does not move"))?;
-        let start = web_time::Instant::now();
-        let moved = packed.apply(&motion.moved(scene, t)?);
-        let pose_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(CpuStep {
-            moved,
-            pose_ms,
-            build: self.build(packed),
-        })
-    }
-
-    /// Rewrites in `renderer` the records `step` changed in `packed`: the moved primitives and,
-    /// where a tree was built, its nodes in both layouts. Returns the time it took, in
-    /// milliseconds. The renderer's samples start again.
-    pub fn write(&self, step: &CpuStep, packed: &PackedScene, renderer: &mut Renderer) -> Result<f64, GpuError> {
-        let start = web_time::Instant::now();
-        let mut kinds = RecordKind::moved(step.moved).to_vec();
-        if step.build.is_some() {
-            kinds.extend([RecordKind::Node, RecordKind::ThreadedNode, RecordKind::Wide]);
-        }
-        renderer.write_records(packed, &kinds)?;
-        Ok(start.elapsed().as_secs_f64() * 1e3)
     }
 }

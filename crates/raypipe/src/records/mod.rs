@@ -8,9 +8,11 @@
 
 pub mod constants;
 pub mod packed;
+pub mod posed;
 pub mod texels;
 
 pub use packed::{PackedBvh, PackedScene};
+pub use posed::{PoseOn, PoseStep, PosedScene, Poses};
 pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, ShadingTexel, TexelFormat, TexturePixels};
 
 use crate::bvh::aabb::Aabb;

@@ -281,17 +281,17 @@ impl PackedScene {
         primitive_boxes(&self.spheres, &self.triangles)
     }
 
-    /// Builds the linear BVH over the primitives on the CPU.
-    pub fn build_bvh(&mut self, bits: MortonBits) -> BuildTimings {
-        self.build_bvh_with(Builder::Lbvh, bits)
+    /// Builds the linear BVH over the primitives on the CPU, from the 30-bit Morton codes the GPU's
+    /// build uses, so that both build the same tree.
+    pub fn build_bvh(&mut self) -> BuildTimings {
+        self.build_bvh_with(Builder::Lbvh)
     }
 
-    /// Builds the BVH over the primitives on the CPU with `builder` (the LBVH from `bits`-bit Morton
-    /// codes).
-    pub fn build_bvh_with(&mut self, builder: Builder, bits: MortonBits) -> BuildTimings {
+    /// Builds the BVH over the primitives on the CPU with `builder`.
+    pub fn build_bvh_with(&mut self, builder: Builder) -> BuildTimings {
         let boxes = self.primitive_boxes();
         let (bvh, timings) = match builder {
-            Builder::Lbvh => Bvh::build_lbvh(&boxes, bits),
+            Builder::Lbvh => Bvh::build_lbvh(&boxes, MortonBits::Bits30),
             Builder::Sah => Bvh::build_binned_sah(&boxes),
         };
         self.set_bvh(bvh);

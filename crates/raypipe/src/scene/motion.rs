@@ -45,6 +45,12 @@ impl Motion {
         }
     }
 
+    /// Whether the motion is glTF animation, whose meshes a GPU can pose itself from each frame's
+    /// joint matrices and morph weights (the spheres of `bounce` are moved by the host).
+    pub fn is_animation(&self) -> bool {
+        matches!(self, Motion::Animations(_))
+    }
+
     /// `t` wrapped into the motion's duration, for a scene that plays in a loop (unchanged for
     /// motion without end).
     pub fn looped(&self, t: f32) -> f32 {

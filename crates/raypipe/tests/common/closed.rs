@@ -146,7 +146,7 @@ pub fn seen_from_inside(
     scene.settings.height = size;
     scene.settings.max_depth = 0;
     let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(Default::default());
+    packed.build_bvh();
     packed
 }
 

@@ -232,7 +232,7 @@ pub fn plane_scene(material: Material, lights: Vec<Light>) -> Scene {
 /// The centre pixel's radiance.
 pub fn centre(scene: &Scene) -> Vec3 {
     let mut packed = PackedScene::new(scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     let frame = render_cpu(&packed, Accel::Threaded);
     let [r, g, b, _] = frame.color[(PLANE_SIZE / 2 * PLANE_SIZE + PLANE_SIZE / 2) as usize];
     Vec3::new(r, g, b)

@@ -6,7 +6,6 @@
 
 use crate::common::quad_triangles;
 use glam::{Vec2, Vec3};
-use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::intersect::Ray;
 use raypipe::cpu::trace::{PixelTrace, Tracer};
 use raypipe::modes::Accel;
@@ -79,7 +78,7 @@ fn textured(alpha_mode: AlphaMode) -> Material {
 /// all but the nodes tested).
 fn straight_down(scene: &Scene, x: f32) -> PixelTrace {
     let mut packed = PackedScene::new(scene).unwrap();
-    packed.build_bvh(MortonBits::Bits30);
+    packed.build_bvh();
     let ray = Ray::new(Vec3::new(x, 0.0, 20.0), Vec3::NEG_Z);
     let trace = |accel| PixelTrace {
         cost: 0,

@@ -66,7 +66,7 @@ fn sphere_scene(material: Material, eye: Vec3, size: u32, environment: Environme
 
 fn render(scene: &Scene, samples: u32) -> Frame {
     let mut packed = PackedScene::new(scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     if samples == 1 {
         return render_cpu(&packed, Accel::Threaded);
     }

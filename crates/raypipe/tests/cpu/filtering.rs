@@ -13,7 +13,7 @@ use raypipe::scene::{Camera, Filter, Material, RenderSettings, Scene, Sphere, Te
 
 fn render(scene: &Scene) -> Frame {
     let mut packed = PackedScene::new(scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     render_cpu(&packed, Accel::Threaded)
 }
 

@@ -441,7 +441,7 @@ fn a_volume_refracts_at_its_surfaces_and_absorbs_by_beer_lambert() {
         scene.materials.extend([unlit(Vec3::X), unlit(Vec3::Y)]);
         scene.triangles = triangles;
         let mut packed = PackedScene::new(&scene).unwrap();
-        packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+        packed.build_bvh();
         let dir = Vec3::new(1.0, 0.0, -1.0).normalize();
         let trace = |accel| {
             Tracer::new(&packed, accel)

@@ -16,7 +16,7 @@ fn render(scene: &PackedScene, samples: u32) -> Frame {
 
 fn whitted(width: u32, height: u32) -> PackedScene {
     let mut scene = packed("whitted", width, height, 5);
-    scene.build_bvh(Default::default());
+    scene.build_bvh();
     scene
 }
 

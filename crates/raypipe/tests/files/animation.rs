@@ -5,6 +5,9 @@
 use crate::common::gltf_file::{BEND_HEIGHT, GltfBuilder, morphing_quad, skinned_cylinder};
 use crate::common::harness::Test;
 use glam::{Quat, Vec3};
+use raypipe::modes::Accel;
+use raypipe::records::packed::MovedRecords;
+use raypipe::records::{PackedScene, PoseOn, PosedScene, Poses};
 use raypipe::scene::animation::{Interpolation, Sampler};
 use raypipe::scene::gltf::{Files, GltfScene, parse};
 use raypipe::scene::model::{ModelOptions, gltf_scene};
@@ -303,6 +306,50 @@ fn moving_records_in_place_equals_packing_anew() {
     );
 }
 
+/// A posed scene keeps the last two poses' times; its records and tree at each pose are those of
+/// the scene packed and built anew at that time; a time it cannot pose changes nothing. Posed for
+/// the GPU, an animation keeps its loaded records (the GPU skins them) while bounce's spheres move.
+fn a_posed_scene_keeps_its_last_two_poses_and_builds_as_packed_anew() {
+    let (builder, _, _) = skinned_cylinder(6);
+    let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
+    let cylinder = gltf_scene(&file, "cylinder.gltf", &ModelOptions::default()).unwrap();
+    let mut posed = PosedScene::new(&cylinder, Accel::Threaded, PoseOn::Cpu).unwrap();
+    assert_eq!(posed.poses(), Poses::default());
+    for (t, previous) in [(0.25, None), (0.75, Some(0.25)), (0.5, Some(0.75))] {
+        let step = posed.pose(t).unwrap();
+        assert_eq!(
+            posed.poses(),
+            Poses {
+                current: Some(t),
+                previous
+            },
+            "t = {t}"
+        );
+        assert_eq!(step.moved, Some(MovedRecords::Triangles));
+        assert!(step.build.is_some());
+        let mut anew = PackedScene::new(&cylinder.at_time(t).unwrap()).unwrap();
+        anew.build_bvh();
+        // Not assert_eq: a scene's records print as thousands of lines.
+        assert!(posed.packed() == &anew, "t = {t}: the records or the tree differ");
+    }
+    let before = posed.packed().clone();
+    assert!(posed.pose(f32::NAN).is_err());
+    assert_eq!(posed.poses().current, Some(0.5), "a refused time is not a pose");
+    assert!(posed.packed() == &before, "a refused time moved the records");
+
+    let mut on_gpu = PosedScene::new(&cylinder, Accel::Threaded, PoseOn::Gpu).unwrap();
+    let step = on_gpu.pose(0.5).unwrap();
+    assert_eq!((step.moved, step.build), (None, None));
+    assert!(
+        on_gpu.packed() == &PackedScene::new(&cylinder).unwrap(),
+        "the GPU skins them"
+    );
+    let bounce = Scene::load("bounce:30").unwrap();
+    let mut on_gpu = PosedScene::new(&bounce, Accel::Threaded, PoseOn::Gpu).unwrap();
+    assert_eq!(on_gpu.pose(2.0).unwrap().moved, Some(MovedRecords::Spheres));
+    assert!(on_gpu.packed() == &PackedScene::new(&bounce.at_time(2.0).unwrap()).unwrap());
+}
+
 pub fn tests() -> Vec<Test> {
     raypipe_test_support::tests![
         plain step_linear_and_cubic_samplers_at_keys_and_between,
@@ -315,5 +362,6 @@ pub fn tests() -> Vec<Test> {
         plain weights_that_do_not_sum_to_one_are_normalized_with_a_notice,
         models the_animated_samples_move,
         plain moving_records_in_place_equals_packing_anew,
+        plain a_posed_scene_keeps_its_last_two_poses_and_builds_as_packed_anew,
     ]
 }

@@ -105,7 +105,7 @@ fn one_quad(accel: Accel) -> PackedScene {
     scene.settings.height = HEIGHT;
     let mut packed = PackedScene::new(&scene).unwrap();
     if accel.uses_bvh() {
-        packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+        packed.build_bvh();
     }
     packed
 }

@@ -4,7 +4,6 @@
 use crate::common::harness::Test;
 use crate::common::*;
 use pollster::block_on;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::Count;
 use raypipe::gpu::device::readback::TextureReadback;
 use raypipe::gpu::{Display, GpuContext, Renderer, RendererOptions, Shown};
@@ -101,7 +100,7 @@ fn assert_close(name: &str, rgba: &[u8], expected: &FloatImage, steps: i32) {
 
 fn scene_renderer(ctx: &GpuContext, count: Count) -> Renderer {
     let mut scene = packed("whitted", 64, 48, 5);
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     let options = RendererOptions {
         accel: Accel::Threaded,
         count,

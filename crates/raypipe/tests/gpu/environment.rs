@@ -43,7 +43,7 @@ fn environment_scene() -> PackedScene {
     environment.intensity = 1.5;
     scene.set_environment(Some(environment));
     let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     packed
 }
 
@@ -82,7 +82,7 @@ fn skipped_pixels_read_the_environment(ctx: &GpuContext) {
         Environment::from_function(128, |d| Vec3::new(0.5 + 0.4 * d.x, 0.5 + 0.4 * d.y, 0.5)).unwrap(),
     ));
     let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     let cpu = render_cpu(&packed, Accel::Threaded);
     let gpu = render_gpu(ctx, &packed, raypipe::modes::MemoryMode::Storage, Accel::Threaded);
     assert_images_match("environment-skipped", &gpu.display(), &cpu.display(), Tolerance::COLOR);

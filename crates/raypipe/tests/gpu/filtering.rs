@@ -58,7 +58,7 @@ fn filtering_scene() -> PackedScene {
         Some(&uv),
     ));
     let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     packed
 }
 

@@ -7,8 +7,7 @@ use glam::Vec3;
 use pollster::block_on;
 use raypipe::bvh::lbvh::LbvhBuilder;
 use raypipe::bvh::morton::MortonBits;
-use raypipe::gpu::builders::lbvh::depth_bound;
-use raypipe::gpu::{GpuContext, Renderer, RendererOptions, SceneRebuild};
+use raypipe::gpu::{GpuContext, GpuError, MotionError, MovingScene, RendererOptions, SceneRebuild, TreeUpdate};
 use raypipe::image::Frame;
 use raypipe::modes::Pipeline;
 use raypipe::modes::{Accel, MemoryMode};
@@ -25,62 +24,30 @@ fn time_of(frame: u32) -> f32 {
 /// `count` frames with the BVH rebuilt on the GPU before each, in the frame's submission; each
 /// frame rewrites only the records that moved, as `render --frames` and the viewer do.
 pub fn gpu_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32) -> Vec<Frame> {
-    gpu_frames_refitting(ctx, scene, accel, count, false)
+    moving_frames(ctx, scene, accel, MemoryMode::Storage, TreeUpdate::Rebuild, count)
 }
 
-/// [`gpu_frames`], where `refit` builds the tree at the first frame only and refits it after.
-fn gpu_frames_refitting(ctx: &GpuContext, scene: &Scene, accel: Accel, count: u32, refit: bool) -> Vec<Frame> {
-    let mut packed = PackedScene::new(scene).unwrap();
-    let rebuild = block_on(SceneRebuild::new(ctx, scene, &packed, accel, MortonBits::Bits30)).unwrap();
-    let options = RendererOptions {
-        accel,
-        ..Default::default()
-    };
-    let mut renderer = block_on(rebuild.renderer(ctx, &packed, options)).unwrap();
-    (0..count)
-        .map(|frame| {
-            if let Some(moved) = rebuild.move_to(scene, &mut packed, time_of(frame)).unwrap() {
-                renderer.write_moved(&packed, moved).unwrap();
-            }
-            block_on(renderer.render_samples(
-                1,
-                |encoder| {
-                    if refit && frame > 0 {
-                        rebuild.encode_refit(encoder);
-                    } else {
-                        rebuild.encode(encoder);
-                    }
-                },
-                |_| {},
-            ))
-            .unwrap()
-            .frame
-        })
-        .collect()
-}
-
-/// `count` frames in `memory`, the BVH rebuilt on the CPU before each and the records rewritten in
-/// place: the route of adapters without compute shaders (WebGL2).
-pub fn rewritten_frames(ctx: &GpuContext, scene: &Scene, accel: Accel, memory: MemoryMode, count: u32) -> Vec<Frame> {
-    let mut builder = LbvhBuilder::<u64>::new();
-    let mut packed_at = |frame: u32| {
-        let mut packed = PackedScene::new(&scene.at_time(time_of(frame)).unwrap()).unwrap();
-        builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
-        packed.set_bvh(builder.to_bvh());
-        packed
-    };
-    let first = packed_at(0);
+/// `count` frames of the library's moving scene in `memory`: its tree rebuilt (or refitted, with
+/// `update`) on the GPU in storage memory, and elsewhere built on the CPU with the moved records
+/// and the nodes rewritten in place, the route of adapters without compute shaders (WebGL2).
+pub fn moving_frames(
+    ctx: &GpuContext,
+    scene: &Scene,
+    accel: Accel,
+    memory: MemoryMode,
+    update: TreeUpdate,
+    count: u32,
+) -> Vec<Frame> {
     let options = RendererOptions {
         accel,
         memory,
         ..Default::default()
     };
-    let bound = depth_bound(first.primitive_count(), MortonBits::Bits30);
-    let mut renderer = block_on(Renderer::with_depth_bound(ctx, &first, options, bound)).unwrap();
+    let mut moving = block_on(MovingScene::new(ctx, scene, options, update)).unwrap();
     (0..count)
         .map(|frame| {
-            renderer.write_scene(&packed_at(frame)).unwrap();
-            block_on(renderer.read_frame()).unwrap().frame
+            moving.pose(time_of(frame)).unwrap();
+            block_on(moving.render_samples(1, |_| {})).unwrap().frame
         })
         .collect()
 }
@@ -141,7 +108,7 @@ fn rewritten_texture_frames_match_the_gpu_rebuild(ctx: &GpuContext) {
     scene.settings.height = 48;
     for accel in [Accel::Threaded, Accel::Stackless, Accel::Wide] {
         let on_gpu = gpu_frames(ctx, &scene, accel, 3);
-        let rewritten = rewritten_frames(ctx, &scene, accel, MemoryMode::Texture, 3);
+        let rewritten = moving_frames(ctx, &scene, accel, MemoryMode::Texture, TreeUpdate::Rebuild, 3);
         assert_ne!(rewritten[0], rewritten[2], "the spheres move");
         for (k, (r, g)) in rewritten.iter().zip(&on_gpu).enumerate() {
             assert_frames_match(&format!("frames-rewritten-{accel:?}-{k}"), r, g);
@@ -170,7 +137,7 @@ fn gpu_rebuilt_animated_frames_match_the_cpu(ctx: &GpuContext) {
         for (k, (g, c)) in on_gpu.iter().zip(&on_cpu).enumerate() {
             assert_frames_match(&format!("frames-animated-{accel:?}-{k}"), g, c);
         }
-        let rewritten = rewritten_frames(ctx, &scene, accel, MemoryMode::Texture, 4);
+        let rewritten = moving_frames(ctx, &scene, accel, MemoryMode::Texture, TreeUpdate::Rebuild, 4);
         for (k, (r, c)) in rewritten.iter().zip(&on_cpu).enumerate() {
             assert_frames_match(&format!("frames-animated-texture-{accel:?}-{k}"), r, c);
         }
@@ -184,7 +151,7 @@ fn gpu_refitted_animated_frames_match_the_cpu(ctx: &GpuContext) {
     scene.settings.width = 48;
     scene.settings.height = 40;
     for accel in [Accel::Threaded, Accel::Stackless, Accel::Wide] {
-        let refitted = gpu_frames_refitting(ctx, &scene, accel, 4, true);
+        let refitted = moving_frames(ctx, &scene, accel, MemoryMode::Storage, TreeUpdate::Refit, 4);
         let on_cpu = cpu_frames(&scene, accel, 4);
         for (k, (g, c)) in refitted.iter().zip(&on_cpu).enumerate() {
             assert_frames_match(&format!("frames-refitted-{accel:?}-{k}"), g, c);
@@ -198,7 +165,7 @@ fn a_posed_frame_matches_the_cpu_in_every_mode(ctx: &GpuContext) {
     posed.settings.width = 48;
     posed.settings.height = 40;
     let mut packed = PackedScene::new(&posed).unwrap();
-    packed.build_bvh(MortonBits::Bits30);
+    packed.build_bvh();
     let cpu = render_cpu(&packed, Accel::Threaded);
     for memory in ctx.memory_modes() {
         for pipeline in [Pipeline::Fragment, Pipeline::Compute] {
@@ -237,7 +204,7 @@ fn cpu_posed_vertices(scene: &Scene, t: f32) -> Vec<Vec3> {
 /// the weighted joint matrices before it applies them, the CPU's matrix is the same sum: only the
 /// rounding of a few multiply-adds differs).
 fn assert_skinned_like_the_cpu(ctx: &GpuContext, what: &str, scene: &Scene, times: &[f32]) {
-    let mut packed = PackedScene::new(scene).unwrap();
+    let packed = PackedScene::new(scene).unwrap();
     let rebuild = block_on(SceneRebuild::new(
         ctx,
         scene,
@@ -248,7 +215,7 @@ fn assert_skinned_like_the_cpu(ctx: &GpuContext, what: &str, scene: &Scene, time
     .unwrap();
     let deform = rebuild.deform().expect("an animated scene skins on the GPU");
     for &t in times {
-        assert_eq!(rebuild.move_to(scene, &mut packed, t).unwrap(), None);
+        deform.write_pose(t).unwrap();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         rebuild.encode(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
@@ -288,18 +255,8 @@ fn gpu_skinned_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path)
         let times: Vec<f32> = [0.2, 0.55, 0.9].iter().map(|f| f * duration).collect();
         assert_skinned_like_the_cpu(ctx, name, &scene, &times);
         for &t in &times {
-            let mut packed = PackedScene::new(&scene).unwrap();
-            let rebuild = block_on(SceneRebuild::new(
-                ctx,
-                &scene,
-                &packed,
-                Accel::Threaded,
-                MortonBits::Bits30,
-            ))
-            .unwrap();
-            rebuild.move_to(&scene, &mut packed, t).unwrap();
             let mut cpu_packed = PackedScene::new(&scene.at_time(t).unwrap()).unwrap();
-            cpu_packed.build_bvh(MortonBits::Bits30);
+            cpu_packed.build_bvh();
             let cpu = render_cpu(&cpu_packed, Accel::Threaded);
             for pipeline in [Pipeline::Fragment, Pipeline::Compute] {
                 let options = RendererOptions {
@@ -307,13 +264,30 @@ fn gpu_skinned_samples_match_the_cpu(ctx: &GpuContext, models: &std::path::Path)
                     pipeline,
                     ..Default::default()
                 };
-                let mut renderer = block_on(rebuild.renderer(ctx, &packed, options)).unwrap();
-                let gpu = block_on(renderer.render_samples(1, |encoder| rebuild.encode(encoder), |_| {}))
-                    .unwrap()
-                    .frame;
+                let mut moving = block_on(MovingScene::new(ctx, &scene, options, TreeUpdate::Rebuild)).unwrap();
+                moving.pose(t).unwrap();
+                let gpu = block_on(moving.render_samples(1, |_| {})).unwrap().frame;
                 assert_frames_match(&format!("skinned-{name}-{t}-{pipeline:?}"), &gpu, &cpu);
             }
         }
+    }
+}
+
+/// A tree is refitted only where the GPU built it: in uniform or texture memory the scene is
+/// refused before anything is compiled.
+fn refitting_needs_storage_memory(ctx: &GpuContext) {
+    let scene = Scene::load("bounce:20").unwrap();
+    for memory in [MemoryMode::Uniform, MemoryMode::Texture] {
+        let options = RendererOptions {
+            memory,
+            ..Default::default()
+        };
+        let made = block_on(MovingScene::new(ctx, &scene, options, TreeUpdate::Refit));
+        assert!(
+            matches!(made, Err(MotionError::Gpu(GpuError::RebuildNeedsStorage { memory: m })) if m == memory),
+            "{memory:?}: {:?}",
+            made.err()
+        );
     }
 }
 
@@ -327,5 +301,6 @@ pub fn tests() -> Vec<Test> {
         gpu gpu_rebuilt_frames_match_the_cpu,
         gpu gpu_rebuilt_frames_with_triangles_match_the_cpu,
         gpu rewritten_texture_frames_match_the_gpu_rebuild,
+        gpu refitting_needs_storage_memory,
     ]
 }

@@ -32,7 +32,7 @@ fn albedo_scene(builder: &GltfBuilder) -> PackedScene {
     scene.lights.clear();
     scene.set_environment(None);
     let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     packed
 }
 
@@ -130,7 +130,7 @@ fn every_packing_renders_the_same_image(ctx: &GpuContext) {
             scene.settings.width = 48;
             scene.settings.height = 40;
             let mut packed = PackedScene::new(&scene).unwrap();
-            packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+            packed.build_bvh();
             render_gpu(ctx, &packed, MemoryMode::Storage, Accel::Threaded)
         })
         .collect();
@@ -215,7 +215,7 @@ fn gltf_materials_match_the_cpu(ctx: &GpuContext) {
     assert_eq!(scene.lights.len(), 3);
     gpu_matches_cpu(ctx, &scene, "gltf-materials");
     let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     let frame = render_cpu(&packed, Accel::Threaded);
     // The quads (double-sided: the camera sees their backs) and the cube show in an eighth of the
     // view and more (the mirror shows much of the background): the glass shows the red quad
@@ -266,7 +266,7 @@ fn gpu_matches_cpu(ctx: &GpuContext, scene: &Scene, name: &str) -> usize {
 /// `gpu_matches_cpu` in the `memory` modes given.
 fn gpu_matches_cpu_in(ctx: &GpuContext, scene: &Scene, name: &str, memory_modes: &[MemoryMode]) -> usize {
     let mut packed = PackedScene::new(scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     let cpu = render_cpu(&packed, Accel::Threaded);
     for &memory in memory_modes {
         let gpu = render_gpu(ctx, &packed, memory, Accel::Threaded);
@@ -416,7 +416,7 @@ fn alpha_and_sides_match_the_cpu(ctx: &GpuContext) {
     scene.settings.height = 48;
     scene.settings.max_depth = 3;
     let mut packed = PackedScene::new(&scene).unwrap();
-    packed.build_bvh(raypipe::bvh::morton::MortonBits::Bits30);
+    packed.build_bvh();
     let cpu = render_cpu(&packed, Accel::Brute);
     for accel in ctx.accels() {
         let walked = render_cpu(&packed, accel);

@@ -83,7 +83,7 @@ fn check_same_codes(builder: &mut GpuLbvhBuilder, spheres: &[GpuSphere], what: &
 fn check_wide_collapse(builder: &GpuLbvhBuilder, nodes: &[GpuNode], what: &str) {
     let ctx = builder.context();
     let n = builder.count();
-    let depth = raypipe::gpu::builders::lbvh::depth_bound(n, builder.bits());
+    let depth = raypipe::bvh::lbvh::depth_bound(n, builder.bits());
     let collapse = block_on(GpuWideCollapse::new(ctx, &builder.buffers().nodes, n, depth)).unwrap();
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     collapse.encode(&mut encoder);

@@ -4,7 +4,6 @@
 use crate::common::harness::Test;
 use crate::common::*;
 use glam::Vec3;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::cpu::Count;
 use raypipe::gpu::{GpuContext, RendererOptions};
 use raypipe::modes::{Accel, Builder, MemoryMode};
@@ -13,7 +12,7 @@ use raypipe::scene::Camera;
 
 fn check(ctx: &GpuContext, spec: &str, width: u32, height: u32) {
     let mut scene = packed(spec, width, height, 5);
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     check_scene(ctx, &spec.replace(':', "-"), &scene);
 }
 
@@ -45,7 +44,7 @@ fn whitted(ctx: &GpuContext) {
 /// view's mean per sample too.
 fn sixteen_samples_agree(ctx: &GpuContext) {
     let mut scene = packed("random:300", 96, 72, 5);
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     for (memory, count) in [
         (MemoryMode::Storage, Count::Rays),
         (MemoryMode::Texture, Count::Rays),
@@ -107,7 +106,7 @@ fn random_spheres_with_duplicates(ctx: &GpuContext) {
     scene.settings.width = 64;
     scene.settings.height = 48;
     let mut scene = PackedScene::new(&scene).unwrap();
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     check_scene(ctx, "random-duplicates", &scene);
 }
 
@@ -123,13 +122,13 @@ fn coincident_spheres(ctx: &GpuContext) {
     scene.settings.width = 64;
     scene.settings.height = 48;
     let mut scene = PackedScene::new(&scene).unwrap();
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     check_scene(ctx, "coincident", &scene);
 }
 
 fn cost_aov_counts_the_same_tests_on_both_devices(ctx: &GpuContext) {
     let mut scene = packed("random:3000:9", 64, 48, 5);
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     let cost = |accel| raypipe::cpu::render_with(&scene, accel, Count::Cost, 1, &|| {}).unwrap();
     let brute = cost(Accel::Brute);
     assert!(
@@ -169,7 +168,7 @@ fn spheres_and_triangles(ctx: &GpuContext) {
     scene.settings.height = 64;
     let mut scene = PackedScene::new(&scene).unwrap();
     assert_eq!((scene.triangles.len(), scene.spheres.len()), (1152, 1500));
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     check_scene(ctx, "spheres-and-triangles", &scene);
 }
 
@@ -181,9 +180,9 @@ fn sah_trees_trace_as_the_lbvh_does(ctx: &GpuContext) {
     scene.settings.width = 96;
     scene.settings.height = 64;
     let mut scene = PackedScene::new(&scene).unwrap();
-    scene.build_bvh_with(Builder::Sah, MortonBits::Bits30);
+    scene.build_bvh_with(Builder::Sah);
     let mut lbvh = scene.clone();
-    lbvh.build_bvh(MortonBits::Bits30);
+    lbvh.build_bvh();
     let (sah_nodes, lbvh_nodes) = (&scene.bvh.as_ref().unwrap().nodes, &lbvh.bvh.as_ref().unwrap().nodes);
     assert_eq!(sah_nodes.len(), lbvh_nodes.len());
     assert_ne!(
@@ -214,7 +213,7 @@ fn pixels_outside_the_projected_box_match_the_cpu(ctx: &GpuContext) {
     scene.settings.width = 64;
     scene.settings.height = 48;
     let mut scene = PackedScene::new(&scene).unwrap();
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     let pixels = 64 * 48;
     let with_camera = |eye: Vec3, target: Vec3| {
         let camera = Camera {

@@ -4,7 +4,6 @@
 
 use crate::common::harness::Test;
 use crate::common::*;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{GpuContext, GpuError, Renderer, RendererOptions};
 use raypipe::modes::MemoryMode;
 use std::future::Future;
@@ -38,7 +37,7 @@ fn a_lost_device_fails_each_operation_with_one_line(ctx: &GpuContext) {
     // A device of its own on the shared adapter: the shared one must outlive this test.
     let own = pollster::block_on(GpuContext::open(ctx.adapter.clone())).expect("a second device");
     let mut scene = packed("whitted", 16, 12, 1);
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     let options = RendererOptions {
         memory: MemoryMode::Storage,
         ..Default::default()

@@ -3,7 +3,6 @@
 use crate::common::harness::Test;
 use crate::common::*;
 use raypipe::Choice;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{GpuContext, GpuError, Renderer, RendererOptions};
 use raypipe::image::diff::Tolerance;
 use raypipe::modes::{Accel, MemoryMode};
@@ -11,7 +10,7 @@ use raypipe::records::PackedScene;
 
 fn check(ctx: &GpuContext, spec: &str) {
     let mut scene = packed(spec, 64, 48, 5);
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     for accel in ctx.accels() {
         check_accel(ctx, &scene, accel, spec);
     }
@@ -45,7 +44,7 @@ fn triangles_in_every_memory_mode(ctx: &GpuContext) {
     scene.settings.width = 64;
     scene.settings.height = 48;
     let mut scene = PackedScene::new(&scene).unwrap();
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     for accel in ctx.accels() {
         check_accel(ctx, &scene, accel, "spheres-and-triangles");
     }

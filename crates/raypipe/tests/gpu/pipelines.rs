@@ -3,7 +3,6 @@
 
 use crate::common::harness::Test;
 use crate::common::*;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::{GpuContext, RendererOptions};
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, Count, MemoryMode, Pipeline};
@@ -18,13 +17,13 @@ fn frame(ctx: &GpuContext, scene: &PackedScene, options: RendererOptions, sample
 fn compute_equals_fragment(ctx: &GpuContext) {
     // Odd sizes: the last workgroups of the compute grid reach past the image.
     let mut whitted = PackedScene::new(&whitted_with_quad(75, 53)).unwrap();
-    whitted.build_bvh(MortonBits::Bits30);
+    whitted.build_bvh();
     // 10 rows of tiles, where the compute kernel's row step must skip 6, which shares a factor
     // with 10 (compute.wgsl, `tile_row`).
     let mut tall = PackedScene::new(&whitted_with_quad(12, 80)).unwrap();
-    tall.build_bvh(MortonBits::Bits30);
+    tall.build_bvh();
     let mut cloud = packed("random:1500:3", 75, 53, 5);
-    cloud.build_bvh(MortonBits::Bits30);
+    cloud.build_bvh();
     let options = |accel, memory, count| RendererOptions {
         pipeline: Pipeline::Fragment,
         memory,

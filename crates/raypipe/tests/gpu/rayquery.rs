@@ -5,9 +5,9 @@
 
 use crate::common::harness::Test;
 use crate::common::*;
-use crate::frames::{cpu_frames, gpu_frames, rewritten_frames};
+use crate::frames::{cpu_frames, gpu_frames, moving_frames};
 use raypipe::Choice;
-use raypipe::bvh::morton::MortonBits;
+use raypipe::gpu::TreeUpdate;
 use raypipe::gpu::{GpuContext, GpuError, Renderer, RendererOptions};
 use raypipe::image::Frame;
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
@@ -67,7 +67,7 @@ fn assert_like_the_stack_walk(ctx: &GpuContext, name: &str, scene: &PackedScene,
 }
 
 fn with_bvh(mut scene: PackedScene) -> PackedScene {
-    scene.build_bvh(MortonBits::Bits30);
+    scene.build_bvh();
     scene
 }
 
@@ -182,7 +182,14 @@ fn ray_queries_follow_animated_frames(ctx: &GpuContext, models: &Path) {
     check("gpu", gpu_frames(ctx, &scene, Accel::RayQuery, 3));
     check(
         "texture",
-        rewritten_frames(ctx, &scene, Accel::RayQuery, MemoryMode::Texture, 3),
+        moving_frames(
+            ctx,
+            &scene,
+            Accel::RayQuery,
+            MemoryMode::Texture,
+            TreeUpdate::Rebuild,
+            3,
+        ),
     );
     // Spheres that move: their boxes rewritten and the structures rebuilt.
     let mut bounce = Scene::load("bounce:300:2").unwrap();

@@ -7,7 +7,6 @@
 use crate::common::harness::Test;
 use crate::common::*;
 use raypipe::Choice;
-use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::GpuContext;
 use raypipe::image::Frame;
 use raypipe::image::diff::Tolerance;
@@ -74,7 +73,7 @@ fn factors(scene: &Scene) -> ([f32; 2], [f32; 2]) {
 fn pack(scene: &Scene, accel: Accel) -> PackedScene {
     let mut packed = PackedScene::new(scene).unwrap_or_else(|e| panic!("the scaled scene is refused: {e}"));
     if accel.uses_bvh() {
-        packed.build_bvh(MortonBits::Bits30);
+        packed.build_bvh();
     }
     packed
 }

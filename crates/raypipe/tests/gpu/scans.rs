@@ -37,7 +37,7 @@ fn the_bunny_shades_smooth_unless_asked_flat(models: &Path) {
     assert!(flat.triangles.iter().all(|t| t.normals.is_none()));
     let render = |scene: &Scene| {
         let mut packed = PackedScene::new(scene).unwrap();
-        packed.build_bvh(Default::default());
+        packed.build_bvh();
         raypipe::cpu::render(&packed, Accel::Threaded).unwrap()
     };
     let (smooth, flat) = (render(&smooth), render(&flat));

@@ -5,7 +5,7 @@
 //!
 //! One level of wide nodes a dispatch, each sized by the level before it through an indirect
 //! dispatch; the host records as many levels as the deepest tree the build can make
-//! ([`super::lbvh::depth_bound`]), those past the tree's end dispatching no workgroup.
+//! ([`crate::bvh::lbvh::depth_bound`]), those past the tree's end dispatching no workgroup.
 
 use crate::bvh::wide::{GpuWideTexel, capacity_texels, leaf_texels, node_capacity};
 use crate::gpu::device::compute::{buffer_entry, buffers_bind_group, kernels, storage_buffer};

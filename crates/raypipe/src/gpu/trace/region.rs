@@ -418,7 +418,7 @@ mod tests {
     fn rays_that_enter_a_leaf_box_start_in_the_traced_pixels() {
         let scene = crate::scene::builtin::by_name("torus:400").unwrap().unwrap();
         let mut packed = crate::records::PackedScene::new(&scene).unwrap();
-        packed.build_bvh(crate::bvh::morton::MortonBits::Bits30);
+        packed.build_bvh();
         let bvh = packed.bvh.as_ref().unwrap();
         let cover = BoxCover::new(bvh).unwrap();
         let leaves: Vec<Aabb> = bvh

@@ -507,11 +507,4 @@ fn params_buffer(ctx: &GpuContext, bits: MortonBits, count: usize, sphere_count:
     params
 }
 
-/// A bound on the depth of any LBVH over `count` primitives with codes of `bits`: each level of the
-/// radix tree consumes at least one bit of the (code, position) key, which has bits + ceil(log2 n)
-/// bits. Renderers size their traversal stack with it when the tree is built on the GPU.
-pub fn depth_bound(count: usize, bits: MortonBits) -> u32 {
-    bits.total_bits() + (count.max(1) as u64).next_power_of_two().trailing_zeros()
-}
-
 const PHASE_NAMES: [&str; PHASES] = ["morton", "sort", "hierarchy"];
