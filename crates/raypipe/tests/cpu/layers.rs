@@ -290,6 +290,36 @@ fn reaches(graph: &BTreeMap<&str, BTreeSet<&str>>, from: &str, to: &str) -> bool
 
 /// The checker itself, on a made-up folder: comments and unit tests are left out, re-exports
 /// followed, and the circle they hide found.
+/// The parts of a moving scene that only the library's `gpu::MovingScene` puts together.
+const MOVING_SCENE_PARTS: &[&str] = &[
+    "SceneRebuild",
+    "GpuLbvhBuilder",
+    "GpuDeform",
+    "MortonBits",
+    "depth_bound",
+];
+
+/// Every program that moves a scene (the viewer, the page, `render --frames`, `bench --rebuild`
+/// and `--motion`) does it through `MovingScene`, and names none of its parts. (`raypipe bvh`
+/// times the builders themselves, key widths among its choices, and is left out.)
+#[test]
+fn programs_move_scenes_through_the_library_alone() {
+    let crates = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap();
+    let mut files = Vec::new();
+    for program in ["raypipe-view/src", "raypipe-web/src", "raypipe-cli/src"] {
+        collect(&crates.join(program), &mut files);
+    }
+    let mut named = Vec::new();
+    for file in files.iter().filter(|f| !f.ends_with("raypipe-cli/src/bvh.rs")) {
+        let code = without_comments_and_tests(&std::fs::read_to_string(file).unwrap());
+        for part in MOVING_SCENE_PARTS.iter().filter(|part| code.contains(*part)) {
+            named.push(format!("{} names {part}", file.strip_prefix(crates).unwrap().display()));
+        }
+    }
+    assert!(named.is_empty(), "{named:#?}");
+    assert!(files.len() > 20, "the programs' sources were found");
+}
+
 #[test]
 fn the_checker_sees_circles_and_re_exports() {
     let module = |p: &[&str]| p.iter().map(|s| s.to_string()).collect::<ModulePath>();
