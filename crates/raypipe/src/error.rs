@@ -21,8 +21,61 @@ pub enum Element {
     /// A material of a scene file, by its name there.
     NamedMaterial(String),
     /// A `[[mesh]]` table of a scene file.
-    Mesh(usize),
+    MeshTable(usize),
     Texture(usize),
+    /// A part of a glTF file, from the outermost in (`node 2: mesh 0 primitive 1: accessor 7`).
+    Gltf(Vec<GltfPart>),
+}
+
+/// A part of a glTF file, by its index in the file's arrays, or by name (an attribute, an
+/// extension, a sparse accessor's indices).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GltfPart {
+    Accessor(usize),
+    Animation(usize),
+    Buffer(usize),
+    BufferView(usize),
+    Camera(usize),
+    /// An animation's channel.
+    Channel(usize),
+    Image(usize),
+    /// An instance of `EXT_mesh_gpu_instancing`.
+    Instance(usize),
+    Light(usize),
+    Material(usize),
+    Mesh(usize),
+    MorphTarget(usize),
+    Node(usize),
+    /// A mesh's primitive (written after its mesh: `mesh 0 primitive 1`).
+    Primitive(usize),
+    Scene(usize),
+    Skin(usize),
+    Named(String),
+}
+
+impl fmt::Display for GltfPart {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (kind, index) = match self {
+            GltfPart::Accessor(i) => ("accessor", i),
+            GltfPart::Animation(i) => ("animation", i),
+            GltfPart::Buffer(i) => ("buffer", i),
+            GltfPart::BufferView(i) => ("buffer view", i),
+            GltfPart::Camera(i) => ("camera", i),
+            GltfPart::Channel(i) => ("channel", i),
+            GltfPart::Image(i) => ("image", i),
+            GltfPart::Instance(i) => ("instance", i),
+            GltfPart::Light(i) => ("light", i),
+            GltfPart::Material(i) => ("material", i),
+            GltfPart::Mesh(i) => ("mesh", i),
+            GltfPart::MorphTarget(i) => ("morph target", i),
+            GltfPart::Node(i) => ("node", i),
+            GltfPart::Primitive(i) => ("primitive", i),
+            GltfPart::Scene(i) => ("scene", i),
+            GltfPart::Skin(i) => ("skin", i),
+            GltfPart::Named(name) => return f.write_str(name),
+        };
+        write!(f, "{kind} {index}")
+    }
 }
 
 impl fmt::Display for Element {
@@ -37,8 +90,19 @@ impl fmt::Display for Element {
             Element::Light(i) => write!(f, "light {i}"),
             Element::Material(i) => write!(f, "material {i}"),
             Element::NamedMaterial(name) => write!(f, "material '{name}'"),
-            Element::Mesh(i) => write!(f, "mesh {i}"),
+            Element::MeshTable(i) => write!(f, "mesh {i}"),
             Element::Texture(i) => write!(f, "texture {i}"),
+            Element::Gltf(path) => {
+                for (k, part) in path.iter().enumerate() {
+                    match (k, part) {
+                        (0, _) => {}
+                        (_, GltfPart::Primitive(_)) if matches!(path[k - 1], GltfPart::Mesh(_)) => f.write_str(" ")?,
+                        _ => f.write_str(": ")?,
+                    }
+                    write!(f, "{part}")?;
+                }
+                Ok(())
+            }
         }
     }
 }
@@ -76,6 +140,30 @@ impl InputError {
             element: Some(element),
             ..Self::new(message)
         }
+    }
+
+    /// An error about a part of a glTF file.
+    pub fn in_gltf(part: GltfPart, message: impl Into<String>) -> Self {
+        Self::of(Element::Gltf(vec![part]), message)
+    }
+
+    /// The error as it reads from the glTF part that holds where it lies: `part` goes before the
+    /// parts named already (an element of another kind becomes part of the message).
+    pub fn within(mut self, part: GltfPart) -> Self {
+        match &mut self.element {
+            Some(Element::Gltf(path)) => path.insert(0, part),
+            Some(other) => {
+                self.message = format!("{other}: {}", self.message);
+                self.element = Some(Element::Gltf(vec![part]));
+            }
+            None => self.element = Some(Element::Gltf(vec![part])),
+        }
+        self
+    }
+
+    /// [`InputError::within`] a part named by `name` (an attribute, an extension).
+    pub fn within_named(self, name: impl Into<String>) -> Self {
+        self.within(GltfPart::Named(name.into()))
     }
 
     pub fn with_line(mut self, line: Option<usize>) -> Self {

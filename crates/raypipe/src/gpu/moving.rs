@@ -126,6 +126,10 @@ impl MovingScene {
         let mut posed = PosedScene::new(scene, options.accel, on)?;
         let (renderer, gpu, cpu_build) = if on_gpu {
             let rebuild = SceneRebuild::new(ctx, scene, posed.packed(), options.accel, MOTION_BITS).await?;
+            if let Some(deform) = rebuild.deform() {
+                // Posed as the scene loads (its time 0), until the first pose.
+                deform.write_pose(0.0)?;
+            }
             let renderer = rebuild.renderer(ctx, posed.packed(), options).await?;
             let gpu = GpuTree {
                 rebuild: Box::new(rebuild),

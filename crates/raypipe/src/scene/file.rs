@@ -389,7 +389,7 @@ impl<'d> Tables<'d> {
         let mut placements = Vec::new();
         for (i, m) in def.mesh.iter().enumerate() {
             let at = line(m.span());
-            let element = Element::Mesh(i);
+            let element = Element::MeshTable(i);
             let mut resolve = |name: &Option<String>, element: &Element, at| self.resolve(name, element, at);
             placements.push((placement(m.get_ref(), &mut resolve, &element, at)?, element, at));
         }

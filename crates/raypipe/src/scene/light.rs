@@ -1,5 +1,6 @@
 //! Lights: the paper's point light, and KHR_lights_punctual's three in their units.
 
+use crate::error::InputError;
 use glam::Vec3;
 
 /// A light that casts hard shadows. What reaches a surface from it is its irradiance at normal
@@ -53,7 +54,7 @@ pub enum LightKind {
 
 impl LightKind {
     /// Why the kind's numbers cannot be rendered, if they cannot.
-    pub(crate) fn check(&self) -> Result<(), String> {
+    pub(crate) fn check(&self) -> Result<(), InputError> {
         let range_ok = |range: &Option<f32>| range.is_none_or(|r| r > 0.0 && r.is_finite());
         let unit = |d: Vec3| d.is_finite() && (d.length() - 1.0).abs() <= 1e-4;
         match self {
@@ -66,23 +67,23 @@ impl LightKind {
                 range,
             } => {
                 if !range_ok(range) {
-                    return Err("range must be positive and finite".into());
+                    return Err(InputError::new("range must be positive and finite"));
                 }
                 if !unit(*direction) {
-                    return Err("direction must have unit length".into());
+                    return Err(InputError::new("direction must have unit length"));
                 }
                 let cone_ok =
                     *inner_cone >= 0.0 && inner_cone < outer_cone && *outer_cone <= std::f32::consts::FRAC_PI_2;
                 if !cone_ok {
-                    return Err(format!(
+                    return Err(InputError::new(format!(
                         "cone angles must satisfy 0 <= inner < outer <= pi/2 (got {inner_cone} and {outer_cone})"
-                    ));
+                    )));
                 }
                 Ok(())
             }
             LightKind::Directional { direction } if unit(*direction) => Ok(()),
-            LightKind::Directional { .. } => Err("direction must have unit length".into()),
-            LightKind::Point { .. } => Err("range must be positive and finite".into()),
+            LightKind::Directional { .. } => Err(InputError::new("direction must have unit length")),
+            LightKind::Point { .. } => Err(InputError::new("range must be positive and finite")),
         }
     }
 }

@@ -1,5 +1,6 @@
 //! Materials: the paper's Whitted model, and glTF's metallic-roughness model beside it.
 
+use crate::error::InputError;
 use glam::{Vec2, Vec3};
 
 /// How a surface answers light. Two models share the record: the paper's Whitted material (Phong
@@ -269,29 +270,29 @@ impl TextureTransform {
 }
 
 /// The checks `Scene::validate` makes of one material, with `texture_count` textures to name.
-pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<(), String> {
+pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<(), InputError> {
     if !m.color.is_finite() {
-        return Err("color must be finite".into());
+        return Err(InputError::new("color must be finite"));
     }
     if !(m.emission.is_finite() && m.emission.min_element() >= 0.0) {
-        return Err("emission must be finite and not negative".into());
+        return Err(InputError::new("emission must be finite and not negative"));
     }
     let maps = m.pbr.as_ref().map(Pbr::maps).unwrap_or_default();
     for map in std::iter::once(m.texture).chain(maps).flatten() {
         if map.texture as usize >= texture_count {
-            return Err(format!(
+            return Err(InputError::new(format!(
                 "texture index {} out of range ({texture_count} textures)",
                 map.texture
-            ));
+            )));
         }
         if !map.transform.is_finite() {
-            return Err("texture transform must be finite".into());
+            return Err(InputError::new("texture transform must be finite"));
         }
         if map.tex_coord > 1 {
-            return Err(format!(
+            return Err(InputError::new(format!(
                 "texture coordinate set {} (sets 0 and 1 are read)",
                 map.tex_coord
-            ));
+            )));
         }
     }
     for (name, value) in [
@@ -301,22 +302,29 @@ pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<()
         ("transmit", m.transmit),
     ] {
         if !(value.is_finite() && value >= 0.0) {
-            return Err(format!("{name} must be finite and not negative (got {value})"));
+            return Err(InputError::new(format!(
+                "{name} must be finite and not negative (got {value})"
+            )));
         }
     }
     if m.reflect > 1.0 || m.transmit > 1.0 {
-        return Err("reflect and transmit must be at most 1".into());
+        return Err(InputError::new("reflect and transmit must be at most 1"));
     }
     if !(0.0..=1.0).contains(&m.alpha) {
-        return Err(format!("alpha must be in 0..=1 (got {})", m.alpha));
+        return Err(InputError::new(format!("alpha must be in 0..=1 (got {})", m.alpha)));
     }
     if let AlphaMode::Mask { cutoff } = m.alpha_mode
         && !(cutoff.is_finite() && cutoff >= 0.0)
     {
-        return Err(format!("alpha cutoff must be finite and not negative (got {cutoff})"));
+        return Err(InputError::new(format!(
+            "alpha cutoff must be finite and not negative (got {cutoff})"
+        )));
     }
     if !(m.ior.is_finite() && m.ior > 0.0) {
-        return Err(format!("ior must be positive and finite (got {})", m.ior));
+        return Err(InputError::new(format!(
+            "ior must be positive and finite (got {})",
+            m.ior
+        )));
     }
     if let Some(pbr) = &m.pbr {
         for (name, value) in [
@@ -326,26 +334,26 @@ pub(crate) fn validate_material(m: &Material, texture_count: usize) -> Result<()
             ("occlusion strength", pbr.occlusion_strength),
         ] {
             if !(0.0..=1.0).contains(&value) {
-                return Err(format!("{name} must be in 0..=1 (got {value})"));
+                return Err(InputError::new(format!("{name} must be in 0..=1 (got {value})")));
             }
         }
         if let Some(volume) = pbr.volume {
             let color = volume.attenuation_color;
             if !(color.is_finite() && color.min_element() >= 0.0 && color.max_element() <= 1.0) {
-                return Err("attenuation colour must be in 0..=1".into());
+                return Err(InputError::new("attenuation colour must be in 0..=1"));
             }
             if volume.attenuation_distance.is_nan() || volume.attenuation_distance <= 0.0 {
-                return Err(format!(
+                return Err(InputError::new(format!(
                     "attenuation distance must be positive (got {})",
                     volume.attenuation_distance
-                ));
+                )));
             }
         }
         if !pbr.normal_scale.is_finite() {
-            return Err("normal scale must be finite".into());
+            return Err(InputError::new("normal scale must be finite"));
         }
         if !(pbr.specular_color.is_finite() && pbr.specular_color.min_element() >= 0.0) {
-            return Err("specular colour must be finite and not negative".into());
+            return Err(InputError::new("specular colour must be finite and not negative"));
         }
     }
     Ok(())

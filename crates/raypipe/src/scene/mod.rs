@@ -294,10 +294,7 @@ impl Scene {
             if !within_reach(light.position) {
                 return Err(InputError::of(Element::Light(i), out_of_reach("position")));
             }
-            light
-                .kind
-                .check()
-                .map_err(|msg| InputError::of(Element::Light(i), msg))?;
+            light.kind.check().map_err(|e| e.with_element(Element::Light(i)))?;
         }
         for (i, texture) in self.textures.iter().enumerate() {
             texture.validate().map_err(|e| e.with_element(Element::Texture(i)))?;
@@ -328,7 +325,7 @@ impl Scene {
             ));
         }
         for (i, m) in self.materials.iter().enumerate() {
-            validate_material(m, self.textures.len()).map_err(|msg| InputError::of(Element::Material(i), msg))?;
+            validate_material(m, self.textures.len()).map_err(|e| e.with_element(Element::Material(i)))?;
         }
         let material_count = self.materials.len() as u32;
         let check_material = |element: &dyn Fn() -> Element, index: u32| {

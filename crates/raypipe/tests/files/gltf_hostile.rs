@@ -6,6 +6,7 @@ use crate::common::gltf_file::{Packing, glb, textured_quad};
 use crate::common::harness::Test;
 use crate::common::test_dir;
 use crate::gltf::hierarchy;
+use raypipe::error::{Element, GltfPart};
 use raypipe::scene::Scene;
 use raypipe::scene::gltf::{Files, parse};
 use serde_json::{Value, json};
@@ -290,6 +291,39 @@ fn images_without_a_source_or_a_type() {
     assert_eq!(file.textures.len(), 1);
 }
 
+/// The reader's errors carry where they lie as data, from the outermost part in, so that a viewer
+/// may point at it: a primitive's index accessor, a node's instancing attribute, a buffer.
+fn errors_carry_their_gltf_element() {
+    let element = |edit: Edit| {
+        let b = hierarchy(json!({}));
+        let mut document: Value = serde_json::from_slice(&b.gltf()).unwrap();
+        edit(&mut document);
+        parse(&serde_json::to_vec(&document).unwrap(), Files::None, &mut Vec::new())
+            .unwrap_err()
+            .element
+    };
+    use GltfPart::*;
+    assert_eq!(
+        element(Box::new(|d| d["accessors"][0]["count"] = json!(2))),
+        Some(Element::Gltf(vec![Mesh(0), Primitive(0), Accessor(1)]))
+    );
+    assert_eq!(
+        element(Box::new(|d| d["buffers"][0]["byteLength"] = json!(1000))),
+        Some(Element::Gltf(vec![Buffer(0)]))
+    );
+    assert_eq!(
+        element(Box::new(|d| {
+            d["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+            d["nodes"][0]["extensions"] = json!({"EXT_mesh_gpu_instancing": {"attributes": {"SCALE": 9}}});
+        })),
+        Some(Element::Gltf(vec![
+            Node(0),
+            Named("EXT_mesh_gpu_instancing".into()),
+            Named("SCALE".into())
+        ]))
+    );
+}
+
 pub fn tests() -> Vec<Test> {
     raypipe_test_support::tests![
         plain hostile_documents_end_in_one_line_naming_the_element,
@@ -298,5 +332,6 @@ pub fn tests() -> Vec<Test> {
         plain a_huge_texture_is_refused_before_it_is_decoded,
         plain unsupported_optional_extensions_are_ignored_with_a_notice,
         plain images_without_a_source_or_a_type,
+        plain errors_carry_their_gltf_element,
     ]
 }

@@ -438,7 +438,7 @@ pub struct GpuDeform {
 impl GpuDeform {
     /// The pass for `motion`'s animations (`None` for motion that is not skinning or morphing),
     /// writing into `triangles` (the build's records); `normals` are the scene's normal records,
-    /// uploaded here.
+    /// uploaded here. Its first [`GpuDeform::write_pose`] comes before its first encode.
     pub async fn new(
         ctx: &GpuContext,
         motion: &Motion,
@@ -453,11 +453,6 @@ impl GpuDeform {
                 Ok(Self::create(ctx, animations.clone(), triangles, normals))
             })
             .await?;
-        // Posed as the scene loads, until the first move.
-        deform.write_pose(0.0).map_err(|e| GpuError::Operation {
-            what: "posing the scene for the GPU",
-            message: e.to_string(),
-        })?;
         Ok(Some(deform))
     }
 

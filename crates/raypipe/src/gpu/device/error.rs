@@ -34,6 +34,14 @@ pub enum GpuError {
         needed: Capacity,
         allowed: Capacity,
     },
+    /// A scene rewritten in a renderer has another count of records than the one it was made
+    /// with: a renderer's arrays keep their size (a moving scene moves its records, never adds any).
+    #[error("rewriting the scene: {records} {array} records, where {uploaded} were uploaded")]
+    RecordCountChanged {
+        array: &'static str,
+        records: usize,
+        uploaded: usize,
+    },
     /// A BVH rebuilt on the GPU reaches the shader through storage buffers only.
     #[error("a BVH rebuilt on the GPU is read from storage memory, not {memory} memory")]
     RebuildNeedsStorage { memory: MemoryMode },

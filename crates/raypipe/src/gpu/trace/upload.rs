@@ -70,14 +70,10 @@ impl SceneResources {
                 continue;
             }
             if records.len() != array.capacity {
-                return Err(GpuError::Operation {
-                    what: "rewriting the scene",
-                    message: format!(
-                        "{} {} records, where {} were uploaded",
-                        records.len(),
-                        kind.name(),
-                        array.capacity
-                    ),
+                return Err(GpuError::RecordCountChanged {
+                    array: kind.name(),
+                    records: records.len(),
+                    uploaded: array.capacity,
                 });
             }
             match resource {

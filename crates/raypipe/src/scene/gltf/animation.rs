@@ -3,6 +3,7 @@
 //! targets. Every reference, count and number is checked here, so that posing cannot fail.
 
 use super::data::read_floats;
+use crate::error::{GltfPart, InputError};
 use crate::scene::animation::{
     Channel, Clip, Influences, Interpolation, MAX_INFLUENCES, MAX_JOINTS, MorphTarget, Node, Path, Rig, Sampler, Skin,
     Transform,
@@ -22,7 +23,7 @@ pub fn read_rig(
     buffers: &[Vec<u8>],
     parents: &[Option<usize>],
     notices: &mut Vec<String>,
-) -> Result<Rig, String> {
+) -> Result<Rig, InputError> {
     let nodes = root
         .nodes
         .iter()
@@ -40,7 +41,7 @@ pub fn read_rig(
         if let Some(weights) = &node.weights
             && !weights.iter().all(|w| w.is_finite())
         {
-            return Err(format!("node {n}: weights must be finite"));
+            return Err(InputError::in_gltf(GltfPart::Node(n), "weights must be finite"));
         }
     }
     let order = parents_first(parents);
@@ -48,14 +49,14 @@ pub fn read_rig(
         .skins
         .iter()
         .enumerate()
-        .map(|(s, skin)| read_skin(root, buffers, skin).map_err(|e| format!("skin {s}: {e}")))
+        .map(|(s, skin)| read_skin(root, buffers, skin).map_err(|e| e.within(GltfPart::Skin(s))))
         .collect::<Result<Vec<_>, _>>()?;
     let clips = root
         .animations
         .iter()
         .enumerate()
         .map(|(a, animation)| {
-            read_clip(root, buffers, animation, &nodes, notices).map_err(|e| format!("animation {a}: {e}"))
+            read_clip(root, buffers, animation, &nodes, notices).map_err(|e| e.within(GltfPart::Animation(a)))
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(Rig {
@@ -97,34 +98,31 @@ fn parents_first(parents: &[Option<usize>]) -> Vec<usize> {
     order
 }
 
-fn read_skin(root: &json::Root, buffers: &[Vec<u8>], skin: &json::Skin) -> Result<Skin, String> {
+fn read_skin(root: &json::Root, buffers: &[Vec<u8>], skin: &json::Skin) -> Result<Skin, InputError> {
     let joints: Vec<usize> = skin.joints.iter().map(|j| j.value()).collect();
     if joints.is_empty() {
-        return Err("no joints".into());
+        return Err(InputError::new("no joints"));
     }
     if joints.len() > MAX_JOINTS {
-        return Err(format!(
+        return Err(InputError::new(format!(
             "{} joints, more than the {MAX_JOINTS} a skin may have",
             joints.len()
-        ));
+        )));
     }
     let inverse_binds = match &skin.inverse_bind_matrices {
         None => vec![Mat4::IDENTITY; joints.len()],
         Some(accessor) => {
             let floats = read_floats(root, buffers, accessor.value(), &[Type::Mat4])?;
+            let fail = |message: String| Err(InputError::in_gltf(GltfPart::Accessor(accessor.value()), message));
             if floats.len() / 16 < joints.len() {
-                return Err(format!(
-                    "accessor {}: {} inverse bind matrices for {} joints",
-                    accessor.value(),
+                return fail(format!(
+                    "{} inverse bind matrices for {} joints",
                     floats.len() / 16,
                     joints.len()
                 ));
             }
             if !floats.iter().all(|f| f.is_finite()) {
-                return Err(format!(
-                    "accessor {}: inverse bind matrices must be finite",
-                    accessor.value()
-                ));
+                return fail("inverse bind matrices must be finite".into());
             }
             floats
                 .chunks_exact(16)
@@ -142,35 +140,12 @@ fn read_clip(
     animation: &json::Animation,
     nodes: &[Node],
     notices: &mut Vec<String>,
-) -> Result<Clip, String> {
+) -> Result<Clip, InputError> {
     let mut channels = Vec::new();
     for (c, channel) in animation.channels.iter().enumerate() {
-        let what = format!("channel {c}");
-        let node = channel.target.node.value();
-        let path = match channel.target.path {
-            Checked::Valid(json::animation::Property::Translation) => Path::Translation,
-            Checked::Valid(json::animation::Property::Rotation) => Path::Rotation,
-            Checked::Valid(json::animation::Property::Scale) => Path::Scale,
-            Checked::Valid(json::animation::Property::MorphTargetWeights) => Path::Weights,
-            Checked::Invalid => return Err(format!("{what}: unknown target path")),
-        };
-        if path != Path::Weights && matches!(nodes[node].rest, Transform::Matrix(_)) {
-            return Err(format!(
-                "{what}: animates node {node}, whose transform is a matrix (only translation, rotation and scale may be animated)"
-            ));
-        }
-        let sampler = animation
-            .samplers
-            .get(channel.sampler.value())
-            .ok_or_else(|| format!("{what}: sampler {} does not exist", channel.sampler.value()))?;
-        let width = match path {
-            Path::Translation | Path::Scale => 3,
-            Path::Rotation => 4,
-            Path::Weights => morph_target_count(root, node)
-                .ok_or_else(|| format!("{what}: animates the weights of node {node}, which has no morph targets"))?,
-        };
-        let sampler = read_sampler(root, buffers, sampler, path, width).map_err(|e| format!("{what}: {e}"))?;
-        channels.push(Channel { node, path, sampler });
+        let channel =
+            read_channel(root, buffers, animation, channel, nodes).map_err(|e| e.within(GltfPart::Channel(c)))?;
+        channels.push(channel);
     }
     if channels.is_empty() {
         notices.push(format!(
@@ -182,6 +157,46 @@ fn read_clip(
         name: animation.name.clone(),
         channels,
     })
+}
+
+fn read_channel(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    animation: &json::Animation,
+    channel: &json::animation::Channel,
+    nodes: &[Node],
+) -> Result<Channel, InputError> {
+    let fail = |message: String| Err(InputError::new(message));
+    let node = channel.target.node.value();
+    let path = match channel.target.path {
+        Checked::Valid(json::animation::Property::Translation) => Path::Translation,
+        Checked::Valid(json::animation::Property::Rotation) => Path::Rotation,
+        Checked::Valid(json::animation::Property::Scale) => Path::Scale,
+        Checked::Valid(json::animation::Property::MorphTargetWeights) => Path::Weights,
+        Checked::Invalid => return fail("unknown target path".into()),
+    };
+    if path != Path::Weights && matches!(nodes[node].rest, Transform::Matrix(_)) {
+        return fail(format!(
+            "animates node {node}, whose transform is a matrix (only translation, rotation and scale may be animated)"
+        ));
+    }
+    let Some(sampler) = animation.samplers.get(channel.sampler.value()) else {
+        return fail(format!("sampler {} does not exist", channel.sampler.value()));
+    };
+    let width = match path {
+        Path::Translation | Path::Scale => 3,
+        Path::Rotation => 4,
+        Path::Weights => match morph_target_count(root, node) {
+            Some(count) => count,
+            None => {
+                return fail(format!(
+                    "animates the weights of node {node}, which has no morph targets"
+                ));
+            }
+        },
+    };
+    let sampler = read_sampler(root, buffers, sampler, path, width)?;
+    Ok(Channel { node, path, sampler })
 }
 
 /// The morph targets of the mesh on `node` (every primitive of a mesh has as many).
@@ -197,12 +212,12 @@ fn read_sampler(
     sampler: &json::animation::Sampler,
     path: Path,
     width: usize,
-) -> Result<Sampler, String> {
+) -> Result<Sampler, InputError> {
     let interpolation = match sampler.interpolation {
         Checked::Valid(json::animation::Interpolation::Step) => Interpolation::Step,
         Checked::Valid(json::animation::Interpolation::Linear) => Interpolation::Linear,
         Checked::Valid(json::animation::Interpolation::CubicSpline) => Interpolation::CubicSpline,
-        Checked::Invalid => return Err("unknown interpolation".into()),
+        Checked::Invalid => return Err(InputError::new("unknown interpolation")),
     };
     let times = read_floats(root, buffers, sampler.input.value(), &[Type::Scalar])?;
     let output_type = match path {
@@ -218,11 +233,11 @@ fn read_sampler(
         interpolation,
     };
     read.validate().map_err(|e| {
-        format!(
+        InputError::new(format!(
             "sampler of input accessor {} and output accessor {}: {e}",
             sampler.input.value(),
             sampler.output.value()
-        )
+        ))
     })?;
     Ok(read)
 }
@@ -236,16 +251,16 @@ pub fn read_influences(
     sets: &[(usize, usize)],
     vertex_count: usize,
     notices: &mut Vec<String>,
-) -> Result<Vec<Influences>, String> {
+) -> Result<Vec<Influences>, InputError> {
     let mut influences = vec![Influences::default(); vertex_count];
     for (set, &(joints_accessor, weights_accessor)) in sets.iter().enumerate().take(MAX_INFLUENCES / 4) {
         let joints = read_floats(root, buffers, joints_accessor, &[Type::Vec4])?;
         let weights = read_floats(root, buffers, weights_accessor, &[Type::Vec4])?;
         for (accessor, values) in [(joints_accessor, &joints), (weights_accessor, &weights)] {
             if values.len() != vertex_count * 4 {
-                return Err(format!(
-                    "accessor {accessor}: {} elements where POSITION has {vertex_count}",
-                    values.len() / 4
+                return Err(InputError::in_gltf(
+                    GltfPart::Accessor(accessor),
+                    format!("{} elements where POSITION has {vertex_count}", values.len() / 4),
                 ));
             }
         }
@@ -253,14 +268,15 @@ pub fn read_influences(
             for c in 0..4 {
                 let (joint, weight) = (joints[v * 4 + c], weights[v * 4 + c]);
                 if !(weight.is_finite() && weight >= 0.0) {
-                    return Err(format!(
-                        "accessor {weights_accessor}: weight {} of vertex {v} must be finite and not negative",
-                        c
+                    return Err(InputError::in_gltf(
+                        GltfPart::Accessor(weights_accessor),
+                        format!("weight {c} of vertex {v} must be finite and not negative"),
                     ));
                 }
                 if !(joint >= 0.0 && (joint as usize) < MAX_JOINTS && joint.fract() == 0.0) {
-                    return Err(format!(
-                        "accessor {joints_accessor}: vertex {v} names joint {joint}, and a skin has at most {MAX_JOINTS}"
+                    return Err(InputError::in_gltf(
+                        GltfPart::Accessor(joints_accessor),
+                        format!("vertex {v} names joint {joint}, and a skin has at most {MAX_JOINTS}"),
                     ));
                 }
                 let slot = set * 4 + c;
@@ -273,7 +289,7 @@ pub fn read_influences(
     for (v, influence) in influences.iter_mut().enumerate() {
         let sum: f32 = influence.weights.iter().sum();
         if sum <= 0.0 {
-            return Err(format!("vertex {v}: its joint weights are all zero"));
+            return Err(InputError::new(format!("vertex {v}: its joint weights are all zero")));
         }
         if (sum - 1.0).abs() > WEIGHT_SUM_SLACK {
             normalized += 1;
@@ -296,26 +312,25 @@ pub fn read_targets(
     buffers: &[Vec<u8>],
     primitive: &json::mesh::Primitive,
     vertex_count: usize,
-) -> Result<Vec<MorphTarget>, String> {
+) -> Result<Vec<MorphTarget>, InputError> {
     let Some(targets) = &primitive.targets else {
         return Ok(Vec::new());
     };
     let offsets = |accessor: Option<&json::Index<json::Accessor>>, t: usize, what: &str| {
         accessor
             .map(|index| {
-                let floats = read_floats(root, buffers, index.value(), &[Type::Vec3])?;
+                let within = |e: InputError| e.within(GltfPart::MorphTarget(t));
+                let floats = read_floats(root, buffers, index.value(), &[Type::Vec3]).map_err(within)?;
+                let fail =
+                    |message: String| Err(within(InputError::in_gltf(GltfPart::Accessor(index.value()), message)));
                 if floats.len() != vertex_count * 3 {
-                    return Err(format!(
-                        "morph target {t}: accessor {}: {} {what} offsets where POSITION has {vertex_count}",
-                        index.value(),
+                    return fail(format!(
+                        "{} {what} offsets where POSITION has {vertex_count}",
                         floats.len() / 3
                     ));
                 }
                 if !floats.iter().all(|f| f.is_finite()) {
-                    return Err(format!(
-                        "morph target {t}: accessor {}: {what} offsets must be finite",
-                        index.value()
-                    ));
+                    return fail(format!("{what} offsets must be finite"));
                 }
                 Ok(floats.chunks_exact(3).map(Vec3::from_slice).collect())
             })

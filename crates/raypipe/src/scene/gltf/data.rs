@@ -2,6 +2,7 @@
 //! the accessors that read them, every offset, length and count checked before anything is
 //! allocated or read.
 
+use crate::error::{GltfPart, InputError};
 use base64::Engine;
 use gltf::json;
 use gltf::json::accessor::{ComponentType, Type};
@@ -21,71 +22,74 @@ pub const MAX_ACCESSOR_COUNT: u64 = 1 << 24;
 /// The largest image file read.
 pub const MAX_IMAGE_BYTES: u64 = 256 << 20;
 
-/// The bytes an external or `data:` URI names. `cap` bounds what is read; `what` names it.
-pub fn read_uri(uri: &str, files: Files, cap: u64, what: &str) -> Result<Vec<u8>, String> {
+/// The bytes an external or `data:` URI names. `cap` bounds what is read; `part` (a buffer or an
+/// image) holds the URI.
+pub fn read_uri(uri: &str, files: Files, cap: u64, part: GltfPart) -> Result<Vec<u8>, InputError> {
+    read_uri_bytes(uri, files, cap).map_err(|e| e.within(part))
+}
+
+fn read_uri_bytes(uri: &str, files: Files, cap: u64) -> Result<Vec<u8>, InputError> {
+    let fail = |message: String| Err(InputError::new(message));
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((header, payload)) = rest.split_once(',') else {
-            return Err(format!("{what}: data URI without a comma"));
+            return fail("data URI without a comma".into());
         };
         if !header.ends_with(";base64") {
-            return Err(format!("{what}: only base64 data URIs are read"));
+            return fail("only base64 data URIs are read".into());
         }
         // Base64 grows data by 4/3: a payload this long cannot decode to more than the cap.
         if payload.len() as u64 / 4 * 3 > cap + 3 {
-            return Err(format!("{what}: data URI longer than the {cap} bytes it may hold"));
+            return fail(format!("data URI longer than the {cap} bytes it may hold"));
         }
         let bytes = base64::engine::general_purpose::STANDARD
             .decode(payload.trim_end())
-            .map_err(|e| format!("{what}: data URI is not base64: {e}"))?;
+            .map_err(|e| InputError::new(format!("data URI is not base64: {e}")))?;
         if bytes.len() as u64 > cap {
-            return Err(format!(
-                "{what}: data URI holds {} bytes, more than the {cap} it may",
+            return fail(format!(
+                "data URI holds {} bytes, more than the {cap} it may",
                 bytes.len()
             ));
         }
         return Ok(bytes);
     }
-    let relative = relative_path(uri).map_err(|e| format!("{what}: {e}"))?;
+    let relative = relative_path(uri)?;
     let Files::Folder(folder) = files else {
-        return Err(format!(
-            "{what}: external file '{}' cannot be read here (give a .glb, or a .gltf with data: URIs)",
+        return fail(format!(
+            "external file '{}' cannot be read here (give a .glb, or a .gltf with data: URIs)",
             crate::error::quoted(uri)
         ));
     };
     let path = folder.join(&relative);
     // Links may point anywhere: the file must still lie in the document's folder once resolved.
     let (Ok(real_folder), Ok(real_path)) = (folder.canonicalize(), path.canonicalize()) else {
-        return Err(format!("{what}: cannot read '{}': no such file", relative.display()));
+        return fail(format!("cannot read '{}': no such file", relative.display()));
     };
     if !real_path.starts_with(&real_folder) {
-        return Err(format!(
-            "{what}: '{}' lies outside the glTF's folder",
-            relative.display()
-        ));
+        return fail(format!("'{}' lies outside the glTF's folder", relative.display()));
     }
-    crate::input::read_regular(&real_path, "file", cap).map_err(|e| format!("{what}: {}", e.message))
+    crate::input::read_regular(&real_path, "file", cap).map_err(|e| InputError::new(e.message))
 }
 
 /// A URI reference as a path below the document's folder: percent-escapes decoded, and refused
 /// when absolute, with a scheme, or climbing out with `..`.
-fn relative_path(uri: &str) -> Result<PathBuf, String> {
-    let decoded =
-        percent_decode(uri).ok_or_else(|| format!("URI '{}' is not valid UTF-8", crate::error::quoted(uri)))?;
+fn relative_path(uri: &str) -> Result<PathBuf, InputError> {
+    let decoded = percent_decode(uri)
+        .ok_or_else(|| InputError::new(format!("URI '{}' is not valid UTF-8", crate::error::quoted(uri))))?;
     let shown = crate::error::quoted(&decoded);
     if decoded.is_empty() {
-        return Err("empty URI".into());
+        return Err(InputError::new("empty URI"));
     }
     if decoded.contains(':') || decoded.starts_with(['/', '\\']) {
-        return Err(format!(
+        return Err(InputError::new(format!(
             "URI '{shown}' is absolute: only files beside the glTF are read"
-        ));
+        )));
     }
     let path = PathBuf::from(decoded.replace('\\', "/"));
     if path
         .components()
         .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
     {
-        return Err(format!("URI '{shown}' leaves the glTF's folder"));
+        return Err(InputError::new(format!("URI '{shown}' leaves the glTF's folder")));
     }
     Ok(path)
 }
@@ -109,27 +113,23 @@ fn percent_decode(text: &str) -> Option<String> {
 }
 
 /// Every buffer's bytes, by index: each at least its `byteLength` long, and cut to it.
-pub fn load_buffers(root: &json::Root, blob: Option<Vec<u8>>, files: Files) -> Result<Vec<Vec<u8>>, String> {
+pub fn load_buffers(root: &json::Root, blob: Option<Vec<u8>>, files: Files) -> Result<Vec<Vec<u8>>, InputError> {
     let mut blob = blob;
     let mut buffers = Vec::with_capacity(root.buffers.len());
     for (index, buffer) in root.buffers.iter().enumerate() {
-        let what = format!("buffer {index}");
+        let fail = |message: String| Err(InputError::in_gltf(GltfPart::Buffer(index), message));
         let length = buffer.byte_length.0;
         if length > crate::input::MAX_MODEL_BYTES {
-            return Err(format!("{what}: byteLength {length} is more than a model may hold"));
+            return fail(format!("byteLength {length} is more than a model may hold"));
         }
-        let mut bytes = match (&buffer.uri, index) {
-            (Some(uri), _) => read_uri(uri, files, length, &what)?,
-            (None, 0) => blob
-                .take()
-                .ok_or_else(|| format!("{what}: no uri, and the file has no binary chunk"))?,
-            (None, _) => return Err(format!("{what}: no uri (only buffer 0 may be a GLB's binary chunk)")),
+        let mut bytes = match (&buffer.uri, index, blob.take()) {
+            (Some(uri), _, _) => read_uri(uri, files, length, GltfPart::Buffer(index))?,
+            (None, 0, Some(blob)) => blob,
+            (None, 0, None) => return fail("no uri, and the file has no binary chunk".into()),
+            (None, _, _) => return fail("no uri (only buffer 0 may be a GLB's binary chunk)".into()),
         };
         if (bytes.len() as u64) < length {
-            return Err(format!(
-                "{what}: {} bytes, less than its byteLength {length}",
-                bytes.len()
-            ));
+            return fail(format!("{} bytes, less than its byteLength {length}", bytes.len()));
         }
         bytes.truncate(length as usize);
         buffers.push(bytes);
@@ -138,24 +138,25 @@ pub fn load_buffers(root: &json::Root, blob: Option<Vec<u8>>, files: Files) -> R
 }
 
 /// The bytes of buffer view `index`, checked against its buffer.
-pub fn view_bytes<'a>(root: &json::Root, buffers: &'a [Vec<u8>], index: usize) -> Result<&'a [u8], String> {
+pub fn view_bytes<'a>(root: &json::Root, buffers: &'a [Vec<u8>], index: usize) -> Result<&'a [u8], InputError> {
     let view = root
         .buffer_views
         .get(index)
-        .ok_or_else(|| format!("buffer view {index} does not exist"))?;
+        .ok_or_else(|| InputError::new(format!("buffer view {index} does not exist")))?;
+    let fail = |message: String| InputError::in_gltf(GltfPart::BufferView(index), message);
     let buffer = buffers
         .get(view.buffer.value())
-        .ok_or_else(|| format!("buffer view {index}: buffer {} does not exist", view.buffer.value()))?;
+        .ok_or_else(|| fail(format!("buffer {} does not exist", view.buffer.value())))?;
     let offset = view.byte_offset.map_or(0, |o| o.0);
     let length = view.byte_length.0;
     let end = offset.checked_add(length).filter(|&end| end <= buffer.len() as u64);
     let Some(end) = end else {
-        return Err(format!(
-            "buffer view {index}: bytes {offset}..{} reach past buffer {} ({} bytes)",
+        return Err(fail(format!(
+            "bytes {offset}..{} reach past buffer {} ({} bytes)",
             offset.saturating_add(length),
             view.buffer.value(),
             buffer.len()
-        ));
+        )));
     };
     Ok(&buffer[offset as usize..end as usize])
 }
@@ -190,12 +191,13 @@ fn component(bytes: &[u8], component: ComponentType, normalized: bool) -> f32 {
 }
 
 /// An accessor and its component and element types, by index.
-pub(crate) fn lookup(root: &json::Root, index: usize) -> Result<(&json::Accessor, ComponentType, Type), String> {
+pub(crate) fn lookup(root: &json::Root, index: usize) -> Result<(&json::Accessor, ComponentType, Type), InputError> {
     let accessor = root
         .accessors
         .get(index)
-        .ok_or_else(|| format!("accessor {index} does not exist"))?;
-    let (component_type, type_) = accessor_types(accessor).ok_or_else(|| format!("accessor {index}: invalid type"))?;
+        .ok_or_else(|| InputError::new(format!("accessor {index} does not exist")))?;
+    let (component_type, type_) =
+        accessor_types(accessor).ok_or_else(|| InputError::in_gltf(GltfPart::Accessor(index), "invalid type"))?;
     Ok((accessor, component_type, type_))
 }
 
@@ -215,21 +217,22 @@ impl<'a> Elements<'a> {
         accessor: &json::Accessor,
         element_size: usize,
         count: usize,
-    ) -> Result<Option<Self>, String> {
+    ) -> Result<Option<Self>, InputError> {
         let Some(view) = accessor.buffer_view else {
             // Zeros cost memory that no byte of the file pays for: at most twice the buffers' size.
             let paid = 2 * buffers.iter().map(|b| b.len() as u64).sum::<u64>();
             if (count * element_size) as u64 > paid.max(1 << 20) {
-                return Err(format!(
+                return Err(InputError::new(format!(
                     "{count} elements without a buffer view: more than twice the file's buffers"
-                ));
+                )));
             }
             return Ok(None);
         };
         let bytes = view_bytes(root, buffers, view.value())?;
         let stride = element_stride(root, view.value(), element_size);
         let offset = accessor.byte_offset.map_or(0, |o| o.0);
-        let offset = usize::try_from(offset).map_err(|_| format!("byteOffset {offset} is beyond any buffer"))?;
+        let offset = usize::try_from(offset)
+            .map_err(|_| InputError::new(format!("byteOffset {offset} is beyond any buffer")))?;
         check_span(bytes.len(), offset, stride, element_size, count)?;
         Ok(Some(Self { bytes, offset, stride }))
     }
@@ -241,28 +244,43 @@ impl<'a> Elements<'a> {
 }
 
 /// An accessor's count, refused above `limit` before anything is allocated.
-fn bounded_count(accessor: &json::Accessor, limit: u64, what: &str) -> Result<usize, String> {
+fn bounded_count(accessor: &json::Accessor, limit: u64, what: &str) -> Result<usize, InputError> {
     let count = accessor.count.0;
     if count > limit {
-        return Err(format!("count {count} is more than the {limit} {what}"));
+        return Err(InputError::new(format!(
+            "count {count} is more than the {limit} {what}"
+        )));
     }
     Ok(count as usize)
 }
 
 /// An accessor's elements as f32s, one after another (as many to an element as its type has);
-/// `types` lists the element types the caller takes. Sparse substitutions are applied. Errors start
-/// with `accessor N: `.
-pub fn read_floats(root: &json::Root, buffers: &[Vec<u8>], index: usize, types: &[Type]) -> Result<Vec<f32>, String> {
-    let what = format!("accessor {index}");
+/// `types` lists the element types the caller takes. Sparse substitutions are applied. Errors lie
+/// within the accessor.
+pub fn read_floats(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    index: usize,
+    types: &[Type],
+) -> Result<Vec<f32>, InputError> {
     let (accessor, component_type, type_) = lookup(root, index)?;
+    floats_of(root, buffers, accessor, (component_type, type_), types).map_err(|e| e.within(GltfPart::Accessor(index)))
+}
+
+fn floats_of(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    accessor: &json::Accessor,
+    (component_type, type_): (ComponentType, Type),
+    types: &[Type],
+) -> Result<Vec<f32>, InputError> {
     if !types.contains(&type_) {
-        return Err(format!("{what}: type {type_:?} where {types:?} is expected"));
+        return Err(InputError::new(format!("type {type_:?} where {types:?} is expected")));
     }
     let width = type_.multiplicity();
-    let count = bounded_count(accessor, MAX_ACCESSOR_COUNT, "elements an accessor may have")
-        .map_err(|e| format!("{what}: {e}"))?;
+    let count = bounded_count(accessor, MAX_ACCESSOR_COUNT, "elements an accessor may have")?;
     let size = component_size(component_type);
-    let elements = Elements::of(root, buffers, accessor, width * size, count).map_err(|e| format!("{what}: {e}"))?;
+    let elements = Elements::of(root, buffers, accessor, width * size, count)?;
     let mut values = vec![0.0f32; count * width];
     if let Some(elements) = elements {
         for (e, element) in values.chunks_exact_mut(width).enumerate() {
@@ -275,20 +293,22 @@ pub fn read_floats(root: &json::Root, buffers: &[Vec<u8>], index: usize, types: 
     if let Some(sparse) = &accessor.sparse {
         let substitutes = sparse.count.0;
         if substitutes > count as u64 {
-            return Err(format!(
-                "{what}: sparse count {substitutes} is more than the count {count}"
-            ));
+            return Err(InputError::new(format!(
+                "sparse count {substitutes} is more than the count {count}"
+            )));
         }
         let substitutes = substitutes as usize;
         let indices = sparse_indices(root, buffers, &sparse.indices, substitutes)
-            .map_err(|e| format!("{what}: sparse indices: {e}"))?;
-        let bytes = view_bytes(root, buffers, sparse.values.buffer_view.value()).map_err(|e| format!("{what}: {e}"))?;
+            .map_err(|e| e.within_named("sparse indices"))?;
+        let bytes = view_bytes(root, buffers, sparse.values.buffer_view.value())?;
         let offset = sparse.values.byte_offset.0 as usize;
         check_span(bytes.len(), offset, width * size, width * size, substitutes)
-            .map_err(|e| format!("{what}: sparse values: {e}"))?;
+            .map_err(|e| e.within_named("sparse values"))?;
         for (k, &target) in indices.iter().enumerate() {
             if target as usize >= count {
-                return Err(format!("{what}: sparse index {target} out of range ({count} elements)"));
+                return Err(InputError::new(format!(
+                    "sparse index {target} out of range ({count} elements)"
+                )));
             }
             for c in 0..width {
                 let at = offset + (k * width + c) * size;
@@ -318,20 +338,26 @@ fn element_stride(root: &json::Root, view: usize, element_size: usize) -> usize 
 }
 
 /// Whether `count` elements of `element_size` bytes, `stride` apart from `offset`, fit in `length`.
-fn check_span(length: usize, offset: usize, stride: usize, element_size: usize, count: usize) -> Result<(), String> {
+fn check_span(
+    length: usize,
+    offset: usize,
+    stride: usize,
+    element_size: usize,
+    count: usize,
+) -> Result<(), InputError> {
     if count == 0 {
         return Ok(());
     }
     if stride < element_size {
-        return Err(format!(
+        return Err(InputError::new(format!(
             "byteStride {stride} is less than the element's {element_size} bytes"
-        ));
+        )));
     }
     let end = (count as u64 - 1) * stride as u64 + element_size as u64 + offset as u64;
     if end > length as u64 {
-        return Err(format!(
+        return Err(InputError::new(format!(
             "{count} elements of {element_size} bytes, {stride} apart from byte {offset}, need {end} bytes; its buffer view has {length}"
-        ));
+        )));
     }
     Ok(())
 }
@@ -341,9 +367,9 @@ fn sparse_indices(
     buffers: &[Vec<u8>],
     indices: &json::accessor::sparse::Indices,
     count: usize,
-) -> Result<Vec<u32>, String> {
+) -> Result<Vec<u32>, InputError> {
     let json::validation::Checked::Valid(kind) = indices.component_type else {
-        return Err("invalid component type".into());
+        return Err(InputError::new("invalid component type"));
     };
     let bytes = view_bytes(root, buffers, indices.buffer_view.value())?;
     let size = component_size(kind.0);
@@ -360,26 +386,35 @@ pub fn read_indices(
     buffers: &[Vec<u8>],
     index: usize,
     vertex_count: usize,
-) -> Result<Vec<u32>, String> {
-    let what = format!("accessor {index}");
+) -> Result<Vec<u32>, InputError> {
     let (accessor, component_type, type_) = lookup(root, index)?;
+    indices_of(root, buffers, accessor, (component_type, type_), vertex_count)
+        .map_err(|e| e.within(GltfPart::Accessor(index)))
+}
+
+fn indices_of(
+    root: &json::Root,
+    buffers: &[Vec<u8>],
+    accessor: &json::Accessor,
+    (component_type, type_): (ComponentType, Type),
+    vertex_count: usize,
+) -> Result<Vec<u32>, InputError> {
     if type_ != Type::Scalar
         || !matches!(
             component_type,
             ComponentType::U8 | ComponentType::U16 | ComponentType::U32
         )
     {
-        return Err(format!(
-            "{what}: indices must be unsigned scalars (got {component_type:?} {type_:?})"
-        ));
+        return Err(InputError::new(format!(
+            "indices must be unsigned scalars (got {component_type:?} {type_:?})"
+        )));
     }
     if accessor.sparse.is_some() {
-        return Err(format!("{what}: sparse index accessors are not read"));
+        return Err(InputError::new("sparse index accessors are not read"));
     }
-    let count = bounded_count(accessor, MAX_ACCESSOR_COUNT * 3, "indices of a render's triangles")
-        .map_err(|e| format!("{what}: {e}"))?;
+    let count = bounded_count(accessor, MAX_ACCESSOR_COUNT * 3, "indices of a render's triangles")?;
     let size = component_size(component_type);
-    let elements = Elements::of(root, buffers, accessor, size, count).map_err(|e| format!("{what}: {e}"))?;
+    let elements = Elements::of(root, buffers, accessor, size, count)?;
     // Read as integers: f32 is not exact for every u32.
     let mut values = vec![0u32; count];
     if let Some(elements) = elements {
@@ -393,9 +428,9 @@ pub fn read_indices(
         }
     }
     if let Some((k, &bad)) = values.iter().enumerate().find(|&(_, &v)| v as usize >= vertex_count) {
-        return Err(format!(
-            "{what}: index {k} is {bad}, out of range ({vertex_count} vertices)"
-        ));
+        return Err(InputError::new(format!(
+            "index {k} is {bad}, out of range ({vertex_count} vertices)"
+        )));
     }
     Ok(values)
 }
@@ -425,16 +460,33 @@ mod tests {
     fn data_uris_decode_and_are_bounded() {
         let files = Files::None;
         assert_eq!(
-            read_uri("data:application/octet-stream;base64,AAEC", files, 3, "b").unwrap(),
+            read_uri(
+                "data:application/octet-stream;base64,AAEC",
+                files,
+                3,
+                GltfPart::Buffer(0)
+            )
+            .unwrap(),
             vec![0, 1, 2]
         );
-        assert!(read_uri("data:application/octet-stream;base64,AAECAAEC", files, 3, "b").is_err());
         assert!(
-            read_uri("data:text/plain,hello", files, 10, "b")
+            read_uri(
+                "data:application/octet-stream;base64,AAECAAEC",
+                files,
+                3,
+                GltfPart::Buffer(0)
+            )
+            .is_err()
+        );
+        assert!(
+            read_uri("data:text/plain,hello", files, 10, GltfPart::Buffer(0))
                 .unwrap_err()
+                .message
                 .contains("base64")
         );
-        let external = read_uri("x.bin", files, 10, "buffer 0").unwrap_err();
+        let external = read_uri("x.bin", files, 10, GltfPart::Buffer(0))
+            .unwrap_err()
+            .to_string();
         assert!(
             external.starts_with("buffer 0: external file 'x.bin' cannot be read here"),
             "{external}"
@@ -445,7 +497,7 @@ mod tests {
     fn spans_are_checked_before_reading() {
         assert!(check_span(12, 0, 12, 12, 1).is_ok());
         assert!(check_span(24, 4, 12, 12, 2).is_err());
-        assert!(check_span(100, 0, 4, 12, 2).unwrap_err().contains("byteStride"));
+        assert!(check_span(100, 0, 4, 12, 2).unwrap_err().message.contains("byteStride"));
         // A count of 2^31 with a stride of 2^31 does not overflow.
         assert!(check_span(100, 0, 1 << 31, 12, 1 << 31).is_err());
     }

@@ -10,6 +10,7 @@
 //! sides. What is not read yet is named in one notice: maps on TEXCOORD_2 and above.
 
 use super::data::{Files, MAX_IMAGE_BYTES, read_uri, view_bytes};
+use crate::error::{GltfPart, InputError};
 use crate::scene::texture::{MAX_DECODED_TEXELS, MAX_TEXELS, MAX_TEXTURE_SIDE, shrink_to_fit};
 use crate::scene::{
     AlphaMode, Filter, Material, Pbr, TexelFilter, Texture, TextureMap, TextureTransform, Volume, Wrap,
@@ -90,14 +91,13 @@ impl Materials {
         buffers: &[Vec<u8>],
         files: Files,
         notices: &mut Vec<String>,
-    ) -> Result<(), String> {
+    ) -> Result<(), InputError> {
         for material in document.materials() {
-            let what = format!("material {}", material.index().unwrap_or(0));
+            let within = |e: InputError| e.within(GltfPart::Material(material.index().unwrap_or(0)));
             let read = self
                 .material(document.as_json(), &material, buffers, files)
-                .map_err(|e| format!("{what}: {e}"))?;
-            crate::scene::material::validate_material(&read, self.textures.len())
-                .map_err(|e| format!("{what}: {e}"))?;
+                .map_err(within)?;
+            crate::scene::material::validate_material(&read, self.textures.len()).map_err(within)?;
             self.materials.push(read);
         }
         let halvings = shrink_to_fit(&mut self.textures, MAX_TEXELS);
@@ -117,13 +117,14 @@ impl Materials {
         material: &gltf::Material,
         buffers: &[Vec<u8>],
         files: Files,
-    ) -> Result<Material, String> {
+    ) -> Result<Material, InputError> {
         let pbr = material.pbr_metallic_roughness();
         let [r, g, b, alpha] = pbr.base_color_factor();
-        let map = |info: Option<MapInfo>, encoding: Encoding, this: &mut Self| -> Result<Option<TextureMap>, String> {
-            let Some(info) = info else { return Ok(None) };
-            this.map(root, &info, encoding, buffers, files)
-        };
+        let map =
+            |info: Option<MapInfo>, encoding: Encoding, this: &mut Self| -> Result<Option<TextureMap>, InputError> {
+                let Some(info) = info else { return Ok(None) };
+                this.map(root, &info, encoding, buffers, files)
+            };
         let base = map(pbr.base_color_texture().as_ref().map(MapInfo::of), Encoding::Srgb, self)?;
         let metallic_roughness = map(
             pbr.metallic_roughness_texture().as_ref().map(MapInfo::of),
@@ -216,7 +217,7 @@ impl Materials {
         encoding: Encoding,
         buffers: &[Vec<u8>],
         files: Files,
-    ) -> Result<Option<TextureMap>, String> {
+    ) -> Result<Option<TextureMap>, InputError> {
         let (transform, tex_coord) = texture_transform(info.transform, info.tex_coord)?;
         if tex_coord > 1 {
             self.left_out
@@ -234,22 +235,22 @@ impl Materials {
     /// Checks that a primitive with material `index` has what its maps read: the coordinate set
     /// of each (`sets`: whether it has TEXCOORD_0 and TEXCOORD_1), and for a normal map its
     /// normals. Says whether the primitive needs tangents (its material has a normal map).
-    pub fn check_attributes(&self, index: u32, sets: [bool; 2], has_normals: bool) -> Result<bool, String> {
+    pub fn check_attributes(&self, index: u32, sets: [bool; 2], has_normals: bool) -> Result<bool, InputError> {
         let material = &self.materials[index as usize];
         let pbr = material.pbr.unwrap_or_default();
         let maps = std::iter::once(material.texture).chain(pbr.maps()).flatten();
         for map in maps {
             if !sets[map.tex_coord as usize] {
-                return Err(format!(
+                return Err(InputError::new(format!(
                     "material {index} reads TEXCOORD_{}, which the primitive lacks",
                     map.tex_coord
-                ));
+                )));
             }
         }
         if pbr.normal_texture.is_some() && !has_normals {
-            return Err(format!(
+            return Err(InputError::new(format!(
                 "material {index} has a normal map, and the primitive has no NORMAL"
-            ));
+            )));
         }
         Ok(pbr.normal_texture.is_some())
     }
@@ -284,7 +285,7 @@ impl Materials {
         encoding: Encoding,
         buffers: &[Vec<u8>],
         files: Files,
-    ) -> Result<u32, String> {
+    ) -> Result<u32, InputError> {
         let sampler = texture.sampler();
         let wrap = [sampler.wrap_s(), sampler.wrap_t()].map(|mode| match mode {
             WrappingMode::Repeat => Wrap::Repeat,
@@ -296,20 +297,18 @@ impl Materials {
         if let Some(&index) = self.by_image.get(&(image, wrap, filter, encoding)) {
             return Ok(index);
         }
-        let what = format!("image {image}");
+        let within = |e: InputError| e.within(GltfPart::Image(image));
         // Read from the JSON: gltf's `Image::source` unwraps a missing uri and a view's missing
         // mimeType, which no validation checks (found by the fuzz target).
         let json = &root.images[image];
         let mime = json.mime_type.as_ref().map(|m| m.0.as_str());
         let bytes = match (&json.buffer_view, &json.uri) {
-            (Some(view), _) => view_bytes(root, buffers, view.value())
-                .map_err(|e| format!("{what}: {e}"))?
-                .to_vec(),
-            (None, Some(uri)) => read_uri(uri, files, MAX_IMAGE_BYTES, &what)?,
-            (None, None) => return Err(format!("{what}: neither a bufferView nor a uri")),
+            (Some(view), _) => view_bytes(root, buffers, view.value()).map_err(within)?.to_vec(),
+            (None, Some(uri)) => read_uri(uri, files, MAX_IMAGE_BYTES, GltfPart::Image(image))?,
+            (None, None) => return Err(within(InputError::new("neither a bufferView nor a uri"))),
         };
         let budget = MAX_DECODED_TEXELS - self.texels;
-        let (width, height, rgba) = decode_image(&bytes, mime, budget).map_err(|e| format!("{what}: {e}"))?;
+        let (width, height, rgba) = decode_image(&bytes, mime, budget).map_err(within)?;
         self.texels += width as u64 * height as u64;
         self.textures.push(match encoding {
             Encoding::Srgb => Texture::from_srgb8(width, height, &rgba, wrap).with_filter(filter),
@@ -343,13 +342,13 @@ fn sampler_filter(magnify: Option<MagFilter>, minify: Option<MinFilter>) -> Filt
 
 /// A KHR_texture_transform object's transform and texture coordinate set (`texCoord` overrides
 /// the textureInfo's `tex_coord`); the identity where there is none.
-fn texture_transform(json: Option<&gltf::json::Value>, tex_coord: u32) -> Result<(TextureTransform, u32), String> {
+fn texture_transform(json: Option<&gltf::json::Value>, tex_coord: u32) -> Result<(TextureTransform, u32), InputError> {
     let mut transform = TextureTransform::default();
     let Some(json) = json else {
         return Ok((transform, tex_coord));
     };
-    let fail = |what: &str| format!("{TEXTURE_TRANSFORM}: {what} must be finite numbers");
-    let pair = |name: &str, default: Vec2| -> Result<Vec2, String> {
+    let fail = |what: &str| InputError::new(format!("{TEXTURE_TRANSFORM}: {what} must be finite numbers"));
+    let pair = |name: &str, default: Vec2| -> Result<Vec2, InputError> {
         match json.get(name) {
             None => Ok(default),
             Some(value) => {
@@ -382,7 +381,7 @@ fn texture_transform(json: Option<&gltf::json::Value>, tex_coord: u32) -> Result
         Some(set) => set
             .as_u64()
             .and_then(|s| u32::try_from(s).ok())
-            .ok_or_else(|| format!("{TEXTURE_TRANSFORM}: texCoord must be a set index"))?,
+            .ok_or_else(|| InputError::new(format!("{TEXTURE_TRANSFORM}: texCoord must be a set index")))?,
     };
     Ok((transform, tex_coord))
 }
@@ -390,25 +389,29 @@ fn texture_transform(json: Option<&gltf::json::Value>, tex_coord: u32) -> Result
 /// An image file's pixels as 8-bit RGBA, by its MIME type or, without one, its first bytes. Its
 /// size is checked from the header, before the pixels are decoded: each side at most
 /// MAX_TEXTURE_SIDE, and at most `budget` texels.
-fn decode_image(bytes: &[u8], mime: Option<&str>, budget: u64) -> Result<(u32, u32, Vec<u8>), String> {
+fn decode_image(bytes: &[u8], mime: Option<&str>, budget: u64) -> Result<(u32, u32, Vec<u8>), InputError> {
     let png = match mime {
         Some("image/png") => true,
         Some("image/jpeg") => false,
-        Some(other) => return Err(format!("images of type {other} are not read (PNG and JPEG are)")),
+        Some(other) => {
+            return Err(InputError::new(format!(
+                "images of type {other} are not read (PNG and JPEG are)"
+            )));
+        }
         None if bytes.starts_with(b"\x89PNG") => true,
         None if bytes.starts_with(&[0xff, 0xd8]) => false,
-        None => return Err("not a PNG or JPEG image".into()),
+        None => return Err(InputError::new("not a PNG or JPEG image")),
     };
     let check = |width: u32, height: u32| {
         if width == 0 || height == 0 || width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
-            return Err(format!(
+            return Err(InputError::new(format!(
                 "{width}x{height} pixels: each side must be in 1..={MAX_TEXTURE_SIDE}"
-            ));
+            )));
         }
         if width as u64 * height as u64 > budget {
-            return Err(format!(
+            return Err(InputError::new(format!(
                 "{width}x{height} pixels: the file's images would decode to more than {MAX_DECODED_TEXELS} texels"
-            ));
+            )));
         }
         Ok(())
     };
@@ -419,19 +422,23 @@ fn decode_image(bytes: &[u8], mime: Option<&str>, budget: u64) -> Result<(u32, u
     }
 }
 
-fn decode_png(bytes: &[u8], check: impl Fn(u32, u32) -> Result<(), String>) -> Result<(u32, u32, Vec<u8>), String> {
+type Decoded = (u32, u32, Vec<u8>);
+
+fn decode_png(bytes: &[u8], check: impl Fn(u32, u32) -> Result<(), InputError>) -> Result<Decoded, InputError> {
     // The size stands at a fixed place in the first chunk, IHDR, which every PNG has: checked
     // before the decoder reads on (a file without it is one the decoder refuses).
     if bytes.len() >= 24 && &bytes[12..16] == b"IHDR" {
         let number = |at: usize| u32::from_be_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
         check(number(16), number(20))?;
     }
-    let fail = |e: png::DecodingError| format!("PNG: {e}");
+    let fail = |e: png::DecodingError| InputError::new(format!("PNG: {e}"));
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
     let mut reader = decoder.read_info().map_err(fail)?;
     let (width, height) = (reader.info().width, reader.info().height);
-    let size = reader.output_buffer_size().ok_or("PNG: image too large")?;
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| InputError::new("PNG: image too large"))?;
     let mut pixels = vec![0; size];
     let frame = reader.next_frame(&mut pixels).map_err(fail)?;
     pixels.truncate(frame.buffer_size());
@@ -440,12 +447,12 @@ fn decode_png(bytes: &[u8], check: impl Fn(u32, u32) -> Result<(), String>) -> R
         png::ColorType::Rgb => pixels.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect(),
         png::ColorType::GrayscaleAlpha => pixels.chunks_exact(2).flat_map(|p| [p[0], p[0], p[0], p[1]]).collect(),
         png::ColorType::Grayscale => pixels.iter().flat_map(|&g| [g, g, g, 255]).collect(),
-        png::ColorType::Indexed => return Err("PNG: palette not expanded".into()),
+        png::ColorType::Indexed => return Err(InputError::new("PNG: palette not expanded")),
     };
     Ok((width, height, rgba))
 }
 
-fn decode_jpeg(bytes: &[u8], check: impl Fn(u32, u32) -> Result<(), String>) -> Result<(u32, u32, Vec<u8>), String> {
+fn decode_jpeg(bytes: &[u8], check: impl Fn(u32, u32) -> Result<(), InputError>) -> Result<Decoded, InputError> {
     use zune_jpeg::zune_core::colorspace::ColorSpace;
     use zune_jpeg::zune_core::options::DecoderOptions;
     let options = DecoderOptions::default()
@@ -453,13 +460,14 @@ fn decode_jpeg(bytes: &[u8], check: impl Fn(u32, u32) -> Result<(), String>) -> 
         .set_max_width(MAX_TEXTURE_SIDE as usize)
         .set_max_height(MAX_TEXTURE_SIDE as usize);
     let mut decoder = zune_jpeg::JpegDecoder::new_with_options(std::io::Cursor::new(bytes), options);
-    decoder.decode_headers().map_err(|e| format!("JPEG: {e:?}"))?;
-    let info = decoder.info().ok_or("JPEG: no header")?;
+    let fail = |e: zune_jpeg::errors::DecodeErrors| InputError::new(format!("JPEG: {e:?}"));
+    decoder.decode_headers().map_err(fail)?;
+    let info = decoder.info().ok_or_else(|| InputError::new("JPEG: no header"))?;
     let (width, height) = (info.width as u32, info.height as u32);
     check(width, height)?;
-    let pixels = decoder.decode().map_err(|e| format!("JPEG: {e:?}"))?;
+    let pixels = decoder.decode().map_err(fail)?;
     if pixels.len() != width as usize * height as usize * 4 {
-        return Err("JPEG: decoded to the wrong size".into());
+        return Err(InputError::new("JPEG: decoded to the wrong size"));
     }
     Ok((width, height, pixels))
 }
@@ -479,7 +487,7 @@ mod tests {
         );
         assert_eq!(texture_transform(None, 0).unwrap(), (TextureTransform::default(), 0));
         let bad: gltf::json::Value = serde_json::from_str(r#"{"scale": [1]}"#).unwrap();
-        assert!(texture_transform(Some(&bad), 0).unwrap_err().contains("scale"));
+        assert!(texture_transform(Some(&bad), 0).unwrap_err().message.contains("scale"));
     }
 
     #[test]
@@ -526,11 +534,13 @@ mod tests {
         assert!(
             decode_image(b"GIF89a", None, MAX_TEXELS)
                 .unwrap_err()
+                .message
                 .contains("not a PNG or JPEG")
         );
         assert!(
             decode_image(b"", Some("image/webp"), MAX_TEXELS)
                 .unwrap_err()
+                .message
                 .contains("image/webp")
         );
     }

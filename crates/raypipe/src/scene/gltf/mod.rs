@@ -5,8 +5,9 @@
 //! textures, its first perspective camera and its KHR_lights_punctual lights. Everything the file
 //! says is checked before it is used: references, every accessor against its buffer view and
 //! buffer, counts before allocating, the node graph for cycles and shared children, and numbers for
-//! NaN. Errors are one line naming the element (`mesh 3 primitive 0: accessor 7: ...`); what is
-//! read but not rendered (points, lines, unused textures) is reported as one notice each.
+//! NaN. Errors are one line naming the element (`mesh 3 primitive 0: accessor 7: ...`), which
+//! they carry as data too ([`crate::error::Element::Gltf`], the file's parts from the outermost
+//! in); what is read but not rendered (points, lines, unused textures) is reported as one notice each.
 //!
 //! Skins, morph targets and animations are read into a [`Rig`] (`animation.rs`); the primitives are
 //! then posed at the first animation's start (or, without one, at rest with skins and weights
@@ -22,7 +23,7 @@ pub use data::Files;
 
 use super::animation::{Instance, Rig};
 use super::{Camera, Light, LightKind, Material, Texture};
-use crate::error::InputError;
+use crate::error::{Element, GltfPart, InputError};
 use crate::mesh::Mesh;
 use data::read_floats;
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
@@ -98,7 +99,7 @@ pub struct GltfScene {
 pub fn load(path: &Path) -> Result<GltfScene, InputError> {
     let shown = path.display().to_string();
     let bytes = crate::input::read_regular_after_head(path, "glTF file", crate::input::MAX_MODEL_BYTES, |head, _| {
-        check_head(head).map_err(InputError::new)
+        check_head(head)
     })?;
     let folder = match path.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent,
@@ -113,32 +114,37 @@ pub fn load(path: &Path) -> Result<GltfScene, InputError> {
 }
 
 /// A GLB starts with its magic, glTF JSON with `{` (after a byte-order mark or white space).
-fn check_head(head: &[u8]) -> Result<(), String> {
+fn check_head(head: &[u8]) -> Result<(), InputError> {
     let text = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head);
     match text.iter().find(|b| !b.is_ascii_whitespace()) {
         _ if head.starts_with(b"glTF") => Ok(()),
         Some(b'{') => Ok(()),
-        None if head.is_empty() => Err("empty file".into()),
-        _ => Err("not a glTF file: it starts with neither '{' nor the GLB magic 'glTF'".into()),
+        None if head.is_empty() => Err(InputError::new("empty file")),
+        _ => Err(InputError::new(
+            "not a glTF file: it starts with neither '{' nor the GLB magic 'glTF'",
+        )),
     }
 }
 
 /// A GLB's total length must cover its 12-byte header and lie within the file. gltf 1.4.1 subtracts
 /// the header from it unchecked (`Glb::from_slice`), which overflows for a length below 12: a panic
 /// where overflow is checked (found by the fuzz target), a wrapped number elsewhere.
-fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+fn check_glb_header(bytes: &[u8]) -> Result<(), InputError> {
     if !bytes.starts_with(b"glTF") {
         return Ok(());
     }
     let Some(length) = bytes.get(8..12) else {
-        return Err(format!("GLB header: {} bytes, less than its 12", bytes.len()));
+        return Err(InputError::new(format!(
+            "GLB header: {} bytes, less than its 12",
+            bytes.len()
+        )));
     };
     let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]) as u64;
     if length < 12 || length > bytes.len() as u64 {
-        return Err(format!(
+        return Err(InputError::new(format!(
             "GLB header: total length {length}, where the file has {} bytes and the header 12",
             bytes.len()
-        ));
+        )));
     }
     Ok(())
 }
@@ -146,14 +152,10 @@ fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
 /// Parses glTF JSON or GLB bytes; `files` says where external files may be read from. Things the
 /// file holds that are not rendered are reported in `notices`.
 pub fn parse(bytes: &[u8], files: Files, notices: &mut Vec<String>) -> Result<GltfScene, InputError> {
-    parse_document(bytes, files, notices).map_err(InputError::new)
-}
-
-fn parse_document(bytes: &[u8], files: Files, notices: &mut Vec<String>) -> Result<GltfScene, String> {
     check_glb_header(bytes)?;
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
-        gltf::Error::Deserialize(e) => format!("not glTF JSON: {e}"),
-        other => format!("not a glTF file: {other}"),
+        gltf::Error::Deserialize(e) => InputError::new(format!("not glTF JSON: {e}")),
+        other => InputError::new(format!("not a glTF file: {other}")),
     })?;
     let mut root = document.into_json();
     check_extensions(&mut root, notices)?;
@@ -187,7 +189,7 @@ fn parse_document(bytes: &[u8], files: Files, notices: &mut Vec<String>) -> Resu
         ));
     }
     if reader.primitives.is_empty() {
-        return Err("the scene has no triangles".into());
+        return Err(InputError::new("the scene has no triangles"));
     }
     let moves = !root.skins.is_empty()
         || !root.animations.is_empty()
@@ -215,16 +217,16 @@ fn parse_document(bytes: &[u8], files: Files, notices: &mut Vec<String>) -> Resu
 }
 
 /// Refuses a required extension that is not read; notes each used one that is ignored.
-fn check_extensions(root: &mut json::Root, notices: &mut Vec<String>) -> Result<(), String> {
+fn check_extensions(root: &mut json::Root, notices: &mut Vec<String>) -> Result<(), InputError> {
     if let Some(name) = root
         .extensions_required
         .iter()
         .find(|name| !SUPPORTED_EXTENSIONS.contains(&name.as_str()))
     {
-        return Err(format!(
+        return Err(InputError::new(format!(
             "extension {} is required, and raypipe does not read it",
             crate::error::quoted(name)
-        ));
+        )));
     }
     for name in &root.extensions_used {
         if !SUPPORTED_EXTENSIONS.contains(&name.as_str()) {
@@ -237,7 +239,7 @@ fn check_extensions(root: &mut json::Root, notices: &mut Vec<String>) -> Result<
 }
 
 /// Every reference in range and every enum known (the crate's checks), first fault first.
-fn validate(root: &json::Root) -> Result<(), String> {
+fn validate(root: &json::Root) -> Result<(), InputError> {
     use gltf::json::validation::Validate;
     // gltf-json 1.4.1 reads a primitive's POSITION accessor before it checks the index (its
     // `primitive_validate_hook` indexes the accessors directly): checked here first, or a file
@@ -248,10 +250,13 @@ fn validate(root: &json::Root) -> Result<(), String> {
             if let Some(index) = primitive.attributes.get(&position)
                 && index.value() >= root.accessors.len()
             {
-                return Err(format!(
-                    "mesh {m} primitive {p}: POSITION accessor {} does not exist ({} accessors)",
-                    index.value(),
-                    root.accessors.len()
+                return Err(InputError::of(
+                    Element::Gltf(vec![GltfPart::Mesh(m), GltfPart::Primitive(p)]),
+                    format!(
+                        "POSITION accessor {} does not exist ({} accessors)",
+                        index.value(),
+                        root.accessors.len()
+                    ),
                 ));
             }
         }
@@ -260,7 +265,7 @@ fn validate(root: &json::Root) -> Result<(), String> {
     root.validate(root, json::Path::new, &mut |path, error| {
         first.get_or_insert_with(|| format!("{}: {error}", path()));
     });
-    first.map_or(Ok(()), Err)
+    first.map_or(Ok(()), |first| Err(InputError::new(first)))
 }
 
 /// The scene's nodes with their world matrices, and every node's parent.
@@ -269,17 +274,19 @@ type NodeWalk<'a> = (Vec<(gltf::Node<'a>, Mat4)>, Vec<Option<usize>>);
 /// Each node of the default scene (or, without scenes, of every root) with its world matrix, parents
 /// before children. A node with two parents, a cycle, or a NaN in a transform is an error.
 /// Also returns every node's parent.
-fn walk_nodes<'a>(document: &'a gltf::Document, notices: &mut Vec<String>) -> Result<NodeWalk<'a>, String> {
+fn walk_nodes<'a>(document: &'a gltf::Document, notices: &mut Vec<String>) -> Result<NodeWalk<'a>, InputError> {
     let nodes: Vec<gltf::Node> = document.nodes().collect();
     let count = nodes.len();
     let mut parent: Vec<Option<usize>> = vec![None; count];
     for node in document.nodes() {
         for child in node.children() {
             if let Some(first) = parent[child.index()].replace(node.index()) {
-                return Err(format!(
-                    "node {}: a child of nodes {first} and {} (a node has at most one parent)",
-                    child.index(),
-                    node.index()
+                return Err(InputError::in_gltf(
+                    GltfPart::Node(child.index()),
+                    format!(
+                        "a child of nodes {first} and {} (a node has at most one parent)",
+                        node.index()
+                    ),
                 ));
             }
         }
@@ -296,25 +303,18 @@ fn walk_nodes<'a>(document: &'a gltf::Document, notices: &mut Vec<String>) -> Re
         stack.extend(nodes[index].children().map(|c| c.index()));
     }
     if let Some(index) = reached.iter().position(|&r| !r) {
-        return Err(format!("node {index}: its parents form a cycle"));
+        return Err(InputError::in_gltf(GltfPart::Node(index), "its parents form a cycle"));
     }
     let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
         Some(scene) => {
             let mut listed = vec![false; count];
             for node in scene.nodes() {
+                let fail = |message: String| Err(InputError::in_gltf(GltfPart::Scene(scene.index()), message));
                 if let Some(p) = parent[node.index()] {
-                    return Err(format!(
-                        "scene {}: node {} is a child of node {p}, not a root",
-                        scene.index(),
-                        node.index()
-                    ));
+                    return fail(format!("node {} is a child of node {p}, not a root", node.index()));
                 }
                 if std::mem::replace(&mut listed[node.index()], true) {
-                    return Err(format!(
-                        "scene {}: node {} is listed twice",
-                        scene.index(),
-                        node.index()
-                    ));
+                    return fail(format!("node {} is listed twice", node.index()));
                 }
             }
             scene.nodes().collect()
@@ -329,7 +329,10 @@ fn walk_nodes<'a>(document: &'a gltf::Document, notices: &mut Vec<String>) -> Re
     while let Some((node, parent_world)) = stack.pop() {
         let world = parent_world * local_matrix(document.as_json(), node.index())?;
         if !world.is_finite() {
-            return Err(format!("node {}: its world transform is not finite", node.index()));
+            return Err(InputError::in_gltf(
+                GltfPart::Node(node.index()),
+                "its world transform is not finite",
+            ));
         }
         let children: Vec<_> = node.children().collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
@@ -339,9 +342,9 @@ fn walk_nodes<'a>(document: &'a gltf::Document, notices: &mut Vec<String>) -> Re
 }
 
 /// A node's matrix, or its translation, rotation and scale composed (T * R * S), checked.
-fn local_matrix(root: &json::Root, node: usize) -> Result<Mat4, String> {
+fn local_matrix(root: &json::Root, node: usize) -> Result<Mat4, InputError> {
     let transform = animation::rest_transform(&root.nodes[node]);
-    transform.check().map_err(|e| format!("node {node}: {e}"))?;
+    transform.check().map_err(|e| e.within(GltfPart::Node(node)))?;
     Ok(transform.matrix())
 }
 
@@ -362,32 +365,38 @@ struct SceneReader<'a> {
 }
 
 impl SceneReader<'_> {
-    fn node(&mut self, node: &gltf::Node, world: Mat4) -> Result<(), String> {
+    fn node(&mut self, node: &gltf::Node, world: Mat4) -> Result<(), InputError> {
+        let in_node = |message: String| InputError::in_gltf(GltfPart::Node(node.index()), message);
         if let Some(mesh) = node.mesh() {
             let local = self.mesh(&mesh)?;
             let skin = node.skin().map(|s| s.index());
             if let Some(skin) = skin {
                 let joints = self.root.skins[skin].joints.len();
                 for (p, primitive) in local.iter().enumerate() {
-                    let what = format!("node {}: mesh {} primitive {p}", node.index(), mesh.index());
+                    let in_primitive = |message: String| {
+                        let path = vec![
+                            GltfPart::Node(node.index()),
+                            GltfPart::Mesh(mesh.index()),
+                            GltfPart::Primitive(p),
+                        ];
+                        Err(InputError::of(Element::Gltf(path), message))
+                    };
                     match primitive.max_joint {
-                        None => {
-                            return Err(format!(
-                                "{what}: skinned by skin {skin}, without JOINTS_0 and WEIGHTS_0"
-                            ));
-                        }
+                        None => return in_primitive(format!("skinned by skin {skin}, without JOINTS_0 and WEIGHTS_0")),
                         Some(j) if j as usize >= joints => {
-                            return Err(format!("{what}: names joint {j}, and skin {skin} has {joints}"));
+                            return in_primitive(format!("names joint {j}, and skin {skin} has {joints}"));
                         }
                         Some(_) => {}
                     }
                 }
             }
-            match self.instancing(node)? {
+            match self
+                .instancing(node)
+                .map_err(|e| e.within_named(INSTANCING).within(GltfPart::Node(node.index())))?
+            {
                 Some(_) if skin.is_some() => {
-                    return Err(format!(
-                        "node {}: EXT_mesh_gpu_instancing on a skinned mesh, which raypipe does not read",
-                        node.index()
+                    return Err(in_node(
+                        "EXT_mesh_gpu_instancing on a skinned mesh, which raypipe does not read".into(),
                     ));
                 }
                 Some(offsets) => {
@@ -416,18 +425,20 @@ impl SceneReader<'_> {
                     });
                 }
                 (json::validation::Checked::Valid(json::camera::Type::Perspective), None) => {
-                    return Err(format!(
-                        "camera {}: of type perspective, without its perspective object",
-                        camera.index()
+                    return Err(InputError::in_gltf(
+                        GltfPart::Camera(camera.index()),
+                        "of type perspective, without its perspective object",
                     ));
                 }
                 _ => self.note_once("orthographic cameras are skipped"),
             }
         }
         if let Some(light) = node.light() {
-            let what = format!("node {}: light {}", node.index(), light.index());
-            self.lights
-                .push(punctual_light(&light, world).map_err(|e| format!("{what}: {e}"))?);
+            let light = punctual_light(&light, world).map_err(|e| {
+                e.within(GltfPart::Light(light.index()))
+                    .within(GltfPart::Node(node.index()))
+            })?;
+            self.lights.push(light);
         }
         Ok(())
     }
@@ -435,27 +446,28 @@ impl SceneReader<'_> {
     /// The node's EXT_mesh_gpu_instancing transforms, each T * R * S from its TRANSLATION,
     /// ROTATION and SCALE accessors (float VEC3; float or normalized VEC4; float VEC3; as many
     /// elements in each, an absent one the identity), or `None` where the node has none.
-    fn instancing(&self, node: &gltf::Node) -> Result<Option<Vec<Mat4>>, String> {
+    fn instancing(&self, node: &gltf::Node) -> Result<Option<Vec<Mat4>>, InputError> {
         let json = &self.root.nodes[node.index()];
         let Some(extension) = json.extensions.as_ref().and_then(|e| e.others.get(INSTANCING)) else {
             return Ok(None);
         };
-        let what = format!("node {}: {INSTANCING}", node.index());
         let Some(attributes) = extension.get("attributes").and_then(|a| a.as_object()) else {
-            return Err(format!("{what}: no attributes object"));
+            return Err(InputError::new("no attributes object"));
         };
-        let read = |name: &str, type_: Type, normalized_ok: bool| -> Result<Option<Vec<f32>>, String> {
+        let read = |name: &str, type_: Type, normalized_ok: bool| -> Result<Option<Vec<f32>>, InputError> {
             let Some(value) = attributes.get(name) else {
                 return Ok(None);
             };
             let index = value
                 .as_u64()
-                .ok_or_else(|| format!("{what}: {name} is not an accessor index"))? as usize;
+                .ok_or_else(|| InputError::new(format!("{name} is not an accessor index")))?
+                as usize;
+            let in_attribute = |message: String| InputError::new(message).within_named(name);
             let accessor = self
                 .root
                 .accessors
                 .get(index)
-                .ok_or_else(|| format!("{what}: {name}: accessor {index} does not exist"))?;
+                .ok_or_else(|| in_attribute(format!("accessor {index} does not exist")))?;
             use json::accessor::ComponentType::{F32, I8, I16};
             let component = match &accessor.component_type {
                 json::validation::Checked::Valid(c) => Some(c.0),
@@ -464,18 +476,18 @@ impl SceneReader<'_> {
             let float = component == Some(F32);
             let normalized = accessor.normalized && matches!(component, Some(I8 | I16));
             if !(float || (normalized_ok && normalized)) {
-                return Err(format!(
-                    "{what}: {name}: accessor {index} must be float{}",
+                return Err(in_attribute(format!(
+                    "accessor {index} must be float{}",
                     if normalized_ok {
                         " or normalized signed byte or short"
                     } else {
                         ""
                     }
-                ));
+                )));
             }
             read_floats(self.root, self.buffers, index, &[type_])
                 .map(Some)
-                .map_err(|e| format!("{what}: {name}: {e}"))
+                .map_err(|e| e.within_named(name))
         };
         let translation = read("TRANSLATION", Type::Vec3, false)?;
         let rotation = read("ROTATION", Type::Vec4, true)?;
@@ -487,10 +499,12 @@ impl SceneReader<'_> {
         ];
         let mut given = counts.iter().filter_map(|&(name, count)| Some((name, count?)));
         let Some((first, count)) = given.next() else {
-            return Err(format!("{what}: none of TRANSLATION, ROTATION and SCALE"));
+            return Err(InputError::new("none of TRANSLATION, ROTATION and SCALE"));
         };
         if let Some((name, other)) = given.find(|&(_, other)| other != count) {
-            return Err(format!("{what}: {first} has {count} instances and {name} {other}"));
+            return Err(InputError::new(format!(
+                "{first} has {count} instances and {name} {other}"
+            )));
         }
         (0..count)
             .map(|i| {
@@ -504,10 +518,10 @@ impl SceneReader<'_> {
                         .map_or(glam::Quat::IDENTITY, |r| glam::Quat::from_slice(&r[4 * i..4 * i + 4])),
                     scale: vec3(&scale, Vec3::ONE),
                 };
-                transform.check().map_err(|e| format!("{what}: instance {i}: {e}"))?;
+                transform.check().map_err(|e| e.within(GltfPart::Instance(i)))?;
                 Ok(transform.matrix())
             })
-            .collect::<Result<Vec<_>, String>>()
+            .collect::<Result<Vec<_>, InputError>>()
             .map(Some)
     }
 
@@ -527,7 +541,7 @@ impl SceneReader<'_> {
         offset: Mat4,
         node: usize,
         skin: Option<usize>,
-    ) -> Result<(), String> {
+    ) -> Result<(), InputError> {
         let world = world * offset;
         let linear = Mat3::from_mat4(world);
         let determinant = linear.determinant();
@@ -535,9 +549,12 @@ impl SceneReader<'_> {
         for primitive in local {
             self.triangles += primitive.triangles.len();
             if self.triangles > crate::scene::MAX_RECORDS {
-                return Err(format!(
-                    "node {node}: the scene's triangles pass the {} a render takes",
-                    crate::scene::MAX_RECORDS
+                return Err(InputError::in_gltf(
+                    GltfPart::Node(node),
+                    format!(
+                        "the scene's triangles pass the {} a render takes",
+                        crate::scene::MAX_RECORDS
+                    ),
                 ));
             }
             let rest = &primitive.rest;
@@ -625,22 +642,24 @@ impl GltfScene {
 
 /// A KHR_lights_punctual light where its node puts it: at the node's origin, pointing along the
 /// node's -z, in the extension's units (candela for point and spot, lux for directional).
-fn punctual_light(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> Result<Light, String> {
+fn punctual_light(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> Result<Light, InputError> {
     use gltf::khr_lights_punctual::Kind;
     let color = Vec3::from(light.color()) * light.intensity();
     if !(color.is_finite() && color.min_element() >= 0.0) {
-        return Err("colour times intensity must be finite and not negative".into());
+        return Err(InputError::new(
+            "colour times intensity must be finite and not negative",
+        ));
     }
     let range = light.range();
     if range.is_some_and(|r| !(r > 0.0 && r.is_finite())) {
-        return Err(format!(
+        return Err(InputError::new(format!(
             "range must be positive and finite (got {})",
             range.unwrap_or(0.0)
-        ));
+        )));
     }
     let direction = || {
         crate::scene::unit_vector(world.transform_vector3(Vec3::NEG_Z))
-            .ok_or_else(|| "its node's transform collapses its direction".to_string())
+            .ok_or_else(|| InputError::new("its node's transform collapses its direction"))
     };
     let kind = match light.kind() {
         Kind::Directional => LightKind::Directional {

@@ -5,6 +5,7 @@
 use super::SceneReader;
 use super::data::{read_floats, read_indices};
 use super::tangents::mikktspace_tangents;
+use crate::error::{GltfPart, InputError};
 use crate::scene::animation::RestPrimitive;
 use glam::{Vec2, Vec3, Vec4};
 use gltf::json::accessor::Type;
@@ -28,18 +29,17 @@ pub(super) struct LocalPrimitive {
 }
 
 impl SceneReader<'_> {
-    pub(super) fn mesh(&mut self, mesh: &gltf::Mesh) -> Result<Rc<Vec<LocalPrimitive>>, String> {
+    pub(super) fn mesh(&mut self, mesh: &gltf::Mesh) -> Result<Rc<Vec<LocalPrimitive>>, InputError> {
         if let Some(local) = self.meshes.get(&mesh.index()) {
             return Ok(local.clone());
         }
         let mut local = Vec::new();
         for primitive in mesh.primitives() {
-            let what = format!("mesh {} primitive {}", mesh.index(), primitive.index());
             let weights = mesh.weights().unwrap_or(&[]);
-            if let Some(read) = self
-                .primitive(&primitive, mesh.index(), weights)
-                .map_err(|e| format!("{what}: {e}"))?
-            {
+            if let Some(read) = self.primitive(&primitive, mesh.index(), weights).map_err(|e| {
+                e.within(GltfPart::Primitive(primitive.index()))
+                    .within(GltfPart::Mesh(mesh.index()))
+            })? {
                 local.push(read);
             }
         }
@@ -53,14 +53,14 @@ impl SceneReader<'_> {
         primitive: &gltf::Primitive,
         mesh: usize,
         mesh_weights: &[f32],
-    ) -> Result<Option<LocalPrimitive>, String> {
+    ) -> Result<Option<LocalPrimitive>, InputError> {
         let mode = primitive.mode();
         if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
             self.skipped_modes += 1;
             return Ok(None);
         }
         let attribute = |semantic: gltf::Semantic| primitive.get(&semantic).map(|a| a.index());
-        let position = attribute(gltf::Semantic::Positions).ok_or("no POSITION attribute")?;
+        let position = attribute(gltf::Semantic::Positions).ok_or_else(|| InputError::new("no POSITION attribute"))?;
         let positions: Vec<Vec3> = self
             .vectors::<3>(position, Type::Vec3, None, "position")?
             .into_iter()
@@ -71,7 +71,7 @@ impl SceneReader<'_> {
             .map(|index| self.vectors::<3>(index, Type::Vec3, vertex_count, "normal"))
             .transpose()?
             .map(|normals| normals.into_iter().map(Vec3::from).collect());
-        let coordinates = |set: u32| -> Result<Option<Vec<Vec2>>, String> {
+        let coordinates = |set: u32| -> Result<Option<Vec<Vec2>>, InputError> {
             Ok(attribute(gltf::Semantic::TexCoords(set))
                 .map(|index| self.vectors::<2>(index, Type::Vec2, vertex_count, "texture coordinate"))
                 .transpose()?
@@ -111,14 +111,14 @@ impl SceneReader<'_> {
         let json = &self.root.meshes[mesh].primitives[primitive.index()];
         let targets = super::animation::read_targets(self.root, self.buffers, json, vertex_count)?;
         if !mesh_weights.is_empty() && mesh_weights.len() != targets.len() {
-            return Err(format!(
+            return Err(InputError::new(format!(
                 "{} mesh weights for {} morph targets",
                 mesh_weights.len(),
                 targets.len()
-            ));
+            )));
         }
         if !mesh_weights.iter().all(|w| w.is_finite()) {
-            return Err("mesh weights must be finite".into());
+            return Err(InputError::new("mesh weights must be finite"));
         }
         let mut weights = mesh_weights.to_vec();
         weights.resize(targets.len(), 0.0);
@@ -155,7 +155,7 @@ impl SceneReader<'_> {
     }
 
     /// COLOR_0: VEC3 or VEC4 of floats or normalized unsigned bytes or shorts, as linear RGBA.
-    fn colors(&self, index: usize, vertex_count: usize) -> Result<Vec<Vec4>, String> {
+    fn colors(&self, index: usize, vertex_count: usize) -> Result<Vec<Vec4>, InputError> {
         let (_, _, type_) = super::data::lookup(self.root, index)?;
         let colors: Vec<Vec4> = if type_ == Type::Vec3 {
             let rgb = self.vectors::<3>(index, Type::Vec3, Some(vertex_count), "colour")?;
@@ -175,7 +175,7 @@ impl SceneReader<'_> {
         type_: Type,
         vertex_count: Option<usize>,
         what: &str,
-    ) -> Result<Vec<[f32; N]>, String> {
+    ) -> Result<Vec<[f32; N]>, InputError> {
         let floats = read_floats(self.root, self.buffers, index, &[type_])?;
         let elements: Vec<[f32; N]> = floats
             .chunks_exact(N)
@@ -184,13 +184,16 @@ impl SceneReader<'_> {
         if let Some(count) = vertex_count
             && elements.len() != count
         {
-            return Err(format!(
-                "accessor {index}: {} elements where POSITION has {count}",
-                elements.len()
+            return Err(InputError::in_gltf(
+                GltfPart::Accessor(index),
+                format!("{} elements where POSITION has {count}", elements.len()),
             ));
         }
         if let Some(k) = elements.iter().position(|e| !e.iter().all(|c| c.is_finite())) {
-            return Err(format!("accessor {index}: {what} {k} is not finite"));
+            return Err(InputError::in_gltf(
+                GltfPart::Accessor(index),
+                format!("{what} {k} is not finite"),
+            ));
         }
         Ok(elements)
     }
