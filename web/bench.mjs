@@ -42,13 +42,15 @@ for (const backend of ["webgpu", "webgl2"]) {
     polling: 50,
   });
   const firstFrames = Date.now() - loaded;
-  const start = await page.evaluate(() => ({ ...window.raypipeStatus, now: performance.now() }));
+  // The viewer's live frame count, not the status's (published four times a second).
+  const sample = () => page.evaluate(() => ({ ...window.raypipeStatus, frames: window.raypipeViewer.frames, now: performance.now() }));
+  const start = await sample();
   if (start.error) throw new Error(`${backend}: ${start.error}`);
-  await page.waitForFunction((frames) => window.raypipeStatus.frames >= frames, start.frames + Number(options.frames), {
+  await page.waitForFunction((frames) => window.raypipeViewer.frames >= frames, start.frames + Number(options.frames), {
     timeout: 600_000,
     polling: 20,
   });
-  const end = await page.evaluate(() => ({ ...window.raypipeStatus, now: performance.now() }));
+  const end = await sample();
   const fps = ((end.frames - start.frames) * 1000) / (end.now - start.now);
   console.log(JSON.stringify({
     backend,

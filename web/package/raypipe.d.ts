@@ -51,7 +51,11 @@ export interface ViewerOptions extends Settings {
   strict?: boolean;
 }
 
-/** What runs, as the viewer publishes it after every frame and change. */
+/**
+ * What runs, as the viewer publishes it: at once when a setting, the scene, an error or the
+ * samples' completion changes; four times a second while only the frame count, the clock and the
+ * rates move. Its schema is the viewer's (raypipe-web's status.rs), which a test holds to this.
+ */
 export interface ViewerStatus {
   frames: number;
   backend: "webgpu" | "webgl2";
@@ -102,6 +106,8 @@ export declare class Viewer extends EventTarget {
   readonly canvas: HTMLCanvasElement;
   /** What runs; `null` once disposed. */
   readonly status: ViewerStatus | null;
+  /** The frames drawn so far, at any moment (the status's `frames` is published four times a second); 0 once disposed. */
+  readonly frames: number;
   /** Changes settings; throws the line of any refused (after applying the others). */
   set(settings: Settings): void;
   /** Opens a model, scene or environment; resolves once it is shown, rejects with the one-line message. */

@@ -78,6 +78,12 @@ export class Viewer extends EventTarget {
     return this.#inner ? this.#inner.status : null;
   }
 
+  /// The frames drawn so far, at any moment (the status's `frames` is published four times a
+  /// second); 0 once disposed.
+  get frames() {
+    return this.#inner ? this.#inner.frames : 0;
+  }
+
   /// Changes settings by the URL's names: `{ accel: "stack", spp: 16 }`. Each one taken lands at
   /// once or a few frames later; a refused one throws its line after the others are applied.
   set(settings) {

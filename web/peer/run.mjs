@@ -178,12 +178,13 @@ async function measurePeer(backend) {
 async function measureRaypipe(backend, accel, builder) {
   const name = `raypipe ${backend} ${accel} ${builder}`;
   const page = await newPage();
-  // Every animation frame's timestamp with the page's frame count then: a frame's time is the
-  // interval to the next frame that traced.
+  // Every animation frame's timestamp with the viewer's frame count then (live, where the status
+  // is published four times a second): a frame's time is the interval to the next frame that
+  // traced.
   await page.addInitScript(() => {
     window.frameLog = [];
     const watch = (time) => {
-      const frames = window.raypipeStatus?.frames;
+      const frames = window.raypipeViewer?.frames;
       const last = window.frameLog.at(-1);
       if (frames != null && (!last || last[1] !== frames)) window.frameLog.push([time, frames]);
       requestAnimationFrame(watch);

@@ -10,6 +10,7 @@
 //! calls, the animation frames and the status the page shows.
 
 pub mod params;
+pub mod status;
 
 #[cfg(target_arch = "wasm32")]
 mod console;

@@ -1,7 +1,7 @@
 //! The viewer on a canvas: WebGPU where the browser has it, else WebGL2; every frame traced in the
 //! fragment shader (or the compute kernel, on WebGPU) and shown by the display pass, from the
 //! browser's animation frames. The page's HTML controls call [`Viewer`]'s methods; what runs is
-//! published each frame as `window.raypipeStatus`.
+//! published as a [`Status`] where it says something new.
 //!
 //! Building a tracer is async in a browser (shader compilation and error scopes resolve on the
 //! browser's event loop), so a switch of mode or scene is started here and lands a few frames later;
@@ -9,6 +9,7 @@
 //! message shown.
 
 use crate::params::{StartParams, WebBackend};
+use crate::status::{Status, Value};
 use raypipe::Choice;
 use raypipe::gpu::GpuContext;
 use raypipe::scene::model::Floor;
@@ -53,8 +54,11 @@ struct Page {
     gpu: GpuState,
     /// Counts the devices this viewer has opened: a tracer built on an earlier one is not shown.
     generation: u32,
-    /// The last status published, and who hears of the next ([`Viewer::on_status`]).
+    /// The last status published, as JavaScript reads it and as it was made, when, and who hears
+    /// of the next ([`Viewer::on_status`]).
     status: JsValue,
+    shown: Option<Status>,
+    published_at: Instant,
     listener: Option<js_sys::Function>,
     /// The animation-frame callback and the frame it asked for, dropped by [`Viewer::dispose`].
     frames: FrameCallback,
@@ -288,6 +292,8 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         gpu: GpuState::Live,
         generation: 0,
         status: JsValue::NULL,
+        shown: None,
+        published_at: Instant::now(),
         listener: None,
         frames: Rc::new(RefCell::new(None)),
         frame_request: None,
@@ -508,55 +514,57 @@ impl Page {
         });
     }
 
-    /// The viewer's status: what runs, for the page's readout, the package's `status` event and
-    /// tests. Listeners hear of it after the current call returns, so that they may call the
-    /// viewer back.
-    fn publish(&mut self) {
-        let status = js_sys::Object::new();
-        let set = |key: &str, value: JsValue| {
-            let _ = js_sys::Reflect::set(&status, &key.into(), &value);
-        };
-        let optional = |value: Option<f64>| value.map_or(JsValue::NULL, JsValue::from);
+    /// What runs now.
+    fn status(&self) -> Status {
         let player = &self.player;
         let modes = &player.modes;
-        set("frames", player.frames.into());
-        set("backend", self.backend.name().into());
-        set("adapter", self.screen.ctx.describe().into());
-        set("scene", player.name.clone().into());
-        set("error", player.message.clone().map_or(JsValue::NULL, JsValue::from));
-        set("lost", (self.gpu != GpuState::Live).into());
-        set("busy", self.busy.into());
-        set("width", self.screen.config.width.into());
-        set("height", self.screen.config.height.into());
-        set("primitives", (player.primitives() as u32).into());
-        set("pipeline", modes.pipeline.name().into());
-        set("accel", modes.accel.name().into());
-        set("builder", modes.builder.name().into());
-        set("memory", modes.memory.name().into());
-        set("memories", memory_names(&self.screen.ctx).into());
-        set("depth", modes.depth.into());
-        set("aov", modes.view.name().into());
-        set("exposure", modes.display.exposure.into());
-        set("tonemap", modes.display.tone_map.name().into());
-        set("paused", modes.paused.into());
-        set("floor", (self.floor != Floor::None).into());
-        set(
-            "environment",
-            self.environment
-                .as_ref()
-                .map_or(JsValue::NULL, |(name, _)| name.as_str().into()),
-        );
-        set("moving", player.scene.motion.is_some().into());
-        set("time", player.clock.time.into());
-        set("duration", optional(player.duration().map(f64::from)));
-        set("speed", player.clock.speed.into());
-        set("samples", player.gathered().into());
-        set("spp", player.spp.into());
-        set("fps", player.rate.fps.into());
-        set("frameMs", player.rate.frame_ms.into());
-        set("buildMs", optional(player.build_ms));
-        set("firstFrameMs", optional(self.first_frame_ms));
-        self.status = status.into();
+        Status {
+            frames: player.frames,
+            backend: self.backend.name(),
+            adapter: self.screen.ctx.describe(),
+            scene: player.name.clone(),
+            error: player.message.clone(),
+            lost: self.gpu != GpuState::Live,
+            busy: self.busy,
+            width: self.screen.config.width,
+            height: self.screen.config.height,
+            primitives: player.primitives() as u32,
+            pipeline: modes.pipeline.name(),
+            accel: modes.accel.name(),
+            builder: modes.builder.name(),
+            memory: modes.memory.name(),
+            memories: self.screen.ctx.memory_modes().iter().map(|m| m.name()).collect(),
+            depth: modes.depth,
+            aov: modes.view.name(),
+            exposure: modes.display.exposure,
+            tonemap: modes.display.tone_map.name(),
+            paused: modes.paused,
+            floor: self.floor != Floor::None,
+            environment: self.environment.as_ref().map(|(name, _)| name.clone()),
+            moving: player.scene.motion.is_some(),
+            time: player.clock.time,
+            duration: player.duration(),
+            speed: player.clock.speed,
+            samples: player.gathered(),
+            spp: player.spp,
+            fps: player.rate.fps,
+            frame_ms: player.rate.frame_ms,
+            build_ms: player.build_ms,
+            first_frame_ms: self.first_frame_ms,
+        }
+    }
+
+    /// Publishes the status where it says something new ([`Status::publishes_over`]): as the
+    /// object [`Viewer::status`] returns, and to the listener.
+    fn publish(&mut self) {
+        let status = self.status();
+        let since_ms = self.published_at.elapsed().as_secs_f64() * 1e3;
+        if !status.publishes_over(self.shown.as_ref(), since_ms) {
+            return;
+        }
+        self.status = to_js(&status);
+        self.shown = Some(status);
+        self.published_at = Instant::now();
         if let Some(listener) = self.listener.clone() {
             let status = self.status.clone();
             wasm_bindgen_futures::spawn_local(async move {
@@ -684,6 +692,22 @@ fn superseded(request: &TracerRequest) -> String {
     }
 }
 
-fn memory_names(ctx: &GpuContext) -> js_sys::Array {
-    ctx.memory_modes().iter().map(|m| JsValue::from(m.name())).collect()
+/// A status as the object JavaScript reads, field by field of its schema.
+fn to_js(status: &Status) -> JsValue {
+    let object = js_sys::Object::new();
+    for field in status.fields() {
+        let value = match field.value {
+            Value::Number(n) => JsValue::from(n),
+            Value::Text(text) => JsValue::from(text),
+            Value::Flag(flag) => JsValue::from(flag),
+            Value::Texts(texts) => texts
+                .iter()
+                .map(|t| JsValue::from(*t))
+                .collect::<js_sys::Array>()
+                .into(),
+            Value::Null => JsValue::NULL,
+        };
+        let _ = js_sys::Reflect::set(&object, &field.name.into(), &value);
+    }
+    object.into()
 }

@@ -208,6 +208,12 @@ impl Viewer {
         self.page.borrow().status.clone()
     }
 
+    /// The frames drawn so far, at any moment: a status publishes its count four times a second.
+    #[wasm_bindgen(getter)]
+    pub fn frames(&self) -> u32 {
+        self.page.borrow().player.frames
+    }
+
     /// Calls `listener` with each status published from now on (after the call that published
     /// it returns); `null` stops it.
     pub fn on_status(&self, listener: Option<js_sys::Function>) {
