@@ -24,19 +24,19 @@ pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
 
 /// The most surfaces a ray passes through for blended triangles before the rest of its weight is
 /// dropped: what keeps a pixel's work bounded whatever the scene.
-pub const MAX_BLEND_LAYERS: u32 = 32;
+pub(crate) const MAX_BLEND_LAYERS: u32 = 32;
 /// Room on the ray stack for branches that wait while a ray goes on through blended surfaces,
 /// beyond the one per level of depth.
-pub const BLEND_STACK_ROOM: u32 = 8;
+pub(crate) const BLEND_STACK_ROOM: u32 = 8;
 
 /// The tracer's ray stack (`RAY_STACK_SIZE`): depth-first with two branches keeps at most one
 /// waiting sibling per level, plus the pair just pushed; where a ray goes on behind blended
 /// surfaces, their branches wait too, in BLEND_STACK_ROOM more (a branch that finds the stack full
 /// is dropped, alike on both tracers).
-pub fn ray_stack_size(max_depth: u32, blend: bool) -> u32 {
+pub(crate) fn ray_stack_size(max_depth: u32, blend: bool) -> u32 {
     max_depth + 1 + if blend { BLEND_STACK_ROOM } else { 0 }
 }
 
 /// A footprint is its cone's width over the cosine between the ray and the surface, at least this:
 /// at grazing angles the footprint is long, and reads the coarsest level.
-pub const MIN_FOOTPRINT_COSINE: f32 = 1e-4;
+pub(crate) const MIN_FOOTPRINT_COSINE: f32 = 1e-4;

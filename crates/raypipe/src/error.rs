@@ -225,7 +225,7 @@ pub fn one_line(text: &str) -> String {
 
 /// The longest message a line keeps, in characters: a parser that quotes its input must not turn
 /// one bad file into a screenful.
-pub const MAX_MESSAGE: usize = 300;
+pub(crate) const MAX_MESSAGE: usize = 300;
 
 /// Input quoted in a message: control characters escaped, at most 40 characters of it.
 pub fn quoted(input: &str) -> String {

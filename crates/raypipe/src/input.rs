@@ -6,17 +6,17 @@ use std::io::Read;
 use std::path::Path;
 
 /// The largest scene file read: far past any hand-written scene.
-pub const MAX_SCENE_BYTES: u64 = 16 << 20;
+pub(crate) const MAX_SCENE_BYTES: u64 = 16 << 20;
 /// The largest model file read: a mesh far past what a render takes.
-pub const MAX_MODEL_BYTES: u64 = 4 << 30;
+pub(crate) const MAX_MODEL_BYTES: u64 = 4 << 30;
 
 /// How much of a file is read first, so that a format can refuse it by its header before the
 /// rest is read: far more than any header of the formats read.
-pub const HEAD_BYTES: usize = 64 << 10;
+pub(crate) const HEAD_BYTES: usize = 64 << 10;
 
 /// The bytes of the regular file at `path` (links followed), at most `cap` of them; `what` names
 /// the file in messages ("scene file", "model file").
-pub fn read_regular(path: &Path, what: &str, cap: u64) -> Result<Vec<u8>, InputError> {
+pub(crate) fn read_regular(path: &Path, what: &str, cap: u64) -> Result<Vec<u8>, InputError> {
     read_regular_after_head(path, what, cap, |_, _| Ok(()))
 }
 
@@ -24,7 +24,7 @@ pub fn read_regular(path: &Path, what: &str, cap: u64) -> Result<Vec<u8>, InputE
 /// `check_head` before the rest is read: a file that is not of its format (a gigabyte of zeros
 /// named `.ply`) costs a header's read, not its size in memory. `check_head` is told whether it
 /// sees the whole file.
-pub fn read_regular_after_head(
+pub(crate) fn read_regular_after_head(
     path: &Path,
     what: &str,
     cap: u64,

@@ -30,7 +30,7 @@ fn shares_more<K: Key>(keys: &[K], i: usize, j: i64, limit: K) -> bool {
 /// Internal node i over n sorted keys: its left and right child, as node indices (internal nodes
 /// 0..n-1, then leaves).
 #[inline(always)]
-pub fn internal_node<K: Key>(keys: &[K], i: usize) -> [u32; 2] {
+pub(crate) fn internal_node<K: Key>(keys: &[K], i: usize) -> [u32; 2] {
     // Direction of the range: towards the neighbour that shares the longer prefix, which is the one
     // with the smaller xor (sorted distinct keys never differ from i first at the same bit on both
     // sides). The other neighbour's prefix bounds the range: every key in it shares more with i.

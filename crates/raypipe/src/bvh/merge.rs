@@ -23,13 +23,13 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 /// Leaves merged by one task, by default.
-pub const CHUNK: usize = 1 << 14;
+pub(crate) const CHUNK: usize = 1 << 14;
 
 /// Writes the tree over `keys` (sorted, each holding its primitive) into `nodes` (2n - 1 of them):
 /// internal nodes in Karras's numbering, then the leaves in sorted order, each with its box, parent
 /// and escape link. `leaf_boxes` keeps the leaves' boxes, in sorted order, for the next build.
 /// `chunk` leaves are merged by one task ([`CHUNK`] unless a test wants more left to the last merge).
-pub fn merge_bottom_up<K: Key>(
+pub(crate) fn merge_bottom_up<K: Key>(
     keys: &[K],
     boxes: &[Aabb],
     leaf_boxes: &mut Vec<Aabb>,

@@ -120,6 +120,6 @@ impl Bvh {
     }
 }
 
-pub fn node_box(node: &GpuNode) -> Aabb {
+pub(crate) fn node_box(node: &GpuNode) -> Aabb {
     Aabb::new(glam::Vec3::from_array(node.min), glam::Vec3::from_array(node.max))
 }

@@ -58,7 +58,7 @@ static SPREAD_10: [u32; 1024] = {
 };
 
 /// Spreads the low 21 bits of `v` so that two zero bits separate each.
-pub fn spread_bits_21(v: u64) -> u64 {
+pub(crate) fn spread_bits_21(v: u64) -> u64 {
     let mut x = v & 0x1f_ffff;
     x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
     x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
@@ -73,7 +73,8 @@ pub fn spread_bits_21(v: u64) -> u64 {
 /// lacks SSE4.1). A GPU port must compute the same expression; a fused multiply-add there can move a
 /// centroid that lies within one rounding of a cell boundary into the neighbouring cell, which changes
 /// the tree but not its validity.
-pub fn quantize(value: f32, lo: f32, scale: f32, cells: u32) -> u32 {
+#[cfg(test)]
+pub(crate) fn quantize(value: f32, lo: f32, scale: f32, cells: u32) -> u32 {
     ((value - lo) * scale).max(0.0).min((cells - 1) as f32) as u32
 }
 
@@ -86,7 +87,7 @@ pub fn scales(bounds: Aabb, cells: u32) -> Vec3 {
 /// The grid that Morton codes quantize centroids in: the centroids' bounds, cut into `2^bits` cells
 /// per axis.
 #[derive(Clone, Copy, Debug)]
-pub struct Grid {
+pub(crate) struct Grid {
     min: Vec3A,
     scale: Vec3A,
     last_cell: Vec3A,
@@ -126,7 +127,7 @@ impl Grid {
 }
 
 /// Bounds of the boxes' centroids: the grid that Morton codes quantize in.
-pub fn centroid_bounds(boxes: &[Aabb]) -> Aabb {
+pub(crate) fn centroid_bounds(boxes: &[Aabb]) -> Aabb {
     let (min, max) = boxes
         .par_chunks(4096)
         .map(|chunk| {

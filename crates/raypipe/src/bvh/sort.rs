@@ -24,7 +24,8 @@ const SERIAL_ITEMS: usize = 1 << 16;
 
 /// Sorts `items` by the `bits` low bits of `key(item)`, stably. `scratch` is resized to match and
 /// keeps its capacity for the next sort.
-pub fn radix_sort_by_key<T, K>(items: &mut [T], scratch: &mut Vec<T>, bits: u32, key: K)
+#[cfg(test)]
+pub(crate) fn radix_sort_by_key<T, K>(items: &mut [T], scratch: &mut Vec<T>, bits: u32, key: K)
 where
     T: Copy + Default + Send + Sync,
     K: Fn(T) -> u64 + Sync,
@@ -35,7 +36,7 @@ where
 /// [`radix_sort_by_key`] that hands each stretch of the result to `then(start, stretch)` as soon
 /// as it is in place, while it is still in cache, on the thread that sorted it. The stretches tile
 /// the whole array.
-pub fn radix_sort_by_key_then<T, K, F>(items: &mut [T], scratch: &mut Vec<T>, bits: u32, key: K, then: F)
+pub(crate) fn radix_sort_by_key_then<T, K, F>(items: &mut [T], scratch: &mut Vec<T>, bits: u32, key: K, then: F)
 where
     T: Copy + Default + Send + Sync,
     K: Fn(T) -> u64 + Sync,

@@ -123,7 +123,7 @@ pub(crate) fn flush_subnormal(v: Vec3) -> Vec3 {
 
 /// The smallest power of two q with 65534 q >= extent (1 for a flat or tiny extent). Computed from
 /// the float's exponent bits, so the GPU finds the same one.
-pub fn quantum_for(extent: f32) -> f32 {
+pub(crate) fn quantum_for(extent: f32) -> f32 {
     if extent.is_nan() || extent < TINY_EXTENT {
         return 1.0;
     }

@@ -153,17 +153,17 @@ pub fn leaf_texels(primitive_count: usize) -> u32 {
 /// a greedy collapse can make. Every node that is not all leaves has eight children, so with F
 /// such nodes and L all-leaf ones (two leaves or more each) there are at most n / 2 + F nodes and
 /// F is at most (n / 2 - 1) / 7: 4n / 7 in all.
-pub fn capacity_texels(primitive_count: usize) -> u32 {
+pub(crate) fn capacity_texels(primitive_count: usize) -> u32 {
     leaf_texels(primitive_count) + NODE_TEXELS * node_capacity(primitive_count)
 }
 
-pub fn node_capacity(primitive_count: usize) -> u32 {
+pub(crate) fn node_capacity(primitive_count: usize) -> u32 {
     (4 * primitive_count).div_ceil(7).max(1) as u32
 }
 
 /// The smallest power of two q with SPAN q >= extent (1 for a flat or tiny extent), as its biased
 /// exponent; from the float's exponent bits, so the GPU finds the same one.
-pub fn quantum_exponent(extent: f32) -> u32 {
+pub(crate) fn quantum_exponent(extent: f32) -> u32 {
     if extent.is_nan() || extent < TINY_EXTENT {
         return 127;
     }
@@ -309,7 +309,7 @@ fn quantize(origin: Vec3, exponents: [u32; 3], bounds: Aabb) -> ([u32; 3], [u32;
 }
 
 /// The wide BVH of `nodes` (the root first) over `primitive_count` primitives, as its texels,
-/// [`capacity_texels`] of them: as many as any tree over as many primitives may need, as the
+/// `capacity_texels` of them: as many as any tree over as many primitives may need, as the
 /// GPU's, so that a renderer whose scene moves rewrites its array in place each frame.
 pub fn wide_texels(nodes: &[GpuNode], primitive_count: usize) -> Vec<GpuWideTexel> {
     let root = leaf_texels(primitive_count) as usize;

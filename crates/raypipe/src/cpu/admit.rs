@@ -91,7 +91,7 @@ fn triangle_stops_ray(query: &RayQuery, triangle: &GpuTriangle, ray: &Ray) -> bo
 
 /// Tests a primitive of the BVH; when it beats the best hit and the ray takes it, it becomes the
 /// best hit and this says so (`hit_primitive`).
-pub fn hit_primitive(primitives: &Primitives, index: u32, ray: &Ray, hit: &mut Hit) -> bool {
+pub(crate) fn hit_primitive(primitives: &Primitives, index: u32, ray: &Ray, hit: &mut Hit) -> bool {
     count_box_tests(1);
     let t = primitives.intersect(index, ray, hit.t);
     if closer_primitive(t, index, hit) && primitives.stops_ray(index, ray) {

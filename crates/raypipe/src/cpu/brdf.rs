@@ -6,11 +6,11 @@ use std::f32::consts::PI;
 
 /// The smallest GGX alpha direct light is evaluated with: a point light's highlight on a mirror
 /// is then a tiny spot rather than 0/0.
-pub const MIN_ALPHA: f32 = 1e-3;
+pub(crate) const MIN_ALPHA: f32 = 1e-3;
 
 /// What a glTF surface is made of at a hit, its maps applied.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GltfSurface {
+pub(crate) struct GltfSurface {
     pub base: Vec3,
     pub metallic: f32,
     pub roughness: f32,
@@ -31,14 +31,14 @@ fn max3(v: Vec3) -> f32 {
 }
 
 /// Trowbridge-Reitz (GGX) normal distribution D.
-pub fn ggx_distribution(n_dot_h: f32, alpha: f32) -> f32 {
+pub(crate) fn ggx_distribution(n_dot_h: f32, alpha: f32) -> f32 {
     let a2 = alpha * alpha;
     let f = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
     a2 / (PI * f * f)
 }
 
 /// Smith's height-correlated visibility V = G2 / (4 |n·l| |n·v|).
-pub fn smith_visibility(n_dot_l: f32, n_dot_v: f32, alpha: f32) -> f32 {
+pub(crate) fn smith_visibility(n_dot_l: f32, n_dot_v: f32, alpha: f32) -> f32 {
     let a2 = alpha * alpha;
     let gv = n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt();
     let gl = n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt();
@@ -60,21 +60,21 @@ fn smith_g2(n_dot_l: f32, n_dot_v: f32, alpha: f32) -> f32 {
 /// The dielectric layer's Fresnel reflectance at `v_dot_h` (Schlick), KHR_materials_specular's
 /// factor and colour applied: F0 = min(((ior - 1) / (ior + 1))² specular colour, 1) and F90 = 1,
 /// both times the factor.
-pub fn dielectric_fresnel(s: &GltfSurface, v_dot_h: f32) -> Vec3 {
+pub(crate) fn dielectric_fresnel(s: &GltfSurface, v_dot_h: f32) -> Vec3 {
     let r = (s.ior - 1.0) / (s.ior + 1.0);
     let f0 = (r * r * s.specular_color).min(Vec3::ONE);
     s.specular_factor * (f0 + (Vec3::ONE - f0) * pow5(1.0 - v_dot_h.abs()))
 }
 
 /// The metal's Fresnel reflectance (Schlick, F0 the base colour).
-pub fn metal_fresnel(s: &GltfSurface, v_dot_h: f32) -> Vec3 {
+pub(crate) fn metal_fresnel(s: &GltfSurface, v_dot_h: f32) -> Vec3 {
     s.base + (Vec3::ONE - s.base) * pow5(1.0 - v_dot_h.abs())
 }
 
 /// The glTF BRDF for light arriving from `l` and leaving to `v`, about the shading normal `n`
 /// (all unit, `l` and `v` on `n`'s side): mix(dielectric, metal, metallic) with
 /// dielectric = (1 - max F) (1 - transmission) base / π + F D V and metal = F_metal D V.
-pub fn gltf_brdf(s: &GltfSurface, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
+pub(crate) fn gltf_brdf(s: &GltfSurface, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
     let h = (l + v).normalize();
     let n_dot_l = n.dot(l).max(0.0);
     let n_dot_v = n.dot(v).max(0.0);
@@ -91,7 +91,7 @@ pub fn gltf_brdf(s: &GltfSurface, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
 
 /// A unit `n`'s tangent frame (Duff et al. 2017): two unit vectors that make, with `n`, a
 /// right-handed orthonormal basis.
-pub fn tangent_frame(n: Vec3) -> (Vec3, Vec3) {
+pub(crate) fn tangent_frame(n: Vec3) -> (Vec3, Vec3) {
     let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
@@ -103,7 +103,7 @@ pub fn tangent_frame(n: Vec3) -> (Vec3, Vec3) {
 
 /// A microfacet normal drawn from GGX's distribution of normals visible from `v` (Heitz 2018),
 /// in the frame where the surface normal is +z; `u` uniform in [0, 1)².
-pub fn sample_visible_normal(v: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
+pub(crate) fn sample_visible_normal(v: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
     let vh = Vec3::new(alpha * v.x, alpha * v.y, v.z).normalize();
     let len_sq = vh.x * vh.x + vh.y * vh.y;
     let t1 = if len_sq > 0.0 {
@@ -123,7 +123,7 @@ pub fn sample_visible_normal(v: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
 
 /// Where a glTF surface sends its reflected ray, and what the ray carries back.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpecularSample {
+pub(crate) struct SpecularSample {
     /// Unit, on `n`'s side unless `weight` is zero.
     pub dir: Vec3,
     /// The reflected radiance's factor: F at a mirror; F G2 / G1(v), the visible-normal
@@ -138,7 +138,7 @@ pub struct SpecularSample {
 
 /// The reflected ray of a glTF surface seen from `v` about the shading normal `n`: the mirror
 /// direction at roughness 0, else one drawn through GGX's visible normals with `u`.
-pub fn sample_specular(s: &GltfSurface, n: Vec3, v: Vec3, u: [f32; 2]) -> SpecularSample {
+pub(crate) fn sample_specular(s: &GltfSurface, n: Vec3, v: Vec3, u: [f32; 2]) -> SpecularSample {
     let alpha = s.roughness * s.roughness;
     let n_dot_v = n.dot(v).max(0.0);
     let h = if alpha == 0.0 {

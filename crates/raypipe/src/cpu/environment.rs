@@ -10,7 +10,7 @@ use std::f32::consts::PI;
 
 /// Where direction `d` (unit) reads an equirectangular map of the environment: `d` turned back by
 /// the environment's rotation about +y, then u = 0.5 + atan2(x, -z) / 2π, v = acos(y) / π.
-pub fn environment_uv(scene: &PackedScene, d: Vec3) -> Vec2 {
+pub(crate) fn environment_uv(scene: &PackedScene, d: Vec3) -> Vec2 {
     let [cos, sin] = scene.globals.scene.environment_turn;
     let x = cos * d.x - sin * d.z;
     let z = sin * d.x + cos * d.z;
@@ -20,7 +20,7 @@ pub fn environment_uv(scene: &PackedScene, d: Vec3) -> Vec2 {
 /// What a ray leaving the scene along `dir` brings back (`escaped_radiance`): the environment's
 /// radiance, or the background colour where the scene has none. The map is read at the level
 /// where a texel spans the ray cone's `spread` (radians; a row of the map spans π / height).
-pub fn escaped_radiance(scene: &PackedScene, dir: Vec3, spread: f32) -> Vec3 {
+pub(crate) fn escaped_radiance(scene: &PackedScene, dir: Vec3, spread: f32) -> Vec3 {
     let info = &scene.globals.scene;
     if info.environment_map == NONE {
         return v3(info.background);
@@ -32,7 +32,7 @@ pub fn escaped_radiance(scene: &PackedScene, dir: Vec3, spread: f32) -> Vec3 {
 
 /// The environment's irradiance over π on a surface facing `normal`: what a white Lambert surface
 /// there reflects.
-pub fn environment_irradiance(scene: &PackedScene, normal: Vec3) -> Vec3 {
+pub(crate) fn environment_irradiance(scene: &PackedScene, normal: Vec3) -> Vec3 {
     let info = &scene.globals.scene;
     let map = &scene.texture_maps[info.irradiance_map as usize];
     info.environment_intensity * sample_texture(scene, map, environment_uv(scene, normal), -1.0).truncate()

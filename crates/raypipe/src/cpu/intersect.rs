@@ -29,7 +29,7 @@ impl Ray {
 /// Benthin and Wald 2013): the frame's z is the direction's dominant axis, its x and y the other two
 /// (swapped where the ray points down that axis, which keeps the triangles' winding); `s` holds
 /// (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in the frame's axes. As in the shader, the axes are
-/// choices between swizzles ([`shear_axes`]), which GPU compilers keep in registers.
+/// choices between swizzles (`shear_axes`), which GPU compilers keep in registers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayShear {
     /// The frame's z is world x (`z_is_x`), world y (`z_is_y`), or world z.
@@ -41,7 +41,7 @@ pub struct RayShear {
 }
 
 /// `v`'s components in the frame's axis order: exact, a permutation.
-pub fn shear_axes(v: Vec3, shear: &RayShear) -> Vec3 {
+pub(crate) fn shear_axes(v: Vec3, shear: &RayShear) -> Vec3 {
     let cyclic = if shear.z_is_x {
         v.yzx()
     } else if shear.z_is_y {
@@ -52,7 +52,7 @@ pub fn shear_axes(v: Vec3, shear: &RayShear) -> Vec3 {
     if shear.swap_xy { cyclic.yxz() } else { cyclic }
 }
 
-pub fn ray_shear(dir: Vec3) -> RayShear {
+pub(crate) fn ray_shear(dir: Vec3) -> RayShear {
     let a = dir.abs();
     let mut shear = RayShear {
         z_is_x: a.x > a.y && a.x > a.z,
@@ -95,7 +95,7 @@ impl Hit {
     }
 }
 
-pub fn v3(a: [f32; 3]) -> Vec3 {
+pub(crate) fn v3(a: [f32; 3]) -> Vec3 {
     Vec3::from_array(a)
 }
 
@@ -106,21 +106,21 @@ thread_local! {
     static BOX_TESTS: std::cell::Cell<u32> = const { std::cell::Cell::new(0) };
 }
 
-pub fn count_box_tests(n: u32) {
+pub(crate) fn count_box_tests(n: u32) {
     BOX_TESTS.with(|c| c.set(c.get().wrapping_add(n)));
 }
 
-pub fn box_tests() -> u32 {
+pub(crate) fn box_tests() -> u32 {
     BOX_TESTS.with(|c| c.get())
 }
 
-pub fn reset_box_tests() {
+pub(crate) fn reset_box_tests() {
     BOX_TESTS.with(|c| c.set(0));
 }
 
 /// The nearest t in (0, t_max] where the ray meets the sphere, or [`NO_HIT`]. t_max itself counts, so
 /// that a sphere as near as the best hit so far can still win the tie (see [`closer_primitive`]).
-pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
+pub(crate) fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
     let oc = ray.origin - v3(sphere.center);
     let b = oc.dot(ray.dir);
     // Squared distance from the centre to the ray's line, without the cancellation in b*b - c.
@@ -143,7 +143,7 @@ pub fn intersect_sphere(sphere: &GpuSphere, ray: &Ray, t_max: f32) -> f32 {
 
 /// A corner in the ray's sheared frame: xy where the ray passes through (0, 0), z scaled so that
 /// the hit's t comes out of the barycentric blend of the corners' z.
-pub fn sheared(corner: Vec3, ray: &Ray) -> Vec3 {
+pub(crate) fn sheared(corner: Vec3, ray: &Ray) -> Vec3 {
     let p = shear_axes(corner - ray.origin, &ray.shear);
     let s = ray.shear.s;
     Vec3::new(p.x - s.x * p.z, p.y - s.y * p.z, s.z * p.z)
@@ -152,7 +152,7 @@ pub fn sheared(corner: Vec3, ray: &Ray) -> Vec3 {
 /// p.x q.y - p.y q.x, with the pair taken in one fixed order: the triangle across an edge meets it
 /// as (q, p) and gets exactly the negated value, as in the shader, where the compiler may fuse
 /// multiply-adds.
-pub fn edge_function(p: glam::Vec2, q: glam::Vec2) -> f32 {
+pub(crate) fn edge_function(p: glam::Vec2, q: glam::Vec2) -> f32 {
     if p.x < q.x || (p.x == q.x && p.y < q.y) {
         p.x * q.y - p.y * q.x
     } else {
@@ -165,7 +165,7 @@ pub fn edge_function(p: glam::Vec2, q: glam::Vec2) -> f32 {
 /// passes outside. Two triangles sharing an edge compute that edge's function from the same sheared
 /// corners, so a ray through the edge hits one of them (or both), never neither. A ray in the
 /// triangle's plane (or a degenerate triangle) has det 0 and misses.
-pub fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
+pub(crate) fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
     let [a, b, c] = triangle.corners().map(|corner| sheared(corner, ray));
     let u = edge_function(c.truncate(), b.truncate());
     let v = edge_function(a.truncate(), c.truncate());
@@ -189,7 +189,7 @@ pub fn triangle_uvt(triangle: &GpuTriangle, ray: &Ray) -> Vec3 {
 }
 
 /// The t in (0, t_max] where the ray meets the triangle, or [`NO_HIT`]; t_max counts, as for spheres.
-pub fn intersect_triangle(triangle: &GpuTriangle, ray: &Ray, t_max: f32) -> f32 {
+pub(crate) fn intersect_triangle(triangle: &GpuTriangle, ray: &Ray, t_max: f32) -> f32 {
     let t = triangle_uvt(triangle, ray).z;
     if t > 0.0 && t <= t_max { t } else { NO_HIT }
 }
@@ -197,11 +197,11 @@ pub fn intersect_triangle(triangle: &GpuTriangle, ray: &Ray, t_max: f32) -> f32 
 /// Whether primitive `index`, met at t (or [`NO_HIT`]), beats the best hit: nearer, or as near with
 /// a lower index, so that coincident primitives resolve the same whatever order a traversal visits
 /// them in.
-pub fn closer_primitive(t: f32, index: u32, best: &Hit) -> bool {
+pub(crate) fn closer_primitive(t: f32, index: u32, best: &Hit) -> bool {
     t > 0.0 && (t < best.t || (t == best.t && best.kind == HitKind::Primitive && index < best.index))
 }
 
-pub fn intersect_plane(plane: &GpuPlane, ray: &Ray, t_max: f32) -> f32 {
+pub(crate) fn intersect_plane(plane: &GpuPlane, ray: &Ray, t_max: f32) -> f32 {
     let normal = v3(plane.normal);
     let denom = normal.dot(ray.dir);
     if denom.abs() < PARALLEL_EPSILON {
@@ -215,13 +215,13 @@ pub fn intersect_plane(plane: &GpuPlane, ray: &Ray, t_max: f32) -> f32 {
 }
 
 /// 1 / dir, with near-zero components replaced so the slab test never computes 0 * inf.
-pub fn safe_inverse(dir: Vec3) -> Vec3 {
+pub(crate) fn safe_inverse(dir: Vec3) -> Vec3 {
     let tiny = Vec3::splat(TINY_DIRECTION);
     1.0 / Vec3::select(dir.abs().cmplt(tiny), tiny, dir)
 }
 
 /// Where the ray enters the box (0 if it starts inside), if it does so by t_max; else [`NO_HIT`].
-pub fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
+pub(crate) fn intersect_box(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
     count_box_tests(1);
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
@@ -244,7 +244,7 @@ fn smaller(a: f32, b: f32) -> f32 {
 }
 
 /// Planes are unbounded, so they stay outside any acceleration structure and are always tested.
-pub fn closest_plane(planes: &[GpuPlane], ray: &Ray, best: Hit) -> Hit {
+pub(crate) fn closest_plane(planes: &[GpuPlane], ray: &Ray, best: Hit) -> Hit {
     let mut hit = best;
     for (i, plane) in planes.iter().enumerate() {
         let t = intersect_plane(plane, ray, hit.t);
@@ -259,6 +259,6 @@ pub fn closest_plane(planes: &[GpuPlane], ray: &Ray, best: Hit) -> Hit {
     hit
 }
 
-pub fn any_plane(planes: &[GpuPlane], ray: &Ray, t_max: f32) -> bool {
+pub(crate) fn any_plane(planes: &[GpuPlane], ray: &Ray, t_max: f32) -> bool {
     planes.iter().any(|plane| intersect_plane(plane, ray, t_max) < t_max)
 }

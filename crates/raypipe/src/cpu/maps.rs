@@ -12,7 +12,7 @@ use glam::{UVec2, Vec2, Vec3, Vec4};
 
 /// A texture coordinate brought into the image's period by its wrap mode: [0, 1] for repeat and
 /// clamp, [0, 2] for mirror (the second copy mirrored).
-pub fn fold_coordinate(c: f32, wrap: u32) -> f32 {
+pub(crate) fn fold_coordinate(c: f32, wrap: u32) -> f32 {
     if wrap == WRAP_REPEAT {
         return c - c.floor();
     }
@@ -23,7 +23,7 @@ pub fn fold_coordinate(c: f32, wrap: u32) -> f32 {
 }
 
 /// Column or row `i` of an axis of `size` texels, where `i` may lie one outside the folded period.
-pub fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
+pub(crate) fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
     if wrap == WRAP_REPEAT {
         return (i + size) % size;
     }
@@ -37,14 +37,14 @@ pub fn wrap_texel(i: i32, size: i32, wrap: u32) -> i32 {
 
 /// Where a mip level's texels start among all textures' texels, and its size.
 #[derive(Clone, Copy, Debug)]
-pub struct MipLevel {
+pub(crate) struct MipLevel {
     pub offset: u32,
     pub size: UVec2,
 }
 
 /// Level `level` of the map's texture (`mip_level`): the levels follow the image one after another,
 /// each side halved and rounded up (`scene::texture::mip_sizes`).
-pub fn mip_level(map: &GpuTextureMap, level: u32) -> MipLevel {
+pub(crate) fn mip_level(map: &GpuTextureMap, level: u32) -> MipLevel {
     let mut offset = map.offset;
     let mut size = UVec2::new(map.width, map.height);
     for _ in 0..level {
@@ -90,7 +90,7 @@ fn sample_level(scene: &PackedScene, map: &GpuTextureMap, uv: Vec2, level: u32, 
 /// magnified and read at full size through the magnification filter; above, the minification
 /// filter reads the level nearest `lod` or blends the two around it (trilinear), or reads the full
 /// size where the sampler has no mipmaps.
-pub fn sample_texture(scene: &PackedScene, map: &GpuTextureMap, surface_uv: Vec2, lod: f32) -> Vec4 {
+pub(crate) fn sample_texture(scene: &PackedScene, map: &GpuTextureMap, surface_uv: Vec2, lod: f32) -> Vec4 {
     let point = surface_uv.extend(1.0);
     let uv = Vec2::new(v3(map.transform_u).dot(point), v3(map.transform_v).dot(point));
     let bits = map.sampling;
@@ -121,7 +121,7 @@ pub fn sample_texture(scene: &PackedScene, map: &GpuTextureMap, surface_uv: Vec2
 /// footprint spans in the map's texture, through the triangle's texel scale for the map's
 /// coordinate set and the map's transform (which scales areas by its determinant). -1 (full size)
 /// where there is no footprint.
-pub fn texture_lod(map: &GpuTextureMap, attributes: &Attributes) -> f32 {
+pub(crate) fn texture_lod(map: &GpuTextureMap, attributes: &Attributes) -> f32 {
     let scale = if map.tex_coord == 1 {
         attributes.texel_scale.y
     } else {
@@ -134,12 +134,12 @@ pub fn texture_lod(map: &GpuTextureMap, attributes: &Attributes) -> f32 {
 }
 
 /// log2 of `texels`, -1 where it is not positive (`lod_of`).
-pub fn lod_of(texels: f32) -> f32 {
+pub(crate) fn lod_of(texels: f32) -> f32 {
     if texels > 0.0 { texels.min(1e30).log2() } else { -1.0 }
 }
 
 /// Whether the attributes hold the coordinate set the map reads (`has_coordinates`).
-pub fn has_coordinates(map: &GpuTextureMap, attributes: &Attributes) -> bool {
+pub(crate) fn has_coordinates(map: &GpuTextureMap, attributes: &Attributes) -> bool {
     let set = if map.tex_coord == 1 {
         ATTRIBUTE_UV1
     } else {
@@ -149,7 +149,7 @@ pub fn has_coordinates(map: &GpuTextureMap, attributes: &Attributes) -> bool {
 }
 
 /// The coordinates the map reads.
-pub fn map_coordinates(map: &GpuTextureMap, attributes: &Attributes) -> Vec2 {
+pub(crate) fn map_coordinates(map: &GpuTextureMap, attributes: &Attributes) -> Vec2 {
     if map.tex_coord == 1 {
         attributes.uv1
     } else {
@@ -159,7 +159,7 @@ pub fn map_coordinates(map: &GpuTextureMap, attributes: &Attributes) -> Vec2 {
 
 /// Texture map `index` at the hit, through the coordinate set it reads; white where the triangle
 /// lacks that set (`sample_map`), `None` where there is no map.
-pub fn sample_map(scene: &PackedScene, index: u32, attributes: &Attributes) -> Option<Vec4> {
+pub(crate) fn sample_map(scene: &PackedScene, index: u32, attributes: &Attributes) -> Option<Vec4> {
     if index == NONE {
         return None;
     }
@@ -177,7 +177,7 @@ pub fn sample_map(scene: &PackedScene, index: u32, attributes: &Attributes) -> O
 
 /// The alpha of a material's surface at the hit (`surface_alpha`): its own, times the vertex
 /// colour's, times the base colour map's (`surface_material` multiplies them in this order).
-pub fn surface_alpha(scene: &PackedScene, material: &GpuMaterial, attributes: &Attributes) -> f32 {
+pub(crate) fn surface_alpha(scene: &PackedScene, material: &GpuMaterial, attributes: &Attributes) -> f32 {
     let mut alpha = material.alpha;
     if attributes.present & ATTRIBUTE_COLOR != 0 {
         alpha *= attributes.color.w;
@@ -252,7 +252,7 @@ fn blend_corners(uvt: Vec3, corners: &[AttributeTexel]) -> Vec4 {
 }
 
 /// The triangle's attributes where the ray meets it (`triangle_attributes`).
-pub fn triangle_attributes(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray) -> Attributes {
+pub(crate) fn triangle_attributes(scene: &PackedScene, triangle: &GpuTriangle, ray: &Ray) -> Attributes {
     let mut a = Attributes::NONE;
     if triangle.attributes == NONE {
         return a;

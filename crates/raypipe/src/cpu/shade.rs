@@ -20,7 +20,7 @@ use glam::{Vec2, Vec3};
 /// refraction use it), and the direction from the surface to the viewer. Twin of `ShadingFrame` in
 /// shade.wgsl.
 #[derive(Clone, Copy, Debug)]
-pub struct ShadingFrame {
+pub(crate) struct ShadingFrame {
     pub normal: Vec3,
     pub shading: Vec3,
     pub view: Vec3,
@@ -49,12 +49,12 @@ pub struct Surface {
     pub curvature: f32,
 }
 
-pub fn max_abs(v: Vec3) -> f32 {
+pub(crate) fn max_abs(v: Vec3) -> f32 {
     v.abs().max_element()
 }
 
 /// `v.normalize()` for any nonzero v: the squares of a big or small v would overflow or underflow.
-pub fn normalize_scaled(v: Vec3) -> Vec3 {
+pub(crate) fn normalize_scaled(v: Vec3) -> Vec3 {
     (v / max_abs(v)).normalize()
 }
 
@@ -64,7 +64,7 @@ pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
 }
 
 /// The surface a ray hit: where, its normals, its material.
-pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
+pub(crate) fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
     let position = ray.origin + hit.t * ray.dir;
     let reach = max_abs(ray.origin).max(max_abs(position));
     if hit.kind == HitKind::Primitive {
@@ -119,7 +119,7 @@ pub fn surface_at(scene: &PackedScene, ray: &Ray, hit: &Hit) -> Surface {
 /// The surface's material, its vertex colour and maps applied at the hit (`surface_material`): the
 /// base colour's (alpha too, as `surface_alpha` computes it), and a glTF material's metalness and
 /// roughness (blue and green), emission, and specular strength (alpha) and colour.
-pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
+pub(crate) fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
     let mut material = scene.materials[surface.material as usize];
     let a = &surface.attributes;
     if a.present & ATTRIBUTE_COLOR != 0 {
@@ -153,7 +153,7 @@ pub fn surface_material(scene: &PackedScene, surface: &Surface) -> GpuMaterial {
 
 /// The share of ambient light that reaches a glTF surface: 1 blended toward its occlusion map's
 /// red by the map's strength.
-pub fn ambient_share(scene: &PackedScene, surface: &Surface, material: &GpuMaterial) -> f32 {
+pub(crate) fn ambient_share(scene: &PackedScene, surface: &Surface, material: &GpuMaterial) -> f32 {
     if surface.attributes.present == 0 {
         return 1.0;
     }
@@ -167,7 +167,7 @@ pub fn ambient_share(scene: &PackedScene, surface: &Surface, material: &GpuMater
 /// triangle's tangent (made perpendicular to the shading normal n), its bitangent w cross(n,
 /// tangent) and n; n itself where the triangle lacks the map's coordinates or tangents, or where
 /// the bent normal would turn away from the geometric one.
-pub fn normal_mapped(scene: &PackedScene, surface: &Surface, material: &GpuMaterial) -> Vec3 {
+pub(crate) fn normal_mapped(scene: &PackedScene, surface: &Surface, material: &GpuMaterial) -> Vec3 {
     let n = surface.shading;
     let a = &surface.attributes;
     if material.normal_map == NONE || a.present & ATTRIBUTE_TANGENT == 0 {
@@ -231,7 +231,7 @@ fn triangle_curvature(triangle: &GpuTriangle, normals: [Vec3; 3], normal: Vec3) 
 /// How a light reaches a point: the unit direction to it, how far a shadow ray runs, and E, the
 /// irradiance on a surface facing it.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LightArrival {
+pub(crate) struct LightArrival {
     pub dir: Vec3,
     pub distance: f32,
     pub irradiance: Vec3,
@@ -239,7 +239,7 @@ pub struct LightArrival {
 
 /// KHR_lights_punctual's recommended falloff: inverse-square, windowed smoothly to zero at
 /// `range` (none where it is 0).
-pub fn range_attenuation(range: f32, distance: f32) -> f32 {
+pub(crate) fn range_attenuation(range: f32, distance: f32) -> f32 {
     let inverse_square = 1.0 / (distance * distance);
     if range <= 0.0 {
         return inverse_square;
@@ -250,7 +250,7 @@ pub fn range_attenuation(range: f32, distance: f32) -> f32 {
 }
 
 /// What `light` gives the point `position`, by its kind (`light_arrival`).
-pub fn light_arrival(light: &GpuLight, position: Vec3) -> LightArrival {
+pub(crate) fn light_arrival(light: &GpuLight, position: Vec3) -> LightArrival {
     if light.kind == LIGHT_DIRECTIONAL {
         return LightArrival {
             dir: -v3(light.direction),
@@ -286,7 +286,7 @@ fn lit(light: &GpuLight, arrival: &LightArrival) -> bool {
 /// Phong times the light's E, in the hit's `frame`. `shadow_ray` casts a shadow ray (and counts
 /// it): `None` where something blocks it, else the share of the light that blended triangles let
 /// through (`occluded` and `shadowed`).
-pub fn direct_light(
+pub(crate) fn direct_light(
     scene: &PackedScene,
     surface: &Surface,
     frame: ShadingFrame,
@@ -320,7 +320,7 @@ pub fn direct_light(
 }
 
 /// A glTF material's parameters, as the BRDF takes them.
-pub fn gltf_surface(material: &GpuMaterial) -> GltfSurface {
+pub(crate) fn gltf_surface(material: &GpuMaterial) -> GltfSurface {
     GltfSurface {
         base: v3(material.color),
         metallic: material.metallic,
@@ -335,7 +335,7 @@ pub fn gltf_surface(material: &GpuMaterial) -> GltfSurface {
 /// A glTF surface's direct light: the ambient light (the environment's irradiance, where the
 /// scene has one) on its diffuse share, times `ambient_share`; plus, for every light that it faces
 /// and that nothing blocks, E times the BRDF times the cosine. Arguments as [`direct_light`]'s.
-pub fn gltf_direct_light(
+pub(crate) fn gltf_direct_light(
     scene: &PackedScene,
     surface: &Surface,
     frame: ShadingFrame,
@@ -372,21 +372,21 @@ pub fn gltf_direct_light(
 
 /// `side` points to where the new ray goes: the facing normal for reflection and shadows, its
 /// opposite for refraction.
-pub fn offset_origin(surface: &Surface, side: Vec3) -> Vec3 {
+pub(crate) fn offset_origin(surface: &Surface, side: Vec3) -> Vec3 {
     surface.position + side * (RAY_BIAS * surface.reach)
 }
 
 /// The unit direction of a ray along `i` refracted into the medium across `n` (unit, on i's side)
 /// with `eta` the ratio of indices (from over to); `None` past the critical angle
 /// (`refracted_direction`).
-pub fn refracted_direction(i: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+pub(crate) fn refracted_direction(i: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
     let cos_i = -n.dot(i);
     let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
     (k >= 0.0).then(|| (eta * i + (eta * cos_i - k.sqrt()) * n).normalize())
 }
 
 /// Schlick's approximation of the Fresnel reflectance; cos_theta is taken on the less dense side.
-pub fn fresnel_schlick(cos_theta: f32, ior: f32) -> f32 {
+pub(crate) fn fresnel_schlick(cos_theta: f32, ior: f32) -> f32 {
     let r = (1.0 - ior) / (1.0 + ior);
     let r0 = r * r;
     let x = 1.0 - cos_theta;

@@ -437,7 +437,7 @@ impl<'a> Tracer<'a> {
 
 /// A 32-bit integer hash (PCG's output permutation, after Jarzynski and Olano 2020), for the
 /// per-pixel scramble of the sample sequence (`hash_u32`).
-pub fn hash_u32(value: u32) -> u32 {
+pub(crate) fn hash_u32(value: u32) -> u32 {
     let state = value.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
     let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
     (word >> 22) ^ word
@@ -459,13 +459,13 @@ pub fn sample_offset(pixel: UVec2, index: u32) -> Vec2 {
 }
 
 /// The seed of a pixel's sample's random sequence (`sample_seed`).
-pub fn sample_seed(pixel: UVec2, sample: u32) -> u32 {
+pub(crate) fn sample_seed(pixel: UVec2, sample: u32) -> u32 {
     hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(sample)))
 }
 
 /// The spread angle of the ray cone through a pixel (`pixel_spread`): the angle one pixel of
 /// the image subtends at the eye, at its centre.
-pub fn pixel_spread(scene: &PackedScene) -> f32 {
+pub(crate) fn pixel_spread(scene: &PackedScene) -> f32 {
     let camera = &scene.globals.camera;
     (2.0 * camera.tan_half_fov / camera.height).atan()
 }

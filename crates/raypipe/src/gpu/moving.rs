@@ -40,6 +40,7 @@ pub enum MotionError {
     /// The pose leaves the space the tracers reach (or its time is not finite).
     #[error(transparent)]
     Input(#[from] InputError),
+    /// The device refused the build, the renderer or a write.
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
@@ -211,6 +212,7 @@ impl MovingScene {
         self.renderer.render_samples(samples, prepare, sample_done).await
     }
 
+    /// The renderer that traces the scene.
     pub fn renderer(&self) -> &Renderer {
         &self.renderer
     }

@@ -4,7 +4,7 @@
 use crate::records::constants;
 
 /// The records shared with the host.
-pub const TYPES: &str = include_str!("shaders/types.wgsl");
+pub(crate) const TYPES: &str = include_str!("shaders/types.wgsl");
 
 /// What every shader module starts from: the constants shared with the CPU reference, and the
 /// records shared with the host.

@@ -23,6 +23,8 @@ use crate::records::packed::MovedRecords;
 use crate::records::{GpuSphere, PackedScene};
 use crate::scene::Scene;
 
+/// A scene's primitives in the GPU build's buffers, and the passes that rebuild (or refit) their
+/// tree there before a frame: skinning, the LBVH, its threaded layout or wide collapse.
 pub struct SceneRebuild {
     builder: GpuLbvhBuilder,
     /// For the walks that read the 16-byte depth-first nodes.
@@ -160,6 +162,7 @@ impl SceneRebuild {
         }
     }
 
+    /// The LBVH build, whose buffers hold the primitives and the tree.
     pub fn builder(&self) -> &GpuLbvhBuilder {
         &self.builder
     }
@@ -169,9 +172,7 @@ impl SceneRebuild {
         self.wide.as_ref()
     }
 
-    /// GPU time of the last skinning pass and of the last refit (with its threaded layout or wide
-    /// collapse), where
-    /// they ran and the adapter has timestamps.
+    /// GPU time of the last skinning pass, where it ran and the adapter has timestamps.
     pub async fn read_skinning_ms(&self) -> Result<Option<f64>, GpuError> {
         match &self.deform {
             Some(deform) => deform.read_ms().await,
@@ -179,6 +180,8 @@ impl SceneRebuild {
         }
     }
 
+    /// GPU time of the last refit (with its threaded layout or wide collapse), where it ran and
+    /// the adapter has timestamps.
     pub async fn read_refit_ms(&self) -> Result<Option<f64>, GpuError> {
         let Some(refit) = self.builder.read_refit_ms().await? else {
             return Ok(None);

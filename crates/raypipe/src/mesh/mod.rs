@@ -27,7 +27,7 @@ pub struct Mesh {
 
 /// A parse or validation error of a model: the line where the format has lines, and what. The file
 /// is named by [`load`], or by whoever parsed the bytes.
-pub type MeshError = InputError;
+pub(crate) type MeshError = InputError;
 
 /// The model formats, by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,7 +69,7 @@ impl MeshFormat {
 }
 
 /// Whether `path` names a model file by its extension.
-pub fn is_model_path(path: &Path) -> bool {
+pub(crate) fn is_model_path(path: &Path) -> bool {
     MeshFormat::from_path(path).is_some()
 }
 
@@ -137,7 +137,7 @@ fn check_face(face: &[i64], vertex_count: usize) -> Result<Vec<u32>, String> {
 }
 
 /// The rotation by Euler angles in degrees: about x, then y, then z.
-pub fn euler_rotation(degrees: Vec3) -> glam::Quat {
+pub(crate) fn euler_rotation(degrees: Vec3) -> glam::Quat {
     glam::Quat::from_euler(
         glam::EulerRot::ZYX,
         degrees.z.to_radians(),

@@ -41,7 +41,7 @@ fn keyword_has_normals(line: usize, keyword: &str) -> Result<bool, MeshError> {
 }
 
 /// The keyword, from the file's first bytes: its first record must be one.
-pub fn check_head(head: &[u8], whole: bool) -> Result<(), MeshError> {
+pub(crate) fn check_head(head: &[u8], whole: bool) -> Result<(), MeshError> {
     let text = match std::str::from_utf8(head) {
         Ok(text) => text,
         // The head may end inside a character; what comes before it must be text.

@@ -12,7 +12,7 @@ use ply_rs_bw::ply::{Encoding, Property, PropertyAccess, PropertyAccessResult, P
 use std::io::Cursor;
 
 /// The magic line and, where the head is not the whole file, the header's end within it.
-pub fn check_head(head: &[u8], whole: bool) -> Result<(), MeshError> {
+pub(crate) fn check_head(head: &[u8], whole: bool) -> Result<(), MeshError> {
     if !(head.starts_with(b"ply\n") || head.starts_with(b"ply\r\n")) {
         return Err(MeshError::at(1, "expected 'ply': not a PLY file"));
     }

@@ -13,41 +13,41 @@ use crate::scene::{Filter, TexelFilter, Wrap};
 use std::fmt::Write;
 
 /// `GpuMaterial::model`: the paper's Whitted material.
-pub const MODEL_WHITTED: u32 = 0;
+pub(crate) const MODEL_WHITTED: u32 = 0;
 /// `GpuMaterial::model`: glTF's metallic-roughness material.
-pub const MODEL_GLTF: u32 = 1;
+pub(crate) const MODEL_GLTF: u32 = 1;
 /// `GpuMaterial::model`: a glTF material with KHR_materials_unlit, its base colour its radiance.
-pub const MODEL_UNLIT: u32 = 2;
+pub(crate) const MODEL_UNLIT: u32 = 2;
 
 /// `GpuTriangle::material`: the material's index is its low bits, at most this many; the flags
 /// above them say what the walks' hit test must know of the material without loading it. All
 /// stay below 2^24, exact in texture memory's float texels.
-pub const MATERIAL_INDEX_MASK: u32 = (1 << 21) - 1;
+pub(crate) const MATERIAL_INDEX_MASK: u32 = (1 << 21) - 1;
 /// The triangle's back (seen against its geometric normal) is invisible to camera and reflected
 /// rays.
-pub const TRIANGLE_SINGLE_SIDED: u32 = 1 << 21;
+pub(crate) const TRIANGLE_SINGLE_SIDED: u32 = 1 << 21;
 /// Alpha MASK: the triangle is cut away where its alpha is below the material's cutoff.
-pub const TRIANGLE_ALPHA_MASK: u32 = 1 << 22;
+pub(crate) const TRIANGLE_ALPHA_MASK: u32 = 1 << 22;
 /// Alpha BLEND: the triangle covers its alpha of a ray; shadow rays pass the rest.
-pub const TRIANGLE_ALPHA_BLEND: u32 = 1 << 23;
+pub(crate) const TRIANGLE_ALPHA_BLEND: u32 = 1 << 23;
 /// The layout bits of a triangle's attribute block (`PackedScene::triangle_attributes`): which
 /// attributes follow its first two texels.
-pub const ATTRIBUTE_UV0: u32 = 1;
-pub const ATTRIBUTE_UV1: u32 = 2;
-pub const ATTRIBUTE_COLOR: u32 = 4;
-pub const ATTRIBUTE_TANGENT: u32 = 8;
+pub(crate) const ATTRIBUTE_UV0: u32 = 1;
+pub(crate) const ATTRIBUTE_UV1: u32 = 2;
+pub(crate) const ATTRIBUTE_COLOR: u32 = 4;
+pub(crate) const ATTRIBUTE_TANGENT: u32 = 8;
 
 /// `GpuLight::kind` (by `scene::LightKind`, in `records/packed.rs`): the paper's light, E its colour
 /// everywhere.
-pub const LIGHT_CONSTANT: u32 = 0;
+pub(crate) const LIGHT_CONSTANT: u32 = 0;
 /// A KHR_lights_punctual point light: candela, inverse-square.
-pub const LIGHT_POINT: u32 = 1;
+pub(crate) const LIGHT_POINT: u32 = 1;
 /// A point light in a cone.
-pub const LIGHT_SPOT: u32 = 2;
+pub(crate) const LIGHT_SPOT: u32 = 2;
 /// Parallel light in lux.
-pub const LIGHT_DIRECTIONAL: u32 = 3;
+pub(crate) const LIGHT_DIRECTIONAL: u32 = 3;
 
-/// `GpuTextureMap::wrap`: an axis's wrap mode ([`wrap_code`]), the u axis in the low byte and v
+/// `GpuTextureMap::wrap`: an axis's wrap mode (`wrap_code`), the u axis in the low byte and v
 /// in the next.
 pub const WRAP_REPEAT: u32 = 0;
 pub const WRAP_CLAMP: u32 = 1;
@@ -56,13 +56,13 @@ pub const WRAP_MIRROR: u32 = 2;
 /// `GpuTextureMap::sampling`: its low byte counts the texture's mip levels; these bits above it
 /// are the sampler's filter ([`filter_code`]). Magnified and minified reads are linear unless
 /// a NEAREST bit says otherwise; without a MIPMAP bit only the full-size image is read.
-pub const MIP_LEVELS_MASK: u32 = 0xff;
-pub const FILTER_MAGNIFY_NEAREST: u32 = 1 << 8;
-pub const FILTER_MINIFY_NEAREST: u32 = 1 << 9;
-pub const FILTER_MIPMAP_NEAREST: u32 = 1 << 10;
-pub const FILTER_MIPMAP_LINEAR: u32 = 1 << 11;
+pub(crate) const MIP_LEVELS_MASK: u32 = 0xff;
+pub(crate) const FILTER_MAGNIFY_NEAREST: u32 = 1 << 8;
+pub(crate) const FILTER_MINIFY_NEAREST: u32 = 1 << 9;
+pub(crate) const FILTER_MIPMAP_NEAREST: u32 = 1 << 10;
+pub(crate) const FILTER_MIPMAP_LINEAR: u32 = 1 << 11;
 /// The number the records carry for `wrap`.
-pub fn wrap_code(wrap: Wrap) -> u32 {
+pub(crate) fn wrap_code(wrap: Wrap) -> u32 {
     match wrap {
         Wrap::Repeat => WRAP_REPEAT,
         Wrap::Clamp => WRAP_CLAMP,
@@ -71,7 +71,7 @@ pub fn wrap_code(wrap: Wrap) -> u32 {
 }
 
 /// The `FILTER_*` bits the records carry for `filter`.
-pub fn filter_code(filter: Filter) -> u32 {
+pub(crate) fn filter_code(filter: Filter) -> u32 {
     let nearest = |f: TexelFilter, bit: u32| if f == TexelFilter::Nearest { bit } else { 0 };
     nearest(filter.magnify, FILTER_MAGNIFY_NEAREST)
         | nearest(filter.minify, FILTER_MINIFY_NEAREST)
@@ -141,7 +141,7 @@ pub fn wgsl() -> String {
 }
 
 /// A WGSL float literal that reads back as exactly `value`.
-pub fn float_literal(value: f32) -> String {
+pub(crate) fn float_literal(value: f32) -> String {
     let text = format!("{value:?}");
     if text.contains(['.', 'e']) {
         text

@@ -14,7 +14,7 @@ use crate::scene::Scene;
 
 /// The key width of every tree built as a scene moves, on the CPU as on the GPU: the same codes
 /// give both the same tree.
-pub const MOTION_BITS: MortonBits = MortonBits::Bits30;
+pub(crate) const MOTION_BITS: MortonBits = MortonBits::Bits30;
 
 /// Where a moving scene's primitives are posed and its tree built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,6 +33,7 @@ pub enum PoseOn {
 pub struct Poses {
     /// `None` until the scene is first posed: it stands as loaded.
     pub current: Option<f32>,
+    /// The pose before the current one; `None` until the scene is posed twice.
     pub previous: Option<f32>,
 }
 
@@ -86,6 +87,7 @@ impl PosedScene {
         &self.packed
     }
 
+    /// The times of the last two poses.
     pub fn poses(&self) -> Poses {
         self.poses
     }

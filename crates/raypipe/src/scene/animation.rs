@@ -16,9 +16,9 @@ use std::sync::Arc;
 
 /// Most joints a skin may have. Characters use tens to a few hundred; the bound keeps a hostile
 /// file from making every vertex's skinning read an unbounded table.
-pub const MAX_JOINTS: usize = 4096;
+pub(crate) const MAX_JOINTS: usize = 4096;
 /// Joint influences a vertex may have: JOINTS_0 and JOINTS_1, four each.
-pub const MAX_INFLUENCES: usize = 8;
+pub(crate) const MAX_INFLUENCES: usize = 8;
 
 /// How a sampler fills in between its keys.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -20,7 +20,7 @@ pub const NAMES: &[&str] = &[
 
 /// Largest primitive count a procedural family accepts: `raypipe bvh` builds trees this large;
 /// renders take at most [`crate::scene::MAX_RECORDS`] primitives.
-pub const MAX_COUNT: usize = 1 << 26;
+pub(crate) const MAX_COUNT: usize = 1 << 26;
 
 /// Returns `Ok(None)` when `name` is not a built-in (it may be a file), `Err` when it is one with bad
 /// parameters.
@@ -224,7 +224,7 @@ fn cloud_scene(spheres: Vec<Sphere>, floor_y: f32) -> Scene {
 }
 
 /// `n` spheres on the unit sphere's surface (a Fibonacci lattice), as in the paper's "Sphere 8K".
-pub fn sphere_shell(n: usize) -> Scene {
+pub(crate) fn sphere_shell(n: usize) -> Scene {
     let golden_angle = PI * (3.0 - 5f32.sqrt());
     // Each sphere covers about its share of the shell's area.
     let radius = 0.9 / (n as f32).sqrt();

@@ -20,8 +20,8 @@ pub const MAX_ENVIRONMENT_TEXELS: u64 = 1 << 23;
 /// The largest environment file read: an 8192 x 4096 float EXR, uncompressed, with room.
 pub const MAX_ENVIRONMENT_BYTES: u64 = 1 << 30;
 /// The irradiance map's size: irradiance varies slowly with the normal.
-pub const IRRADIANCE_WIDTH: u32 = 32;
-pub const IRRADIANCE_HEIGHT: u32 = 16;
+pub(crate) const IRRADIANCE_WIDTH: u32 = 32;
+pub(crate) const IRRADIANCE_HEIGHT: u32 = 16;
 /// The width the radiance is averaged down to before its irradiance is summed.
 const IRRADIANCE_SOURCE_WIDTH: u32 = 128;
 /// The largest radiance kept: half precision's largest finite value (brighter texels, a sun's
@@ -190,7 +190,7 @@ impl Environment {
 
 /// The unit direction at texture coordinate (u, v) of an equirectangular map: the inverse of the
 /// convention.
-pub fn texel_direction(u: f32, v: f32) -> Vec3 {
+pub(crate) fn texel_direction(u: f32, v: f32) -> Vec3 {
     let phi = 2.0 * PI * (u - 0.5);
     let theta = PI * v;
     Vec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos())

@@ -152,7 +152,7 @@ pub fn parse(text: &str) -> Result<Scene, InputError> {
 
 /// Parses scene TOML whose mesh files are relative to `base`. Errors carry the line and element, not
 /// the file, which the caller names.
-pub fn parse_in(text: &str, base: &Path) -> Result<Scene, InputError> {
+pub(crate) fn parse_in(text: &str, base: &Path) -> Result<Scene, InputError> {
     let def: SceneDef = toml::from_str(text).map_err(|e| {
         let line = e.span().map(|s| line_of(text, s.start));
         at_line(line, e.message().trim())

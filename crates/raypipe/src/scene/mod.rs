@@ -261,7 +261,7 @@ fn out_of_reach(what: &str) -> String {
 }
 
 /// `v` at unit length, or `None` for a zero vector; no square of a huge or tiny `v` is formed.
-pub fn unit_vector(v: Vec3) -> Option<Vec3> {
+pub(crate) fn unit_vector(v: Vec3) -> Option<Vec3> {
     let largest = v.abs().max_element();
     (largest > 0.0 && largest.is_finite()).then(|| (v / largest).normalize())
 }
@@ -450,7 +450,7 @@ fn validate_camera(c: &Camera) -> Result<(), InputError> {
 pub const MAX_RECORDS: usize = (1 << 24) - 1;
 
 /// The largest image side we accept; far beyond any adapter's texture limit is a typo, not a request.
-pub const MAX_IMAGE_SIDE: u32 = 16384;
+pub(crate) const MAX_IMAGE_SIDE: u32 = 16384;
 /// The deepest bounce count we accept; the shader keeps a ray stack of this many entries plus one.
 pub const MAX_DEPTH_LIMIT: u32 = 32;
 

@@ -56,9 +56,9 @@ impl Default for Filter {
 pub const MAX_TEXELS: u64 = 1 << 24;
 /// The most texels a file's images may decode to together: what [`shrink_to_fit`] brings down
 /// to MAX_TEXELS.
-pub const MAX_DECODED_TEXELS: u64 = 4 * MAX_TEXELS;
+pub(crate) const MAX_DECODED_TEXELS: u64 = 4 * MAX_TEXELS;
 /// The longest side of a texture.
-pub const MAX_TEXTURE_SIDE: u32 = 16384;
+pub(crate) const MAX_TEXTURE_SIDE: u32 = 16384;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
@@ -213,7 +213,7 @@ impl Texture {
 
 /// The sizes of a `width` x `height` image's mip levels, the image first: each side halved and
 /// rounded up, down to 1 x 1 (what the shader's `mip_level` walks).
-pub fn mip_sizes(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
+pub(crate) fn mip_sizes(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
     std::iter::successors(Some((width, height)), |&(w, h)| {
         ((w, h) != (1, 1)).then(|| (w.div_ceil(2), h.div_ceil(2)))
     })
@@ -222,7 +222,7 @@ pub fn mip_sizes(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
 /// Halves the largest of `textures` until they hold at most `budget` texels together, mipmaps
 /// counted ([`MAX_TEXELS`] or less; a texture of one texel cannot shrink, and with a million of them the sum cannot exceed
 /// the limit). Returns how many halvings it took.
-pub fn shrink_to_fit(textures: &mut [Texture], budget: u64) -> usize {
+pub(crate) fn shrink_to_fit(textures: &mut [Texture], budget: u64) -> usize {
     let size = |t: &Texture| t.stored_texels();
     let mut total: u64 = textures.iter().map(size).sum();
     let mut halvings = 0;

@@ -55,14 +55,14 @@ impl NormalSource {
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct DeformParams {
+pub(crate) struct DeformParams {
     pub vertex_count: u32,
     pub triangle_count: u32,
 }
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct DeformInstance {
+pub(crate) struct DeformInstance {
     pub vertex_first: u32,
     pub vertex_count: u32,
     pub target_first: u32,
@@ -76,7 +76,7 @@ pub struct DeformInstance {
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct DeformVertex {
+pub(crate) struct DeformVertex {
     pub position: [f32; 3],
     pub instance: u32,
     pub normal: [f32; 3],
@@ -85,7 +85,7 @@ pub struct DeformVertex {
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct DeformInfluences {
+pub(crate) struct DeformInfluences {
     pub joints: [u32; 4],
     pub weights_low: [f32; 4],
     pub weights_high: [f32; 4],
@@ -93,14 +93,14 @@ pub struct DeformInfluences {
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct DeformOffset {
+pub(crate) struct DeformOffset {
     pub position: [f32; 4],
     pub normal: [f32; 4],
 }
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct DeformTriangle {
+pub(crate) struct DeformTriangle {
     pub corners: [u32; 3],
     pub triangle: u32,
     pub groups: [u32; 3],
@@ -110,7 +110,7 @@ pub struct DeformTriangle {
 /// A vertex as the pass posed it (w unused).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct PosedVertex {
+pub(crate) struct PosedVertex {
     pub position: [f32; 4],
     pub normal: [f32; 4],
 }
@@ -118,7 +118,7 @@ pub struct PosedVertex {
 /// A posed face's normal and corner angles, for smooth normals (the pass's own scratch).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Face {
+pub(crate) struct Face {
     pub normal: [f32; 4],
     pub angles: [f32; 4],
 }
@@ -151,7 +151,7 @@ pub fn shader_source() -> String {
 /// What the pass reads that never changes: every placed primitive of every animation, its rest
 /// vertices, joints, morph offsets and triangles, laid end to end.
 #[derive(Debug, Default)]
-pub struct DeformRecords {
+pub(crate) struct DeformRecords {
     pub instances: Vec<DeformInstance>,
     pub vertices: Vec<DeformVertex>,
     pub influences: Vec<DeformInfluences>,
@@ -559,7 +559,7 @@ impl GpuDeform {
         self.records.vertices.len()
     }
 
-    /// The posed vertices' positions, in the order of [`DeformRecords`], for tests.
+    /// The posed vertices' positions, in the order of `DeformRecords`, for tests.
     pub async fn read_positions(&self) -> Result<Vec<Vec3>, GpuError> {
         let size = (self.records.vertices.len() * size_of::<PosedVertex>()) as u64;
         if size == 0 {

@@ -29,7 +29,7 @@ use wgpu::util::DeviceExt;
 
 /// What a BLAS holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BlasKind {
+pub(crate) enum BlasKind {
     /// Triangles the driver tests alone: double-sided, without alpha.
     OpaqueTriangles,
     /// Triangles whose hits the shader decides (single-sided, alpha MASK or BLEND): non-opaque.
@@ -40,7 +40,7 @@ pub enum BlasKind {
 
 /// The scene's primitives in the BLASes' order.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct BlasLayout {
+pub(crate) struct BlasLayout {
     /// The scene primitive (spheres first, then triangles) of each BLAS primitive, the BLASes one
     /// after another: every triangle BLAS before the spheres'.
     pub primitives: Vec<u32>,
@@ -124,7 +124,7 @@ struct Blas {
 /// wgpu 30 builds acceleration structures afresh every time: its update mode (`PreferUpdate`,
 /// refitting a built structure) is not implemented yet ("only rebuild implemented" in wgpu-core), so
 /// a moving scene's structures are rebuilt.
-pub struct AccelStructures {
+pub(crate) struct AccelStructures {
     /// The triangle records, the BLASes' vertices (corner `3 i + k` of triangle `i`): a buffer of
     /// their own, or the records a GPU rebuild poses ([`AccelStructures::follows_gpu`]).
     vertices: Option<wgpu::Buffer>,

@@ -20,7 +20,7 @@ const FRAME_BYTES: u64 = std::mem::size_of::<GpuBvhFrame>() as u64;
 /// The kernels' parameters (`LayoutParams` in types.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct LayoutParams {
+pub(crate) struct LayoutParams {
     /// Nodes: 2n - 1 for n primitives.
     pub node_count: u32,
 }
@@ -164,7 +164,7 @@ impl GpuThreadedLayout {
 }
 
 /// Records the copy of a laid-out frame (a `GpuBvhFrame` buffer) into a globals buffer (COPY_DST).
-pub fn encode_frame_copy(encoder: &mut wgpu::CommandEncoder, frame: &wgpu::Buffer, globals: &wgpu::Buffer) {
+pub(crate) fn encode_frame_copy(encoder: &mut wgpu::CommandEncoder, frame: &wgpu::Buffer, globals: &wgpu::Buffer) {
     let offset = std::mem::offset_of!(GpuGlobals, bvh_frame) as u64;
     encoder.copy_buffer_to_buffer(frame, 0, globals, offset, FRAME_BYTES);
 }

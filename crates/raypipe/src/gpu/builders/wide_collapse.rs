@@ -23,7 +23,7 @@ pub const GROUP: u32 = 64;
 /// The kernels' parameters (`CollapseParams` in types.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct CollapseParams {
+pub(crate) struct CollapseParams {
     pub primitive_count: u32,
     /// Where the nodes start: after the leaf words.
     pub root_texel: u32,

@@ -2,7 +2,7 @@
 //! workgroup grids.
 
 /// A storage buffer with `extra` usages, at least 16 bytes (a binding may not be empty).
-pub fn storage_buffer(device: &wgpu::Device, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
+pub(crate) fn storage_buffer(device: &wgpu::Device, label: &str, size: u64, extra: wgpu::BufferUsages) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: size.max(16),
@@ -12,7 +12,11 @@ pub fn storage_buffer(device: &wgpu::Device, label: &str, size: u64, extra: wgpu
 }
 
 /// A buffer binding of the compute stage.
-pub fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType, dynamic_offset: bool) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn buffer_entry(
+    binding: u32,
+    ty: wgpu::BufferBindingType,
+    dynamic_offset: bool,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -26,7 +30,7 @@ pub fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType, dynamic_offset: b
 }
 
 /// A bind group of whole buffers, bound at 0, 1, 2, ... in the order given.
-pub fn buffers_bind_group(
+pub(crate) fn buffers_bind_group(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::BindGroupLayout,

@@ -379,7 +379,7 @@ const MESA_TESTED_GOOD: (u32, u32) = (25, 0);
 /// Mesa 22.3.6's llvmpipe ends the fragment shader's ray loop early with rays still on the stack
 /// (reflections and refractions go missing on scenes with small glass spheres); 25.0.7 is correct.
 /// Versions in between were not tested.
-pub fn driver_warning(info: &wgpu::AdapterInfo) -> Option<String> {
+pub(crate) fn driver_warning(info: &wgpu::AdapterInfo) -> Option<String> {
     if !info.name.contains("llvmpipe") {
         return None;
     }

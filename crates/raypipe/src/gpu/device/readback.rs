@@ -6,7 +6,7 @@ use super::context::{map_future, wait_mapped};
 use crate::gpu::GpuError;
 
 /// Bytes per row in a texture-to-buffer copy: `unpadded` rounded up to wgpu's 256-byte alignment.
-pub fn padded_bytes_per_row(unpadded: u32) -> u32 {
+pub(crate) fn padded_bytes_per_row(unpadded: u32) -> u32 {
     unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
 }
 
@@ -74,7 +74,7 @@ impl TextureReadback {
 
 /// Maps a MAP_READ buffer whose copies were submitted, waits for them, hands its bytes to `f`, and
 /// unmaps it again so the buffer can receive the next copy.
-pub async fn map_read<T>(
+pub(crate) async fn map_read<T>(
     device: &wgpu::Device,
     buffer: &wgpu::Buffer,
     f: impl FnOnce(&[u8]) -> T,
@@ -93,7 +93,7 @@ pub async fn map_read<T>(
 }
 
 /// Copies the first `size` bytes of `source` (COPY_SRC) to the host.
-pub async fn read_buffer(
+pub(crate) async fn read_buffer(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     source: &wgpu::Buffer,

@@ -4,7 +4,7 @@ use super::readback::map_read;
 use crate::gpu::{GpuContext, GpuError};
 
 /// Timestamps around `passes` render or compute passes, resolved into a buffer the host reads.
-pub struct PassTimestamps {
+pub(crate) struct PassTimestamps {
     passes: u32,
     queries: wgpu::QuerySet,
     resolve: wgpu::Buffer,

@@ -16,7 +16,7 @@ const DISPLAY: &str = include_str!("../shaders/display.wgsl");
 /// The pass's parameters (`DisplayParams` in display.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct DisplayParams {
+pub(crate) struct DisplayParams {
     pub view: u32,
     pub target_srgb: u32,
     pub depth_far: f32,

@@ -4,9 +4,9 @@
 //! ray). A software rasterizer runs the whole tracer for every 2x2 group of pixels, hit or miss
 //! (docs/BENCHMARKS.md): a model that fills a third of the frame pays for a third of it.
 //!
-//! The boxes are the BVH's own, from the root down (a [`BoxCover`]): a node whose projection is
+//! The boxes are the BVH's own, from the root down (a `BoxCover`): a node whose projection is
 //! large is replaced by its children's, so the traced pixels hug the model's outline instead of its
-//! bounding box, in tiles of [`TILE`] pixels.
+//! bounding box, in tiles of `TILE` pixels.
 
 use crate::bvh::aabb::Aabb;
 use crate::records::GpuCamera;
@@ -15,7 +15,7 @@ use glam::{DVec2, DVec3, Vec3};
 
 /// The side of the square tiles the traced pixels are made of: even, so that no 2x2 group of
 /// pixels is split between the tracer and the misses' shader.
-pub const TILE: u32 = 4;
+pub(crate) const TILE: u32 = 4;
 /// A node whose rectangle holds more pixels than this is replaced by its children's.
 const REFINE_ABOVE_PIXELS: u32 = 64;
 /// The levels of the BVH a cover keeps below its root: at most 2047 boxes to project each time the
@@ -76,7 +76,7 @@ impl TracedPixels {
 /// and threaded walks'), whose quantized corners are rounded outward from the build layout's (the
 /// stackless walk's), so they hold both.
 #[derive(Clone, Debug)]
-pub struct BoxCover {
+pub(crate) struct BoxCover {
     /// Depth-first from the root.
     nodes: Vec<CoverNode>,
 }
@@ -125,6 +125,7 @@ impl BoxCover {
     }
 
     /// The root's box: the one every walk tests first.
+    #[cfg(test)]
     pub fn root(&self) -> Aabb {
         self.nodes[0].bounds
     }

@@ -111,13 +111,13 @@ pub struct RecordArray {
 
 /// Where the textures' texels are bound: after the record arrays. They always travel in a texture,
 /// whatever the memory mode: images are what texture units are for.
-pub fn texture_pixels_binding(arrays: &[RecordArray]) -> u32 {
+pub(crate) fn texture_pixels_binding(arrays: &[RecordArray]) -> u32 {
     arrays.iter().map(|a| a.binding).max().unwrap_or(0) + 1
 }
 
 /// Where ray queries' two bindings start ([`crate::gpu::builders::rayquery::AccelStructures`]): after the
 /// textures' texels.
-pub fn ray_query_binding(arrays: &[RecordArray]) -> u32 {
+pub(crate) fn ray_query_binding(arrays: &[RecordArray]) -> u32 {
     texture_pixels_binding(arrays) + 1
 }
 

@@ -18,7 +18,7 @@ const WEIGHT_SUM_SLACK: f32 = 2e-3;
 
 /// The nodes (every one, with its parent), skins and animations of a validated document.
 /// `parents` comes from the hierarchy walk, which refused cycles and shared children.
-pub fn read_rig(
+pub(crate) fn read_rig(
     root: &json::Root,
     buffers: &[Vec<u8>],
     parents: &[Option<usize>],
@@ -70,7 +70,7 @@ pub fn read_rig(
 
 /// A node's own transform as the file writes it: its matrix, or its translation, rotation and
 /// scale (each defaulting to the identity's). Unchecked: see [`Transform::check`].
-pub fn rest_transform(node: &json::Node) -> Transform {
+pub(crate) fn rest_transform(node: &json::Node) -> Transform {
     match node.matrix {
         Some(m) => Transform::Matrix(Mat4::from_cols_array(&m)),
         None => Transform::Decomposed {
@@ -245,7 +245,7 @@ fn read_sampler(
 /// A primitive's joints and weights (JOINTS_n and WEIGHTS_n, n = 0 and 1), for `vertex_count`
 /// vertices: joint indices below the most a skin may have (the skin that uses the mesh checks its
 /// own count), weights normalized where they do not sum to one.
-pub fn read_influences(
+pub(crate) fn read_influences(
     root: &json::Root,
     buffers: &[Vec<u8>],
     sets: &[(usize, usize)],
@@ -307,7 +307,7 @@ pub fn read_influences(
 }
 
 /// A primitive's morph targets: position and normal offsets, as many as its vertices.
-pub fn read_targets(
+pub(crate) fn read_targets(
     root: &json::Root,
     buffers: &[Vec<u8>],
     primitive: &json::mesh::Primitive,

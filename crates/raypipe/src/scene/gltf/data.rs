@@ -18,13 +18,13 @@ pub enum Files<'a> {
 
 /// The most elements an accessor may have: a render takes at most 2^24 - 1 primitives, so no
 /// attribute of one needs more.
-pub const MAX_ACCESSOR_COUNT: u64 = 1 << 24;
+pub(crate) const MAX_ACCESSOR_COUNT: u64 = 1 << 24;
 /// The largest image file read.
-pub const MAX_IMAGE_BYTES: u64 = 256 << 20;
+pub(crate) const MAX_IMAGE_BYTES: u64 = 256 << 20;
 
 /// The bytes an external or `data:` URI names. `cap` bounds what is read; `part` (a buffer or an
 /// image) holds the URI.
-pub fn read_uri(uri: &str, files: Files, cap: u64, part: GltfPart) -> Result<Vec<u8>, InputError> {
+pub(crate) fn read_uri(uri: &str, files: Files, cap: u64, part: GltfPart) -> Result<Vec<u8>, InputError> {
     read_uri_bytes(uri, files, cap).map_err(|e| e.within(part))
 }
 
@@ -113,7 +113,7 @@ fn percent_decode(text: &str) -> Option<String> {
 }
 
 /// Every buffer's bytes, by index: each at least its `byteLength` long, and cut to it.
-pub fn load_buffers(root: &json::Root, blob: Option<Vec<u8>>, files: Files) -> Result<Vec<Vec<u8>>, InputError> {
+pub(crate) fn load_buffers(root: &json::Root, blob: Option<Vec<u8>>, files: Files) -> Result<Vec<Vec<u8>>, InputError> {
     let mut blob = blob;
     let mut buffers = Vec::with_capacity(root.buffers.len());
     for (index, buffer) in root.buffers.iter().enumerate() {
@@ -138,7 +138,7 @@ pub fn load_buffers(root: &json::Root, blob: Option<Vec<u8>>, files: Files) -> R
 }
 
 /// The bytes of buffer view `index`, checked against its buffer.
-pub fn view_bytes<'a>(root: &json::Root, buffers: &'a [Vec<u8>], index: usize) -> Result<&'a [u8], InputError> {
+pub(crate) fn view_bytes<'a>(root: &json::Root, buffers: &'a [Vec<u8>], index: usize) -> Result<&'a [u8], InputError> {
     let view = root
         .buffer_views
         .get(index)
@@ -257,7 +257,7 @@ fn bounded_count(accessor: &json::Accessor, limit: u64, what: &str) -> Result<us
 /// An accessor's elements as f32s, one after another (as many to an element as its type has);
 /// `types` lists the element types the caller takes. Sparse substitutions are applied. Errors lie
 /// within the accessor.
-pub fn read_floats(
+pub(crate) fn read_floats(
     root: &json::Root,
     buffers: &[Vec<u8>],
     index: usize,
@@ -381,7 +381,7 @@ fn sparse_indices(
 }
 
 /// An index accessor's values (unsigned bytes, shorts or ints), each below `vertex_count`.
-pub fn read_indices(
+pub(crate) fn read_indices(
     root: &json::Root,
     buffers: &[Vec<u8>],
     index: usize,

@@ -60,7 +60,7 @@ macro_rules! map_info {
 }
 
 /// The document's materials and the textures they use, built once each.
-pub struct Materials {
+pub(crate) struct Materials {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     /// The material of primitives without one (glTF's default material), added on first use.

@@ -37,7 +37,7 @@ use std::sync::Arc;
 
 /// The extensions read. KHR_mesh_quantization only widens the accessor types, which every
 /// attribute reader takes.
-pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+pub(crate) const SUPPORTED_EXTENSIONS: &[&str] = &[
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_transmission",
@@ -54,7 +54,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
 const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
 /// Whether `path` names a glTF file by its extension.
-pub fn is_gltf_path(path: &Path) -> bool {
+pub(crate) fn is_gltf_path(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))

@@ -48,7 +48,7 @@ impl mikktspace::Geometry for Corners<'_> {
 /// `None` where a primitive lacks normals or those coordinates (the reader refuses a normal map
 /// there first) or MikkTSpace finds nothing to work on. A degenerate corner gets a zero tangent,
 /// which the shaders read as "no tangent" and shade without the map.
-pub fn mikktspace_tangents(
+pub(crate) fn mikktspace_tangents(
     positions: &[Vec3],
     normals: Option<&[Vec3]>,
     coordinates: Option<&[Vec2]>,

@@ -84,7 +84,7 @@ crate::choice::impl_choice!(
 );
 
 /// The crease angle's default: edges between faces further apart than this stay sharp.
-pub const DEFAULT_CREASE_DEGREES: f32 = 60.0;
+pub(crate) const DEFAULT_CREASE_DEGREES: f32 = 60.0;
 
 /// How many spheres a mesh becomes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -248,7 +248,7 @@ pub fn add_mesh(scene: &mut Scene, mut mesh: Mesh, placement: &Placement) -> Res
 /// materials and textures, or spheres on its surface. Returns the placement's transform, which the
 /// file's camera and lights take too. A file with animations is posed at the placement's time of
 /// its clip, and its moving triangles join the scene's motion (spheres stand still).
-pub fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) -> Result<Similarity, InputError> {
+pub(crate) fn place_gltf(scene: &mut Scene, gltf: &GltfScene, placement: &Placement) -> Result<Similarity, InputError> {
     let clip = match &gltf.rig {
         Some(rig) => rig.clip(placement.animation.as_ref())?,
         None if placement.animation.is_some() => {
