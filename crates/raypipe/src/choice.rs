@@ -10,6 +10,7 @@ pub trait Choice: Copy + PartialEq + std::fmt::Debug + 'static {
     fn name(self) -> &'static str;
     /// One line on what it does, for help texts and menus.
     fn about(self) -> &'static str;
+    /// The choice that `name` names (its command-line and URL spelling), if one does.
     fn from_name(name: &str) -> Option<Self> {
         Self::ALL.iter().copied().find(|v| v.name() == name)
     }

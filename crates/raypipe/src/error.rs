@@ -8,20 +8,27 @@ use std::fmt;
 /// The part of a scene an error is about.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Element {
+    /// The scene's camera.
     Camera,
     /// The render settings (size, depth, background).
     Render,
     /// The scene as a whole (its record counts, say).
     Scene,
+    /// A sphere, by index.
     Sphere(usize),
+    /// A triangle, by index.
     Triangle(usize),
+    /// A plane, by index.
     Plane(usize),
+    /// A light, by index.
     Light(usize),
+    /// A material, by index.
     Material(usize),
     /// A material of a scene file, by its name there.
     NamedMaterial(String),
     /// A `[[mesh]]` table of a scene file.
     MeshTable(usize),
+    /// A texture, by index.
     Texture(usize),
     /// A part of a glTF file, from the outermost in (`node 2: mesh 0 primitive 1: accessor 7`).
     Gltf(Vec<GltfPart>),
@@ -31,25 +38,39 @@ pub enum Element {
 /// extension, a sparse accessor's indices).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum GltfPart {
+    /// An accessor, by index.
     Accessor(usize),
+    /// An animation, by index.
     Animation(usize),
+    /// A buffer, by index.
     Buffer(usize),
+    /// A buffer view, by index.
     BufferView(usize),
+    /// A camera, by index.
     Camera(usize),
     /// An animation's channel.
     Channel(usize),
+    /// An image, by index.
     Image(usize),
     /// An instance of `EXT_mesh_gpu_instancing`.
     Instance(usize),
+    /// A `KHR_lights_punctual` light, by index.
     Light(usize),
+    /// A material, by index.
     Material(usize),
+    /// A mesh, by index.
     Mesh(usize),
+    /// A primitive's morph target, by index.
     MorphTarget(usize),
+    /// A node, by index.
     Node(usize),
     /// A mesh's primitive (written after its mesh: `mesh 0 primitive 1`).
     Primitive(usize),
+    /// A scene of the file, by index.
     Scene(usize),
+    /// A skin, by index.
     Skin(usize),
+    /// A part by name: an attribute (`TRANSLATION`), an extension, a sparse accessor's indices.
     Named(String),
 }
 
@@ -121,6 +142,7 @@ pub struct InputError {
 }
 
 impl InputError {
+    /// An error whose place is not known yet (callers add it as it travels up).
     pub fn new(message: impl Into<String>) -> Self {
         Self {
             origin: None,
@@ -135,6 +157,7 @@ impl InputError {
         Self::new(message).with_line(Some(line))
     }
 
+    /// An error about `element`.
     pub fn of(element: Element, message: impl Into<String>) -> Self {
         Self {
             element: Some(element),
@@ -166,11 +189,13 @@ impl InputError {
         self.within(GltfPart::Named(name.into()))
     }
 
+    /// Names the line, unless one is named already.
     pub fn with_line(mut self, line: Option<usize>) -> Self {
         self.line = self.line.or(line);
         self
     }
 
+    /// Names the element, unless one is named already.
     pub fn with_element(mut self, element: Element) -> Self {
         self.element.get_or_insert(element);
         self

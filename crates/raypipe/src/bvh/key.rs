@@ -15,8 +15,11 @@ use std::ops::{BitXor, Not};
 pub trait Key: Copy + Default + Ord + BitXor<Output = Self> + Not<Output = Self> + Send + Sync + 'static {
     /// The widest Morton code the key holds above the index.
     const CODE_BITS: u32;
+    /// The key of `primitive` with Morton code `code`.
     fn new(code: u64, primitive: u32) -> Self;
+    /// The key's Morton code.
     fn code(self) -> u64;
+    /// The primitive the key sorts.
     fn primitive(self) -> u32;
     /// The same code above `position`.
     fn at_position(self, position: u32) -> Self;

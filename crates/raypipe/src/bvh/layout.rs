@@ -12,6 +12,8 @@ pub const NONE: u32 = u32::MAX;
 /// The `right` field of a leaf.
 pub const LEAF: u32 = u32::MAX;
 
+/// A node of the build layout, as the stackless walk reads it: its box, its children (or its
+/// primitive), its parent and its skip link.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuNode {
@@ -33,6 +35,7 @@ pub struct GpuNode {
 }
 
 impl GpuNode {
+    /// Whether the node is a leaf (it holds one primitive).
     pub fn is_leaf(&self) -> bool {
         self.right == LEAF
     }

@@ -186,10 +186,12 @@ pub struct LbvhBuilder<K: Key> {
 }
 
 impl<K: Key> LbvhBuilder<K> {
+    /// A builder with Karras's hierarchy and empty buffers.
     pub fn new() -> Self {
         Self::default()
     }
 
+    /// A builder that makes its hierarchy by `hierarchy`.
     pub fn with_hierarchy(hierarchy: Hierarchy) -> Self {
         Self {
             hierarchy,

@@ -48,6 +48,7 @@ pub struct BuildTimings {
 }
 
 impl BuildTimings {
+    /// The whole build: every phase's milliseconds summed.
     pub fn total(&self) -> f64 {
         self.morton + self.sort + self.hierarchy + self.bounds + self.links + self.layout + self.collapse
     }
@@ -115,6 +116,7 @@ impl Bvh {
             .collect()
     }
 
+    /// The depth of the deepest leaf (the root is at depth 0).
     pub fn max_depth(&self) -> u32 {
         self.leaf_depths().into_iter().max().unwrap_or(0)
     }

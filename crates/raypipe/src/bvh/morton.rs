@@ -5,6 +5,7 @@ use super::aabb::Aabb;
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
+/// How many bits a Morton code has: the key width of the LBVH.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MortonBits {
     /// 10 bits per axis, in the low 30 bits.
@@ -23,6 +24,7 @@ crate::choice::impl_choice!(
 );
 
 impl MortonBits {
+    /// Bits of each axis in a code.
     pub const fn bits_per_axis(self) -> u32 {
         match self {
             MortonBits::Bits30 => 10,
@@ -30,6 +32,7 @@ impl MortonBits {
         }
     }
 
+    /// Bits of a code: three axes' worth.
     pub const fn total_bits(self) -> u32 {
         3 * self.bits_per_axis()
     }

@@ -40,10 +40,12 @@ pub struct GpuThreadedNode {
 }
 
 impl GpuThreadedNode {
+    /// Whether the node is a leaf: its link's top bit.
     pub fn is_leaf(&self) -> bool {
         self.link & LEAF_BIT != 0
     }
 
+    /// A leaf's primitive.
     pub fn primitive(&self) -> u32 {
         self.link & !LEAF_BIT
     }
@@ -79,6 +81,7 @@ pub struct QuantizationFrame {
 }
 
 impl QuantizationFrame {
+    /// The frame that quantizes boxes inside `root`, the tree's root box.
     pub fn around(root: Aabb) -> Self {
         let extent = root.max - root.min;
         Self {

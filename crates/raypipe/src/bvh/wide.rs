@@ -134,11 +134,13 @@ pub struct WideTree<'a> {
 }
 
 impl WideTree<'_> {
+    /// The wide node whose first texel is `texel`.
     pub fn node(&self, texel: u32) -> WideNode {
         let at = texel as usize;
         bytemuck::pod_read_unaligned(bytemuck::cast_slice(&self.texels[at..at + NODE_TEXELS as usize]))
     }
 
+    /// The 32-bit word `word` of the texels, counted from the first.
     pub fn word(&self, word: u32) -> u32 {
         self.texels[word as usize / 4].words[word as usize % 4]
     }

@@ -40,6 +40,8 @@ pub fn brute_closest(primitives: &Primitives, ray: &Ray, best: Hit) -> Hit {
     hit
 }
 
+/// Whether any primitive blocks `ray` before `t_max`, testing every one (the brute-force walk's
+/// shadow ray).
 pub fn brute_occluded(primitives: &Primitives, ray: &Ray, t_max: f32) -> bool {
     let blocks = |t: f32| t > 0.0 && t < t_max;
     primitives

@@ -35,6 +35,7 @@ pub struct RayQuery<'a> {
 }
 
 impl Primitives<'_> {
+    /// How many primitives there are: spheres, then triangles.
     pub fn count(&self) -> usize {
         self.spheres.len() + self.triangles.len()
     }

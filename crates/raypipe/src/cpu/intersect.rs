@@ -5,6 +5,7 @@ use crate::constants::{PARALLEL_EPSILON, TINY_DIRECTION};
 use crate::records::{GpuPlane, GpuSphere, GpuTriangle};
 use glam::{Vec3, Vec3Swizzles};
 
+/// A ray: its origin and unit direction, with its shear for the watertight triangle test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     pub origin: Vec3,
@@ -69,11 +70,14 @@ pub(crate) fn ray_shear(dir: Vec3) -> RayShear {
     shear
 }
 
+/// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HitKind {
+    /// Nothing, before `t_max`.
     None,
     /// A sphere or a triangle: the index is the primitive's (spheres first, then triangles).
     Primitive,
+    /// One of the scene's infinite planes.
     Plane,
 }
 
@@ -86,6 +90,7 @@ pub struct Hit {
 }
 
 impl Hit {
+    /// No hit yet, with `t_max` the farthest a hit may lie.
     pub fn none(t_max: f32) -> Self {
         Self {
             t: t_max,

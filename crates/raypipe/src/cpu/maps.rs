@@ -211,6 +211,7 @@ pub struct Attributes {
 }
 
 impl Attributes {
+    /// No attributes: a triangle without texture coordinates, colours or tangents.
     pub const NONE: Attributes = Attributes {
         present: 0,
         uv0: Vec2::ZERO,

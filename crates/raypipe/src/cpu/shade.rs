@@ -26,6 +26,7 @@ pub(crate) struct ShadingFrame {
     pub view: Vec3,
 }
 
+/// Where a ray hit and what lies there: the point, its shading frame, material and attributes.
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {
     pub position: Vec3,

@@ -7,6 +7,7 @@
 
 use super::FloatImage;
 
+/// How two images differ, over their pixels' largest channel errors.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiffStats {
     pub pixels: usize,
@@ -37,6 +38,7 @@ impl Tolerance {
     /// Identical up to float rounding: for images of one device in different memory modes.
     pub const EXACT: Tolerance = Tolerance { mean: 0.0, p99: 0.0 };
 
+    /// Whether `stats` lie within this tolerance.
     pub fn check(&self, stats: &DiffStats) -> Result<(), Mismatch> {
         if stats.mean <= self.mean && stats.p99 <= self.p99 {
             Ok(())
@@ -63,10 +65,13 @@ fn channel_error(a: f32, b: f32) -> f64 {
 /// Why two images do not match.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Mismatch {
+    /// The images' sizes differ.
     #[error("images differ in size: {}x{} and {}x{}", .a.0, .a.1, .b.0, .b.1)]
     Size { a: (u32, u32), b: (u32, u32) },
+    /// The images' channels differ.
     #[error("images differ in channels: {a:?} and {b:?}")]
     Channels { a: Vec<String>, b: Vec<String> },
+    /// The images differ beyond the tolerance.
     #[error(
         "images differ: mean error {:.3e} (allowed {:.1e}), p99 {:.3e} (allowed {:.1e}), max {:.3e}, {} of {} pixels differ",
         .stats.mean, .allowed.mean, .stats.p99, .allowed.p99, .stats.max, .stats.differing, .stats.pixels
@@ -99,6 +104,7 @@ pub fn pixel_errors(a: &FloatImage, b: &FloatImage) -> Result<Vec<f64>, Mismatch
         .collect())
 }
 
+/// The statistics of per-pixel errors.
 pub fn stats(errors: &[f64]) -> DiffStats {
     let pixels = errors.len();
     if pixels == 0 {
@@ -123,6 +129,7 @@ pub fn stats(errors: &[f64]) -> DiffStats {
     }
 }
 
+/// How `a` and `b` differ: each pixel's largest relative channel error, summarized.
 pub fn compare(a: &FloatImage, b: &FloatImage) -> Result<DiffStats, Mismatch> {
     Ok(stats(&pixel_errors(a, b)?))
 }

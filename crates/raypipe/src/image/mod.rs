@@ -32,11 +32,13 @@ pub struct FloatImage {
 }
 
 impl FloatImage {
+    /// Pixel `index`'s channels.
     pub fn pixel(&self, index: usize) -> &[f32] {
         let n = self.channels.len();
         &self.data[index * n..(index + 1) * n]
     }
 
+    /// Pixels in the image.
     pub fn pixel_count(&self) -> usize {
         self.width as usize * self.height as usize
     }
@@ -86,6 +88,7 @@ fn rgb_names() -> Vec<String> {
 }
 
 impl Frame {
+    /// A black frame of `width` x `height`: no ray counted, every depth a miss.
     pub fn new(width: u32, height: u32) -> Self {
         let pixels = width as usize * height as usize;
         Self {

@@ -32,14 +32,18 @@ pub(crate) type MeshError = InputError;
 /// The model formats, by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {
+    /// Stanford PLY (ASCII or binary).
     Ply,
+    /// Wavefront OBJ.
     Obj,
+    /// Object File Format.
     Off,
 }
 
 impl MeshFormat {
     const BY_EXTENSION: [(&str, MeshFormat); 3] = [("ply", Self::Ply), ("obj", Self::Obj), ("off", Self::Off)];
 
+    /// The format a path's extension names, if it names one.
     pub fn from_path(path: &Path) -> Option<Self> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         Self::BY_EXTENSION
@@ -179,6 +183,7 @@ impl Mesh {
         Ok(())
     }
 
+    /// The box around the mesh's vertices.
     pub fn bounds(&self) -> Aabb {
         Aabb::around_points(self.positions.iter().copied())
     }
@@ -212,6 +217,7 @@ impl Mesh {
         }
     }
 
+    /// A triangle's three corners.
     pub fn corners(&self, triangle: [u32; 3]) -> [Vec3; 3] {
         triangle.map(|i| self.positions[i as usize])
     }
@@ -269,11 +275,13 @@ impl Mesh {
             .collect()
     }
 
+    /// A triangle's area.
     pub fn triangle_area(&self, triangle: [u32; 3]) -> f32 {
         let [a, b, c] = self.corners(triangle);
         0.5 * (b - a).cross(c - a).length()
     }
 
+    /// The mesh's surface area, summed in f64.
     pub fn area(&self) -> f64 {
         self.triangles.iter().map(|&t| self.triangle_area(t) as f64).sum()
     }

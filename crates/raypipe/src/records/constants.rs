@@ -50,7 +50,9 @@ pub(crate) const LIGHT_DIRECTIONAL: u32 = 3;
 /// `GpuTextureMap::wrap`: an axis's wrap mode (`wrap_code`), the u axis in the low byte and v
 /// in the next.
 pub const WRAP_REPEAT: u32 = 0;
+/// Texture coordinates clamped to the edge.
 pub const WRAP_CLAMP: u32 = 1;
+/// Texture coordinates mirrored at every repeat.
 pub const WRAP_MIRROR: u32 = 2;
 
 /// `GpuTextureMap::sampling`: its low byte counts the texture's mip levels; these bits above it

@@ -69,10 +69,12 @@ impl GpuCamera {
         }
     }
 
+    /// The image width, in pixels.
     pub fn width(&self) -> u32 {
         self.width as u32
     }
 
+    /// The image height, in pixels.
     pub fn height(&self) -> u32 {
         self.height as u32
     }
@@ -120,6 +122,7 @@ pub struct GpuBvhFrame {
 }
 
 impl GpuBvhFrame {
+    /// The record of `frame`.
     pub fn new(frame: &QuantizationFrame) -> Self {
         Self {
             origin: frame.origin.to_array(),
@@ -129,6 +132,7 @@ impl GpuBvhFrame {
         }
     }
 
+    /// The frame this record holds.
     pub fn frame(&self) -> QuantizationFrame {
         QuantizationFrame {
             origin: Vec3::from_array(self.origin),
@@ -146,6 +150,7 @@ pub struct GpuGlobals {
     pub bvh_frame: GpuBvhFrame,
 }
 
+/// A sphere as the shader reads it: centre, radius and material.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuSphere {
@@ -175,6 +180,7 @@ pub struct GpuTriangle {
 }
 
 impl GpuSphere {
+    /// The box around the sphere.
     pub fn bounds(&self) -> Aabb {
         Aabb::around_sphere(Vec3::from_array(self.center), self.radius)
     }
@@ -187,6 +193,7 @@ impl GpuTriangle {
         Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
     }
 
+    /// The triangle's three corners.
     pub fn corners(&self) -> [Vec3; 3] {
         [self.v0, self.v1, self.v2].map(Vec3::from_array)
     }

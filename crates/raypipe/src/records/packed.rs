@@ -45,6 +45,7 @@ pub struct PackedBvh {
 }
 
 impl PackedBvh {
+    /// `bvh` with its depth-first copy laid out; the wide collapse waits for its first use.
     pub fn new(bvh: Bvh) -> Self {
         let depth = bvh.max_depth();
         let (frame, threaded_nodes) = threaded_nodes(&bvh.nodes);
@@ -71,6 +72,7 @@ impl PackedBvh {
         start.elapsed().as_secs_f64() * 1e3
     }
 
+    /// The wide nodes, collapsed on first use.
     pub fn wide_tree(&self) -> WideTree<'_> {
         WideTree {
             texels: self.wide_texels(),
@@ -79,6 +81,7 @@ impl PackedBvh {
         }
     }
 
+    /// The depth-first 16-byte nodes.
     pub fn threaded_tree(&self) -> ThreadedTree<'_> {
         ThreadedTree {
             nodes: &self.threaded_nodes,
@@ -97,6 +100,7 @@ pub fn primitive_boxes(spheres: &[GpuSphere], triangles: &[GpuTriangle]) -> Vec<
 /// Which records a motion rewrote.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MovedRecords {
+    /// Sphere centres.
     Spheres,
     /// Triangles and their vertex normals.
     Triangles,
@@ -315,10 +319,12 @@ impl PackedScene {
         self.globals.camera = GpuCamera::new(camera, width, height);
     }
 
+    /// The image width, in pixels.
     pub fn width(&self) -> u32 {
         self.globals.camera.width()
     }
 
+    /// The image height, in pixels.
     pub fn height(&self) -> u32 {
         self.globals.camera.height()
     }

@@ -25,6 +25,7 @@ pub enum TexelFormat {
 pub trait GpuRecord: Pod {
     /// The WGSL struct name in `types.wgsl`.
     const WGSL_TYPE: &'static str;
+    /// How the record's texels are stored: floats, unless it packs integers.
     const TEXEL_FORMAT: TexelFormat = TexelFormat::Float;
     /// Texels per record: the record's size over 16 bytes.
     const TEXELS: usize = std::mem::size_of::<Self>() / 16;

@@ -162,13 +162,17 @@ fn slerp(a: Quat, b: Quat, s: f32) -> Quat {
 /// What a channel animates on its node.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Path {
+    /// The node's translation.
     Translation,
+    /// The node's rotation.
     Rotation,
+    /// The node's scale.
     Scale,
     /// The morph target weights of the node's mesh.
     Weights,
 }
 
+/// One channel of a clip: a node's path, and the sampler that drives it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channel {
     pub node: usize,
@@ -195,7 +199,9 @@ impl Clip {
 /// scale, composed T * R * S.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Transform {
+    /// A whole matrix (not animated).
     Matrix(Mat4),
+    /// Translation, rotation and scale, composed T * R * S.
     Decomposed {
         translation: Vec3,
         rotation: Quat,
@@ -242,6 +248,7 @@ impl Transform {
     }
 }
 
+/// A node of the hierarchy: its parent, rest transform and morph weights.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Node {
     pub parent: Option<usize>,
@@ -250,6 +257,7 @@ pub struct Node {
     pub weights: Option<Vec<f32>>,
 }
 
+/// A skin: its joints (nodes) and their inverse bind matrices.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Skin {
     /// The joints' nodes.
@@ -310,7 +318,9 @@ pub struct Rig {
 /// A clip by its place in the file or its name (`--animation`, a scene file's `animation`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ClipChoice {
+    /// The clip at this place in the file.
     Index(usize),
+    /// The clip of this name.
     Name(String),
 }
 
@@ -614,6 +624,7 @@ pub struct MovedTriangles {
 }
 
 impl Animated {
+    /// Seconds the clip plays.
     pub fn duration(&self) -> f32 {
         self.rig.clips[self.clip].duration()
     }

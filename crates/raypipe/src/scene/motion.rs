@@ -8,6 +8,7 @@ use crate::error::{Element, InputError};
 use glam::Vec3;
 use std::sync::Arc;
 
+/// How a scene moves.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Motion {
     /// Every sphere flies straight on and bounces off the walls of a box (`bounce:N`).

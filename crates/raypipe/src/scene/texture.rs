@@ -22,7 +22,9 @@ pub enum Wrap {
 /// How texels are read within a level: the one nearest the point, or the four around it blended.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum TexelFilter {
+    /// The nearest texel (or level).
     Nearest,
+    /// Bilinear between texels (or linear between levels).
     #[default]
     Linear,
 }
@@ -60,6 +62,7 @@ pub(crate) const MAX_DECODED_TEXELS: u64 = 4 * MAX_TEXELS;
 /// The longest side of a texture.
 pub(crate) const MAX_TEXTURE_SIDE: u32 = 16384;
 
+/// An image of linear RGBA texels (half floats), with how it wraps and filters.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     pub width: u32,
@@ -186,6 +189,7 @@ impl Texture {
         self.texels[(y * self.width + x) as usize].map(|bits| f16::from_bits(bits).to_f32())
     }
 
+    /// Why the texture cannot be rendered, if it cannot: its size and texels.
     pub fn validate(&self) -> Result<(), InputError> {
         let (w, h) = (self.width, self.height);
         if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {

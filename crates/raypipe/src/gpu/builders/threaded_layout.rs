@@ -36,6 +36,8 @@ pub fn shader_source() -> String {
     )
 }
 
+/// The threaded layout on the GPU: the build's nodes renumbered depth-first into 16-byte nodes with
+/// skip links, for the stack and threaded walks.
 pub struct GpuThreadedLayout {
     order: wgpu::ComputePipeline,
     nodes: wgpu::ComputePipeline,

@@ -44,6 +44,8 @@ pub fn shader_source() -> String {
     )
 }
 
+/// The wide collapse on the GPU: the build's binary tree into compressed 8-wide nodes, for the wide
+/// walk.
 pub struct GpuWideCollapse {
     start: wgpu::ComputePipeline,
     level: wgpu::ComputePipeline,

@@ -5,13 +5,16 @@ use crate::modes::Backend;
 use crate::modes::{MemoryMode, Pipeline};
 use std::fmt;
 
+/// What can go wrong on the GPU (see the module).
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
+    /// No adapter, on the backend asked for or on any.
     #[error("no GPU adapter found{}", match .backend {
         Some(backend) => format!(" on the {backend} backend"),
         None => " (install a driver, for example mesa-vulkan-drivers)".to_string(),
     })]
     NoAdapter { backend: Option<Backend> },
+    /// The adapter would not open a device.
     #[error("cannot open a device on adapter {adapter}: {message}")]
     Device { adapter: String, message: String },
     /// wgpu reported a validation or out-of-memory error while `what` ran.
@@ -45,8 +48,10 @@ pub enum GpuError {
     /// A BVH rebuilt on the GPU reaches the shader through storage buffers only.
     #[error("a BVH rebuilt on the GPU is read from storage memory, not {memory} memory")]
     RebuildNeedsStorage { memory: MemoryMode },
+    /// A walk that reads a BVH was given a scene without one.
     #[error(transparent)]
     MissingBvh(#[from] MissingBvh),
+    /// The image is wider or taller than the adapter's largest texture.
     #[error("image {width}x{height} is larger than the adapter's maximum texture size {max}")]
     ImageTooLarge { width: u32, height: u32, max: u32 },
     /// A frame target of this size is more memory than the adapter allocates at once.
@@ -60,6 +65,7 @@ pub enum GpuError {
         max: u64,
         max_pixels: u64,
     },
+    /// The adapter lacks what a mode needs (ray queries, say).
     #[error("adapter {adapter} cannot {what}")]
     Unsupported { adapter: String, what: &'static str },
     /// The adapter lacks what `pipeline` needs.
@@ -69,12 +75,14 @@ pub enum GpuError {
         pipeline: Pipeline,
         what: &'static str,
     },
+    /// Mapping a read-back buffer failed.
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
     /// The device was lost (a driver reset, a GPU removed, a browser's decision): nothing made on
     /// it works again; a new device must be opened.
     #[error("the GPU was lost ({why})")]
     Lost { why: String },
+    /// `WGPU_BACKEND` names no backend.
     #[error("WGPU_BACKEND={0:?} names no backend wgpu knows (vulkan, gl, metal, dx12, webgpu)")]
     UnknownBackendEnv(String),
 }

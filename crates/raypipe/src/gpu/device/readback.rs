@@ -21,6 +21,8 @@ pub struct TextureReadback {
 }
 
 impl TextureReadback {
+    /// A buffer that holds a `width` x `height` texture of `bytes_per_pixel`, rows padded as copies
+    /// need.
     pub fn new(device: &wgpu::Device, width: u32, height: u32, bytes_per_pixel: u32) -> Self {
         let size = padded_bytes_per_row(width * bytes_per_pixel) as u64 * height as u64;
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
@@ -42,6 +44,7 @@ impl TextureReadback {
         (texture.width(), texture.height()) == (self.width, self.height)
     }
 
+    /// Records the copy of `texture` into the buffer.
     pub fn encode_copy(&self, encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture) {
         encoder.copy_texture_to_buffer(
             texture.as_image_copy(),

@@ -100,6 +100,7 @@ pub struct Display {
 }
 
 impl Display {
+    /// The display pass, drawing into targets of `format`.
     pub fn new(ctx: &GpuContext, format: wgpu::TextureFormat) -> Self {
         let device = &ctx.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {

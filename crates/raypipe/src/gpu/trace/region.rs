@@ -33,6 +33,7 @@ pub struct PixelRect {
 }
 
 impl PixelRect {
+    /// The whole of a `width` x `height` image.
     pub fn whole(width: u32, height: u32) -> Self {
         Self {
             x: 0,
@@ -50,20 +51,24 @@ pub struct TracedPixels {
 }
 
 impl TracedPixels {
+    /// Every pixel of a `width` x `height` image, as one rectangle.
     pub fn whole(width: u32, height: u32) -> Self {
         Self {
             rects: vec![PixelRect::whole(width, height)],
         }
     }
 
+    /// Whether these are every pixel of a `width` x `height` image.
     pub fn is_whole(&self, width: u32, height: u32) -> bool {
         self.rects == [PixelRect::whole(width, height)]
     }
 
+    /// How many pixels are traced.
     pub fn pixel_count(&self) -> u64 {
         self.rects.iter().map(|r| r.width as u64 * r.height as u64).sum()
     }
 
+    /// Whether pixel (`x`, `y`) is traced.
     pub fn contains(&self, x: u32, y: u32) -> bool {
         self.rects
             .iter()

@@ -40,12 +40,17 @@ const TRACE: &str = include_str!("../shaders/trace.wgsl");
 /// The scene's record arrays, each read by the shader through `load_<name>(i)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RecordKind {
+    /// The spheres.
     Sphere,
+    /// The triangles.
     Triangle,
+    /// The smooth triangles' vertex normals.
     TriangleNormals,
     /// The triangles' attribute blocks (texture coordinates, colours, tangents), texel by texel.
     TriangleAttributes,
+    /// The planes.
     Plane,
+    /// The lights.
     Light,
     /// The materials' texels, then the texture maps' (`PackedScene::shading`).
     Shading,
@@ -58,6 +63,7 @@ pub enum RecordKind {
 }
 
 impl RecordKind {
+    /// Every kind, in the order of the shader's bindings.
     pub const ALL: [RecordKind; 10] = [
         RecordKind::Sphere,
         RecordKind::Triangle,
@@ -171,6 +177,7 @@ impl SceneFeatures {
         environment: true,
     };
 
+    /// What `scene` holds, so that the shader compiles in only what it reads.
     pub fn of(scene: &PackedScene) -> SceneFeatures {
         let flags = scene.triangle_flags();
         let environment = scene.globals.scene.environment_map != NONE;
@@ -198,6 +205,8 @@ impl SceneFeatures {
     }
 }
 
+/// What the tracer's WGSL is composed for: pipeline, memory, walk, depths, record arrays and the
+/// scene's features.
 pub struct ShaderConfig<'a> {
     pub pipeline: Pipeline,
     pub memory: MemoryMode,
@@ -213,6 +222,8 @@ pub struct ShaderConfig<'a> {
     pub features: SceneFeatures,
 }
 
+/// The tracer's WGSL for `config`: the preamble, the record loaders of its memory mode, the walk,
+/// shading and the entry point.
 pub fn compose(config: &ShaderConfig) -> String {
     let mut source = String::new();
     let w = &mut source;

@@ -32,6 +32,7 @@ enum Resource {
 }
 
 impl SceneResources {
+    /// The bind group entries of the scene's arrays, in binding order.
     pub fn bind_entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
         let mut entries: Vec<_> = self
             .arrays
@@ -103,6 +104,8 @@ impl SceneResources {
     }
 }
 
+/// Uploads `scene`'s record arrays in `memory` (buffers or textures; `shared` ones are bound, not
+/// written) for shaders of `stage`.
 pub fn upload(
     ctx: &GpuContext,
     scene: &PackedScene,

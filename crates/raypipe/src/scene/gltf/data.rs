@@ -12,7 +12,9 @@ use std::path::{Component, Path, PathBuf};
 /// given the file's bytes alone).
 #[derive(Clone, Copy, Debug)]
 pub enum Files<'a> {
+    /// This folder and below.
     Folder(&'a Path),
+    /// Nowhere: the document's own bytes and `data:` URIs only.
     None,
 }
 

@@ -30,6 +30,7 @@ pub struct ModelOptions {
 }
 
 impl ModelOptions {
+    /// Whether every option is its default.
     pub fn is_default(&self) -> bool {
         *self == Self::default()
     }

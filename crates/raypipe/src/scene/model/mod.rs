@@ -142,6 +142,7 @@ impl Default for Placement {
 }
 
 impl Placement {
+    /// Why the placement cannot be used, if it cannot: its numbers finite, its scale positive.
     pub fn validate(&self) -> Result<(), InputError> {
         let fail = |message: String| Err(InputError::new(message));
         if !(self.scale > 0.0 && self.scale.is_finite()) {

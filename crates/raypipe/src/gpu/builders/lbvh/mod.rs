@@ -147,10 +147,12 @@ impl GpuLbvhBuilder {
         Ok(())
     }
 
+    /// The device it builds on.
     pub fn context(&self) -> &GpuContext {
         &self.ctx
     }
 
+    /// Its buffers: the primitives, the keys, the nodes.
     pub fn buffers(&self) -> &Buffers {
         &self.buffers
     }
@@ -160,6 +162,7 @@ impl GpuLbvhBuilder {
         self.buffers.count() as usize
     }
 
+    /// New sphere records for the next build, as many as it was made for.
     pub fn write_spheres(&self, spheres: &[GpuSphere]) {
         assert_eq!(spheres.len(), self.buffers.sphere_count as usize);
         self.ctx
@@ -167,6 +170,7 @@ impl GpuLbvhBuilder {
             .write_buffer(&self.buffers.spheres, 0, bytemuck::cast_slice(spheres));
     }
 
+    /// New triangle records for the next build, as many as it was made for.
     pub fn write_triangles(&self, triangles: &[GpuTriangle]) {
         assert_eq!(triangles.len(), self.buffers.triangle_count as usize);
         self.ctx
