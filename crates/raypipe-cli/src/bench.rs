@@ -516,7 +516,7 @@ fn time_frames(args: &BenchArgs, timed: &mut Timed, progress: impl Fn(usize, usi
             measured.times.push(traced.gpu_ms.unwrap_or(wall));
             measured.rays = traced.frame.rays();
             if let Timed::Rebuilt(moving) = timed {
-                measured.builds.extend(block_on(moving.read_gpu_build())?);
+                measured.builds.extend(block_on(moving.read_build())?);
             }
             if let Some(ms) = block_on(timed.renderer().read_structures_build_ms())?.filter(|_| driver_builds) {
                 measured.driver_builds.push(ms);

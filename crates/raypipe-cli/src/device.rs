@@ -215,15 +215,11 @@ pub fn render_frames(
             bar.set_message("");
             for &(frame, t) in times {
                 // The first frame too: a skinning pass starts at the scene's time 0.
-                let cost = moving.pose(t)?;
+                moving.pose(t)?;
                 let start = Instant::now();
                 let timed = block_on(moving.render_samples(options.samples, |_| {}))?;
                 let wall = start.elapsed().as_secs_f64() * 1e3;
-                let build = match cost.cpu_build {
-                    Some(build) => Some(build),
-                    None => block_on(moving.read_gpu_build())?,
-                };
-                outcome.builds.extend(build);
+                outcome.builds.extend(block_on(moving.read_build())?);
                 outcome.render_ms.push(timed.gpu_ms.unwrap_or(wall));
                 outcome.rays.push(timed.frame.rays());
                 emit(frame, &timed.frame)?;

@@ -36,7 +36,7 @@ pub struct Tracer {
     stage: Stage,
     /// The primitives' count, for the panel.
     pub primitives: usize,
-    /// The BVH's build time on the CPU, where it was built there (the last build).
+    /// The BVH's build time on the CPU, where it was built there, when the tracer was made.
     pub cpu_build_ms: Option<f64>,
 }
 
@@ -124,12 +124,7 @@ impl Tracer {
         let Stage::Moving(moving) = &mut self.stage else {
             return Ok(None);
         };
-        let cost = moving.pose(t)?;
-        let ms = cost.cpu_build.map(|timings| timings.total());
-        if ms.is_some() {
-            self.cpu_build_ms = ms;
-        }
-        Ok(ms)
+        Ok(moving.pose(t)?.cpu_build.map(|timings| timings.total()))
     }
 
     /// The GPU time of the last BVH rebuild on the GPU, where the scene is rebuilt there and the

@@ -76,11 +76,10 @@ impl Status {
     /// Every field, in the declaration's order.
     pub fn fields(&self) -> Vec<Field<'_>> {
         use Value::{Flag, Number, Text, Texts};
-        let number = |n: f64| Number(n);
         let optional = |n: Option<f64>| n.map_or(Value::Null, Number);
         let field = |name, declared, value| Field { name, declared, value };
         vec![
-            field("frames", "number", number(self.frames.into())),
+            field("frames", "number", Number(self.frames.into())),
             field("backend", r#""webgpu" | "webgl2""#, Text(self.backend)),
             field("adapter", "string", Text(&self.adapter)),
             field("scene", "string", Text(&self.scene)),
@@ -91,17 +90,17 @@ impl Status {
             ),
             field("lost", "boolean", Flag(self.lost)),
             field("busy", "boolean", Flag(self.busy)),
-            field("width", "number", number(self.width.into())),
-            field("height", "number", number(self.height.into())),
-            field("primitives", "number", number(self.primitives.into())),
+            field("width", "number", Number(self.width.into())),
+            field("height", "number", Number(self.height.into())),
+            field("primitives", "number", Number(self.primitives.into())),
             field("pipeline", "Pipeline", Text(self.pipeline)),
             field("accel", "Accel", Text(self.accel)),
             field("builder", "Builder", Text(self.builder)),
             field("memory", "Memory", Text(self.memory)),
             field("memories", "Memory[]", Texts(&self.memories)),
-            field("depth", "number", number(self.depth.into())),
+            field("depth", "number", Number(self.depth.into())),
             field("aov", "View", Text(self.aov)),
-            field("exposure", "number", number(self.exposure.into())),
+            field("exposure", "number", Number(self.exposure.into())),
             field("tonemap", "ToneMap", Text(self.tonemap)),
             field("paused", "boolean", Flag(self.paused)),
             field("floor", "boolean", Flag(self.floor)),
@@ -111,13 +110,13 @@ impl Status {
                 self.environment.as_deref().map_or(Value::Null, Text),
             ),
             field("moving", "boolean", Flag(self.moving)),
-            field("time", "number", number(self.time.into())),
+            field("time", "number", Number(self.time.into())),
             field("duration", "number | null", optional(self.duration.map(f64::from))),
-            field("speed", "number", number(self.speed.into())),
-            field("samples", "number", number(self.samples.into())),
-            field("spp", "number", number(self.spp.into())),
-            field("fps", "number", number(self.fps)),
-            field("frameMs", "number", number(self.frame_ms)),
+            field("speed", "number", Number(self.speed.into())),
+            field("samples", "number", Number(self.samples.into())),
+            field("spp", "number", Number(self.spp.into())),
+            field("fps", "number", Number(self.fps)),
+            field("frameMs", "number", Number(self.frame_ms)),
             field("buildMs", "number | null", optional(self.build_ms)),
             field("firstFrameMs", "number | null", optional(self.first_frame_ms)),
         ]
@@ -135,7 +134,6 @@ impl Status {
             frames: 0,
             time: 0.0,
             samples: self.done().into(),
-            spp: 1,
             fps: 0.0,
             frame_ms: 0.0,
             build_ms: None,
@@ -149,7 +147,7 @@ impl Status {
     pub fn publishes_over(&self, shown: Option<&Status>, since_ms: f64) -> bool {
         match shown {
             None => true,
-            Some(shown) if self.settings() != shown.settings() || self.spp != shown.spp => true,
+            Some(shown) if self.settings() != shown.settings() => true,
             Some(shown) => self != shown && since_ms >= CLOCK_PERIOD_MS,
         }
     }

@@ -385,11 +385,7 @@ fn frames_of_point(
         let eval = evaluate(motion, t);
         let cost = moving.pose(t)?;
         let traced = block_on(moving.render_samples(args.spp, |_| {}))?;
-        let build = match cost.cpu_build {
-            Some(timings) => Some(timings),
-            None => block_on(moving.read_gpu_build())?,
-        };
-        let (build, collapse) = match build {
+        let (build, collapse) = match block_on(moving.read_build())? {
             Some(timings) => (timings.total() - timings.collapse, timings.collapse),
             // Ray queries: the driver's structures, built on the GPU before the trace.
             None => (

@@ -248,12 +248,14 @@ impl MovingScene {
         self.cpu_build
     }
 
-    /// GPU time of each phase of the last tree build on the GPU submitted and finished (zeros
-    /// without timestamp queries); `None` where the GPU builds no tree.
-    pub async fn read_gpu_build(&self) -> Result<Option<BuildTimings>, GpuError> {
+    /// Each phase of the last tree build, wherever it ran: the CPU's wall clock, or the GPU's time
+    /// of the last build submitted and finished (zeros without timestamp queries); `None` where no
+    /// tree is built (brute force, ray queries).
+    pub async fn read_build(&self) -> Result<Option<BuildTimings>, GpuError> {
         match &self.gpu {
+            None => Ok(self.cpu_build),
             Some(gpu) if self.renderer.options().accel.uses_bvh() => Ok(Some(gpu.rebuild.read_timings().await?)),
-            _ => Ok(None),
+            Some(_) => Ok(None),
         }
     }
 
@@ -263,7 +265,10 @@ impl MovingScene {
         if self.renderer.options().accel.needs_ray_queries() {
             return self.renderer.read_structures_build_ms().await;
         }
-        Ok(self.read_gpu_build().await?.map(|timings| timings.total()))
+        match &self.gpu {
+            Some(_) => Ok(self.read_build().await?.map(|timings| timings.total())),
+            None => Ok(None),
+        }
     }
 
     /// GPU milliseconds of the last skinning pass, where the GPU skins the scene and times it.

@@ -119,19 +119,23 @@ pub(crate) fn load_buffers(root: &json::Root, blob: Option<Vec<u8>>, files: File
     let mut blob = blob;
     let mut buffers = Vec::with_capacity(root.buffers.len());
     for (index, buffer) in root.buffers.iter().enumerate() {
-        let fail = |message: String| Err(InputError::in_gltf(GltfPart::Buffer(index), message));
+        let fault = |message: String| InputError::in_gltf(GltfPart::Buffer(index), message);
         let length = buffer.byte_length.0;
         if length > crate::input::MAX_MODEL_BYTES {
-            return fail(format!("byteLength {length} is more than a model may hold"));
+            return Err(fault(format!("byteLength {length} is more than a model may hold")));
         }
-        let mut bytes = match (&buffer.uri, index, blob.take()) {
-            (Some(uri), _, _) => read_uri(uri, files, length, GltfPart::Buffer(index))?,
-            (None, 0, Some(blob)) => blob,
-            (None, 0, None) => return fail("no uri, and the file has no binary chunk".into()),
-            (None, _, _) => return fail("no uri (only buffer 0 may be a GLB's binary chunk)".into()),
+        let mut bytes = match (&buffer.uri, index) {
+            (Some(uri), _) => read_uri(uri, files, length, GltfPart::Buffer(index))?,
+            (None, 0) => blob
+                .take()
+                .ok_or_else(|| fault("no uri, and the file has no binary chunk".into()))?,
+            (None, _) => return Err(fault("no uri (only buffer 0 may be a GLB's binary chunk)".into())),
         };
         if (bytes.len() as u64) < length {
-            return fail(format!("{} bytes, less than its byteLength {length}", bytes.len()));
+            return Err(fault(format!(
+                "{} bytes, less than its byteLength {length}",
+                bytes.len()
+            )));
         }
         bytes.truncate(length as usize);
         buffers.push(bytes);
