@@ -135,7 +135,9 @@ impl fmt::Display for Element {
 pub struct InputError {
     /// The file the input came from, or the built-in scene's name, once known.
     pub origin: Option<String>,
+    /// The line, where the input is text.
     pub line: Option<usize>,
+    /// The element of the input (a glTF mesh, a TOML table), where known.
     pub element: Option<Element>,
     /// What is wrong, on one line.
     pub message: String,
@@ -240,6 +242,7 @@ impl fmt::Display for InputError {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("the {accel} walk needs the scene's BVH, which was not built")]
 pub struct MissingBvh {
+    /// The walk asked for.
     pub accel: Accel,
 }
 

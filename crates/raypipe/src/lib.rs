@@ -43,6 +43,9 @@
 //! rebuilds (or refits) its tree on the GPU or the CPU as the memory mode allows, and records that
 //! work before the trace; the CPU reference poses with its CPU half, [`records::PosedScene`].
 
+// Every public item says what it is.
+#![deny(missing_docs)]
+
 pub mod bvh;
 pub mod choice;
 pub mod constants;

@@ -6,7 +6,9 @@ use glam::Vec3;
 /// point).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// The low corner.
     pub min: Vec3,
+    /// The high corner.
     pub max: Vec3,
 }
 

@@ -31,6 +31,7 @@ pub struct GpuNode {
     /// traversal's skip link): the right sibling of the nearest ancestor-or-self that is a left
     /// child; [`NONE`] when the subtree ends the tree.
     pub escape: u32,
+    /// Padding to 16 bytes.
     pub _pad: [u32; 2],
 }
 

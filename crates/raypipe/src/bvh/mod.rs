@@ -22,18 +22,23 @@ use rayon::prelude::*;
 /// A BVH over `primitive_count` primitives in the one node layout of [`layout`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bvh {
+    /// The nodes, root first.
     pub nodes: Vec<GpuNode>,
+    /// Primitives the tree holds, one a leaf.
     pub primitive_count: usize,
 }
 
 /// Wall-clock time of each phase of a build, in milliseconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BuildTimings {
+    /// Computing the primitives' Morton codes.
     pub morton: f64,
+    /// Sorting the codes.
     pub sort: f64,
     /// With bottom-up merges ([`lbvh::Hierarchy::Merges`], and always on the GPU), this holds the
     /// bounds and links too, which are written in the same pass; `bounds` and `links` are then zero.
     pub hierarchy: f64,
+    /// Fitting the nodes' boxes.
     pub bounds: f64,
     /// Zero where the links are written with the bounds, as the CPU's climb after Karras's searches
     /// writes them; their time is then in `bounds`.

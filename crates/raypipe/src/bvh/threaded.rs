@@ -62,7 +62,9 @@ impl GpuThreadedNode {
 /// A threaded BVH as the walks read it: its nodes, and the frame their boxes are in.
 #[derive(Clone, Copy, Debug)]
 pub struct ThreadedTree<'a> {
+    /// The threaded nodes, root first.
     pub nodes: &'a [GpuThreadedNode],
+    /// The frame the nodes' quantized boxes are in.
     pub frame: QuantizationFrame,
     /// The stack walk's stack size: the tree's depth in edges (at least 1), as the shader's
     /// `BVH_STACK_SIZE`. The CPU walk holds itself to it, so a stack too small fails there too.

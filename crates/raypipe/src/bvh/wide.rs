@@ -55,6 +55,7 @@ pub const MAX_QUANTUM: u32 = 0xff;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct GpuWideTexel {
+    /// The texel's four words.
     pub words: [u32; 4],
 }
 
@@ -62,16 +63,21 @@ pub struct GpuWideTexel {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct WideNode {
+    /// The low corner of the quantization grid.
     pub origin: [f32; 3],
     /// Biased exponents of the quanta (bits 0-7 x, 8-15 y, 16-23 z) and the internal slots (24-31).
     pub exponents: u32,
+    /// The first texel of the node's internal children.
     pub child_base: u32,
+    /// The first of the node's leaf words.
     pub leaf_base: u32,
     /// Bit s: slot s holds a child.
     pub slots: u32,
+    /// Padding to 16 bytes.
     pub _pad: u32,
     /// Low corners per axis, a byte a slot: slots 0-3 in the first word, 4-7 in the second.
     pub lo: [[u32; 2]; 3],
+    /// High corners per axis, as `lo` holds the low ones.
     pub hi: [[u32; 2]; 3],
 }
 
@@ -125,6 +131,7 @@ impl WideNode {
 /// A wide BVH as the walks read it.
 #[derive(Clone, Copy, Debug)]
 pub struct WideTree<'a> {
+    /// The tree's texels: the leaf words, then the nodes.
     pub texels: &'a [GpuWideTexel],
     /// Where the root starts: after the leaf words.
     pub root: u32,

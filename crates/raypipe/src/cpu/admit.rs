@@ -16,7 +16,9 @@ use std::cell::Cell;
 /// of them.
 #[derive(Clone, Copy)]
 pub struct Primitives<'a> {
+    /// The sphere records.
     pub spheres: &'a [GpuSphere],
+    /// The triangle records.
     pub triangles: &'a [GpuTriangle],
     /// What decides triangles' sides and alpha; `None`: every hit counts (the walks' own tests,
     /// over triangles whose material words carry no flags).
@@ -27,6 +29,7 @@ pub struct Primitives<'a> {
 /// whose materials and maps the alpha test reads.
 #[derive(Clone, Copy)]
 pub struct RayQuery<'a> {
+    /// The scene whose materials and texture maps decide.
     pub scene: &'a PackedScene,
     /// Whether single-sided triangles hide their backs from the ray.
     pub culls_back_faces: bool,

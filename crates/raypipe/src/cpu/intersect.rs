@@ -8,6 +8,7 @@ use glam::{Vec3, Vec3Swizzles};
 /// A ray: its origin and unit direction, with its shear for the watertight triangle test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
+    /// Where the ray starts.
     pub origin: Vec3,
     /// Unit length: t is a distance.
     pub dir: Vec3,
@@ -35,9 +36,11 @@ impl Ray {
 pub struct RayShear {
     /// The frame's z is world x (`z_is_x`), world y (`z_is_y`), or world z.
     pub z_is_x: bool,
+    /// See `z_is_x`.
     pub z_is_y: bool,
     /// The frame's x and y are the remaining axes in reverse cyclic order.
     pub swap_xy: bool,
+    /// (dir.x / dir.z, dir.y / dir.z, 1 / dir.z) in the frame's axes.
     pub s: Vec3,
 }
 
@@ -84,8 +87,11 @@ pub enum HitKind {
 /// The closest hit found so far: `t` is t_max while `kind` is `None`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
+    /// The hit's distance along the ray.
     pub t: f32,
+    /// What was hit.
     pub kind: HitKind,
+    /// Which primitive or plane.
     pub index: u32,
 }
 

@@ -194,8 +194,11 @@ pub(crate) fn surface_alpha(scene: &PackedScene, material: &GpuMaterial, attribu
 /// `present` says which (`ATTRIBUTE_*` bits; 0 for none).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Attributes {
+    /// The `ATTRIBUTE_*` bits of what the triangle has.
     pub present: u32,
+    /// Texture coordinates of set 0.
     pub uv0: Vec2,
+    /// Texture coordinates of set 1.
     pub uv1: Vec2,
     /// Linear RGBA; white without vertex colours.
     pub color: Vec4,

@@ -29,6 +29,7 @@ pub(crate) struct ShadingFrame {
 /// Where a ray hit and what lies there: the point, its shading frame, material and attributes.
 #[derive(Clone, Copy, Debug)]
 pub struct Surface {
+    /// The hit point.
     pub position: Vec3,
     /// Geometric, unit, pointing out of the primitive: it decides inside and outside, and which side
     /// new rays start on.
@@ -36,6 +37,7 @@ pub struct Surface {
     /// Unit, on the geometric normal's side: the interpolated vertex normal of a smooth triangle, the
     /// geometric normal otherwise. Lighting, reflection and refraction use it.
     pub shading: Vec3,
+    /// The material's index.
     pub material: u32,
     /// The largest coordinate of the ray's origin and of the hit: the position's rounding error is
     /// a few float steps of it.

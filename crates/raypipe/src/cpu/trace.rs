@@ -46,6 +46,7 @@ struct Branches {
 /// What one pixel's trace yields: the fragment shader's two outputs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelTrace {
+    /// Linear radiance.
     pub color: Vec3,
     /// First-hit shading normal; zero where the primary ray escapes.
     pub normal: Vec3,
@@ -60,10 +61,13 @@ pub struct PixelTrace {
 
 /// The per-pixel state the shader keeps in private variables.
 pub struct Tracer<'a> {
+    /// The scene traced.
     pub scene: &'a PackedScene,
+    /// The walk.
     pub accel: Accel,
     /// The scene's BVH; the BVH walks need it.
     bvh: Option<&'a PackedBvh>,
+    /// Rays traced for the pixel so far.
     pub ray_count: u32,
     /// The sample's random sequence: its seed and the draws so far.
     seed: u32,

@@ -10,10 +10,13 @@ use super::FloatImage;
 /// How two images differ, over their pixels' largest channel errors.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiffStats {
+    /// Pixels compared.
     pub pixels: usize,
+    /// The mean per-pixel error.
     pub mean: f64,
     /// 99th percentile of the per-pixel error.
     pub p99: f64,
+    /// The largest per-pixel error.
     pub max: f64,
     /// Pixels whose error is above 0.
     pub differing: usize,
@@ -22,7 +25,9 @@ pub struct DiffStats {
 /// A pass mark for [`DiffStats`]: both the mean and the 99th percentile must stay at or below it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerance {
+    /// The largest mean error allowed.
     pub mean: f64,
+    /// The largest 99th percentile allowed.
     pub p99: f64,
 }
 
@@ -67,16 +72,31 @@ fn channel_error(a: f32, b: f32) -> f64 {
 pub enum Mismatch {
     /// The images' sizes differ.
     #[error("images differ in size: {}x{} and {}x{}", .a.0, .a.1, .b.0, .b.1)]
-    Size { a: (u32, u32), b: (u32, u32) },
+    Size {
+        /// The first image's width and height.
+        a: (u32, u32),
+        /// The second's.
+        b: (u32, u32),
+    },
     /// The images' channels differ.
     #[error("images differ in channels: {a:?} and {b:?}")]
-    Channels { a: Vec<String>, b: Vec<String> },
+    Channels {
+        /// The first image's channel names.
+        a: Vec<String>,
+        /// The second's.
+        b: Vec<String>,
+    },
     /// The images differ beyond the tolerance.
     #[error(
         "images differ: mean error {:.3e} (allowed {:.1e}), p99 {:.3e} (allowed {:.1e}), max {:.3e}, {} of {} pixels differ",
         .stats.mean, .allowed.mean, .stats.p99, .allowed.p99, .stats.max, .stats.differing, .stats.pixels
     )]
-    Beyond { stats: DiffStats, allowed: Tolerance },
+    Beyond {
+        /// The errors measured.
+        stats: DiffStats,
+        /// The tolerance they exceed.
+        allowed: Tolerance,
+    },
 }
 
 /// Per-pixel errors of two images of equal size and channels.

@@ -13,7 +13,9 @@ use tonemap::DisplayTransform;
 /// What a render produces: the fragment shader's two outputs per pixel, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
+    /// Pixels in a row.
     pub width: u32,
+    /// Rows.
     pub height: u32,
     /// rgb: linear radiance; a: rays traced for the pixel (primary, shadow, secondary).
     pub color: Vec<[f32; 4]>,
@@ -24,10 +26,13 @@ pub struct Frame {
 /// A float image of any channel count, rows top to bottom, channels interleaved.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FloatImage {
+    /// Pixels in a row.
     pub width: u32,
+    /// Rows.
     pub height: u32,
     /// Channel names, as an EXR file would name them.
     pub channels: Vec<String>,
+    /// The values, `channels.len()` a pixel.
     pub data: Vec<f32>,
 }
 

@@ -14,6 +14,7 @@ pub const MAX_EXPOSURE: f32 = 64.0;
 pub struct DisplayTransform {
     /// Stops: radiance is multiplied by 2^exposure.
     pub exposure: f32,
+    /// The curve from radiance to display values.
     pub tone_map: ToneMap,
 }
 

@@ -18,6 +18,7 @@ use std::path::Path;
 /// An indexed triangle mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// The vertices.
     pub positions: Vec<Vec3>,
     /// One per position, when the file has vertex normals (not necessarily unit length).
     pub normals: Option<Vec<Vec3>>,

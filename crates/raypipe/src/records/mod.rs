@@ -28,6 +28,7 @@ use glam::Vec3;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuCamera {
+    /// The eye's position.
     pub eye: [f32; 3],
     /// tan(fov / 2), fov vertical.
     pub tan_half_fov: f32,
@@ -37,13 +38,16 @@ pub struct GpuCamera {
     pub aspect: f32,
     /// normalize(cross(forward, up)).
     pub right: [f32; 3],
+    /// The image width, in pixels.
     pub width: f32,
     /// cross(right, forward): the true up.
     pub up: [f32; 3],
+    /// The image height, in pixels.
     pub height: f32,
     /// Which of each pixel's samples this draw traces: 0 is the pixel centre, later ones are
     /// jittered (`sample_offset`). The renderer writes it before every draw.
     pub sample: u32,
+    /// Padding to 16 bytes.
     pub _pad: [u32; 3],
 }
 
@@ -85,12 +89,19 @@ impl GpuCamera {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuSceneInfo {
+    /// What escaping rays return where there is no environment.
     pub background: [f32; 3],
+    /// The Whitted model's ambient term, added times a surface's colour.
     pub ambient: f32,
+    /// The sphere records.
     pub sphere_count: u32,
+    /// The plane records.
     pub plane_count: u32,
+    /// The light records.
     pub light_count: u32,
+    /// The material records.
     pub material_count: u32,
+    /// The triangle records.
     pub triangle_count: u32,
     /// The texture map of the environment's radiance, or NONE: escaping rays return the
     /// background.
@@ -101,6 +112,7 @@ pub struct GpuSceneInfo {
     pub environment_intensity: f32,
     /// cos and sin of the environment's rotation about +y.
     pub environment_turn: [f32; 2],
+    /// Padding to 16 bytes.
     pub _pad: [u32; 2],
 }
 
@@ -112,12 +124,15 @@ pub struct GpuSceneInfo {
 pub struct GpuBvhFrame {
     /// The root box's minimum corner.
     pub origin: [f32; 3],
+    /// Padding to 16 bytes.
     pub _pad0: u32,
     /// The quantum of each axis (a power of two).
     pub quantum: [f32; 3],
+    /// Padding to 16 bytes.
     pub _pad1: u32,
     /// Its inverse.
     pub inverse_quantum: [f32; 3],
+    /// Padding to 16 bytes.
     pub _pad2: u32,
 }
 
@@ -145,8 +160,11 @@ impl GpuBvhFrame {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuGlobals {
+    /// The camera and which sample the draw traces.
     pub camera: GpuCamera,
+    /// The scene's constants.
     pub scene: GpuSceneInfo,
+    /// The threaded BVH's quantization frame.
     pub bvh_frame: GpuBvhFrame,
 }
 
@@ -154,10 +172,13 @@ pub struct GpuGlobals {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuSphere {
+    /// The centre.
     pub center: [f32; 3],
+    /// The radius.
     pub radius: f32,
     /// Index into the material records.
     pub material: u32,
+    /// Padding to 16 bytes.
     pub _pad: [u32; 3],
 }
 
@@ -167,13 +188,16 @@ pub struct GpuSphere {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTriangle {
+    /// The first corner.
     pub v0: [f32; 3],
     /// The material's index (`& MATERIAL_INDEX_MASK`) and, above it, what the walks' hit test needs
     /// of the material: `TRIANGLE_SINGLE_SIDED`, `TRIANGLE_ALPHA_MASK`, `TRIANGLE_ALPHA_BLEND`.
     pub material: u32,
+    /// The second corner.
     pub v1: [f32; 3],
     /// Index of the triangle's vertex normals in the normal records, or `NONE` to shade flat.
     pub normals: u32,
+    /// The third corner.
     pub v2: [f32; 3],
     /// The first texel of the triangle's attribute block, or `NONE` (`PackedScene::triangle_attributes`).
     pub attributes: u32,
@@ -203,11 +227,17 @@ impl GpuTriangle {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTriangleNormals {
+    /// The normal at `v0`.
     pub n0: [f32; 3],
+    /// Padding to 16 bytes.
     pub _pad0: f32,
+    /// The normal at `v1`.
     pub n1: [f32; 3],
+    /// Padding to 16 bytes.
     pub _pad1: f32,
+    /// The normal at `v2`.
     pub n2: [f32; 3],
+    /// Padding to 16 bytes.
     pub _pad2: f32,
 }
 
@@ -221,6 +251,7 @@ pub struct AttributeTexel(pub [f32; 4]);
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuPlane {
+    /// A point on the plane.
     pub point: [f32; 3],
     /// Material of the even squares (all of the plane when it has no checker).
     pub material: u32,
@@ -234,16 +265,18 @@ pub struct GpuPlane {
     pub checker_size: f32,
     /// Second in-plane axis: cross(normal, tangent).
     pub bitangent: [f32; 3],
+    /// Padding to 16 bytes.
     pub _pad: f32,
 }
 
 /// A light (`scene::Light`): its irradiance at normal incidence, E, follows from `kind`
-/// (`LightKind::code`, `LIGHT_*` in the preamble).
+/// (`LIGHT_*` in the preamble).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLight {
     /// Unused by a directional light.
     pub position: [f32; 3],
+    /// The light's kind: constant, point, spot or directional (`LIGHT_*`).
     pub kind: u32,
     /// E (constant), candela (point, spot) or lux (directional), per channel.
     pub color: [f32; 3],
@@ -254,7 +287,9 @@ pub struct GpuLight {
     /// A spot's cone as KHR_lights_punctual computes it: the attenuation is
     /// clamp(cos(angle to the axis) * spot_scale + spot_offset, 0, 1)².
     pub spot_scale: f32,
+    /// See `spot_scale`.
     pub spot_offset: f32,
+    /// Padding to 16 bytes.
     pub _pad: [f32; 3],
 }
 
@@ -265,26 +300,38 @@ pub struct GpuLight {
 pub struct GpuMaterial {
     /// Whitted: diffuse albedo; glTF: base colour.
     pub color: [f32; 3],
+    /// Whitted: the Phong highlight's strength.
     pub specular: f32,
+    /// Whitted: the Phong exponent.
     pub shininess: f32,
+    /// Whitted: the mirror reflection's weight.
     pub reflect: f32,
+    /// Whitted: the refraction's weight.
     pub transmit: f32,
+    /// The index of refraction.
     pub ior: f32,
     /// Added to the shaded colour (times the emissive map's colour, where there is one).
     pub emission: [f32; 3],
+    /// Which fields shade: `MODEL_WHITTED`, `MODEL_GLTF` or `MODEL_UNLIT`.
     pub model: u32,
     /// glTF: KHR_materials_specular's colour factor.
     pub specular_color: [f32; 3],
+    /// glTF: metalness, 0..1.
     pub metallic: f32,
+    /// glTF: perceptual roughness, 0..1.
     pub roughness: f32,
     /// glTF: KHR_materials_specular's strength.
     pub specular_factor: f32,
+    /// glTF: how much the occlusion map darkens indirect light, 0..1.
     pub occlusion_strength: f32,
     /// The maps, each an index into the texture maps or `NONE`: base colour (both models), then
     /// glTF's metallic-roughness, occlusion and emissive maps.
     pub base_map: u32,
+    /// See `base_map`.
     pub metallic_roughness_map: u32,
+    /// See `base_map`.
     pub occlusion_map: u32,
+    /// See `base_map`.
     pub emissive_map: u32,
     /// The base colour's alpha (times the base map's, at a hit); used by triangles whose
     /// `material` word says MASK or BLEND.
@@ -293,7 +340,9 @@ pub struct GpuMaterial {
     pub alpha_cutoff: f32,
     /// glTF: the normal map (an index into the texture maps, or `NONE`) and its scale.
     pub normal_map: u32,
+    /// See `normal_map`.
     pub normal_scale: f32,
+    /// Padding to 16 bytes.
     pub _pad: u32,
     /// The volume's absorption per unit length (`scene::Volume::absorption`).
     pub absorption: [f32; 3],
@@ -303,7 +352,9 @@ pub struct GpuMaterial {
     /// KHR_materials_specular's maps (indices into the texture maps, or `NONE`): the strength's
     /// (alpha) and the colour's (RGB).
     pub specular_map: u32,
+    /// See `specular_map`.
     pub specular_color_map: u32,
+    /// Padding to 16 bytes.
     pub _pad1: [u32; 2],
 }
 
@@ -315,14 +366,17 @@ pub struct GpuMaterial {
 pub struct GpuTextureMap {
     /// The texture's first texel among all textures' texels (row by row, `width` to a row).
     pub offset: u32,
+    /// The texture's width, in texels.
     pub width: u32,
+    /// Its height.
     pub height: u32,
-    /// The wrap modes, `wrap_u | wrap_v << 8` (`Wrap::code`s).
+    /// The wrap modes, `wrap_u | wrap_v << 8` (`WRAP_*`).
     pub wrap: u32,
     /// The texture transform's rows: (u', v') = (dot(transform_u, (u, v, 1)), dot(transform_v, (u, v, 1))).
     pub transform_u: [f32; 3],
     /// Which texture coordinate set the map reads, 0 or 1.
     pub tex_coord: u32,
+    /// See `transform_u`.
     pub transform_v: [f32; 3],
     /// The texture's mip levels (`MIP_LEVELS_MASK`; level k follows level k - 1, each side halved
     /// and rounded up) and its sampler's `FILTER_*` bits.
@@ -331,7 +385,9 @@ pub struct GpuTextureMap {
 
 /// One host struct's layout, for the naga layout test.
 pub struct StructLayout {
+    /// The WGSL struct's name.
     pub wgsl_name: &'static str,
+    /// Its size in bytes.
     pub size: usize,
     /// (member name, byte offset), padding excluded.
     pub members: &'static [(&'static str, usize)],

@@ -112,8 +112,11 @@ pub struct PackedScene {
     /// The camera at the scene's image size, the scene constants, and the BVH's frame where it has
     /// one. A renderer starts from these and may move the camera or resize the image.
     pub globals: GpuGlobals,
+    /// The bounce loop's depth.
     pub max_depth: u32,
+    /// The spheres, in the BVH's order once built.
     pub spheres: Vec<GpuSphere>,
+    /// The triangles, in the BVH's order once built.
     pub triangles: Vec<GpuTriangle>,
     /// The vertex normals of the smooth triangles.
     pub triangle_normals: Vec<GpuTriangleNormals>,
@@ -122,8 +125,11 @@ pub struct PackedScene {
     /// v1) and (u2, v2, present, 0) of set 0, then, as the `ATTRIBUTE_*` bits of `present` say, set 1's
     /// two texels alike, three corners' RGBA colours, three corners' tangents (xyz, w the sign).
     pub triangle_attributes: Vec<AttributeTexel>,
+    /// The infinite planes.
     pub planes: Vec<GpuPlane>,
+    /// The lights.
     pub lights: Vec<GpuLight>,
+    /// The materials.
     pub materials: Vec<GpuMaterial>,
     /// The textures as materials map them.
     pub texture_maps: Vec<GpuTextureMap>,

@@ -39,7 +39,9 @@ pub struct Sampler {
     /// `width` floats per key; CUBICSPLINE keys hold an in-tangent, the value and an out-tangent,
     /// `3 * width` floats.
     pub values: Vec<f32>,
+    /// Floats in one value: 3 for a translation or scale, 4 for a rotation, a weight per target.
     pub width: usize,
+    /// How values between keys are found.
     pub interpolation: Interpolation,
 }
 
@@ -175,8 +177,11 @@ pub enum Path {
 /// One channel of a clip: a node's path, and the sampler that drives it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channel {
+    /// The node the channel moves.
     pub node: usize,
+    /// Which of its properties.
     pub path: Path,
+    /// The keyframes.
     pub sampler: Sampler,
 }
 
@@ -185,6 +190,7 @@ pub struct Channel {
 pub struct Clip {
     /// The file's name for it, where it has one.
     pub name: Option<String>,
+    /// The channels.
     pub channels: Vec<Channel>,
 }
 
@@ -203,8 +209,11 @@ pub enum Transform {
     Matrix(Mat4),
     /// Translation, rotation and scale, composed T * R * S.
     Decomposed {
+        /// Applied last.
         translation: Vec3,
+        /// A unit quaternion.
         rotation: Quat,
+        /// Per axis, applied first.
         scale: Vec3,
     },
 }
@@ -251,7 +260,9 @@ impl Transform {
 /// A node of the hierarchy: its parent, rest transform and morph weights.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Node {
+    /// The parent node; `None` for a root.
     pub parent: Option<usize>,
+    /// Its transform where no channel moves it.
     pub rest: Transform,
     /// Morph weights the node gives its mesh, where it overrides the mesh's.
     pub weights: Option<Vec<f32>>,
@@ -269,24 +280,31 @@ pub struct Skin {
 /// Offsets a morph target adds to its primitive's vertices, scaled by its weight.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MorphTarget {
+    /// Offsets added to the positions, where the target moves them.
     pub positions: Option<Vec<Vec3>>,
+    /// Offsets added to the normals, where the target moves them.
     pub normals: Option<Vec<Vec3>>,
 }
 
 /// Up to eight joints (indices into the skin's list) and their weights, summing to one.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Influences {
+    /// The joints.
     pub joints: [u16; MAX_INFLUENCES],
+    /// Their weights.
     pub weights: [f32; MAX_INFLUENCES],
 }
 
 /// A mesh primitive as the file stores it, in its mesh's space, with what deforms it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RestPrimitive {
+    /// The vertices.
     pub positions: Vec<Vec3>,
+    /// The vertex normals, where the file has them.
     pub normals: Option<Vec<Vec3>>,
     /// Per vertex, for a skinned mesh; empty otherwise.
     pub influences: Vec<Influences>,
+    /// The morph targets.
     pub targets: Vec<MorphTarget>,
     /// The mesh's morph weights, one per target.
     pub weights: Vec<f32>,
@@ -295,8 +313,11 @@ pub struct RestPrimitive {
 /// A primitive placed by a node: the node carries it, or its skin's joints do.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Instance {
+    /// The node that places it.
     pub node: usize,
+    /// Its skin, where the joints carry it.
     pub skin: Option<usize>,
+    /// The primitive, shared by every instance of it.
     pub rest: Arc<RestPrimitive>,
     /// Where the primitive stands under its node: one of the node's EXT_mesh_gpu_instancing
     /// transforms, or the identity.
@@ -307,11 +328,15 @@ pub struct Instance {
 /// [`Instance`] per placed primitive in the order the file's scene lists them.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Rig {
+    /// The nodes, as the file lists them.
     pub nodes: Vec<Node>,
     /// Every node, parents before children.
     pub order: Vec<usize>,
+    /// The skins.
     pub skins: Vec<Skin>,
+    /// The animations.
     pub clips: Vec<Clip>,
+    /// The placed primitives.
     pub instances: Vec<Instance>,
 }
 
@@ -336,6 +361,7 @@ impl ClipChoice {
 
 /// The nodes at one time: world matrices and morph weights.
 pub struct Pose {
+    /// Per node, from its space to the file's world.
     pub world: Vec<Mat4>,
     /// Per node, the weights its channels set (empty where none does).
     pub weights: Vec<Vec<f32>>,
@@ -585,10 +611,13 @@ impl CornerNormals {
 /// `triangles`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlacedInstance {
+    /// Which of the rig's instances.
     pub instance: usize,
+    /// The scene's triangle its triangles start at.
     pub first_triangle: usize,
     /// Vertex indices, winding as placed.
     pub triangles: Vec<[u32; 3]>,
+    /// Where the triangles' normals come from as it moves.
     pub normals: CornerNormals,
 }
 
@@ -596,11 +625,15 @@ pub struct PlacedInstance {
 /// file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Animated {
+    /// What moves.
     pub rig: Arc<Rig>,
+    /// Which of its clips plays.
     pub clip: usize,
     /// Added to the scene's time: where in the clip the scene's time 0 falls.
     pub offset: f32,
+    /// How the scene placed the file (framing, a scene file's transform).
     pub place: Similarity,
+    /// The instances the scene holds.
     pub placed: Vec<PlacedInstance>,
 }
 
@@ -610,7 +643,9 @@ pub struct Animated {
 /// target).
 #[derive(Clone, Debug, PartialEq)]
 pub struct InstancePose {
+    /// Joint matrices, or the node's one.
     pub matrices: Vec<Mat4>,
+    /// Morph weights.
     pub weights: Vec<f32>,
 }
 
@@ -618,8 +653,11 @@ pub struct InstancePose {
 /// triangles.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MovedTriangles {
+    /// The first triangle of the run.
     pub first: usize,
+    /// Each triangle's corners.
     pub vertices: Vec<[Vec3; 3]>,
+    /// Each triangle's corner normals.
     pub normals: Option<Vec<[Vec3; 3]>>,
 }
 

@@ -13,6 +13,7 @@ pub struct Light {
     /// The paper's light: E itself, per channel. A glTF point or spot light: the intensity in
     /// candela (colour times intensity). A directional light: the illuminance in lux.
     pub color: Vec3,
+    /// How its irradiance falls off.
     pub kind: LightKind,
 }
 
@@ -43,13 +44,19 @@ pub enum LightKind {
     Spot {
         /// Unit, where the cone points.
         direction: Vec3,
+        /// Radians from the axis of full strength.
         inner_cone: f32,
+        /// Radians from the axis where the light ends.
         outer_cone: f32,
+        /// Where the light ends; `None`: nowhere.
         range: Option<f32>,
     },
     /// Parallel light travelling along `direction` (unit), from infinitely far: E is the colour
     /// everywhere, and shadow rays run to infinity.
-    Directional { direction: Vec3 },
+    Directional {
+        /// Unit, where the light travels.
+        direction: Vec3,
+    },
 }
 
 impl LightKind {

@@ -34,6 +34,7 @@ pub struct Material {
     /// The coverage of the surface, 0..1 (`baseColorFactor`'s alpha), times the base colour
     /// texture's alpha where there is one; what it does follows from `alpha_mode`.
     pub alpha: f32,
+    /// What the alpha does.
     pub alpha_mode: AlphaMode,
     /// Whether the back of a triangle with this material is seen (glTF's `doubleSided`); a
     /// single-sided triangle is invisible from behind to camera and reflected rays
@@ -50,7 +51,10 @@ pub enum AlphaMode {
     Opaque,
     /// The surface is cut away where alpha is below `cutoff`, for every ray (shadow rays too), and
     /// fully there elsewhere.
-    Mask { cutoff: f32 },
+    Mask {
+        /// The least alpha that is surface.
+        cutoff: f32,
+    },
     /// The surface covers `alpha` of every ray that meets it; the rest goes on behind it, shadow
     /// rays too.
     Blend,
@@ -143,6 +147,7 @@ pub struct Pbr {
     /// the vertex normal), each in 2 · value - 1, x and y scaled by `normal_scale`; on triangles
     /// with tangents.
     pub normal_texture: Option<TextureMap>,
+    /// Scales the normal map's x and y.
     pub normal_scale: f32,
     /// KHR_materials_volume (with a thickness above 0): the surface bounds a volume of the
     /// transmissive medium, not a thin wall; `None`: a thin wall.
@@ -214,6 +219,7 @@ impl Volume {
 pub struct TextureMap {
     /// Index into `Scene::textures`.
     pub texture: u32,
+    /// How coordinates are carried to the texture.
     pub transform: TextureTransform,
     /// Which of a triangle's texture coordinate sets it reads: 0 (`Triangle::uvs`) or 1
     /// (`Triangle::uvs1`).
@@ -234,9 +240,11 @@ impl TextureMap {
 /// KHR_texture_transform: coordinates scaled, then rotated about the origin, then offset.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureTransform {
+    /// Added last.
     pub offset: Vec2,
     /// Radians, turning coordinates counter-clockwise (the image clockwise).
     pub rotation: f32,
+    /// Applied first.
     pub scale: Vec2,
 }
 

@@ -25,6 +25,7 @@ pub struct Bounce {
     pub velocities: Vec<Vec3>,
     /// The box the spheres' centres stay in.
     pub lo: Vec3,
+    /// See `lo`.
     pub hi: Vec3,
 }
 

@@ -34,7 +34,9 @@ pub enum TexelFilter {
 /// texel (minified), within a mip level and between two.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Filter {
+    /// Where a texel covers more than the footprint.
     pub magnify: TexelFilter,
+    /// Where the footprint covers more than a texel.
     pub minify: TexelFilter,
     /// Between mip levels: the nearest level or the two around the footprint blended; `None`
     /// reads the full-size image only (minFilter NEAREST or LINEAR).
@@ -65,13 +67,16 @@ pub(crate) const MAX_TEXTURE_SIDE: u32 = 16384;
 /// An image of linear RGBA texels (half floats), with how it wraps and filters.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
+    /// Texels in a row.
     pub width: u32,
+    /// Rows.
     pub height: u32,
     /// Row by row from texture coordinate v = 0 (the image's first row, as glTF has it): linear
     /// RGBA as IEEE half floats (their bits), the precision the GPU texture holds.
     pub texels: Vec<[u16; 4]>,
     /// Along u, then v.
     pub wrap: [Wrap; 2],
+    /// How it is read.
     pub filter: Filter,
 }
 

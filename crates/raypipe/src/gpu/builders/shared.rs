@@ -6,8 +6,11 @@
 /// threaded nodes and their quantization frame laid out from them.
 #[derive(Clone, Debug)]
 pub struct SharedBuffers {
+    /// The sphere records, in the build's order.
     pub spheres: wgpu::Buffer,
+    /// The triangle records, in the build's order.
     pub triangles: wgpu::Buffer,
+    /// The binary nodes.
     pub nodes: wgpu::Buffer,
     /// For the stack and threaded walks.
     pub threaded_nodes: Option<wgpu::Buffer>,

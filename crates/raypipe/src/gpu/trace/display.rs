@@ -81,6 +81,7 @@ pub fn shader_source() -> String {
 /// What the display pass shows of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shown {
+    /// Which of the frame's outputs.
     pub aov: Aov,
     /// The depth view: distances up to this fade from white to black.
     pub depth_far: f32,

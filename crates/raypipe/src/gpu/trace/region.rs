@@ -26,9 +26,13 @@ const COVER_LEVELS: u32 = 10;
 /// A rectangle of pixels: columns `x..x + width`, rows `y..y + height` (row 0 at the top).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PixelRect {
+    /// The first column.
     pub x: u32,
+    /// The first row.
     pub y: u32,
+    /// Columns.
     pub width: u32,
+    /// Rows.
     pub height: u32,
 }
 
@@ -47,6 +51,7 @@ impl PixelRect {
 /// The pixels a frame traces: disjoint rectangles, in rows from the top.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct TracedPixels {
+    /// The rectangles.
     pub rects: Vec<PixelRect>,
 }
 

@@ -106,10 +106,15 @@ impl RecordKind {
 /// A scene array the shader reads through `load_<name>(i)`, bound at `binding` in group 0.
 #[derive(Clone, Copy, Debug)]
 pub struct RecordArray {
+    /// Which records.
     pub kind: RecordKind,
+    /// The WGSL struct of one record.
     pub wgsl_type: &'static str,
+    /// Texels a record takes in texture memory.
     pub texels: usize,
+    /// The texels' format in texture memory.
     pub texel_format: TexelFormat,
+    /// The binding in group 0.
     pub binding: u32,
     /// Records to declare in uniform mode (uniform arrays have a fixed length).
     pub capacity: usize,
@@ -134,8 +139,11 @@ pub(crate) fn ray_query_binding(arrays: &[RecordArray]) -> u32 {
 /// pipeline while its scene moves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SceneFeatures {
+    /// Spheres.
     pub spheres: bool,
+    /// Triangles.
     pub triangles: bool,
+    /// Planes.
     pub planes: bool,
     /// A material with a texture.
     pub textures: bool,
@@ -208,17 +216,23 @@ impl SceneFeatures {
 /// What the tracer's WGSL is composed for: pipeline, memory, walk, depths, record arrays and the
 /// scene's features.
 pub struct ShaderConfig<'a> {
+    /// Fragment or compute.
     pub pipeline: Pipeline,
+    /// How the records are bound.
     pub memory: MemoryMode,
+    /// The walk.
     pub accel: Accel,
+    /// The bounce loop's depth.
     pub max_depth: u32,
     /// Longest root-to-leaf path of the BVH: the traversal stack's size.
     pub bvh_depth: u32,
+    /// The record arrays the shader reads.
     pub arrays: &'a [RecordArray],
     /// Width of the scene textures, in texels.
     pub texels_per_row: u32,
     /// Write each pixel's cost (BVH nodes its primary ray tested) instead of its ray count.
     pub write_cost: bool,
+    /// What the scene holds.
     pub features: SceneFeatures,
 }
 

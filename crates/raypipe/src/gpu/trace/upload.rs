@@ -16,9 +16,12 @@ pub const TEXELS_PER_ROW: u32 = 2048;
 
 /// The scene's arrays on the GPU, ready to bind.
 pub struct SceneResources {
+    /// The record arrays, in binding order.
     pub arrays: Vec<RecordArray>,
+    /// Their bind group layout's entries.
     pub layout_entries: Vec<wgpu::BindGroupLayoutEntry>,
     resources: Vec<Resource>,
+    /// Width of the scene textures, in texels.
     pub texels_per_row: u32,
     /// Every texture's texels (rgba16float, `texels_per_row` wide), bound after the arrays.
     texture_pixels: wgpu::TextureView,

@@ -63,6 +63,7 @@ pub(crate) fn is_gltf_path(path: &Path) -> bool {
 /// One mesh primitive placed in the world: an indexed triangle list with its attributes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Primitive {
+    /// The vertices, in world space.
     pub positions: Vec<Vec3>,
     /// The file's vertex normals, where it has them.
     pub normals: Option<Vec<Vec3>>,
@@ -75,6 +76,7 @@ pub struct Primitive {
     /// Each triangle's corners' tangents (xyz unit, w the bitangent's sign): TANGENT's, or
     /// MikkTSpace's where the material has a normal map and the file no TANGENT.
     pub tangents: Option<Vec<[Vec4; 3]>>,
+    /// Vertex indices, counter-clockwise from the front.
     pub triangles: Vec<[u32; 3]>,
     /// Index into [`GltfScene::materials`].
     pub material: u32,
@@ -83,11 +85,15 @@ pub struct Primitive {
 /// What a glTF file's default scene holds, in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GltfScene {
+    /// The primitives, placed.
     pub primitives: Vec<Primitive>,
+    /// The materials the primitives index.
     pub materials: Vec<Material>,
+    /// The textures the materials map.
     pub textures: Vec<Texture>,
     /// The first perspective camera met in the node hierarchy.
     pub camera: Option<Camera>,
+    /// KHR_lights_punctual's lights, placed.
     pub lights: Vec<Light>,
     /// Where the file has skins, morph targets or animations: what moves, with one instance per
     /// primitive.

@@ -16,10 +16,13 @@ use glam::Vec3;
 /// rotation.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ModelOptions {
+    /// Triangles or spheres; the model's default where `None`.
     pub as_: Option<MeshAs>,
+    /// How many spheres; the default where `None`.
     pub spheres: Option<usize>,
     /// Euler angles in degrees, as [`Placement::rotate`].
     pub rotate: Option<Vec3>,
+    /// The shading normals; the default where `None`.
     pub normals: Option<Normals>,
     /// Degrees, as [`Placement::crease_degrees`].
     pub crease: Option<f32>,

@@ -98,7 +98,9 @@ pub enum SphereCount {
 /// Where and how a mesh enters a scene (the `[[mesh]]` table of a scene file).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Placement {
+    /// Triangles, or spheres on the surface or at the vertices.
     pub as_: MeshAs,
+    /// How many spheres, where the mesh becomes spheres.
     pub spheres: SphereCount,
     /// Sphere radius; by default [`Mesh::default_sphere_radius`] of the placed mesh.
     pub radius: Option<f32>,
@@ -106,10 +108,13 @@ pub struct Placement {
     pub rotate: Vec3,
     /// Centre the bounding box at the origin, longest side 2, before `scale` and `translate`.
     pub normalize: bool,
+    /// Uniform scale, after the rotation and normalization.
     pub scale: f32,
+    /// Added last.
     pub translate: Vec3,
     /// Seed of the surface sampling.
     pub seed: u64,
+    /// Index into the scene's materials.
     pub material: u32,
     /// The triangles' shading normals.
     pub normals: Normals,

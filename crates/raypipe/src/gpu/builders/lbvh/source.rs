@@ -247,7 +247,9 @@ impl SiblingBoxes {
 /// What the build's kernels do where adapters differ: how the sort ranks and how the merges meet.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BuildVariant {
+    /// How the radix sort ranks keys within a workgroup.
     pub ranking: SortRanking,
+    /// How the bottom-up merges read a sibling's box.
     pub sibling_boxes: SiblingBoxes,
 }
 
@@ -386,6 +388,7 @@ pub struct BuildParams {
     pub count: u32,
     /// The lowest key bit of the digit a sort pass orders by.
     pub shift: u32,
+    /// Spheres: primitives below this are spheres, the rest triangles.
     pub sphere_count: u32,
 }
 
