@@ -1,7 +1,7 @@
 //! The numbers the two tracers agree on, the shader and the CPU reference alike: where a ray
 //! ends, how far a secondary ray starts off its surface, what a miss writes, how samples step.
 //! At the bottom of the library, as the scene and the frames use some of them too; the shaders
-//! read them from the preamble [`crate::records::constants::wgsl`] writes.
+//! read them from the preamble that `records` writes.
 
 /// Where a ray that hits nothing ends.
 pub const T_FAR: f32 = 1e30;

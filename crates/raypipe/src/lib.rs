@@ -32,6 +32,12 @@
 //! tracers, `cpu` and `gpu`, which use all of these and not each other. No files of one folder
 //! use each other in a circle. The crate's test `tests/cpu/layers.rs` holds both.
 //!
+//! The API is what this page's modules show. The `internals` feature, which only the project's
+//! own tests and benchmarks turn on (through `raypipe-test-support`), also makes public what they
+//! check beneath it: the CPU twin's walks, hit tests and per-pixel tracer, the shaders' sources and
+//! their records' layouts (`records::layouts`), the shader's composition and upload, the skinning
+//! pass, the threaded layout's kernel and the per-frame rebuild (`gpu::SceneRebuild`).
+//!
 //! The library prints nothing and reads no flags: notices go through the `log` crate, errors are
 //! typed ([`error`], [`gpu::GpuError`]), and it builds for `wasm32-unknown-unknown`.
 //!

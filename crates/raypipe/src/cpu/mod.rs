@@ -2,14 +2,28 @@
 //! a difference between the GPU and CPU images points at one function. It is the oracle of the tests,
 //! the fallback where no adapter exists, and a baseline for benchmarks.
 
+// The walks, the hit tests and the per-pixel tracer are public with the `internals` feature, for the
+// tests that hold them to brute force and to formulas; the API is `render` and `render_with`.
+#[cfg(feature = "internals")]
 pub mod accel;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod accel;
+#[cfg(feature = "internals")]
 pub mod admit;
-pub mod brdf;
-pub mod environment;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod admit;
+pub(crate) mod brdf;
+pub(crate) mod environment;
+#[cfg(feature = "internals")]
 pub mod intersect;
-pub mod maps;
-pub mod shade;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod intersect;
+pub(crate) mod maps;
+pub(crate) mod shade;
+#[cfg(feature = "internals")]
 pub mod trace;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod trace;
 
 pub use crate::error::MissingBvh;
 pub use crate::modes::Count;

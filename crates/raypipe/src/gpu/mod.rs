@@ -9,11 +9,18 @@
 pub mod builders;
 pub mod device;
 pub mod moving;
+#[cfg(feature = "internals")]
 pub mod preamble;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod preamble;
+#[cfg(feature = "internals")]
 pub mod rebuild;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod rebuild;
 pub mod trace;
 
 pub use device::{Capacity, GpuContext, GpuError};
 pub use moving::{MotionError, MovingScene, PoseCost, TreeUpdate};
+#[cfg(feature = "internals")]
 pub use rebuild::SceneRebuild;
 pub use trace::{Display, RecordKind, Renderer, RendererOptions, Shown, TimedFrame};

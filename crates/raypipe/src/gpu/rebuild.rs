@@ -19,8 +19,8 @@ use crate::gpu::builders::wide_collapse::GpuWideCollapse;
 use crate::gpu::trace::renderer::{Renderer, RendererOptions};
 use crate::gpu::{GpuContext, GpuError};
 use crate::modes::Accel;
+use crate::records::PackedScene;
 use crate::records::packed::MovedRecords;
-use crate::records::{GpuSphere, PackedScene};
 use crate::scene::Scene;
 
 /// A scene's primitives in the GPU build's buffers, and the passes that rebuild (or refit) their
@@ -82,7 +82,8 @@ impl SceneRebuild {
     }
 
     /// New sphere positions for the next build (as many as the scene had).
-    pub fn write_spheres(&self, spheres: &[GpuSphere]) {
+    #[cfg(feature = "internals")]
+    pub fn write_spheres(&self, spheres: &[crate::records::GpuSphere]) {
         self.builder.write_spheres(spheres);
     }
 
@@ -163,11 +164,13 @@ impl SceneRebuild {
     }
 
     /// The LBVH build, whose buffers hold the primitives and the tree.
+    #[cfg(feature = "internals")]
     pub fn builder(&self) -> &GpuLbvhBuilder {
         &self.builder
     }
 
     /// The wide collapse, with the wide walk.
+    #[cfg(feature = "internals")]
     pub fn wide(&self) -> Option<&GpuWideCollapse> {
         self.wide.as_ref()
     }

@@ -3,10 +3,15 @@
 //!
 //! Every record is `repr(C)` + `Pod`, a multiple of 16 bytes, with its WGSL twin in
 //! `src/gpu/shaders/types.wgsl`; the layout test checks sizes and member offsets against naga's for
-//! every struct in [`LAYOUTS`], the build kernels' parameters among them. Fields named `_pad*` are
+//! every struct in `layouts::LAYOUTS`, the build kernels' parameters among them. Fields named `_pad*` are
 //! padding the WGSL struct gets implicitly.
 
+#[cfg(feature = "internals")]
 pub mod constants;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod constants;
+#[cfg(feature = "internals")]
+pub mod layouts;
 pub mod packed;
 pub mod posed;
 pub mod texels;
@@ -16,9 +21,7 @@ pub use posed::{PoseOn, PoseStep, PosedScene, Poses};
 pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, ShadingTexel, TexelFormat, TexturePixels};
 
 use crate::bvh::aabb::Aabb;
-use crate::bvh::layout::GpuNode;
-use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame};
-use crate::bvh::wide::GpuWideTexel;
+use crate::bvh::threaded::QuantizationFrame;
 use crate::scene::Camera;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -382,52 +385,3 @@ pub struct GpuTextureMap {
     /// and rounded up) and its sampler's `FILTER_*` bits.
     pub sampling: u32,
 }
-
-/// One host struct's layout, for the naga layout test.
-pub struct StructLayout {
-    /// The WGSL struct's name.
-    pub wgsl_name: &'static str,
-    /// Its size in bytes.
-    pub size: usize,
-    /// (member name, byte offset), padding excluded.
-    pub members: &'static [(&'static str, usize)],
-}
-
-/// A [`StructLayout`] of `$ty` and its WGSL twin `$wgsl`, from the listed fields.
-#[macro_export]
-macro_rules! struct_layout {
-    ($ty:ty, $wgsl:literal, [$($field:ident),* $(,)?]) => {
-        $crate::records::StructLayout {
-            wgsl_name: $wgsl,
-            size: std::mem::size_of::<$ty>(),
-            members: &[$((stringify!($field), std::mem::offset_of!($ty, $field))),*],
-        }
-    };
-}
-
-/// The fragment shader's records, with the WGSL name of each twin in `types.wgsl`. The compute
-/// kernels' parameters have lists of their own beside their modules.
-#[rustfmt::skip]
-pub const LAYOUTS: &[StructLayout] = &[
-    struct_layout!(GpuGlobals, "Globals", [camera, scene, bvh_frame]),
-    struct_layout!(GpuCamera, "Camera", [eye, tan_half_fov, forward, aspect, right, width, up, height, sample]),
-    struct_layout!(GpuSceneInfo, "SceneInfo", [
-        background, ambient, sphere_count, plane_count, light_count, material_count, triangle_count,
-        environment_map, irradiance_map, environment_intensity, environment_turn,
-    ]),
-    struct_layout!(GpuBvhFrame, "BvhFrame", [origin, quantum, inverse_quantum]),
-    struct_layout!(GpuSphere, "Sphere", [center, radius, material]),
-    struct_layout!(GpuTriangle, "Triangle", [v0, material, v1, normals, v2, attributes]),
-    struct_layout!(GpuTriangleNormals, "TriangleNormals", [n0, n1, n2]),
-    struct_layout!(GpuPlane, "Plane", [point, material, normal, checker_material, tangent, checker_size, bitangent]),
-    struct_layout!(GpuLight, "Light", [position, kind, color, range, direction, spot_scale, spot_offset]),
-    struct_layout!(GpuMaterial, "Material", [
-        color, specular, shininess, reflect, transmit, ior, emission, model, specular_color, metallic, roughness,
-        specular_factor, occlusion_strength, base_map, metallic_roughness_map, occlusion_map, emissive_map, alpha,
-        alpha_cutoff, normal_map, normal_scale, absorption, volume, specular_map, specular_color_map,
-    ]),
-    struct_layout!(GpuTextureMap, "TextureMap", [offset, width, height, wrap, transform_u, tex_coord, transform_v, sampling]),
-    struct_layout!(GpuNode, "BvhNode", [min, left, max, right, parent, escape]),
-    struct_layout!(GpuThreadedNode, "ThreadedNode", [bounds, link]),
-    struct_layout!(GpuWideTexel, "WideTexel", [words]),
-];

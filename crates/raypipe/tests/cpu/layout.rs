@@ -7,7 +7,8 @@ use raypipe::gpu::builders::lbvh::{BuildVariant, SiblingBoxes, SortRanking};
 use raypipe::gpu::trace::shader::{SceneFeatures, ShaderConfig, compose};
 use raypipe::gpu::trace::upload::{TEXELS_PER_ROW, record_arrays};
 use raypipe::modes::{Accel, MemoryMode, Pipeline};
-use raypipe::records::{LAYOUTS, PackedScene, StructLayout};
+use raypipe::records::PackedScene;
+use raypipe::records::layouts::{LAYOUTS, StructLayout};
 use raypipe::scene::{Scene, builtin};
 
 /// Every variant of the build's kernels: the sort's three rankings (subgroups of 8 to 32

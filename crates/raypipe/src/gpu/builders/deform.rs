@@ -12,18 +12,16 @@
 
 use crate::error::{Element, InputError};
 use crate::gpu::device::compute::{grid, storage_buffer};
-use crate::gpu::device::readback::read_buffer;
 use crate::gpu::device::timing::PassTimestamps;
 use crate::gpu::preamble::records_source;
 use crate::gpu::{GpuContext, GpuError};
-use crate::records::{GpuTriangleNormals, StructLayout};
+use crate::records::GpuTriangleNormals;
 use crate::scene::animation::{
     Animated, CornerNormals, InstancePose, MAX_INFLUENCES, PlacedInstance, RestPrimitive, Rig,
 };
 use crate::scene::{MAX_COORDINATE, Motion};
-use crate::struct_layout;
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec3};
 use std::collections::HashMap;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
@@ -125,18 +123,19 @@ pub(crate) struct Face {
 
 /// The skinning pass's records with a WGSL twin, for the layout test.
 #[rustfmt::skip]
-pub const LAYOUTS: &[StructLayout] = &[
-    struct_layout!(DeformParams, "DeformParams", [vertex_count, triangle_count]),
-    struct_layout!(DeformInstance, "DeformInstance", [
+#[cfg(feature = "internals")]
+pub const LAYOUTS: &[crate::records::layouts::StructLayout] = &[
+    crate::records::layouts::struct_layout!(DeformParams, "DeformParams", [vertex_count, triangle_count]),
+    crate::records::layouts::struct_layout!(DeformInstance, "DeformInstance", [
         vertex_first, vertex_count, target_first, target_count, matrix_first, skinned, weight_first, normals,
         crease_cos,
     ]),
-    struct_layout!(DeformVertex, "DeformVertex", [position, instance, normal]),
-    struct_layout!(DeformInfluences, "DeformInfluences", [joints, weights_low, weights_high]),
-    struct_layout!(DeformOffset, "DeformOffset", [position, normal]),
-    struct_layout!(DeformTriangle, "DeformTriangle", [corners, triangle, groups, instance]),
-    struct_layout!(PosedVertex, "PosedVertex", [position, normal]),
-    struct_layout!(Face, "Face", [normal, angles]),
+    crate::records::layouts::struct_layout!(DeformVertex, "DeformVertex", [position, instance, normal]),
+    crate::records::layouts::struct_layout!(DeformInfluences, "DeformInfluences", [joints, weights_low, weights_high]),
+    crate::records::layouts::struct_layout!(DeformOffset, "DeformOffset", [position, normal]),
+    crate::records::layouts::struct_layout!(DeformTriangle, "DeformTriangle", [corners, triangle, groups, instance]),
+    crate::records::layouts::struct_layout!(PosedVertex, "PosedVertex", [position, normal]),
+    crate::records::layouts::struct_layout!(Face, "Face", [normal, angles]),
 ];
 
 /// The kernels' WGSL with its preamble.
@@ -429,6 +428,8 @@ pub struct GpuDeform {
     kernels: [wgpu::ComputePipeline; 3],
     bind_groups: [wgpu::BindGroup; 3],
     frame: wgpu::Buffer,
+    /// The posed vertices, which the tests read back.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))]
     posed: wgpu::Buffer,
     /// The renderer's normal records, which the pass rewrites.
     pub triangle_normals: wgpu::Buffer,
@@ -555,18 +556,21 @@ impl GpuDeform {
     }
 
     /// Vertices the pass poses a frame.
+    #[cfg(feature = "internals")]
     pub fn vertex_count(&self) -> usize {
         self.records.vertices.len()
     }
 
     /// The posed vertices' positions, in the order of `DeformRecords`, for tests.
+    #[cfg(feature = "internals")]
     pub async fn read_positions(&self) -> Result<Vec<Vec3>, GpuError> {
         let size = (self.records.vertices.len() * size_of::<PosedVertex>()) as u64;
         if size == 0 {
             return Ok(Vec::new());
         }
-        let bytes = read_buffer(&self.ctx.device, &self.ctx.queue, &self.posed, size).await?;
+        let bytes =
+            crate::gpu::device::readback::read_buffer(&self.ctx.device, &self.ctx.queue, &self.posed, size).await?;
         let posed: Vec<PosedVertex> = bytemuck::pod_collect_to_vec(&bytes);
-        Ok(posed.iter().map(|v| Vec4::from(v.position).truncate()).collect())
+        Ok(posed.iter().map(|v| glam::Vec4::from(v.position).truncate()).collect())
     }
 }

@@ -2,8 +2,9 @@
 //! place of the scene's own.
 
 /// Buffers that already live on the GPU and replace the scene's own in storage memory: the
-/// primitives and nodes of a [`SceneRebuild`](crate::gpu::SceneRebuild), rebuilt there every frame, and the
-/// threaded nodes and their quantization frame laid out from them.
+/// primitives and nodes of a [`GpuLbvhBuilder`](crate::gpu::builders::lbvh::GpuLbvhBuilder)
+/// (a [`MovingScene`](crate::gpu::MovingScene)'s, rebuilt there every frame), and the threaded nodes
+/// and their quantization frame laid out from them.
 #[derive(Clone, Debug)]
 pub struct SharedBuffers {
     /// The sphere records, in the build's order.

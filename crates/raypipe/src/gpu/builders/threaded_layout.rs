@@ -3,14 +3,12 @@
 //! [`crate::bvh::threaded::threaded_nodes`], so a rebuilt tree reaches the stack and threaded walks
 //! with no round trip to the host.
 
-use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame};
+use crate::bvh::threaded::GpuThreadedNode;
 use crate::gpu::device::compute::{buffer_entry, buffers_bind_group, grid, kernels, storage_buffer};
-use crate::gpu::device::readback::read_buffer;
 use crate::gpu::device::timing::PassTimestamps;
 use crate::gpu::preamble::records_source;
 use crate::gpu::{GpuContext, GpuError};
-use crate::records::{GpuBvhFrame, GpuGlobals, StructLayout};
-use crate::struct_layout;
+use crate::records::{GpuBvhFrame, GpuGlobals};
 
 const LAYOUT: &str = include_str!("../shaders/threaded.wgsl");
 /// Invocations per workgroup, one node each.
@@ -26,7 +24,12 @@ pub(crate) struct LayoutParams {
 }
 
 /// The layout's records with a WGSL twin, for the layout test.
-pub const LAYOUTS: &[StructLayout] = &[struct_layout!(LayoutParams, "LayoutParams", [node_count])];
+#[cfg(feature = "internals")]
+pub const LAYOUTS: &[crate::records::layouts::StructLayout] = &[crate::records::layouts::struct_layout!(
+    LayoutParams,
+    "LayoutParams",
+    [node_count]
+)];
 
 /// The layout kernels' WGSL.
 pub fn shader_source() -> String {
@@ -140,6 +143,7 @@ impl GpuThreadedLayout {
     }
 
     /// Records the copy of the frame into a globals buffer (COPY_DST), after [`Self::encode`].
+    #[cfg(feature = "internals")]
     pub fn encode_frame_copy(&self, encoder: &mut wgpu::CommandEncoder, globals: &wgpu::Buffer) {
         encode_frame_copy(encoder, &self.frame, globals);
     }
@@ -153,14 +157,19 @@ impl GpuThreadedLayout {
     }
 
     /// Copies the frame and the nodes back to the host.
-    pub async fn read(&self, ctx: &GpuContext) -> Result<(QuantizationFrame, Vec<GpuThreadedNode>), GpuError> {
+    #[cfg(feature = "internals")]
+    pub async fn read(
+        &self,
+        ctx: &GpuContext,
+    ) -> Result<(crate::bvh::threaded::QuantizationFrame, Vec<GpuThreadedNode>), GpuError> {
         if self.node_count == 0 {
-            return Ok((QuantizationFrame::default(), Vec::new()));
+            return Ok((Default::default(), Vec::new()));
         }
-        let frame = read_buffer(&ctx.device, &ctx.queue, &self.frame, FRAME_BYTES).await?;
+        let frame =
+            crate::gpu::device::readback::read_buffer(&ctx.device, &ctx.queue, &self.frame, FRAME_BYTES).await?;
         let frame: GpuBvhFrame = bytemuck::pod_read_unaligned(&frame);
         let size = self.node_count as u64 * std::mem::size_of::<GpuThreadedNode>() as u64;
-        let nodes = read_buffer(&ctx.device, &ctx.queue, &self.threaded, size).await?;
+        let nodes = crate::gpu::device::readback::read_buffer(&ctx.device, &ctx.queue, &self.threaded, size).await?;
         Ok((frame.frame(), bytemuck::pod_collect_to_vec(&nodes)))
     }
 }

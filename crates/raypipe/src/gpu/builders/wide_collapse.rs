@@ -13,12 +13,11 @@ use crate::gpu::device::readback::read_buffer;
 use crate::gpu::device::timing::PassTimestamps;
 use crate::gpu::preamble::records_source;
 use crate::gpu::{GpuContext, GpuError};
-use crate::records::StructLayout;
-use crate::struct_layout;
 
 const COLLAPSE: &str = include_str!("../shaders/wide.wgsl");
 /// Invocations per workgroup, one wide node each.
-pub const GROUP: u32 = 64;
+#[cfg_attr(feature = "internals", visibility::make(pub))]
+pub(crate) const GROUP: u32 = 64;
 
 /// The kernels' parameters (`CollapseParams` in types.wgsl).
 #[repr(C)]
@@ -30,14 +29,16 @@ pub(crate) struct CollapseParams {
 }
 
 /// The collapse's records with a WGSL twin, for the layout test.
-pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
+#[cfg(feature = "internals")]
+pub const LAYOUTS: &[crate::records::layouts::StructLayout] = &[crate::records::layouts::struct_layout!(
     CollapseParams,
     "CollapseParams",
     [primitive_count, root_texel]
 )];
 
 /// The collapse kernels' WGSL.
-pub fn shader_source() -> String {
+#[cfg_attr(feature = "internals", visibility::make(pub))]
+pub(crate) fn shader_source() -> String {
     format!(
         "// Generated: src/gpu/builders/wide_collapse.rs.\nconst GROUP: u32 = {GROUP}u;\n{}\n{COLLAPSE}",
         records_source()

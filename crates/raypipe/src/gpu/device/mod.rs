@@ -1,11 +1,14 @@
 //! The device: adapter and device (`context`), errors, reading buffers and textures back, GPU
 //! timestamps, and what compute passes share.
 
-pub mod compute;
+pub(crate) mod compute;
 pub mod context;
 mod error;
+#[cfg(feature = "internals")]
 pub mod readback;
-pub mod timing;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod readback;
+pub(crate) mod timing;
 
 pub use context::GpuContext;
 pub use error::{Capacity, GpuError};

@@ -40,6 +40,7 @@ impl TextureReadback {
     }
 
     /// Whether this readback fits `texture`.
+    #[cfg(feature = "internals")]
     pub fn fits(&self, texture: &wgpu::Texture) -> bool {
         (texture.width(), texture.height()) == (self.width, self.height)
     }

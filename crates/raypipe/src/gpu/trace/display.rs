@@ -7,9 +7,7 @@ use crate::Choice;
 use crate::gpu::GpuContext;
 use crate::image::tonemap::DisplayTransform;
 use crate::modes::Aov;
-use crate::records::StructLayout;
 use crate::scene::ToneMap;
-use crate::struct_layout;
 
 const DISPLAY: &str = include_str!("../shaders/display.wgsl");
 
@@ -30,7 +28,8 @@ pub(crate) struct DisplayParams {
 }
 
 /// The display pass's records with a WGSL twin, for the layout test.
-pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
+#[cfg(feature = "internals")]
+pub const LAYOUTS: &[crate::records::layouts::StructLayout] = &[crate::records::layouts::struct_layout!(
     DisplayParams,
     "DisplayParams",
     [
@@ -47,7 +46,8 @@ pub const LAYOUTS: &[StructLayout] = &[struct_layout!(
 
 /// The display pass's WGSL: its numbers from Rust (the views' and tone maps' numbering, the heat
 /// map's stops), then display.wgsl.
-pub fn shader_source() -> String {
+#[cfg_attr(feature = "internals", visibility::make(pub))]
+pub(crate) fn shader_source() -> String {
     use std::fmt::Write;
     let mut out = String::from("// Generated: src/gpu/trace/display.rs.\n");
     let names = Aov::ALL

@@ -4,8 +4,14 @@
 pub mod display;
 pub mod region;
 pub mod renderer;
+#[cfg(feature = "internals")]
 pub mod shader;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod shader;
+#[cfg(feature = "internals")]
 pub mod upload;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod upload;
 
 pub use display::{Display, Shown};
 pub use renderer::{Renderer, RendererOptions, TimedFrame};

@@ -169,6 +169,7 @@ pub struct SceneFeatures {
 
 impl SceneFeatures {
     /// Every kind: a shader for any scene.
+    #[cfg(feature = "internals")]
     pub const ALL: SceneFeatures = SceneFeatures {
         spheres: true,
         triangles: true,

@@ -369,6 +369,7 @@ fn scene_records(scene: &PackedScene, accel: Accel) -> Vec<(RecordKind, &dyn Rec
 }
 
 /// What the shader declares for each of the scene's arrays.
+#[cfg(feature = "internals")]
 pub fn record_arrays(scene: &PackedScene, accel: Accel) -> Vec<RecordArray> {
     scene_records(scene, accel)
         .into_iter()

@@ -22,12 +22,14 @@ use std::num::NonZeroU64;
 mod source;
 
 use source::{
-    BLOCK, HISTOGRAM_ITEMS, PARAMS_STRIDE, PHASES, SCRATCH_BLOCKS, SCRATCH_WORDS_PER_BLOCK, pair_bytes, sort_passes,
-    sort_words,
+    BLOCK, BuildParams, HISTOGRAM_ITEMS, PARAMS_STRIDE, PHASES, SCRATCH_BLOCKS, SCRATCH_WORDS_PER_BLOCK, pair_bytes,
+    sort_passes, sort_words,
 };
-pub use source::{
-    BuildParams, BuildVariant, Codes, DIGIT_BITS, GROUP, LAYOUTS, SiblingBoxes, SortRanking, shader_source,
-};
+pub use source::{BuildVariant, Codes, SiblingBoxes, SortRanking};
+#[cfg(feature = "internals")]
+pub use source::{DIGIT_BITS, GROUP, LAYOUTS, shader_source};
+#[cfg(not(feature = "internals"))]
+use source::{DIGIT_BITS, GROUP, shader_source};
 
 struct Kernels {
     bounds_partial: wgpu::ComputePipeline,

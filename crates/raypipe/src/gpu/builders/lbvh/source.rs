@@ -5,8 +5,6 @@
 use crate::bvh::morton::MortonBits;
 use crate::gpu::GpuContext;
 use crate::gpu::preamble::records_source;
-use crate::records::StructLayout;
-use crate::struct_layout;
 
 const LBVH: &str = include_str!("../../shaders/lbvh.wgsl");
 const RADIX_SORT: &str = include_str!("../../shaders/radix_sort.wgsl");
@@ -393,4 +391,9 @@ pub struct BuildParams {
 }
 
 /// The build's records with a WGSL twin, for the layout test.
-pub const LAYOUTS: &[StructLayout] = &[struct_layout!(BuildParams, "BuildParams", [count, shift, sphere_count])];
+#[cfg(feature = "internals")]
+pub const LAYOUTS: &[crate::records::layouts::StructLayout] = &[crate::records::layouts::struct_layout!(
+    BuildParams,
+    "BuildParams",
+    [count, shift, sphere_count]
+)];

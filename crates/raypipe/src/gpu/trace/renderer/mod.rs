@@ -139,9 +139,8 @@ impl Renderer {
     }
 
     /// The records a motion moved (`scene` as [`PackedScene::apply`] left it): those this renderer
-    /// holds, such as triangles' normals; the ones it reads from a
-    /// [`SceneRebuild`](crate::gpu::SceneRebuild) are that rebuild's to write
-    /// ([`SceneRebuild::write_moved`](crate::gpu::SceneRebuild::write_moved)). The samples start
+    /// holds, such as triangles' normals; the ones it reads from [`SharedBuffers`] are their
+    /// builder's to write (a [`MovingScene`](crate::gpu::MovingScene) does both). The samples start
     /// again.
     pub fn write_moved(&mut self, scene: &PackedScene, moved: MovedRecords) -> Result<(), GpuError> {
         self.write_records(scene, RecordKind::moved(moved))
@@ -182,7 +181,7 @@ impl Renderer {
     }
 
     /// A renderer whose spheres and nodes are `shared`, written by compute passes before each
-    /// frame (a [`SceneRebuild`](crate::gpu::SceneRebuild) makes one: its `renderer`), over trees at
+    /// frame (a [`MovingScene`](crate::gpu::MovingScene) makes one: its `renderer`), over trees at
     /// most `depth_bound` deep.
     pub async fn with_shared_buffers(
         ctx: &GpuContext,
