@@ -1,5 +1,6 @@
 //! The compute pipeline traces what the fragment pipeline traces: on one adapter their targets are
 //! equal bit for bit, for every walk and memory mode, ray counts and costs, one sample and several.
+//! And a device compiles each pipeline once.
 
 use crate::common::harness::Test;
 use crate::common::*;
@@ -69,6 +70,56 @@ fn compute_equals_fragment(ctx: &GpuContext) {
     }
 }
 
+/// A renderer made again on a device takes the pipelines the first compiled and draws what it
+/// drew; another walk or pipeline compiles its own; a wgpu error in the context's error scopes
+/// forgets them all, as one of the pipelines might be the one that failed. On a device of its own,
+/// so that the other tests' pipelines do not count; not on GL, where a second device of one adapter
+/// disturbs the first.
+fn pipelines_are_compiled_once_a_device(shared: &GpuContext) {
+    if shared.info.backend == wgpu::Backend::Gl {
+        return;
+    }
+    let ctx = pollster::block_on(GpuContext::open(shared.adapter.clone())).unwrap();
+    let mut scene = PackedScene::new(&whitted_with_quad(40, 30)).unwrap();
+    scene.build_bvh();
+    let stack = RendererOptions {
+        accel: Accel::Stack,
+        ..Default::default()
+    };
+    assert_eq!(ctx.cached_pipelines(), 0);
+    let first = frame(&ctx, &scene, stack, 2);
+    let kept = ctx.cached_pipelines();
+    assert!(kept > 0, "the first renderer's pipelines are kept");
+    let again = frame(&ctx, &scene, stack, 2);
+    assert_eq!(ctx.cached_pipelines(), kept, "the second renderer compiled nothing");
+    assert!(first.color == again.color && first.surface == again.surface);
+    for other in [
+        RendererOptions {
+            accel: Accel::Threaded,
+            ..stack
+        },
+        RendererOptions {
+            pipeline: Pipeline::Compute,
+            ..stack
+        },
+    ] {
+        let before = ctx.cached_pipelines();
+        frame(&ctx, &scene, other, 1);
+        assert!(ctx.cached_pipelines() > before, "{other:?} compiled its own");
+    }
+    let invalid = pollster::block_on(ctx.checked("making a buffer both mappable and storage", || {
+        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        Ok(buffer)
+    }));
+    assert!(invalid.is_err(), "wgpu refuses the buffer");
+    assert_eq!(ctx.cached_pipelines(), 0, "an error forgets every pipeline");
+}
+
 pub fn tests() -> Vec<Test> {
-    raypipe_test_support::tests![gpu compute_equals_fragment]
+    raypipe_test_support::tests![gpu compute_equals_fragment, gpu pipelines_are_compiled_once_a_device]
 }

@@ -12,6 +12,7 @@
 
 use crate::error::{Element, InputError};
 use crate::gpu::device::compute::{grid, storage_buffer};
+use crate::gpu::device::pipelines::PipelineKey;
 use crate::gpu::device::timing::PassTimestamps;
 use crate::gpu::preamble::records_source;
 use crate::gpu::{GpuContext, GpuError};
@@ -22,6 +23,7 @@ use crate::scene::animation::{
 use crate::scene::{MAX_COORDINATE, Motion};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
+use std::cell::OnceCell;
 use std::collections::HashMap;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
@@ -466,21 +468,28 @@ impl GpuDeform {
         let device = &ctx.device;
         let records = DeformRecords::new(&animations);
         let buffers = DeformBuffers::new(device, &records, normals);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("deform"),
-            source: wgpu::ShaderSource::Wgsl(shader_source().into()),
-        });
+        let source: Arc<str> = shader_source().into();
+        let module = OnceCell::new();
         // Each kernel binds only what it reads: all twelve buffers at once exceed the eight storage
         // buffers a stage may have. Layouts come from the kernels.
         let all = buffers.bindings(triangles);
         let kernel = |entry_point: &str, bindings: &[u32]| {
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry_point),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry_point),
-                compilation_options: Default::default(),
-                cache: None,
+            let key = PipelineKey::new(&source, entry_point, "layout from the kernel".to_string());
+            let pipeline = ctx.pipelines.compute(key, || {
+                let module = module.get_or_init(|| {
+                    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some("deform"),
+                        source: wgpu::ShaderSource::Wgsl(source.to_string().into()),
+                    })
+                });
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry_point),
+                    layout: None,
+                    module,
+                    entry_point: Some(entry_point),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
             });
             let entries: Vec<wgpu::BindGroupEntry> = bindings
                 .iter()

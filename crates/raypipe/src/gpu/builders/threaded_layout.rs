@@ -78,17 +78,18 @@ impl GpuThreadedLayout {
             ctx.queue
                 .write_buffer(&params, 0, bytemuck::bytes_of(&LayoutParams { node_count }));
             let read_write = wgpu::BufferBindingType::Storage { read_only: false };
+            let entries = [
+                buffer_entry(0, wgpu::BufferBindingType::Uniform, false),
+                buffer_entry(1, wgpu::BufferBindingType::Storage { read_only: true }, false),
+                buffer_entry(2, read_write, false),
+                buffer_entry(3, read_write, false),
+                buffer_entry(4, read_write, false),
+            ];
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("threaded layout"),
-                entries: &[
-                    buffer_entry(0, wgpu::BufferBindingType::Uniform, false),
-                    buffer_entry(1, wgpu::BufferBindingType::Storage { read_only: true }, false),
-                    buffer_entry(2, read_write, false),
-                    buffer_entry(3, read_write, false),
-                    buffer_entry(4, read_write, false),
-                ],
+                entries: &entries,
             });
-            let kernel = kernels(device, "threaded layout", shader_source(), &layout);
+            let kernel = kernels(ctx, "threaded layout", shader_source(), &entries);
             let (order_kernel, nodes_kernel) = (kernel("depth_first_order"), kernel("threaded_nodes"));
             let bind_group = buffers_bind_group(
                 device,

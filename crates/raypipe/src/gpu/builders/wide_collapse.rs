@@ -118,12 +118,12 @@ impl GpuWideCollapse {
                     entries: &entries,
                 });
                 let group = buffers_bind_group(device, label, &layout, &buffers[..count]);
-                (layout, group)
+                (entries, group)
             };
-            let (sizing_layout, bind_group) = bound("wide collapse sizing", buffers.len());
-            let (level_layout, level_bind_group) = bound("wide collapse level", buffers.len() - 1);
-            let sizing = kernels(device, "wide collapse sizing", shader_source(), &sizing_layout);
-            let level = kernels(device, "wide collapse level", shader_source(), &level_layout);
+            let (sizing_entries, bind_group) = bound("wide collapse sizing", buffers.len());
+            let (level_entries, level_bind_group) = bound("wide collapse level", buffers.len() - 1);
+            let sizing = kernels(ctx, "wide collapse sizing", shader_source(), &sizing_entries);
+            let level = kernels(ctx, "wide collapse level", shader_source(), &level_entries);
             Ok(Self {
                 start: sizing("collapse_start"),
                 level: level("collapse_level"),

@@ -6,6 +6,7 @@
 use crate::choice::Choice;
 use crate::error::one_line;
 use crate::gpu::GpuError;
+use crate::gpu::device::pipelines::PipelineCache;
 use crate::modes::{Accel, Backend, MemoryMode};
 use std::future::Future;
 use std::pin::Pin;
@@ -72,6 +73,8 @@ pub struct GpuContext {
     pub ray_queries: bool,
     /// Why the device was lost, once wgpu said so ([`GpuContext::watch_loss`]).
     lost: Arc<Mutex<Loss>>,
+    /// The pipelines compiled on the device, for renderers and builders made again alike.
+    pub(crate) pipelines: PipelineCache,
 }
 
 /// What a context knows of its device's loss, and who waits to hear of it.
@@ -163,6 +166,7 @@ impl GpuContext {
             subgroups: subgroups.then_some((info.subgroup_min_size, info.subgroup_max_size)),
             ray_queries: features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY),
             lost: Arc::default(),
+            pipelines: PipelineCache::default(),
             adapter,
             device,
             queue,
@@ -329,8 +333,19 @@ impl GpuContext {
     pub async fn checked<T>(&self, what: &'static str, f: impl FnOnce() -> Result<T, GpuError>) -> Result<T, GpuError> {
         let scopes = self.error_scopes(what);
         let result = f();
-        scopes.pop().await?;
+        let popped = scopes.pop().await;
+        if popped.is_err() {
+            // A pipeline compiled in the scopes may be the one that failed.
+            self.pipelines.clear();
+        }
+        popped?;
         result
+    }
+
+    /// Pipelines the device keeps compiled (render and compute), for the next renderer or builder
+    /// made from the same shader and layouts.
+    pub fn cached_pipelines(&self) -> usize {
+        self.pipelines.len()
     }
 
     /// Opens validation and out-of-memory error scopes around what is recorded until

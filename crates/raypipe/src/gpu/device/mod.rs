@@ -4,6 +4,7 @@
 pub(crate) mod compute;
 pub mod context;
 mod error;
+pub(crate) mod pipelines;
 #[cfg(feature = "internals")]
 pub mod readback;
 #[cfg(not(feature = "internals"))]

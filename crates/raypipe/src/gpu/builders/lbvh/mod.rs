@@ -101,7 +101,7 @@ impl GpuLbvhBuilder {
                 label: Some("lbvh build"),
                 entries: &entries,
             });
-            let kernel = kernels(device, "lbvh", shader_source(bits, variant), &layout);
+            let kernel = kernels(ctx, "lbvh", shader_source(bits, variant), &entries);
             let kernels = Kernels {
                 bounds_partial: kernel("bounds_partial"),
                 bounds_final: kernel("bounds_final"),

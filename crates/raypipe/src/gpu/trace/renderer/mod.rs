@@ -249,7 +249,7 @@ impl Renderer {
             let (trace_pipeline, bind_group) = build_pipeline(
                 ctx,
                 pipeline,
-                &source,
+                source,
                 &SceneBindings {
                     globals: &globals_buffer,
                     resources: &resources,

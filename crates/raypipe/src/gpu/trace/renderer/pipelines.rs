@@ -2,12 +2,15 @@
 //! shader for the pixels outside the traced region) or the compute kernel, the scene's bind group,
 //! and what each needs of the adapter.
 
-use super::targets::{TARGET_FORMAT, tracer_stage};
+use super::targets::{TARGET_FORMAT, previous_sample_entries, tracer_stage};
 use crate::gpu::builders::rayquery::AccelStructures;
+use crate::gpu::device::pipelines::PipelineKey;
 use crate::gpu::trace::shader::ray_query_binding;
 use crate::gpu::trace::upload::SceneResources;
 use crate::gpu::{GpuContext, GpuError};
 use crate::modes::Pipeline;
+use std::cell::OnceCell;
+use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
 /// A triangle whose clip-space corners cover the whole viewport.
@@ -67,12 +70,13 @@ pub(super) struct SceneBindings<'a> {
     pub(super) structures: Option<&'a AccelStructures>,
 }
 
-/// Group 0 of the tracer: the globals at binding 0, then the scene's records.
+/// Group 0 of the tracer: the globals at binding 0, then the scene's records; its layout, the
+/// layout's entries and the group.
 pub(super) fn scene_bind_group(
     device: &wgpu::Device,
     kind: Pipeline,
     bindings: &SceneBindings,
-) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+) -> (wgpu::BindGroupLayout, Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroup) {
     let SceneBindings {
         globals,
         resources,
@@ -110,36 +114,53 @@ pub(super) fn scene_bind_group(
         layout: &layout,
         entries: &entries,
     });
-    (layout, bind_group)
+    (layout, layout_entries, bind_group)
 }
 
 pub(super) fn build_pipeline(
     ctx: &GpuContext,
     kind: Pipeline,
-    source: &str,
+    source: String,
     bindings: &SceneBindings,
     previous_layout: &wgpu::BindGroupLayout,
     with_miss: bool,
 ) -> (TracePipeline, wgpu::BindGroup) {
     let device = &ctx.device;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("trace"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let (bind_group_layout, bind_group) = scene_bind_group(device, kind, bindings);
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("trace"),
-        bind_group_layouts: &[Some(&bind_group_layout), Some(previous_layout)],
-        immediate_size: 0,
-    });
+    let (bind_group_layout, layout_entries, bind_group) = scene_bind_group(device, kind, bindings);
+    // What the pipelines are compiled from besides the source and entry point; the layouts by
+    // their entries, as wgpu identifies them.
+    let descriptor = format!(
+        "{kind:?} pipeline, groups {layout_entries:?} and {:?}, targets {TARGET_FORMAT:?}, vertex vs_main",
+        previous_sample_entries(kind)
+    );
+    let source: Arc<str> = source.into();
+    let key = |entry_point| PipelineKey::new(&source, entry_point, descriptor.clone());
+    let compiled = OnceCell::new();
+    let compiled = || {
+        compiled.get_or_init(|| {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("trace"),
+                source: wgpu::ShaderSource::Wgsl(source.to_string().into()),
+            });
+            let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("trace"),
+                bind_group_layouts: &[Some(&bind_group_layout), Some(previous_layout)],
+                immediate_size: 0,
+            });
+            (module, layout)
+        })
+    };
     if kind == Pipeline::Compute {
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("trace"),
-            layout: Some(&layout),
-            module: &module,
-            entry_point: Some("cs_main"),
-            compilation_options: Default::default(),
-            cache: None,
+        let pipeline = ctx.pipelines.compute(key("cs_main"), || {
+            let (module, layout) = compiled();
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("trace"),
+                layout: Some(layout),
+                module,
+                entry_point: Some("cs_main"),
+                compilation_options: Default::default(),
+                cache: None,
+            })
         });
         return (TracePipeline::Compute(pipeline), bind_group);
     }
@@ -149,30 +170,33 @@ pub(super) fn build_pipeline(
         write_mask: wgpu::ColorWrites::ALL,
     });
     let fullscreen = |label, fragment_entry| {
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 8,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x2],
-                })],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some(fragment_entry),
-                compilation_options: Default::default(),
-                targets: &[target.clone(), target.clone()],
-            }),
-            multiview_mask: None,
-            cache: None,
+        ctx.pipelines.render(key(fragment_entry), || {
+            let (module, layout) = compiled();
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: 8,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x2],
+                    })],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(fragment_entry),
+                    compilation_options: Default::default(),
+                    targets: &[target.clone(), target.clone()],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
         })
     };
     let pipeline = fullscreen("trace", "fs_main");

@@ -168,6 +168,14 @@ pub(crate) fn target_entry(binding: u32, stage: wgpu::ShaderStages) -> wgpu::Bin
 /// Group 1: the previous sample's colour and surface targets; for the compute kernel, the targets
 /// it writes too, as storage textures.
 pub(super) fn previous_sample_layout(device: &wgpu::Device, pipeline: Pipeline) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("previous sample"),
+        entries: &previous_sample_entries(pipeline),
+    })
+}
+
+/// The entries of [`previous_sample_layout`].
+pub(super) fn previous_sample_entries(pipeline: Pipeline) -> Vec<wgpu::BindGroupLayoutEntry> {
     let stage = tracer_stage(pipeline);
     let mut entries = vec![target_entry(0, stage), target_entry(1, stage)];
     if pipeline == Pipeline::Compute {
@@ -182,8 +190,5 @@ pub(super) fn previous_sample_layout(device: &wgpu::Device, pipeline: Pipeline) 
             count: None,
         }));
     }
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("previous sample"),
-        entries: &entries,
-    })
+    entries
 }
