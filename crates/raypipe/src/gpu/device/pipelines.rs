@@ -14,9 +14,10 @@ use std::collections::{HashMap, VecDeque};
 use std::hash::Hash;
 use std::sync::{Arc, Mutex};
 
-/// Pipelines kept per kind: enough for every mode of every scene a test run or a viewing session
-/// meets; past it the oldest go first.
-const CAPACITY: usize = 256;
+/// Pipelines kept per kind: more than the modes and scenes a test run or a viewing session meets
+/// at once; past it the oldest go first. Each key holds its shader's source (the tracer's is tens
+/// of kilobytes), which a page's heap holds too.
+const CAPACITY: usize = 128;
 
 /// What a pipeline is compiled from: the shader's source, the entry point, and the rest of its
 /// descriptor written out (the bind group layouts' entries, targets, compilation options).
