@@ -320,6 +320,53 @@ fn programs_move_scenes_through_the_library_alone() {
     assert!(files.len() > 20, "the programs' sources were found");
 }
 
+/// The longest a source file may grow: past it, a file holds more than one concern.
+const MAX_FILE_LINES: usize = 700;
+
+/// No source file of the workspace (Rust, WGSL, the page's and the package's JavaScript) is
+/// longer than [`MAX_FILE_LINES`].
+#[test]
+fn no_source_file_is_over_700_lines() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .parent()
+        .unwrap();
+    let mut files = Vec::new();
+    for folder in ["crates", "bench", "tools", "fuzz", "web", "scripts"] {
+        source_files(&root.join(folder), &mut files);
+    }
+    let long: Vec<String> = files
+        .iter()
+        .filter_map(|file| {
+            let lines = std::fs::read_to_string(file).unwrap().lines().count();
+            (lines > MAX_FILE_LINES).then(|| format!("{}: {lines} lines", file.strip_prefix(root).unwrap().display()))
+        })
+        .collect();
+    assert!(long.is_empty(), "{long:#?}");
+    assert!(files.len() > 200, "the sources were found ({})", files.len());
+}
+
+fn source_files(dir: &Path, files: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy();
+        // Built or installed, not written here.
+        if ["target", "node_modules", "pkg", "dist"].contains(&name.as_ref()) || name.starts_with('.') {
+            continue;
+        }
+        if path.is_dir() {
+            source_files(&path, files);
+        } else if path
+            .extension()
+            .is_some_and(|e| ["rs", "wgsl", "js", "mjs", "ts", "py", "sh"].contains(&e.to_str().unwrap()))
+        {
+            files.push(path);
+        }
+    }
+}
+
 #[test]
 fn the_checker_sees_circles_and_re_exports() {
     let module = |p: &[&str]| p.iter().map(|s| s.to_string()).collect::<ModulePath>();
