@@ -116,6 +116,10 @@ export declare class Viewer extends EventTarget {
   screenshot(): Promise<Blob>;
   /** A key by its `KeyboardEvent.code`; whether the viewer used it. */
   key(code: string, pressed: boolean): boolean;
+  /** Whether pointers, the wheel and keys on the canvas move the camera. */
+  input: boolean;
+  /** Draws at `width` x `height` pixels (the drawing buffer); throws the line where the adapter refuses it. */
+  resize(width: number, height: number): void;
   /** Stops drawing and frees its GPU resources and listeners. */
   dispose(): void;
   addEventListener<K extends keyof ViewerEventMap>(
@@ -145,3 +149,53 @@ export declare function choices(): Promise<{
   maxDepth: number;
   maxSpp: number;
 }>;
+
+/** What `<raypipe-viewer>`'s `progress` event says: bytes fetched (`total` 0 where the server gives no length), then the build. */
+export interface ProgressDetail {
+  phase: "fetch" | "build";
+  loaded: number;
+  total: number;
+}
+
+export interface RaypipeViewerEventMap {
+  status: CustomEvent<ViewerStatus>;
+  /** The model of `src` is shown. */
+  load: CustomEvent<{ url: string }>;
+  /** A file, an attribute or the GPU failed; the previous scene stays drawn. */
+  error: CustomEvent<{ message: string }>;
+  progress: CustomEvent<ProgressDetail>;
+}
+
+/** `<raypipe-viewer>`, defined when this module is imported: attributes and properties of the same names (docs/web.md). */
+export declare class RaypipeViewerElement extends HTMLElement {
+  /** The viewer, once started; `null` before and once the element left the page. */
+  readonly viewer: Viewer | null;
+  /** The viewer's status; `null` before it starts. */
+  readonly status: ViewerStatus | null;
+  src: string | null;
+  environmentImage: string | null;
+  /** A factor, as model-viewer's (1: as authored). */
+  exposure: number;
+  /** `null`: the scene's own. */
+  toneMapping: "auto" | "neutral" | "aces" | "linear" | "none" | null;
+  cameraControls: boolean;
+  alt: string | null;
+  poster: string | null;
+  loading: "auto" | "lazy" | "eager";
+  accel: Accel | null;
+  backend: "auto" | "webgpu" | "webgl2";
+  /** The drawing buffer's share of the element's device pixels, above 0, at most 1. */
+  renderScale: number;
+  addEventListener<K extends keyof RaypipeViewerEventMap>(
+    type: K,
+    listener: (this: RaypipeViewerElement, event: RaypipeViewerEventMap[K]) => void,
+    options?: boolean | AddEventListenerOptions,
+  ): void;
+  addEventListener(type: string, listener: EventListenerOrEventListenerObject | null, options?: boolean | AddEventListenerOptions): void;
+}
+
+declare global {
+  interface HTMLElementTagNameMap {
+    "raypipe-viewer": RaypipeViewerElement;
+  }
+}

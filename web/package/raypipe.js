@@ -7,8 +7,11 @@
 //
 // The tracer is the wasm module beside this file (raypipe_web.js, raypipe_web_bg.wasm); each viewer
 // has its own adapter and device. Types: raypipe.d.ts.
+import { RaypipeViewerElement } from "./element.js";
 import { Gestures } from "./gestures.js";
 import init, { controls, start } from "./raypipe_web.js";
+
+export { RaypipeViewerElement };
 
 let module = null;
 
@@ -62,6 +65,8 @@ export class Viewer extends EventTarget {
   #made;
   #listeners = [];
   #reading = new Set();
+  #input = false;
+  #listening = false;
 
   constructor(inner, canvas, { made, input }) {
     super();
@@ -70,7 +75,27 @@ export class Viewer extends EventTarget {
     /// The canvas it draws on (made here where `createViewer` was given a container).
     this.canvas = canvas;
     inner.on_status((status) => this.dispatchEvent(new CustomEvent("status", { detail: status })));
-    if (input) this.#listen();
+    this.input = input;
+  }
+
+  /// Whether pointers, the wheel and keys on the canvas move the camera (`createViewer`'s `input`).
+  get input() {
+    return this.#input;
+  }
+
+  set input(on) {
+    this.#input = Boolean(on);
+    if (this.#input && !this.#listening) this.#listen();
+    // A finger's drag turns the camera where input is on, and scrolls the page where it is off.
+    if (this.#listening) this.canvas.style.touchAction = this.#input ? "none" : "";
+  }
+
+  /// Draws at `width` x `height` pixels from the next frame on (the canvas's drawing buffer; its
+  /// size on the page is the page's); throws the line where the adapter refuses the size, which
+  /// leaves the previous one.
+  resize(width, height) {
+    const why = this.#alive().resize(width, height);
+    if (why !== undefined) throw new Error(why);
   }
 
   /// What runs: `{ frames, backend, adapter, scene, error, lost, busy, samples, spp, fps, ... }`.
@@ -180,12 +205,14 @@ export class Viewer extends EventTarget {
   /// told apart by id and captured, a cancelled one is let go, and the canvas takes touches itself
   /// (`touch-action: none`), so that a finger's drag does not scroll the page.
   #listen() {
+    this.#listening = true;
     const canvas = this.canvas;
     if (!canvas.hasAttribute("tabindex")) canvas.tabIndex = 0;
     canvas.style.touchAction = "none";
     const gestures = new Gestures();
     const release = (event) => gestures.release(event.pointerId);
     this.#on(canvas, "pointerdown", (event) => {
+      if (!this.#input) return;
       gestures.down(event.pointerId, event.clientX, event.clientY, event.button);
       canvas.setPointerCapture(event.pointerId);
       canvas.focus();
@@ -200,12 +227,19 @@ export class Viewer extends EventTarget {
     for (const type of ["pointerup", "pointercancel", "lostpointercapture"]) this.#on(canvas, type, release);
     this.#on(canvas, "contextmenu", (event) => event.preventDefault());
     this.#on(canvas, "wheel", (event) => {
+      if (!this.#input) return;
       event.preventDefault();
       this.#inner?.dolly(-event.deltaY / (event.deltaMode === 0 ? 100 : 1));
     }, { passive: false });
     this.#on(canvas, "keydown", (event) => {
+      if (!this.#input) return;
       if (!event.repeat && this.#inner?.key(event.code, true)) event.preventDefault();
     });
-    this.#on(canvas, "keyup", (event) => this.#inner?.key(event.code, false));
+    this.#on(canvas, "keyup", (event) => this.#input && this.#inner?.key(event.code, false));
   }
+}
+
+// After the module's own bindings exist: an element already on the page starts at once.
+if (typeof customElements !== "undefined" && !customElements.get("raypipe-viewer")) {
+  customElements.define("raypipe-viewer", RaypipeViewerElement);
 }

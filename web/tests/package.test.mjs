@@ -41,6 +41,26 @@ const PAGE = `<!doctype html>
 </script>
 `;
 
+// Two elements, one per backend, at the size of the CPU reference image; the package imported
+// after them, so that defining the element starts both.
+const ELEMENT_PAGE = `<!doctype html>
+<meta charset="utf-8">
+<link rel="icon" href="data:,">
+<script type="importmap">{ "imports": { "raypipe": "./node_modules/raypipe/raypipe.js" } }</script>
+<raypipe-viewer id="gl" backend="webgl2" alt="The paper's Whitted scene" camera-controls style="width: 96px; height: 72px"></raypipe-viewer>
+<raypipe-viewer id="gpu" backend="webgpu" style="width: 96px; height: 72px"></raypipe-viewer>
+<script type="module">
+  import "raypipe";
+  window.heard = { gl: [], gpu: [] };
+  for (const id of ["gl", "gpu"]) {
+    const element = document.getElementById(id);
+    for (const type of ["load", "error", "progress"]) {
+      element.addEventListener(type, (event) => window.heard[id].push({ type, ...event.detail }));
+    }
+  }
+</script>
+`;
+
 before(async () => {
   for (const needed of [path.join(built, "package.json"), raypipe]) {
     assert.ok(fs.existsSync(needed), `${needed} is missing: run scripts/build-web.sh --package target/web-package and cargo build --release`);
@@ -52,6 +72,8 @@ before(async () => {
   fs.writeFileSync(path.join(scratch, "package.json"), JSON.stringify({ name: "scratch", private: true, type: "module" }));
   execFileSync("npm", ["install", "--no-audit", "--no-fund", "--loglevel=error", tarball], { cwd: scratch });
   fs.writeFileSync(path.join(scratch, "index.html"), PAGE);
+  fs.writeFileSync(path.join(scratch, "element.html"), ELEMENT_PAGE);
+  fs.writeFileSync(path.join(scratch, "tetrahedron.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
   server = await serve({ "/": scratch });
   browser = await launch();
   await openPage();
@@ -106,8 +128,8 @@ async function until(name, condition, what, { arg = null, timeout = COMPILE_MS }
 
 const SETTLED = (s) => s.frames >= 2 && !s.busy && s.samples >= s.spp && !s.lost;
 
-/// Viewer `name`'s screenshot() against the CPU reference of whitted.
-async function assertShowsWhitted(name, label) {
+/// Viewer `name`'s screenshot() against the CPU reference of whitted at `spp` samples a pixel.
+async function assertShowsWhitted(name, label, spp = 1) {
   const png = await page.evaluate(async (name) => {
     const blob = await window.viewers[name].screenshot();
     if (blob.type !== "image/png") throw new Error(`screenshot() gave ${blob.type}`);
@@ -115,9 +137,9 @@ async function assertShowsWhitted(name, label) {
   }, name);
   const actual = path.join(scratch, `${label}-actual.png`);
   fs.writeFileSync(actual, Buffer.from(png));
-  const expected = path.join(scratch, "whitted-reference.png");
+  const expected = path.join(scratch, `whitted-reference-${spp}spp.png`);
   if (!fs.existsSync(expected)) {
-    execFileSync(raypipe, ["render", "whitted", "--device", "cpu", "--width", `${SIZE.width}`, "--height", `${SIZE.height}`, "-q", "-o", expected]);
+    execFileSync(raypipe, ["render", "whitted", "--device", "cpu", "--width", `${SIZE.width}`, "--height", `${SIZE.height}`, "--spp", `${spp}`, "-q", "-o", expected]);
   }
   const difference = path.join(scratch, `${label}-difference.png`);
   const run = spawnSync(raypipe, ["diff", actual, expected, "--tolerance", "color", "--out", difference], { encoding: "utf8" });
@@ -270,4 +292,57 @@ viewer.set({ accel: "fastest" });
     const names = [...line[1].matchAll(/"([^"]+)"/g)].map((m) => m[1]);
     assert.deepEqual(names.sort(), [...offered.choices[key]].sort(), `${type} in raypipe.d.ts`);
   }
+});
+
+test("<raypipe-viewer> is defined on import, draws at its size, follows it and render-scale, loads src, keeps its scene on a bad one, and lets go of the GPU when removed", async () => {
+  await page?.close();
+  page = await browser.newPage({ viewport: { width: 800, height: 600 }, deviceScaleFactor: 1 });
+  page.errors = [];
+  page.on("pageerror", (error) => page.errors.push(`uncaught: ${error.message}`));
+  await page.goto(`${server.origin}/element.html`);
+  await page.waitForFunction(() => customElements.get("raypipe-viewer") && document.getElementById("gpu").viewer, null, { timeout: 30_000 });
+  await page.evaluate(() => {
+    window.viewers = { gl: document.getElementById("gl").viewer, gpu: document.getElementById("gpu").viewer };
+  });
+  for (const name of ["gl", "gpu"]) {
+    // The viewer's own sample count (no spp attribute): the reference takes as many.
+    const status = await until(name, SETTLED, `the ${name} element's samples`);
+    assert.deepEqual([status.width, status.height], [SIZE.width, SIZE.height], "the element's size in device pixels");
+    assert.equal(status.backend, name === "gl" ? "webgl2" : "webgpu");
+    await assertShowsWhitted(name, `element-${name}`, status.spp);
+  }
+  // alt is the element's accessible label; camera-controls alone lets the canvas take touches.
+  assert.deepEqual(
+    await page.evaluate(() => ["gl", "gpu"].map((id) => {
+      const element = document.getElementById(id);
+      return [element.getAttribute("role"), element.getAttribute("aria-label"), element.viewer.input];
+    })),
+    [["img", "The paper's Whitted scene", true], ["img", null, false]],
+  );
+
+  // The canvas follows the element's size, times render-scale.
+  await page.evaluate(() => { document.getElementById("gl").style.width = "160px"; });
+  await until("gl", (s) => s.width === 160 && s.height === 72, "the element's new width");
+  await page.evaluate(() => { document.getElementById("gl").renderScale = 0.5; });
+  await until("gl", (s) => s.width === 80 && s.height === 36, "half the element's pixels");
+
+  // src: fetched with its progress, shown, then `load`; a missing one says why, and the scene stays.
+  await page.evaluate(() => { document.getElementById("gl").src = "tetrahedron.obj"; });
+  await page.waitForFunction(() => window.heard.gl.some((e) => e.type === "load"), null, { timeout: COMPILE_MS });
+  const shown = await until("gl", (s) => s.scene === "tetrahedron.obj" && !s.busy, "the element's model");
+  assert.equal(shown.primitives, 4);
+  const phases = await page.evaluate(() => window.heard.gl.filter((e) => e.type === "progress").map((e) => e.phase));
+  assert.ok(phases.includes("fetch") && phases.at(-1) === "build", `progress phases ${phases}`);
+  await page.evaluate(() => { document.getElementById("gl").src = "missing.glb"; });
+  await page.waitForFunction(() => window.heard.gl.some((e) => e.type === "error"), null, { timeout: 60_000 });
+  const error = await page.evaluate(() => window.heard.gl.find((e) => e.type === "error").message);
+  assert.match(error, /^missing\.glb: cannot fetch: HTTP 404/);
+  assert.equal((await page.evaluate(() => ({ ...window.viewers.gl.status }))).scene, "tetrahedron.obj");
+
+  // Removed from the page: its viewer is disposed; the other draws on.
+  await page.evaluate(() => document.getElementById("gl").remove());
+  assert.equal(await page.evaluate(() => document.getElementById("gl")?.viewer ?? window.viewers.gl.status), null);
+  const before = await page.evaluate(() => window.viewers.gpu.status.frames);
+  await until("gpu", (s, frames) => s.frames >= frames + 5, "frames after the other element left", { arg: before, timeout: 60_000 });
+  assert.deepEqual(page.errors, []);
 });

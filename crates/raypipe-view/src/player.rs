@@ -332,6 +332,11 @@ impl Player {
         self.tracer.renderer_mut().resize(width, height)
     }
 
+    /// The size it traces at, in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        self.tracer.renderer().size()
+    }
+
     /// The frame shown, read back linear (tracing one sample first where none is).
     pub async fn read_frame(&mut self, ctx: &GpuContext) -> Result<Frame, GpuError> {
         self.read_frame_detached(ctx).await

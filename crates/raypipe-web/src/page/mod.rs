@@ -482,6 +482,13 @@ impl Page {
                 } else if this.player.is_current(&request) {
                     let new_scene = request.new_scene.is_some();
                     this.player.install(request, built);
+                    // Resized while it was built: at the canvas's size now.
+                    let size = this.screen.size();
+                    if this.player.size() != size
+                        && let Err(why) = this.player.resize(size.0, size.1)
+                    {
+                        this.player.say(why.to_string());
+                    }
                     if new_scene && this.player.message.is_none() {
                         this.opened = source;
                     }

@@ -2,7 +2,7 @@
 //! call): settings, files, the camera's drags and keys, screenshots, status and disposal.
 
 use super::{GpuState, Page, Pending, Settle, Viewer, builtin_scene, settle};
-use crate::params::Setting;
+use crate::params::{MAX_SIDE, Setting};
 use raypipe::scene::environment::is_environment_file;
 use raypipe::scene::model::ModelOptions;
 use raypipe::scene::{Environment, Scene};
@@ -102,6 +102,34 @@ impl Viewer {
         this.player.say(why.clone());
         this.publish();
         Some(why)
+    }
+
+    /// Draws at `width` x `height` pixels from the next frame on: the canvas's drawing buffer,
+    /// the surface and the tracer's targets (the `<raypipe-viewer>` element follows its size on
+    /// the page so). A size the adapter cannot trace is refused with its message, returned, and
+    /// the previous size stays; the samples start again.
+    pub fn resize(&self, width: u32, height: u32) -> Option<String> {
+        let mut this = self.page.borrow_mut();
+        if this.disposed || (width, height) == this.screen.size() {
+            return None;
+        }
+        if !(1..=MAX_SIDE).contains(&width) || !(1..=MAX_SIDE).contains(&height) {
+            drop(this);
+            return self.fail(format!("size {width}x{height}: each side 1 to {MAX_SIDE} pixels"));
+        }
+        if this.gpu == GpuState::Live
+            && let Err(why) = this.player.resize(width, height)
+        {
+            drop(this);
+            return self.fail(format!("size {width}x{height}: {why}"));
+        }
+        // On a lost device the size waits in the surface's configuration: the tracer of the
+        // restored device is built at it.
+        this.canvas.set_width(width);
+        this.canvas.set_height(height);
+        this.screen.resize(width, height);
+        this.publish();
+        None
     }
 
     /// Shows a failure of the page's script (a model URL that could not be fetched): the message

@@ -1,0 +1,312 @@
+// <raypipe-viewer>: raypipe as one element of a page, defined when the package's module
+// (raypipe.js) is imported. Its attributes follow model-viewer's where they mean the same (src, environment-image,
+// exposure, tone-mapping, camera-controls, alt, poster, loading), with raypipe's own beside them
+// (accel, backend, render-scale). The canvas inside draws at the element's size on the page times
+// the device pixel ratio times render-scale, and follows it as it changes.
+import { createViewer } from "./raypipe.js";
+
+/// model-viewer's tone-mapping names, as raypipe's tone maps (`tonemap`).
+const TONE_MAPS = { auto: "neutral", neutral: "neutral", aces: "aces", linear: "none", none: "none" };
+
+/// A side shrinks by this, and is tried again, where the adapter refuses a size.
+const SHRINK = 0.75;
+
+const STYLE = `
+:host { display: block; position: relative; width: 300px; height: 150px; overflow: hidden; }
+:host([hidden]) { display: none; }
+canvas { position: absolute; inset: 0; width: 100%; height: 100%; display: block; outline: none; }
+canvas.waiting { visibility: hidden; }
+img { position: absolute; inset: 0; width: 100%; height: 100%; object-fit: contain; pointer-events: none; }
+`;
+
+export class RaypipeViewerElement extends HTMLElement {
+  static observedAttributes = [
+    "src", "environment-image", "exposure", "tone-mapping", "camera-controls", "alt", "poster", "loading",
+    "accel", "backend", "render-scale",
+  ];
+
+  #viewer = null;
+  #canvas;
+  #poster;
+  #starting = null;
+  #resizes = null;
+  #sight = null;
+  #frame = 0;
+  /// The model shown, and the one asked for last (a later `src` wins over an earlier load).
+  #shown = null;
+  #asked = null;
+
+  constructor() {
+    super();
+    const root = this.attachShadow({ mode: "open" });
+    root.innerHTML = `<style>${STYLE}</style><canvas part="canvas"></canvas><img part="poster" alt="" hidden>`;
+    this.#canvas = root.querySelector("canvas");
+    this.#poster = root.querySelector("img");
+  }
+
+  /// The viewer (`Viewer` of `createViewer`), once the element has started; `null` before and
+  /// once it left the page.
+  get viewer() {
+    return this.#viewer;
+  }
+
+  /// The viewer's status, as its `status` event says it; `null` before it starts.
+  get status() {
+    return this.#viewer?.status ?? null;
+  }
+
+  connectedCallback() {
+    if (!this.hasAttribute("role")) this.setAttribute("role", "img");
+    this.#label();
+    this.#showPoster();
+    if (this.getAttribute("loading") === "lazy" && typeof IntersectionObserver !== "undefined") {
+      this.#sight = new IntersectionObserver((entries) => {
+        if (entries.some((entry) => entry.isIntersecting)) {
+          this.#sight?.disconnect();
+          this.#sight = null;
+          this.#start();
+        }
+      });
+      this.#sight.observe(this);
+    } else {
+      this.#start();
+    }
+  }
+
+  disconnectedCallback() {
+    this.#sight?.disconnect();
+    this.#sight = null;
+    this.#stop();
+  }
+
+  attributeChangedCallback(name, before, now) {
+    if (before === now) return;
+    if (name === "alt") return this.#label();
+    if (name === "poster") return this.#showPoster();
+    if (!this.#viewer) return;
+    switch (name) {
+      case "src":
+        return this.#loadModel();
+      case "environment-image":
+        return this.#loadEnvironment();
+      case "render-scale":
+        return this.#fit();
+      case "backend":
+        // A backend is chosen when a viewer starts: a new one, with the same model.
+        this.#stop();
+        return this.#start();
+      default:
+        return this.#apply(name);
+    }
+  }
+
+  // ---- src, environment-image and the others as attributes and properties of the same names.
+
+  get src() { return this.getAttribute("src"); }
+  set src(value) { this.#reflect("src", value); }
+  get environmentImage() { return this.getAttribute("environment-image"); }
+  set environmentImage(value) { this.#reflect("environment-image", value); }
+  get exposure() { return Number(this.getAttribute("exposure") ?? 1); }
+  set exposure(value) { this.#reflect("exposure", value); }
+  get toneMapping() { return this.getAttribute("tone-mapping"); }
+  set toneMapping(value) { this.#reflect("tone-mapping", value); }
+  get cameraControls() { return this.hasAttribute("camera-controls"); }
+  set cameraControls(value) { this.toggleAttribute("camera-controls", Boolean(value)); }
+  get alt() { return this.getAttribute("alt"); }
+  set alt(value) { this.#reflect("alt", value); }
+  get poster() { return this.getAttribute("poster"); }
+  set poster(value) { this.#reflect("poster", value); }
+  get loading() { return this.getAttribute("loading") ?? "auto"; }
+  set loading(value) { this.#reflect("loading", value); }
+  get accel() { return this.getAttribute("accel"); }
+  set accel(value) { this.#reflect("accel", value); }
+  get backend() { return this.getAttribute("backend") ?? "auto"; }
+  set backend(value) { this.#reflect("backend", value); }
+  get renderScale() { return Number(this.getAttribute("render-scale") ?? 1); }
+  set renderScale(value) { this.#reflect("render-scale", value); }
+
+  #reflect(name, value) {
+    if (value === null || value === undefined) this.removeAttribute(name);
+    else this.setAttribute(name, String(value));
+  }
+
+  #label() {
+    const alt = this.getAttribute("alt");
+    if (alt) this.setAttribute("aria-label", alt);
+    else this.removeAttribute("aria-label");
+  }
+
+  #showPoster() {
+    const poster = this.getAttribute("poster");
+    if (poster) this.#poster.src = new URL(poster, document.baseURI).href;
+    this.#poster.hidden = !poster || this.#shown !== null;
+  }
+
+  /// The drawing buffer's size: the element's on the page, in device pixels, times render-scale.
+  #wanted(scale = this.#scale()) {
+    const box = this.getBoundingClientRect();
+    const ratio = window.devicePixelRatio || 1;
+    return [box.width, box.height].map((side) => Math.max(1, Math.round(side * ratio * scale)));
+  }
+
+  #scale() {
+    const scale = Number(this.getAttribute("render-scale") ?? 1);
+    return Number.isFinite(scale) && scale > 0 ? Math.min(scale, 1) : 1;
+  }
+
+  async #start() {
+    if (this.#viewer || this.#starting || !this.isConnected) return;
+    const backend = this.getAttribute("backend") ?? "auto";
+    const [width, height] = this.#wanted();
+    this.#canvas.classList.toggle("waiting", this.hasAttribute("src"));
+    const starting = createViewer(this.#canvas, { backend, width, height, input: this.hasAttribute("camera-controls") });
+    this.#starting = starting;
+    let viewer;
+    try {
+      viewer = await starting;
+    } catch (error) {
+      if (this.#starting === starting) this.#starting = null;
+      return this.#fail(error.message);
+    }
+    if (this.#starting !== starting || !this.isConnected) return viewer.dispose();
+    this.#starting = null;
+    this.#viewer = viewer;
+    // The canvas fills the element; the viewer sized its drawing buffer.
+    this.#canvas.style.width = "100%";
+    this.#canvas.style.height = "100%";
+    viewer.addEventListener("status", (event) => this.dispatchEvent(new CustomEvent("status", { detail: event.detail })));
+    this.#resizes = new ResizeObserver(() => {
+      cancelAnimationFrame(this.#frame);
+      this.#frame = requestAnimationFrame(() => this.#fit());
+    });
+    this.#resizes.observe(this);
+    for (const name of ["exposure", "tone-mapping", "camera-controls", "accel"]) this.#apply(name);
+    if (this.hasAttribute("environment-image")) await this.#loadEnvironment();
+    if (this.hasAttribute("src")) await this.#loadModel();
+  }
+
+  #stop() {
+    this.#starting = null;
+    this.#resizes?.disconnect();
+    this.#resizes = null;
+    cancelAnimationFrame(this.#frame);
+    this.#viewer?.dispose();
+    this.#viewer = null;
+    this.#shown = null;
+    this.#showPoster();
+  }
+
+  /// Follows the element's size: the largest the adapter takes, at most the size wanted.
+  #fit() {
+    const viewer = this.#viewer;
+    if (!viewer) return;
+    let scale = this.#scale();
+    for (;;) {
+      const [width, height] = this.#wanted(scale);
+      try {
+        return viewer.resize(width, height);
+      } catch (error) {
+        if (Math.max(width, height) * SHRINK < 64) return this.#fail(error.message);
+        scale *= SHRINK;
+      }
+    }
+  }
+
+  #apply(name) {
+    const viewer = this.#viewer;
+    const value = this.getAttribute(name);
+    try {
+      if (name === "camera-controls") {
+        viewer.input = this.hasAttribute("camera-controls");
+      } else if (name === "exposure" && value !== null) {
+        // model-viewer's exposure multiplies; raypipe's is in stops.
+        const factor = Number(value);
+        if (!(factor > 0 && Number.isFinite(factor))) throw new Error(`exposure=${value}: expected a positive number`);
+        viewer.set({ exposure: Math.log2(factor) });
+      } else if (name === "tone-mapping" && value !== null) {
+        // Without the attribute, the scene's own tone map.
+        const tonemap = TONE_MAPS[value];
+        if (!tonemap) throw new Error(`tone-mapping=${value}: expected one of ${Object.keys(TONE_MAPS).join(", ")}`);
+        viewer.set({ tonemap });
+      } else if (name === "accel" && value !== null) {
+        viewer.set({ accel: value });
+      }
+    } catch (error) {
+      this.#fail(error.message);
+    }
+  }
+
+  async #loadModel() {
+    const src = this.getAttribute("src");
+    this.#asked = src;
+    if (!src) return;
+    let bytes;
+    try {
+      bytes = await this.#fetch(src);
+    } catch (error) {
+      return this.#asked === src && this.#fail(error.message);
+    }
+    if (this.#asked !== src || !this.#viewer) return;
+    const name = decodeURIComponent(new URL(src, document.baseURI).pathname.split("/").pop() || src);
+    this.#progress("build", 0, 1);
+    try {
+      await this.#viewer.load(bytes, name);
+    } catch (error) {
+      return this.#asked === src && this.#fail(error.message);
+    }
+    if (this.#asked !== src) return;
+    this.#progress("build", 1, 1);
+    this.#shown = src;
+    this.#canvas.classList.remove("waiting");
+    this.#showPoster();
+    this.dispatchEvent(new CustomEvent("load", { detail: { url: src } }));
+  }
+
+  async #loadEnvironment() {
+    const url = this.getAttribute("environment-image");
+    if (!url || !this.#viewer) return;
+    try {
+      await this.#viewer.load(url);
+    } catch (error) {
+      this.#fail(error.message);
+    }
+  }
+
+  /// The file's bytes, with a `progress` event as they arrive.
+  async #fetch(src) {
+    const url = new URL(src, document.baseURI);
+    let response;
+    try {
+      response = await fetch(url);
+      if (!response.ok) throw new Error(`HTTP ${response.status} ${response.statusText}`.trimEnd());
+    } catch (error) {
+      throw new Error(`${src}: cannot fetch: ${error.message}`);
+    }
+    const total = Number(response.headers.get("content-length")) || 0;
+    const reader = response.body.getReader();
+    const chunks = [];
+    let loaded = 0;
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      chunks.push(value);
+      loaded += value.length;
+      this.#progress("fetch", loaded, total);
+    }
+    const bytes = new Uint8Array(loaded);
+    let at = 0;
+    for (const chunk of chunks) {
+      bytes.set(chunk, at);
+      at += chunk.length;
+    }
+    return bytes;
+  }
+
+  #progress(phase, loaded, total) {
+    this.dispatchEvent(new CustomEvent("progress", { detail: { phase, loaded, total } }));
+  }
+
+  #fail(message) {
+    this.dispatchEvent(new CustomEvent("error", { detail: { message } }));
+  }
+}
