@@ -59,7 +59,9 @@ export class RaypipeViewerElement extends HTMLElement {
     if (!this.hasAttribute("role")) this.setAttribute("role", "img");
     this.#label();
     this.#showPoster();
-    if (this.getAttribute("loading") === "lazy" && typeof IntersectionObserver !== "undefined") {
+    // `auto` (the default) is `lazy`, as model-viewer's: the viewer starts once the element is in
+    // view; `eager` starts it at once.
+    if (this.getAttribute("loading") !== "eager" && typeof IntersectionObserver !== "undefined") {
       this.#sight = new IntersectionObserver((entries) => {
         if (entries.some((entry) => entry.isIntersecting)) {
           this.#sight?.disconnect();

@@ -6,7 +6,10 @@
 // (WEBGL_lose_context) and a destroyed WebGPU device are reported and recovered, the same image
 // again; dispose() of one leaves the other drawing; both canvases take touches themselves
 // (touch-action: none; the gestures are tests/gestures.test.mjs's). The declarations type-check a usage file
-// (tsc --noEmit) and name the lists the module offers.
+// (tsc --noEmit) and name the lists the module offers. The <raypipe-viewer> element: defined on
+// import, both backends draw the CPU reference's image at the element's size, it follows a resize
+// and render-scale, loads src (progress, load), keeps its scene on a missing one (error), waits out
+// of view, and lets go of its GPU when removed.
 //
 // Needs the package built (scripts/build-web.sh --package target/web-package, or
 // RAYPIPE_PACKAGE_DIR), the native binary (target/release/raypipe, or RAYPIPE_BIN) and the browser.
@@ -41,14 +44,15 @@ const PAGE = `<!doctype html>
 </script>
 `;
 
-// Two elements, one per backend, at the size of the CPU reference image; the package imported
-// after them, so that defining the element starts both.
+// Two elements, one per backend, at the size of the CPU reference image, and a third far below
+// them; the package imported after them, so that defining the element starts those in view.
 const ELEMENT_PAGE = `<!doctype html>
 <meta charset="utf-8">
 <link rel="icon" href="data:,">
 <script type="importmap">{ "imports": { "raypipe": "./node_modules/raypipe/raypipe.js" } }</script>
 <raypipe-viewer id="gl" backend="webgl2" alt="The paper's Whitted scene" camera-controls style="width: 96px; height: 72px"></raypipe-viewer>
 <raypipe-viewer id="gpu" backend="webgpu" style="width: 96px; height: 72px"></raypipe-viewer>
+<raypipe-viewer id="far" backend="webgl2" style="margin-top: 3000px; width: 40px; height: 30px"></raypipe-viewer>
 <script type="module">
   import "raypipe";
   window.heard = { gl: [], gpu: [] };
@@ -267,6 +271,12 @@ const png: Blob = await viewer.screenshot();
 const { maxSpp } = await choices();
 console.log(png.size, maxSpp);
 viewer.dispose();
+const element = document.querySelector("raypipe-viewer")!;
+element.renderScale = 0.5;
+element.toneMapping = "aces";
+element.addEventListener("error", (event) => console.log(event.detail.message));
+element.addEventListener("progress", (event) => console.log(event.detail.phase, event.detail.loaded));
+console.log(element.viewer?.status?.width);
 `);
   fs.writeFileSync(path.join(scratch, "tsconfig.json"), JSON.stringify({
     compilerOptions: { target: "es2022", module: "es2022", moduleResolution: "bundler", strict: true, noEmit: true, lib: ["es2022", "dom"] },
@@ -338,6 +348,12 @@ test("<raypipe-viewer> is defined on import, draws at its size, follows it and r
   const error = await page.evaluate(() => window.heard.gl.find((e) => e.type === "error").message);
   assert.match(error, /^missing\.glb: cannot fetch: HTTP 404/);
   assert.equal((await page.evaluate(() => ({ ...window.viewers.gl.status }))).scene, "tetrahedron.obj");
+
+  // Out of view, an element waits (loading="auto", as model-viewer's), and starts once in view.
+  assert.equal(await page.evaluate(() => document.getElementById("far").viewer), null);
+  await page.evaluate(() => document.getElementById("far").scrollIntoView());
+  await page.waitForFunction(() => document.getElementById("far").status?.frames >= 1, null, { timeout: COMPILE_MS });
+  await page.evaluate(() => window.scrollTo(0, 0));
 
   // Removed from the page: its viewer is disposed; the other draws on.
   await page.evaluate(() => document.getElementById("gl").remove());
