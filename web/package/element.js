@@ -11,6 +11,18 @@ const TONE_MAPS = { auto: "neutral", neutral: "neutral", aces: "aces", linear: "
 /// A side shrinks by this, and is tried again, where the adapter refuses a size.
 const SHRINK = 0.75;
 
+/// auto-rotate's speed and its wait after the user's last touch of the camera, as model-viewer's
+/// defaults (rotation-per-second, auto-rotate-delay).
+const ROTATION_DEGREES_PER_SECOND = 32;
+const ROTATION_DELAY_MS = 3000;
+
+/// An arrow key's turn of the camera, in degrees.
+const ARROW_DEGREES = 10;
+
+/// camera-orbit's terms where it says `auto`: model-viewer's defaults, the radius as the scene's
+/// own camera distance.
+const ORBIT_DEFAULTS = ["0deg", "75deg", "100%"];
+
 const STYLE = `
 :host { display: block; position: relative; width: 300px; height: 150px; overflow: hidden; }
 :host([hidden]) { display: none; }
@@ -22,7 +34,7 @@ img { position: absolute; inset: 0; width: 100%; height: 100%; object-fit: conta
 export class RaypipeViewerElement extends HTMLElement {
   static observedAttributes = [
     "src", "environment-image", "exposure", "tone-mapping", "camera-controls", "alt", "poster", "loading",
-    "accel", "backend", "render-scale",
+    "accel", "backend", "render-scale", "auto-rotate", "camera-orbit", "field-of-view",
   ];
 
   #viewer = null;
@@ -35,6 +47,8 @@ export class RaypipeViewerElement extends HTMLElement {
   /// The model shown, and the one asked for last (a later `src` wins over an earlier load).
   #shown = null;
   #asked = null;
+  #turning = 0;
+  #touched = -Infinity;
 
   constructor() {
     super();
@@ -42,6 +56,11 @@ export class RaypipeViewerElement extends HTMLElement {
     root.innerHTML = `<style>${STYLE}</style><canvas part="canvas"></canvas><img part="poster" alt="" hidden>`;
     this.#canvas = root.querySelector("canvas");
     this.#poster = root.querySelector("img");
+    // The user's touch of the camera holds auto-rotate off for a while; the arrow keys orbit.
+    for (const type of ["pointerdown", "wheel", "keydown"]) {
+      this.addEventListener(type, () => { this.#touched = performance.now(); }, { passive: true });
+    }
+    this.addEventListener("keydown", (event) => this.#arrow(event));
   }
 
   /// The viewer (`Viewer` of `createViewer`), once the element has started; `null` before and
@@ -93,6 +112,12 @@ export class RaypipeViewerElement extends HTMLElement {
         return this.#loadEnvironment();
       case "render-scale":
         return this.#fit();
+      case "auto-rotate":
+        return this.#rotate();
+      case "camera-orbit":
+        return this.#orbit();
+      case "field-of-view":
+        return this.#fieldOfView();
       case "backend":
         // A backend is chosen when a viewer starts: a new one, with the same model.
         this.#stop();
@@ -126,6 +151,12 @@ export class RaypipeViewerElement extends HTMLElement {
   set backend(value) { this.#reflect("backend", value); }
   get renderScale() { return Number(this.getAttribute("render-scale") ?? 1); }
   set renderScale(value) { this.#reflect("render-scale", value); }
+  get autoRotate() { return this.hasAttribute("auto-rotate"); }
+  set autoRotate(value) { this.toggleAttribute("auto-rotate", Boolean(value)); }
+  get cameraOrbit() { return this.getAttribute("camera-orbit"); }
+  set cameraOrbit(value) { this.#reflect("camera-orbit", value); }
+  get fieldOfView() { return this.getAttribute("field-of-view"); }
+  set fieldOfView(value) { this.#reflect("field-of-view", value); }
 
   #reflect(name, value) {
     if (value === null || value === undefined) this.removeAttribute(name);
@@ -183,8 +214,62 @@ export class RaypipeViewerElement extends HTMLElement {
     });
     this.#resizes.observe(this);
     for (const name of ["exposure", "tone-mapping", "camera-controls", "accel"]) this.#apply(name);
+    this.#camera();
+    this.#rotate();
     if (this.hasAttribute("environment-image")) await this.#loadEnvironment();
     if (this.hasAttribute("src")) await this.#loadModel();
+  }
+
+  /// camera-orbit and field-of-view, where given, over the scene's own camera.
+  #camera() {
+    if (this.hasAttribute("camera-orbit")) this.#orbit();
+    if (this.hasAttribute("field-of-view")) this.#fieldOfView();
+  }
+
+  #orbit() {
+    const value = this.getAttribute("camera-orbit");
+    if (!this.#viewer || value === null) return;
+    try {
+      const terms = value.trim().split(/\s+/);
+      if (terms.length > 3 || terms[0] === "") throw new Error("expected up to three terms: theta phi radius");
+      const [theta, phi, radius] = ORBIT_DEFAULTS.map((fallback, i) => (terms[i] && terms[i] !== "auto" ? terms[i] : fallback));
+      const distance = parseLength(radius);
+      this.#viewer.placeCamera(parseAngle(theta), parseAngle(phi), distance.value, distance.relative);
+    } catch (error) {
+      this.#fail(error.message.startsWith("camera-orbit") ? error.message : `camera-orbit=${value}: ${error.message}`);
+    }
+  }
+
+  #fieldOfView() {
+    const value = this.getAttribute("field-of-view");
+    if (!this.#viewer) return;
+    try {
+      this.#viewer.setFieldOfView(value === null || value.trim() === "auto" ? null : parseAngle(value.trim()));
+    } catch (error) {
+      this.#fail(error.message.startsWith("field-of-view") ? error.message : `field-of-view=${value}: ${error.message}`);
+    }
+  }
+
+  /// Turns the camera while auto-rotate is on, the element on the page and the user not at it.
+  #rotate() {
+    cancelAnimationFrame(this.#turning);
+    if (!this.#viewer || !this.hasAttribute("auto-rotate")) return;
+    let last = performance.now();
+    const step = (now) => {
+      if (!this.#viewer || !this.hasAttribute("auto-rotate")) return;
+      if (now - this.#touched > ROTATION_DELAY_MS) this.#viewer.turn(ROTATION_DEGREES_PER_SECOND * (now - last) / 1000, 0);
+      last = now;
+      this.#turning = requestAnimationFrame(step);
+    };
+    this.#turning = requestAnimationFrame(step);
+  }
+
+  #arrow(event) {
+    const turns = { ArrowLeft: [ARROW_DEGREES, 0], ArrowRight: [-ARROW_DEGREES, 0], ArrowUp: [0, ARROW_DEGREES], ArrowDown: [0, -ARROW_DEGREES] };
+    const turn = turns[event.key];
+    if (!turn || !this.#viewer || !this.hasAttribute("camera-controls")) return;
+    event.preventDefault();
+    this.#viewer.turn(...turn);
   }
 
   #stop() {
@@ -192,6 +277,7 @@ export class RaypipeViewerElement extends HTMLElement {
     this.#resizes?.disconnect();
     this.#resizes = null;
     cancelAnimationFrame(this.#frame);
+    cancelAnimationFrame(this.#turning);
     this.#viewer?.dispose();
     this.#viewer = null;
     this.#shown = null;
@@ -258,6 +344,8 @@ export class RaypipeViewerElement extends HTMLElement {
     }
     if (this.#asked !== src) return;
     this.#progress("build", 1, 1);
+    // A new scene brings its own camera: the element's orbit and field of view apply over it.
+    this.#camera();
     this.#shown = src;
     this.#canvas.classList.remove("waiting");
     this.#showPoster();
@@ -311,4 +399,23 @@ export class RaypipeViewerElement extends HTMLElement {
   #fail(message) {
     this.dispatchEvent(new CustomEvent("error", { detail: { message } }));
   }
+}
+
+/// An angle of camera-orbit or field-of-view (`30deg`, `0.5rad`, a bare number in degrees), in
+/// degrees.
+function parseAngle(term) {
+  const match = /^(-?[\d.]+(?:e-?\d+)?)(deg|rad)?$/.exec(term);
+  const number = match ? Number(match[1]) : NaN;
+  if (!Number.isFinite(number)) throw new Error(`${term} is not an angle (30deg, 0.5rad)`);
+  return match[2] === "rad" ? (number * 180) / Math.PI : number;
+}
+
+/// camera-orbit's radius: `105%` of the scene's own distance, or `2m` (`cm`, `mm`, a bare number
+/// in metres).
+function parseLength(term) {
+  const match = /^([\d.]+(?:e-?\d+)?)(%|m|cm|mm)?$/.exec(term);
+  const number = match ? Number(match[1]) : NaN;
+  if (!(number > 0 && Number.isFinite(number))) throw new Error(`${term} is not a positive length (105%, 2m)`);
+  const scale = { "%": 0.01, m: 1, cm: 0.01, mm: 0.001 }[match[2] ?? "m"];
+  return { value: number * scale, relative: match[2] === "%" };
 }

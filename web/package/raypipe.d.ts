@@ -120,6 +120,14 @@ export declare class Viewer extends EventTarget {
   input: boolean;
   /** Draws at `width` x `height` pixels (the drawing buffer); throws the line where the adapter refuses it. */
   resize(width: number, height: number): void;
+  /** The camera now (points as arrays of three numbers, the vertical field of view in degrees). */
+  readonly camera: { eye: [number, number, number]; target: [number, number, number]; up: [number, number, number]; fov: number };
+  /** Turns the camera about its target: degrees about the up axis and about the view's right axis. */
+  turn(yaw: number, pitch?: number): void;
+  /** The eye on a sphere about the target (model-viewer's camera-orbit, in degrees); `relative`: the radius times the scene's own distance. */
+  placeCamera(theta: number, phi: number, radius?: number | null, relative?: boolean): void;
+  /** The vertical field of view in degrees; `null`: the scene's own. */
+  setFieldOfView(degrees: number | null): void;
   /** Stops drawing and frees its GPU resources and listeners. */
   dispose(): void;
   addEventListener<K extends keyof ViewerEventMap>(
@@ -186,6 +194,11 @@ export declare class RaypipeViewerElement extends HTMLElement {
   backend: "auto" | "webgpu" | "webgl2";
   /** The drawing buffer's share of the element's device pixels, above 0, at most 1. */
   renderScale: number;
+  autoRotate: boolean;
+  /** `theta phi radius`, as model-viewer's: `"0deg 75deg 105%"`, `"auto auto 2m"`. */
+  cameraOrbit: string | null;
+  /** `"30deg"`, or `"auto"` (the scene's own). */
+  fieldOfView: string | null;
   addEventListener<K extends keyof RaypipeViewerEventMap>(
     type: K,
     listener: (this: RaypipeViewerElement, event: RaypipeViewerEventMap[K]) => void,

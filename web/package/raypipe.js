@@ -90,6 +90,32 @@ export class Viewer extends EventTarget {
     if (this.#listening) this.canvas.style.touchAction = this.#input ? "none" : "";
   }
 
+  /// The camera now: `{ eye, target, up, fov }` (arrays of three numbers; degrees).
+  get camera() {
+    return this.#alive().camera;
+  }
+
+  /// Turns the camera about its target: `yaw` degrees about the up axis, `pitch` about the view's
+  /// right axis.
+  turn(yaw, pitch = 0) {
+    this.#alive().turn(yaw, pitch);
+  }
+
+  /// Puts the eye on a sphere about the target, as model-viewer's camera-orbit: `theta` degrees
+  /// about the up axis from the front (+z), `phi` degrees down from the up axis, at `radius`
+  /// (times the scene's own distance where `relative`; omitted: as far as now). Throws the line
+  /// of a refused value.
+  placeCamera(theta, phi, radius, relative = false) {
+    const why = this.#alive().place_camera(theta, phi, radius ?? undefined, relative);
+    if (why !== undefined) throw new Error(why);
+  }
+
+  /// The vertical field of view in degrees; `null`: the scene's own. Throws the line of a refused one.
+  setFieldOfView(degrees) {
+    const why = this.#alive().set_field_of_view(degrees ?? undefined);
+    if (why !== undefined) throw new Error(why);
+  }
+
   /// Draws at `width` x `height` pixels from the next frame on (the canvas's drawing buffer; its
   /// size on the page is the page's); throws the line where the adapter refuses the size, which
   /// leaves the previous one.

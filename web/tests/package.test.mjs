@@ -8,8 +8,9 @@
 // (touch-action: none; the gestures are tests/gestures.test.mjs's). The declarations type-check a usage file
 // (tsc --noEmit) and name the lists the module offers. The <raypipe-viewer> element: defined on
 // import, both backends draw the CPU reference's image at the element's size, it follows a resize
-// and render-scale, loads src (progress, load), keeps its scene on a missing one (error), waits out
-// of view, and lets go of its GPU when removed.
+// and render-scale, loads src (progress, load), keeps its scene on a missing one (error), places
+// its camera (camera-orbit, field-of-view, auto-rotate, the arrow keys), waits out of view, and
+// lets go of its GPU when removed.
 //
 // Needs the package built (scripts/build-web.sh --package target/web-package, or
 // RAYPIPE_PACKAGE_DIR), the native binary (target/release/raypipe, or RAYPIPE_BIN) and the browser.
@@ -348,6 +349,37 @@ test("<raypipe-viewer> is defined on import, draws at its size, follows it and r
   const error = await page.evaluate(() => window.heard.gl.find((e) => e.type === "error").message);
   assert.match(error, /^missing\.glb: cannot fetch: HTTP 404/);
   assert.equal((await page.evaluate(() => ({ ...window.viewers.gl.status }))).scene, "tetrahedron.obj");
+
+  // camera-orbit, field-of-view, auto-rotate; the arrow keys where camera-controls is on.
+  const offset = (c) => c.eye.map((x, i) => x - c.target[i]);
+  const near = (a, b) => a.every((x, i) => Math.abs(x - b[i]) < 1e-3);
+  await page.evaluate(() => { document.getElementById("gpu").cameraOrbit = "90deg 90deg 2m"; });
+  const placed = await page.evaluate(() => window.viewers.gpu.camera);
+  assert.ok(near(offset(placed), [2, 0, 0]), `camera-orbit 90deg 90deg 2m put the eye at ${offset(placed)} from the target`);
+  const fovs = await page.evaluate(() => {
+    const element = document.getElementById("gpu");
+    element.fieldOfView = "30deg";
+    const set = element.viewer.camera.fov;
+    element.fieldOfView = "auto";
+    return [set, element.viewer.camera.fov];
+  });
+  assert.equal(fovs[0], 30);
+  assert.notEqual(fovs[1], 30, "field-of-view=auto is the scene's own");
+  await page.evaluate(() => { document.getElementById("gpu").autoRotate = true; });
+  await page.waitForFunction((eye) => window.viewers.gpu.camera.eye[2] !== eye[2], placed.eye, { timeout: 30_000 });
+  await page.evaluate(() => { document.getElementById("gpu").autoRotate = false; });
+  const glBefore = await page.evaluate(() => window.viewers.gl.camera.eye);
+  await page.evaluate(() => {
+    const canvas = document.getElementById("gl").shadowRoot.querySelector("canvas");
+    canvas.focus();
+    canvas.dispatchEvent(new KeyboardEvent("keydown", { key: "ArrowLeft", code: "ArrowLeft", bubbles: true, composed: true }));
+  });
+  assert.notDeepEqual(await page.evaluate(() => window.viewers.gl.camera.eye), glBefore, "ArrowLeft turned the camera");
+  const refusedOrbit = await page.evaluate(() => {
+    document.getElementById("gpu").cameraOrbit = "sideways";
+    return window.heard.gpu.find((e) => e.type === "error")?.message;
+  });
+  assert.match(refusedOrbit ?? "", /^camera-orbit=sideways: /);
 
   // Out of view, an element waits (loading="auto", as model-viewer's), and starts once in view.
   assert.equal(await page.evaluate(() => document.getElementById("far").viewer), null);

@@ -29,16 +29,20 @@ impl CameraControl {
         (self.camera.eye - self.camera.target).length()
     }
 
-    /// Turns the eye about the target: `dx` pixels about the up axis, `dy` about the right axis,
-    /// short of looking straight along the up axis.
+    /// Turns the eye about the target as a drag of `dx`, `dy` pixels does.
     pub fn orbit(&mut self, dx: f32, dy: f32) {
+        self.turn(-dx * ORBIT_PER_PIXEL, dy * ORBIT_PER_PIXEL);
+    }
+
+    /// Turns the eye about the target: `yaw` radians about the up axis, `pitch` about the right
+    /// axis, short of looking straight along the up axis.
+    pub fn turn(&mut self, yaw: f32, pitch: f32) {
         let c = &mut self.camera;
         let up = c.up.normalize();
         let offset = c.eye - c.target;
-        let yaw = Quat::from_axis_angle(up, -dx * ORBIT_PER_PIXEL);
-        let offset = yaw * offset;
+        let offset = Quat::from_axis_angle(up, yaw) * offset;
         let right = offset.cross(up).normalize_or_zero();
-        let pitched = Quat::from_axis_angle(right, dy * ORBIT_PER_PIXEL) * offset;
+        let pitched = Quat::from_axis_angle(right, pitch) * offset;
         // Stay a little off the pole, where the view's basis would degenerate.
         let cos = pitched.normalize().dot(up).abs();
         let offset = if cos < 0.995 && right != Vec3::ZERO {
@@ -51,7 +55,36 @@ impl CameraControl {
 
     /// Turns the camera about the target by `degrees` about its up axis (the scripted `--orbit`).
     pub fn orbit_degrees(&mut self, degrees: f32) {
-        self.orbit(-degrees.to_radians() / ORBIT_PER_PIXEL, 0.0);
+        self.turn(degrees.to_radians(), 0.0);
+    }
+
+    /// Puts the eye on a sphere about the target, as model-viewer's `camera-orbit` does: `theta`
+    /// radians about the up axis from the front (world +z where the up axis is +y), `phi` radians
+    /// down from the up axis, at `distance` (`None`: as far as now).
+    pub fn place(&mut self, theta: f32, phi: f32, distance: Option<f32>) {
+        let c = &mut self.camera;
+        let up = c.up.normalize();
+        // The front: +z off the up axis; for a scene whose up is z, the current view's side.
+        let front = (Vec3::Z - Vec3::Z.dot(up) * up)
+            .try_normalize()
+            .or_else(|| {
+                let offset = c.eye - c.target;
+                (offset - offset.dot(up) * up).try_normalize()
+            })
+            .unwrap_or_else(|| up.any_orthonormal_vector());
+        let side = up.cross(front);
+        // Short of the poles, where the view's basis would degenerate.
+        let phi = phi.clamp(0.01, std::f32::consts::PI - 0.01);
+        let distance = distance
+            .unwrap_or_else(|| (c.eye - c.target).length())
+            .max(MIN_DISTANCE);
+        let direction = phi.cos() * up + phi.sin() * (theta.cos() * front + theta.sin() * side);
+        c.eye = c.target + direction * distance;
+    }
+
+    /// The distance from the eye to the target in the scene's own camera.
+    pub fn home_distance(&self) -> f32 {
+        (self.home.eye - self.home.target).length()
     }
 
     /// Moves eye and target together across the view by `dx`, `dy` pixels of a `height`-pixel view.
@@ -92,6 +125,29 @@ impl CameraControl {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn placing_the_eye_follows_model_viewers_orbit() {
+        let mut control = CameraControl::new(Camera::default());
+        let target = control.camera.target;
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+        control.place(0.0, std::f32::consts::FRAC_PI_2, Some(2.0));
+        assert!(
+            close(control.camera.eye, target + Vec3::new(0.0, 0.0, 2.0)),
+            "front: +z"
+        );
+        control.place(std::f32::consts::FRAC_PI_2, std::f32::consts::FRAC_PI_2, None);
+        assert!(
+            close(control.camera.eye, target + Vec3::new(2.0, 0.0, 0.0)),
+            "a quarter turn: +x"
+        );
+        control.place(0.0, std::f32::consts::FRAC_PI_4, Some(1.0));
+        let half = std::f32::consts::FRAC_1_SQRT_2;
+        assert!(
+            close(control.camera.eye, target + Vec3::new(0.0, half, half)),
+            "45 degrees from the up axis"
+        );
+    }
 
     #[test]
     fn a_full_orbit_returns_and_the_distance_stays() {

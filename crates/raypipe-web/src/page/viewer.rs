@@ -201,6 +201,71 @@ impl Viewer {
         }
     }
 
+    /// Turns the camera about its target by `yaw_degrees` about the up axis and `pitch_degrees`
+    /// about the view's right axis (the element's auto-rotate and arrow keys).
+    pub fn turn(&self, yaw_degrees: f32, pitch_degrees: f32) {
+        if yaw_degrees.is_finite() && pitch_degrees.is_finite() {
+            let camera = &mut self.page.borrow_mut().player.camera;
+            camera.turn(yaw_degrees.to_radians(), pitch_degrees.to_radians());
+        }
+    }
+
+    /// Puts the eye on a sphere about the target, as model-viewer's `camera-orbit`: `theta_degrees`
+    /// about the up axis from the front (+z), `phi_degrees` down from the up axis, at `radius`
+    /// (times the scene's own camera distance where `relative`; `None`: as far as now). Returns
+    /// the message where a number is not finite or the radius not positive.
+    pub fn place_camera(
+        &self,
+        theta_degrees: f32,
+        phi_degrees: f32,
+        radius: Option<f32>,
+        relative: bool,
+    ) -> Option<String> {
+        if !(theta_degrees.is_finite() && phi_degrees.is_finite() && radius.is_none_or(|r| r > 0.0 && r.is_finite())) {
+            return self.fail(format!(
+                "camera-orbit: angles must be finite and the radius positive (got {theta_degrees}, {phi_degrees}, {radius:?})"
+            ));
+        }
+        let camera = &mut self.page.borrow_mut().player.camera;
+        let distance = radius.map(|r| if relative { r * camera.home_distance() } else { r });
+        camera.place(theta_degrees.to_radians(), phi_degrees.to_radians(), distance);
+        None
+    }
+
+    /// The vertical field of view, in degrees (above 0, below 180; `None`: the scene's own);
+    /// returns the message where it is not.
+    pub fn set_field_of_view(&self, degrees: Option<f32>) -> Option<String> {
+        if degrees.is_some_and(|d| !(d > 0.0 && d < 180.0)) {
+            return self.fail(format!("field-of-view: {degrees:?} degrees is not in (0, 180)"));
+        }
+        let camera = &mut self.page.borrow_mut().player.camera;
+        camera.camera.fov_degrees = degrees.unwrap_or(camera.home.fov_degrees);
+        None
+    }
+
+    /// The camera now: `{ eye, target, up, fov }` (points and the up vector as arrays of three
+    /// numbers, the vertical field of view in degrees).
+    #[wasm_bindgen(getter)]
+    pub fn camera(&self) -> JsValue {
+        let camera = self.page.borrow().player.camera.camera;
+        let object = js_sys::Object::new();
+        let vector = |v: glam::Vec3| {
+            v.to_array()
+                .into_iter()
+                .map(|x| JsValue::from(x as f64))
+                .collect::<js_sys::Array>()
+        };
+        for (key, value) in [
+            ("eye", vector(camera.eye).into()),
+            ("target", vector(camera.target).into()),
+            ("up", vector(camera.up).into()),
+            ("fov", JsValue::from(camera.fov_degrees as f64)),
+        ] {
+            let _ = js_sys::Reflect::set(&object, &key.into(), &value);
+        }
+        object.into()
+    }
+
     /// Wheel steps towards the target (negative: away).
     pub fn dolly(&self, steps: f32) {
         self.page.borrow_mut().player.camera.dolly(steps);
