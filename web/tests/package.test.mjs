@@ -9,8 +9,9 @@
 // (tsc --noEmit) and name the lists the module offers. The <raypipe-viewer> element: defined on
 // import, both backends draw the CPU reference's image at the element's size, it follows a resize
 // and render-scale, loads src (progress, load), keeps its scene on a missing one (error), places
-// its camera (camera-orbit, field-of-view, auto-rotate, the arrow keys), waits out of view, and
-// lets go of its GPU when removed.
+// its camera (camera-orbit, field-of-view, auto-rotate, the arrow keys; in Chromium, the browser's
+// own touches: a finger orbits, two pinch and pan), waits out of view, and lets go of its GPU when
+// removed.
 //
 // Needs the package built (scripts/build-web.sh --package target/web-package, or
 // RAYPIPE_PACKAGE_DIR), the native binary (target/release/raypipe, or RAYPIPE_BIN) and the browser.
@@ -307,7 +308,7 @@ viewer.set({ accel: "fastest" });
 
 test("<raypipe-viewer> is defined on import, draws at its size, follows it and render-scale, loads src, keeps its scene on a bad one, and lets go of the GPU when removed", async () => {
   await page?.close();
-  page = await browser.newPage({ viewport: { width: 800, height: 600 }, deviceScaleFactor: 1 });
+  page = await browser.newPage({ viewport: { width: 800, height: 600 }, deviceScaleFactor: 1, hasTouch: true });
   page.errors = [];
   page.on("pageerror", (error) => page.errors.push(`uncaught: ${error.message}`));
   await page.goto(`${server.origin}/element.html`);
@@ -375,6 +376,7 @@ test("<raypipe-viewer> is defined on import, draws at its size, follows it and r
     canvas.dispatchEvent(new KeyboardEvent("keydown", { key: "ArrowLeft", code: "ArrowLeft", bubbles: true, composed: true }));
   });
   assert.notDeepEqual(await page.evaluate(() => window.viewers.gl.camera.eye), glBefore, "ArrowLeft turned the camera");
+  if (BROWSER === "chromium") await assertTouchMovesCamera();
   const refusedOrbit = await page.evaluate(() => {
     document.getElementById("gpu").cameraOrbit = "sideways";
     return window.heard.gpu.find((e) => e.type === "error")?.message;
@@ -394,3 +396,43 @@ test("<raypipe-viewer> is defined on import, draws at its size, follows it and r
   await until("gpu", (s, frames) => s.frames >= frames + 5, "frames after the other element left", { arg: before, timeout: 60_000 });
   assert.deepEqual(page.errors, []);
 });
+
+/// The browser's own touch events (Chromium's DevTools Input.dispatchTouchEvent) on the element
+/// with camera-controls: one finger orbits, two spreading dolly in, two moving together pan.
+/// Firefox's driver (WebDriver BiDi through Puppeteer) sends no touches here.
+async function assertTouchMovesCamera() {
+  const cdp = await page.context().newCDPSession(page);
+  const box = await page.evaluate(() => {
+    const r = document.getElementById("gl").getBoundingClientRect();
+    return { x: r.x + r.width / 2, y: r.y + r.height / 2 };
+  });
+  const touch = (type, points) => cdp.send("Input.dispatchTouchEvent", {
+    type,
+    touchPoints: points.map(([x, y], id) => ({ x: box.x + x, y: box.y + y, id })),
+  });
+  const camera = () => page.evaluate(() => window.viewers.gl.camera);
+  const distance = (c) => Math.hypot(...c.eye.map((x, i) => x - c.target[i]));
+
+  const before = await camera();
+  await touch("touchStart", [[0, 0]]);
+  for (const x of [10, 20, 30]) await touch("touchMove", [[x, 0]]);
+  await touch("touchEnd", []);
+  const orbited = await camera();
+  assert.notDeepEqual(orbited.eye, before.eye, "a finger's drag orbits");
+  assert.deepEqual(orbited.target, before.target, "about the target");
+  assert.ok(Math.abs(distance(orbited) - distance(before)) < 1e-3 * distance(before));
+
+  await touch("touchStart", [[-10, 0], [10, 0]]);
+  for (const d of [15, 20, 25, 30]) await touch("touchMove", [[-d, 0], [d, 0]]);
+  await touch("touchEnd", []);
+  const dollied = await camera();
+  assert.ok(distance(dollied) < 0.9 * distance(orbited), `spreading fingers dolly in: ${distance(orbited)} to ${distance(dollied)}`);
+
+  await touch("touchStart", [[-10, 0], [10, 0]]);
+  for (const y of [5, 10, 15]) await touch("touchMove", [[-10, y], [10, y]]);
+  await touch("touchEnd", []);
+  const panned = await camera();
+  assert.notDeepEqual(panned.target, dollied.target, "two fingers moving together pan");
+  assert.ok(Math.abs(distance(panned) - distance(dollied)) < 1e-3 * distance(dollied), "a pan keeps the distance");
+  await cdp.detach();
+}
