@@ -95,6 +95,15 @@ export interface ViewerStatus {
   frameMs: number;
   buildMs: number | null;
   firstFrameMs: number | null;
+  camera: ViewerCamera;
+}
+
+/** The camera: points and the up vector as arrays of three numbers, the vertical field of view in degrees. */
+export interface ViewerCamera {
+  eye: [number, number, number];
+  target: [number, number, number];
+  up: [number, number, number];
+  fov: number;
 }
 
 export interface ViewerEventMap {
@@ -121,7 +130,7 @@ export declare class Viewer extends EventTarget {
   /** Draws at `width` x `height` pixels (the drawing buffer); throws the line where the adapter refuses it. */
   resize(width: number, height: number): void;
   /** The camera now (points as arrays of three numbers, the vertical field of view in degrees). */
-  readonly camera: { eye: [number, number, number]; target: [number, number, number]; up: [number, number, number]; fov: number };
+  readonly camera: ViewerCamera;
   /** Turns the camera about its target: degrees about the up axis and about the view's right axis. */
   turn(yaw: number, pitch?: number): void;
   /** The eye on a sphere about the target (model-viewer's camera-orbit, in degrees); `relative`: the radius times the scene's own distance. */

@@ -357,6 +357,7 @@ test("<raypipe-viewer> is defined on import, draws at its size, follows it and r
   await page.evaluate(() => { document.getElementById("gpu").cameraOrbit = "90deg 90deg 2m"; });
   const placed = await page.evaluate(() => window.viewers.gpu.camera);
   assert.ok(near(offset(placed), [2, 0, 0]), `camera-orbit 90deg 90deg 2m put the eye at ${offset(placed)} from the target`);
+  await until("gpu", (s, eye) => s.camera.eye.every((x, i) => Math.abs(x - eye[i]) < 1e-3), "the camera in the status", { arg: placed.eye });
   const fovs = await page.evaluate(() => {
     const element = document.getElementById("gpu");
     element.fieldOfView = "30deg";

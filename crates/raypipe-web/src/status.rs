@@ -51,6 +51,30 @@ pub struct Status {
     pub frame_ms: f64,
     pub build_ms: Option<f64>,
     pub first_frame_ms: Option<f64>,
+    /// The camera now.
+    pub camera: StatusCamera,
+}
+
+/// The camera in a status: eye, target and up, and the vertical field of view in degrees.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StatusCamera {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    pub up: [f32; 3],
+    pub fov: f32,
+}
+
+impl StatusCamera {
+    /// As JavaScript reads it: `{ eye, target, up, fov }` (`ViewerCamera` in raypipe.d.ts).
+    fn value(&self) -> Value<'static> {
+        let numbers = |v: [f32; 3]| Value::Numbers(v.map(f64::from).to_vec());
+        Value::Record(vec![
+            ("eye", numbers(self.eye)),
+            ("target", numbers(self.target)),
+            ("up", numbers(self.up)),
+            ("fov", Value::Number(self.fov.into())),
+        ])
+    }
 }
 
 /// A field's value, as JavaScript receives it.
@@ -60,6 +84,9 @@ pub enum Value<'a> {
     Text(&'a str),
     Flag(bool),
     Texts(&'a [&'static str]),
+    Numbers(Vec<f64>),
+    /// An object of named values.
+    Record(Vec<(&'static str, Value<'a>)>),
     Null,
 }
 
@@ -119,6 +146,7 @@ impl Status {
             field("frameMs", "number", Number(self.frame_ms)),
             field("buildMs", "number | null", optional(self.build_ms)),
             field("firstFrameMs", "number | null", optional(self.first_frame_ms)),
+            field("camera", "ViewerCamera", self.camera.value()),
         ]
     }
 
@@ -137,6 +165,8 @@ impl Status {
             fps: 0.0,
             frame_ms: 0.0,
             build_ms: None,
+            // A camera that moves every frame (a drag, auto-rotate) publishes with the clock.
+            camera: StatusCamera::default(),
             ..self.clone()
         }
     }
@@ -246,6 +276,21 @@ mod tests {
             ..later.clone()
         };
         assert!(busy.publishes_over(Some(&shown), 0.0), "a tracer being built");
+        let turned = Status {
+            camera: StatusCamera {
+                eye: [1.0, 2.0, 3.0],
+                ..shown.camera
+            },
+            ..shown.clone()
+        };
+        assert!(
+            !turned.publishes_over(Some(&shown), 10.0),
+            "a camera that moves every frame, soon after"
+        );
+        assert!(
+            turned.publishes_over(Some(&shown), CLOCK_PERIOD_MS),
+            "the camera, a period after"
+        );
         let failed = Status {
             error: Some("a line".into()),
             ..later

@@ -9,7 +9,7 @@
 //! message shown.
 
 use crate::params::{StartParams, WebBackend};
-use crate::status::{Status, Value};
+use crate::status::{Status, StatusCamera, Value};
 use raypipe::Choice;
 use raypipe::gpu::GpuContext;
 use raypipe::scene::model::Floor;
@@ -406,6 +406,15 @@ impl Page {
             frame_ms: player.rate.frame_ms,
             build_ms: player.build_ms,
             first_frame_ms: self.first_frame_ms,
+            camera: {
+                let camera = player.camera.camera;
+                StatusCamera {
+                    eye: camera.eye.to_array(),
+                    target: camera.target.to_array(),
+                    up: camera.up.to_array(),
+                    fov: camera.fov_degrees,
+                }
+            },
         }
     }
 
@@ -556,20 +565,30 @@ fn superseded(request: &TracerRequest) -> String {
 
 /// A status as the object JavaScript reads, field by field of its schema.
 fn to_js(status: &Status) -> JsValue {
+    record(status.fields().into_iter().map(|field| (field.name, field.value)))
+}
+
+/// Named values as a plain object.
+fn record<'a>(values: impl IntoIterator<Item = (&'static str, Value<'a>)>) -> JsValue {
     let object = js_sys::Object::new();
-    for field in status.fields() {
-        let value = match field.value {
-            Value::Number(n) => JsValue::from(n),
-            Value::Text(text) => JsValue::from(text),
-            Value::Flag(flag) => JsValue::from(flag),
-            Value::Texts(texts) => texts
-                .iter()
-                .map(|t| JsValue::from(*t))
-                .collect::<js_sys::Array>()
-                .into(),
-            Value::Null => JsValue::NULL,
-        };
-        let _ = js_sys::Reflect::set(&object, &field.name.into(), &value);
+    for (name, value) in values {
+        let _ = js_sys::Reflect::set(&object, &name.into(), &js_value(value));
     }
     object.into()
+}
+
+fn js_value(value: Value) -> JsValue {
+    match value {
+        Value::Number(n) => JsValue::from(n),
+        Value::Text(text) => JsValue::from(text),
+        Value::Flag(flag) => JsValue::from(flag),
+        Value::Texts(texts) => texts
+            .iter()
+            .map(|t| JsValue::from(*t))
+            .collect::<js_sys::Array>()
+            .into(),
+        Value::Numbers(numbers) => numbers.into_iter().map(JsValue::from).collect::<js_sys::Array>().into(),
+        Value::Record(values) => record(values),
+        Value::Null => JsValue::NULL,
+    }
 }
