@@ -15,7 +15,7 @@ import { execFileSync, spawnSync } from "node:child_process";
 import fs from "node:fs";
 import path from "node:path";
 import { fileURLToPath } from "node:url";
-import { launch, serve } from "../harness.mjs";
+import { BROWSER, launch, serve } from "../harness.mjs";
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "../..");
 const site = process.env.RAYPIPE_WEB_DIR ?? path.join(root, "target/web");
@@ -48,8 +48,8 @@ after(async () => {
 });
 
 /// A page at `query`, with what reaches its console as errors collected in `page.errors`.
-async function open(query, { init } = {}) {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1 });
+async function open(query, { init, device = { viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1 } } = {}) {
+  const page = await browser.newPage(device);
   page.errors = [];
   page.on("pageerror", (error) => page.errors.push(`uncaught: ${error.message}`));
   page.on("console", (message) => {
@@ -420,6 +420,43 @@ for (const backend of ["webgpu", "webgl2"]) {
     });
   });
 }
+
+test("on a phone (390x844 CSS pixels, 3 device pixels to one, touch) the page fits the screen, draws, and turns and pinches by touch", { skip: BROWSER !== "chromium" && "Firefox's driver sends no touches" }, async () => {
+  const page = await open("scene=whitted&width=960&height=540&spp=1", {
+    device: { viewport: { width: 390, height: 844 }, deviceScaleFactor: 3, isMobile: true, hasTouch: true },
+  });
+  const first = await until(page, (s) => s.frames >= 2 && !s.busy && s.samples >= 1, "a frame on the phone");
+  const [wide, screen] = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth]);
+  assert.ok(wide <= screen, `the page is ${wide} CSS pixels wide on a screen of ${screen}`);
+  const box = await page.locator("#frame").boundingBox();
+  assert.ok(box.x >= 0 && box.x + box.width <= screen && box.height > 100, `the canvas at ${JSON.stringify(box)}`);
+  for (const control of await page.locator("#controls select, #controls input").all()) {
+    const place = await control.boundingBox();
+    if (place) assert.ok(place.x >= 0 && place.x + place.width <= screen, `a control at ${JSON.stringify(place)} leaves the screen`);
+  }
+
+  const cdp = await page.context().newCDPSession(page);
+  const centre = { x: box.x + box.width / 2, y: box.y + box.height / 2 };
+  const touch = (type, points) => cdp.send("Input.dispatchTouchEvent", {
+    type,
+    touchPoints: points.map(([x, y], id) => ({ x: centre.x + x, y: centre.y + y, id })),
+  });
+  const distance = (c) => Math.hypot(...c.eye.map((x, i) => x - c.target[i]));
+  await touch("touchStart", [[0, 0]]);
+  for (const x of [10, 20, 30]) await touch("touchMove", [[x, 0]]);
+  await touch("touchEnd", []);
+  const turned = await until(page, (s, eye) => s.camera.eye.some((x, i) => Math.abs(x - eye[i]) > 1e-3), "the camera turned by a finger", { arg: first.camera.eye });
+  assert.ok(Math.abs(distance(turned.camera) - distance(first.camera)) < 1e-3 * distance(first.camera), "an orbit keeps the distance");
+  await touch("touchStart", [[-10, 0], [10, 0]]);
+  for (const d of [15, 20, 25, 30]) await touch("touchMove", [[-d, 0], [d, 0]]);
+  await touch("touchEnd", []);
+  await until(page, (s, d) => Math.hypot(...s.camera.eye.map((x, i) => x - s.camera.target[i])) < 0.9 * d, "the camera dollied in by a pinch", { arg: distance(turned.camera) });
+  await until(page, (s) => s.frames >= 2 && !s.busy && s.samples >= 1, "a frame after the touches");
+  // The whole screen, as docs/images/phone.png shows it.
+  await page.screenshot({ path: path.join(output, "phone-screen.png") });
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
 
 test("a browser with neither WebGPU nor WebGL2 gets one line on the page", async () => {
   const page = await open("scene=whitted&width=64&height=48", {
