@@ -16,6 +16,13 @@ const SHRINK = 0.75;
 const ROTATION_DEGREES_PER_SECOND = 32;
 const ROTATION_DELAY_MS = 3000;
 
+/// render-scale="auto": the frame time it holds by default (frame-budget), how often it looks,
+/// how far it may lower the scale, and the share of the budget below which it raises it again.
+const FRAME_BUDGET_MS = 33;
+const GOVERNOR_PERIOD_MS = 500;
+const MIN_AUTO_SCALE = 0.25;
+const RAISE_BELOW = 0.6;
+
 /// An arrow key's turn of the camera, in degrees.
 const ARROW_DEGREES = 10;
 
@@ -34,7 +41,7 @@ img { position: absolute; inset: 0; width: 100%; height: 100%; object-fit: conta
 export class RaypipeViewerElement extends HTMLElement {
   static observedAttributes = [
     "src", "environment-image", "exposure", "tone-mapping", "camera-controls", "alt", "poster", "loading",
-    "accel", "backend", "render-scale", "auto-rotate", "camera-orbit", "field-of-view",
+    "accel", "backend", "render-scale", "frame-budget", "auto-rotate", "camera-orbit", "field-of-view",
   ];
 
   #viewer = null;
@@ -49,6 +56,9 @@ export class RaypipeViewerElement extends HTMLElement {
   #asked = null;
   #turning = 0;
   #touched = -Infinity;
+  /// render-scale="auto": the scale it holds now, and its clock.
+  #autoScale = 1;
+  #governor = 0;
 
   constructor() {
     super();
@@ -111,7 +121,10 @@ export class RaypipeViewerElement extends HTMLElement {
       case "environment-image":
         return this.#loadEnvironment();
       case "render-scale":
+        this.#govern();
         return this.#fit();
+      case "frame-budget":
+        return this.#govern();
       case "auto-rotate":
         return this.#rotate();
       case "camera-orbit":
@@ -149,8 +162,11 @@ export class RaypipeViewerElement extends HTMLElement {
   set accel(value) { this.#reflect("accel", value); }
   get backend() { return this.getAttribute("backend") ?? "auto"; }
   set backend(value) { this.#reflect("backend", value); }
-  get renderScale() { return Number(this.getAttribute("render-scale") ?? 1); }
+  /// A number, or "auto"; reading it gives the scale drawn at now.
+  get renderScale() { return this.#auto() ? this.#autoScale : Number(this.getAttribute("render-scale") ?? 1); }
   set renderScale(value) { this.#reflect("render-scale", value); }
+  get frameBudget() { return Number(this.getAttribute("frame-budget") ?? FRAME_BUDGET_MS); }
+  set frameBudget(value) { this.#reflect("frame-budget", value); }
   get autoRotate() { return this.hasAttribute("auto-rotate"); }
   set autoRotate(value) { this.toggleAttribute("auto-rotate", Boolean(value)); }
   get cameraOrbit() { return this.getAttribute("camera-orbit"); }
@@ -182,7 +198,12 @@ export class RaypipeViewerElement extends HTMLElement {
     return [box.width, box.height].map((side) => Math.max(1, Math.round(side * ratio * scale)));
   }
 
+  #auto() {
+    return this.getAttribute("render-scale")?.trim() === "auto";
+  }
+
   #scale() {
+    if (this.#auto()) return this.#autoScale;
     const scale = Number(this.getAttribute("render-scale") ?? 1);
     return Number.isFinite(scale) && scale > 0 ? Math.min(scale, 1) : 1;
   }
@@ -216,6 +237,7 @@ export class RaypipeViewerElement extends HTMLElement {
     for (const name of ["exposure", "tone-mapping", "camera-controls", "accel"]) this.#apply(name);
     this.#camera();
     this.#rotate();
+    this.#govern();
     if (this.hasAttribute("environment-image")) await this.#loadEnvironment();
     if (this.hasAttribute("src")) await this.#loadModel();
   }
@@ -278,10 +300,49 @@ export class RaypipeViewerElement extends HTMLElement {
     this.#resizes = null;
     cancelAnimationFrame(this.#frame);
     cancelAnimationFrame(this.#turning);
+    clearInterval(this.#governor);
     this.#viewer?.dispose();
     this.#viewer = null;
     this.#shown = null;
     this.#showPoster();
+  }
+
+  /// render-scale="auto": every half second, the frame time over it against frame-budget. Frames
+  /// cost about their pixels, so a scale s that took t ms wants s * sqrt(budget / t); it is
+  /// lowered at once where frames run over the budget, raised (a tenth at a time) where they run
+  /// under RAISE_BELOW of it, and looked at only while the viewer traces (samples to gather, or
+  /// motion): a still, finished frame costs nothing to show.
+  #govern() {
+    clearInterval(this.#governor);
+    if (!this.#viewer || !this.#auto()) {
+      this.#autoScale = 1;
+      return;
+    }
+    let frames = this.#viewer.frames;
+    let since = performance.now();
+    this.#governor = setInterval(() => {
+      const viewer = this.#viewer;
+      const status = viewer?.status;
+      if (!viewer || !status) return;
+      const now = performance.now();
+      const drawn = viewer.frames - frames;
+      const elapsed = now - since;
+      [frames, since] = [viewer.frames, now];
+      const tracing = status.samples < status.spp || status.moving || this.hasAttribute("auto-rotate");
+      if (drawn < 2 || status.busy || !tracing) return;
+      const frameMs = elapsed / drawn;
+      const budget = this.frameBudget > 0 ? this.frameBudget : FRAME_BUDGET_MS;
+      const wanted = this.#autoScale * Math.sqrt(budget / frameMs);
+      let scale = this.#autoScale;
+      if (frameMs > budget) scale = Math.max(MIN_AUTO_SCALE, Math.min(wanted, scale * 0.95));
+      else if (frameMs < budget * RAISE_BELOW && scale < 1) scale = Math.min(1, wanted, scale * 1.1);
+      // Each new size starts the samples again: only a change of a twentieth or more.
+      if (Math.abs(scale - this.#autoScale) >= 0.05 * this.#autoScale || (scale === 1 && this.#autoScale !== 1)) {
+        this.#autoScale = scale;
+        this.#fit();
+        this.dispatchEvent(new CustomEvent("render-scale", { detail: { scale, frameMs } }));
+      }
+    }, GOVERNOR_PERIOD_MS);
   }
 
   /// Follows the element's size: the largest the adapter takes, at most the size wanted.

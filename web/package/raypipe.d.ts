@@ -181,6 +181,8 @@ export interface RaypipeViewerEventMap {
   /** A file, an attribute or the GPU failed; the previous scene stays drawn. */
   error: CustomEvent<{ message: string }>;
   progress: CustomEvent<ProgressDetail>;
+  /** render-scale="auto" changed the scale, after frames of `frameMs`. */
+  "render-scale": CustomEvent<{ scale: number; frameMs: number }>;
 }
 
 /** `<raypipe-viewer>`, defined when this module is imported: attributes and properties of the same names (docs/web.md). */
@@ -201,8 +203,10 @@ export declare class RaypipeViewerElement extends HTMLElement {
   loading: "auto" | "lazy" | "eager";
   accel: Accel | null;
   backend: "auto" | "webgpu" | "webgl2";
-  /** The drawing buffer's share of the element's device pixels, above 0, at most 1. */
-  renderScale: number;
+  /** The drawing buffer's share of the element's device pixels, above 0, at most 1; set `"auto"` to hold `frameBudget` (reading it then gives the scale drawn at). */
+  renderScale: number | "auto";
+  /** render-scale="auto"'s frame time, in milliseconds (33 by default). */
+  frameBudget: number;
   autoRotate: boolean;
   /** `theta phi radius`, as model-viewer's: `"0deg 75deg 105%"`, `"auto auto 2m"`. */
   cameraOrbit: string | null;

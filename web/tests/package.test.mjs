@@ -9,7 +9,8 @@
 // (tsc --noEmit) and name the lists the module offers. The <raypipe-viewer> element: defined on
 // import, both backends draw the CPU reference's image at the element's size, it follows a resize
 // and render-scale, loads src (progress, load), keeps its scene on a missing one (error), places
-// its camera (camera-orbit, field-of-view, auto-rotate, the arrow keys; in Chromium, the browser's
+// its camera (camera-orbit, field-of-view, auto-rotate, the arrow keys; render-scale="auto"
+// under budgets no frame meets and every frame meets; in Chromium, the browser's
 // own touches: a finger orbits, two pinch and pan), waits out of view, and lets go of its GPU when
 // removed.
 //
@@ -369,6 +370,17 @@ test("<raypipe-viewer> is defined on import, draws at its size, follows it and r
   assert.notEqual(fovs[1], 30, "field-of-view=auto is the scene's own");
   await page.evaluate(() => { document.getElementById("gpu").autoRotate = true; });
   await page.waitForFunction((eye) => window.viewers.gpu.camera.eye[2] !== eye[2], placed.eye, { timeout: 30_000 });
+  // render-scale="auto" under a budget no frame meets goes down to a quarter, and back up under one
+  // every frame meets.
+  await page.evaluate(() => {
+    const element = document.getElementById("gpu");
+    element.frameBudget = 0.01;
+    element.renderScale = "auto";
+  });
+  await until("gpu", (s, width) => s.width <= width / 2, "a lower scale", { arg: SIZE.width, timeout: 60_000 });
+  await page.evaluate(() => { document.getElementById("gpu").frameBudget = 1e6; });
+  await until("gpu", (s, width) => s.width === width, "the full scale again", { arg: SIZE.width, timeout: 60_000 });
+  await page.evaluate(() => document.getElementById("gpu").removeAttribute("render-scale"));
   await page.evaluate(() => { document.getElementById("gpu").autoRotate = false; });
   const glBefore = await page.evaluate(() => window.viewers.gl.camera.eye);
   await page.evaluate(() => {
