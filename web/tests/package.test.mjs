@@ -59,8 +59,10 @@ const ELEMENT_PAGE = `<!doctype html>
 <script type="module">
   import "raypipe";
   window.heard = { gl: [], gpu: [] };
+  window.statuses = { gl: 0, gpu: 0 };
   for (const id of ["gl", "gpu"]) {
     const element = document.getElementById(id);
+    element.addEventListener("status", (event) => { if (event.detail.frames != null) window.statuses[id] += 1; });
     for (const type of ["load", "error", "progress"]) {
       element.addEventListener(type, (event) => window.heard[id].push({ type, ...event.detail }));
     }
@@ -324,6 +326,7 @@ test("<raypipe-viewer> is defined on import, draws at its size, follows it and r
     assert.equal(status.backend, name === "gl" ? "webgl2" : "webgpu");
     await assertShowsWhitted(name, `element-${name}`, status.spp);
   }
+  assert.ok(await page.evaluate(() => window.statuses.gl > 0 && window.statuses.gpu > 0), "the elements' status events");
   // alt is the element's accessible label; camera-controls alone lets the canvas take touches.
   assert.deepEqual(
     await page.evaluate(() => ["gl", "gpu"].map((id) => {
