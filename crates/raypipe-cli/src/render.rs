@@ -263,6 +263,7 @@ fn say_stats(
             bvh.depth
         );
     }
+    say_memory(packed.triangles.len())?;
     if args.scene.aov == Aov::Cost {
         let counts = frame.counts();
         let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len() as f64;
@@ -288,6 +289,25 @@ fn say_stats(
             traced.rects.len()
         );
     }
+    Ok(())
+}
+
+/// `--stats`'s line on memory: the process's peak (where the system says it), and its bytes a
+/// triangle where the scene has triangles.
+fn say_memory(triangles: usize) -> anyhow::Result<()> {
+    let Some(peak) = crate::report::peak_host_bytes() else {
+        crate::say!("memory: the system does not report the process's peak");
+        return Ok(());
+    };
+    let per_triangle = if triangles > 0 {
+        format!(", {:.0} bytes a triangle", peak as f64 / triangles as f64)
+    } else {
+        String::new()
+    };
+    crate::say!(
+        "memory: peak host {:.1} MiB{per_triangle}",
+        peak as f64 / (1u64 << 20) as f64
+    );
     Ok(())
 }
 

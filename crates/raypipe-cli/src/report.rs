@@ -95,6 +95,22 @@ macro_rules! say {
     }};
 }
 
+/// The most memory the process has held at once (its resident set's high-water mark, Linux's
+/// `VmHWM`), in bytes; `None` where the system does not say. On lavapipe and llvmpipe the GPU's
+/// buffers and textures live in it too.
+pub fn peak_host_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|line| line.starts_with("VmHWM:"))?;
+    let kib: u64 = line
+        .trim_start_matches("VmHWM:")
+        .trim()
+        .strip_suffix("kB")?
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kib * 1024)
+}
+
 /// The median of `values` (for an even count the mean of the middle two, as the peer benchmark
 /// takes it); 0 for none.
 pub fn median(values: impl IntoIterator<Item = f64>) -> f64 {
@@ -263,5 +279,21 @@ mod tests {
             message,
             "image 512x512 needs 4 MiB per frame target, the adapter allocates at most 1 MiB; render at most 65536 pixels on the GPU, or use --device cpu"
         );
+    }
+}
+
+#[cfg(test)]
+mod memory_tests {
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn the_peak_grows_with_what_the_process_holds() {
+        let before = super::peak_host_bytes().expect("Linux says VmHWM");
+        // More than the peak so far (whatever the other tests held), every page written, and kept
+        // from the optimizer.
+        let size = before as usize + (64 << 20);
+        let held = std::hint::black_box(vec![1u8; size]);
+        let after = super::peak_host_bytes().unwrap();
+        assert!(after >= size as u64, "{before} then {after} with {size} bytes held");
+        drop(held);
     }
 }

@@ -337,7 +337,16 @@ fn cost_aov_writes_a_heat_map_with_a_legend() {
         out.to_str().unwrap(),
     ]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
-    assert!(String::from_utf8_lossy(&output.stdout).contains("cost per primary ray"));
+    let stats = String::from_utf8_lossy(&output.stdout);
+    assert!(stats.contains("cost per primary ray"));
+    // The process's peak memory, where the system says it.
+    if cfg!(target_os = "linux") {
+        let peak = stats
+            .lines()
+            .find_map(|line| line.strip_prefix("memory: peak host "))
+            .and_then(|rest| rest.split(' ').next()?.parse::<f64>().ok());
+        assert!(peak.is_some_and(|mib| mib > 1.0), "{stats}");
+    }
     let image = io::read(&out).unwrap();
     assert_eq!(image.width, 40);
     assert!(image.height > 30, "the legend sits under the image");
