@@ -121,18 +121,21 @@ after(async () => {
 /// Waits until viewer `name`'s status satisfies `condition`, failing at once on an error it does not expect.
 async function until(name, condition, what, { arg = null, timeout = COMPILE_MS } = {}) {
   const source = condition.toString();
+  let met;
   try {
-    await page.waitForFunction(([name, source, arg]) => {
+    // The status that met the condition, not one read after it: a lost device may be restored
+    // between the two.
+    met = await page.waitForFunction(([name, source, arg]) => {
       const status = window.viewers[name].status;
       if (status == null) return false;
       if (status.error != null && !source.includes("error")) throw new Error(status.error);
-      return new Function("s", "arg", `return (${source})(s, arg)`)(status, arg);
+      return new Function("s", "arg", `return (${source})(s, arg)`)(status, arg) && JSON.stringify(status);
     }, [name, source, arg], { timeout, polling: 100 });
   } catch (error) {
     const now = await page.evaluate((name) => JSON.stringify(window.viewers[name].status), name);
     throw new Error(`waiting for ${what}: ${error.message.split("\n")[0]}; status ${now}; errors ${page.errors}`);
   }
-  return page.evaluate((name) => ({ ...window.viewers[name].status }), name);
+  return JSON.parse(await met.jsonValue());
 }
 
 const SETTLED = (s) => s.frames >= 2 && !s.busy && s.samples >= s.spp && !s.lost;

@@ -67,16 +67,18 @@ async function until(page, condition, what, { arg = null, timeout = COMPILE_MS }
   const expectsError = source.includes("error");
   let status;
   try {
-    await page.waitForFunction(
+    // The status that met the condition (or showed the error), not one read after it.
+    const met = await page.waitForFunction(
       ([source, expectsError, arg]) => {
         const status = window.raypipeStatus;
         if (status == null) return false;
-        return (status.error != null && !expectsError) || new Function("s", "arg", `return (${source})(s, arg)`)(status, arg);
+        const done = (status.error != null && !expectsError) || new Function("s", "arg", `return (${source})(s, arg)`)(status, arg);
+        return done && JSON.stringify(status);
       },
       [source, expectsError, arg],
       { timeout, polling: 100 },
     );
-    status = await page.evaluate(() => ({ ...window.raypipeStatus }));
+    status = JSON.parse(await met.jsonValue());
   } catch (error) {
     const now = await page.evaluate(() => JSON.stringify(window.raypipeStatus));
     throw new Error(`waiting for ${what}: ${error.message.split("\n")[0]}; status ${now}; errors ${page.errors}`);
