@@ -39,7 +39,7 @@ if [ -x web/node_modules/.bin/wasm-opt ]; then
 else
   echo "web/node_modules/.bin/wasm-opt is missing (npm ci --prefix web): the module stays unshrunk, $(stat -c %s "$wasm") bytes"
 fi
-cp web/package/raypipe.js web/package/element.js web/package/gestures.js web/package/raypipe.d.ts "$out"/
+cp web/package/raypipe.js web/package/element.js web/package/fetch.js web/package/gestures.js web/package/raypipe.d.ts "$out"/
 if [ $page = 1 ]; then
   cp web/index.html web/main.js web/style.css "$out"/
   echo "built the page in $out"

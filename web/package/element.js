@@ -3,6 +3,7 @@
 // exposure, tone-mapping, camera-controls, alt, poster, loading), with raypipe's own beside them
 // (accel, backend, render-scale). The canvas inside draws at the element's size on the page times
 // the device pixel ratio times render-scale, and follows it as it changes.
+import { fetchFile } from "./fetch.js";
 import { createViewer } from "./raypipe.js";
 
 /// model-viewer's tone-mapping names, as raypipe's tone maps (`tonemap`).
@@ -389,14 +390,13 @@ export class RaypipeViewerElement extends HTMLElement {
     const src = this.getAttribute("src");
     this.#asked = src;
     if (!src) return;
-    let bytes;
+    let bytes, name;
     try {
-      bytes = await this.#fetch(src);
+      ({ bytes, name } = await fetchFile(src, (loaded, total) => this.#progress("fetch", loaded, total)));
     } catch (error) {
       return this.#asked === src && this.#fail(error.message);
     }
     if (this.#asked !== src || !this.#viewer) return;
-    const name = decodeURIComponent(new URL(src, document.baseURI).pathname.split("/").pop() || src);
     this.#progress("build", 0, 1);
     try {
       await this.#viewer.load(bytes, name);
@@ -421,36 +421,6 @@ export class RaypipeViewerElement extends HTMLElement {
     } catch (error) {
       this.#fail(error.message);
     }
-  }
-
-  /// The file's bytes, with a `progress` event as they arrive.
-  async #fetch(src) {
-    const url = new URL(src, document.baseURI);
-    let response;
-    try {
-      response = await fetch(url);
-      if (!response.ok) throw new Error(`HTTP ${response.status} ${response.statusText}`.trimEnd());
-    } catch (error) {
-      throw new Error(`${src}: cannot fetch: ${error.message}`);
-    }
-    const total = Number(response.headers.get("content-length")) || 0;
-    const reader = response.body.getReader();
-    const chunks = [];
-    let loaded = 0;
-    for (;;) {
-      const { done, value } = await reader.read();
-      if (done) break;
-      chunks.push(value);
-      loaded += value.length;
-      this.#progress("fetch", loaded, total);
-    }
-    const bytes = new Uint8Array(loaded);
-    let at = 0;
-    for (const chunk of chunks) {
-      bytes.set(chunk, at);
-      at += chunk.length;
-    }
-    return bytes;
   }
 
   #progress(phase, loaded, total) {

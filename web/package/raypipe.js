@@ -8,6 +8,7 @@
 // The tracer is the wasm module beside this file (raypipe_web.js, raypipe_web_bg.wasm); each viewer
 // has its own adapter and device. Types: raypipe.d.ts.
 import { RaypipeViewerElement } from "./element.js";
+import { fetchFile } from "./fetch.js";
 import { Gestures } from "./gestures.js";
 import init, { controls, start } from "./raypipe_web.js";
 
@@ -153,16 +154,14 @@ export class Viewer extends EventTarget {
     const inner = this.#alive();
     let bytes;
     if (typeof source === "string" || source instanceof URL) {
-      const url = new URL(source, document.baseURI);
-      let response;
+      let file;
       try {
-        response = await fetch(url);
-        if (!response.ok) throw new Error(`HTTP ${response.status} ${response.statusText}`.trimEnd());
+        file = await fetchFile(source);
       } catch (error) {
-        return this.#refuse(`${source}: cannot fetch: ${error.message}`);
+        return this.#refuse(error.message);
       }
-      name ??= decodeURIComponent(new URL(response.url || url).pathname.split("/").pop() || String(source));
-      bytes = new Uint8Array(await response.arrayBuffer());
+      name ??= file.name;
+      bytes = file.bytes;
     } else if (typeof Blob !== "undefined" && source instanceof Blob) {
       name ??= source.name;
       bytes = new Uint8Array(await source.arrayBuffer());

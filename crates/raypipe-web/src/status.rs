@@ -65,8 +65,18 @@ pub struct StatusCamera {
 }
 
 impl StatusCamera {
+    /// The camera's eye, target, up and field of view.
+    pub fn of(camera: &raypipe::scene::Camera) -> Self {
+        Self {
+            eye: camera.eye.to_array(),
+            target: camera.target.to_array(),
+            up: camera.up.to_array(),
+            fov: camera.fov_degrees,
+        }
+    }
+
     /// As JavaScript reads it: `{ eye, target, up, fov }` (`ViewerCamera` in raypipe.d.ts).
-    fn value(&self) -> Value<'static> {
+    pub fn value(&self) -> Value<'static> {
         let numbers = |v: [f32; 3]| Value::Numbers(v.map(f64::from).to_vec());
         Value::Record(vec![
             ("eye", numbers(self.eye)),

@@ -406,15 +406,7 @@ impl Page {
             frame_ms: player.rate.frame_ms,
             build_ms: player.build_ms,
             first_frame_ms: self.first_frame_ms,
-            camera: {
-                let camera = player.camera.camera;
-                StatusCamera {
-                    eye: camera.eye.to_array(),
-                    target: camera.target.to_array(),
-                    up: camera.up.to_array(),
-                    fov: camera.fov_degrees,
-                }
-            },
+            camera: StatusCamera::of(&player.camera.camera),
         }
     }
 
@@ -577,7 +569,7 @@ fn record<'a>(values: impl IntoIterator<Item = (&'static str, Value<'a>)>) -> Js
     object.into()
 }
 
-fn js_value(value: Value) -> JsValue {
+pub(super) fn js_value(value: Value) -> JsValue {
     match value {
         Value::Number(n) => JsValue::from(n),
         Value::Text(text) => JsValue::from(text),

@@ -1,8 +1,9 @@
 //! The viewer's JavaScript API (`Viewer`'s methods, which the page's controls and the npm package
 //! call): settings, files, the camera's drags and keys, screenshots, status and disposal.
 
-use super::{GpuState, Page, Pending, Settle, Viewer, builtin_scene, settle};
+use super::{GpuState, Page, Pending, Settle, Viewer, builtin_scene, js_value, settle};
 use crate::params::{MAX_SIDE, Setting};
+use crate::status::StatusCamera;
 use raypipe::scene::environment::is_environment_file;
 use raypipe::scene::model::ModelOptions;
 use raypipe::scene::{Environment, Scene};
@@ -247,23 +248,7 @@ impl Viewer {
     /// numbers, the vertical field of view in degrees).
     #[wasm_bindgen(getter)]
     pub fn camera(&self) -> JsValue {
-        let camera = self.page.borrow().player.camera.camera;
-        let object = js_sys::Object::new();
-        let vector = |v: glam::Vec3| {
-            v.to_array()
-                .into_iter()
-                .map(|x| JsValue::from(x as f64))
-                .collect::<js_sys::Array>()
-        };
-        for (key, value) in [
-            ("eye", vector(camera.eye).into()),
-            ("target", vector(camera.target).into()),
-            ("up", vector(camera.up).into()),
-            ("fov", JsValue::from(camera.fov_degrees as f64)),
-        ] {
-            let _ = js_sys::Reflect::set(&object, &key.into(), &value);
-        }
-        object.into()
+        js_value(StatusCamera::of(&self.page.borrow().player.camera.camera).value())
     }
 
     /// Wheel steps towards the target (negative: away).
