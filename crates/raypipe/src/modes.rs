@@ -74,6 +74,35 @@ impl Accel {
     pub const BVH: [Accel; 4] = [Accel::Stack, Accel::Stackless, Accel::Threaded, Accel::Wide];
 }
 
+/// How light is carried from a hit to the eye.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Integrator {
+    /// The paper's: direct light with hard shadows from the lights, an ambient term, and the
+    /// branches of mirrors and glass (a glossy reflection drawn per sample), to a fixed depth.
+    #[default]
+    Whitted,
+    /// Unidirectional path tracing: a BSDF sample per bounce, the lights and the environment
+    /// sampled at every vertex and weighted by multiple importance sampling, Russian roulette; no
+    /// ambient term.
+    Path,
+}
+
+impl_choice!(
+    Integrator,
+    [
+        (
+            Whitted,
+            "whitted",
+            "the paper's: direct light, hard shadows, an ambient term, mirrors and glass"
+        ),
+        (
+            Path,
+            "path",
+            "path tracing: light, environment and emitters sampled at every bounce, weighted by MIS"
+        ),
+    ]
+);
+
 /// The order the driver's bottom-level structures hold their primitives in, with
 /// [`Accel::RayQuery`]: a driver whose builder keeps the order it is given (lavapipe's) builds its
 /// tree from it.

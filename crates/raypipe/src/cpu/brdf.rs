@@ -26,7 +26,7 @@ fn pow5(x: f32) -> f32 {
     x2 * x2 * x
 }
 
-fn max3(v: Vec3) -> f32 {
+pub(crate) fn max3(v: Vec3) -> f32 {
     v.x.max(v.y.max(v.z))
 }
 
@@ -47,13 +47,13 @@ pub(crate) fn smith_visibility(n_dot_l: f32, n_dot_v: f32, alpha: f32) -> f32 {
 }
 
 /// Smith's masking G1 of one direction.
-fn smith_g1(n_dot_x: f32, alpha: f32) -> f32 {
+pub(crate) fn smith_g1(n_dot_x: f32, alpha: f32) -> f32 {
     let a2 = alpha * alpha;
     2.0 * n_dot_x / (n_dot_x + (a2 + (1.0 - a2) * n_dot_x * n_dot_x).sqrt())
 }
 
 /// Smith's height-correlated masking-shadowing G2.
-fn smith_g2(n_dot_l: f32, n_dot_v: f32, alpha: f32) -> f32 {
+pub(crate) fn smith_g2(n_dot_l: f32, n_dot_v: f32, alpha: f32) -> f32 {
     4.0 * n_dot_l * n_dot_v * smith_visibility(n_dot_l, n_dot_v, alpha)
 }
 

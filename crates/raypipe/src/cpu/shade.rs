@@ -281,7 +281,7 @@ pub(crate) fn light_arrival(light: &GpuLight, position: Vec3) -> LightArrival {
 
 /// Whether a light's shadow ray is worth casting: the paper's lights always are (their ray
 /// counts stay), a glTF light where it gives anything.
-fn lit(light: &GpuLight, arrival: &LightArrival) -> bool {
+pub(crate) fn lit(light: &GpuLight, arrival: &LightArrival) -> bool {
     light.kind == LIGHT_CONSTANT || arrival.irradiance.max_element() > 0.0
 }
 

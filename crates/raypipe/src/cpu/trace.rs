@@ -14,7 +14,8 @@ use super::shade::{
 pub use crate::constants::T_FAR;
 use crate::constants::{MAX_BLEND_LAYERS, MIN_FOOTPRINT_COSINE, MIN_WEIGHT, R2_STEP, ray_stack_size};
 use crate::error::MissingBvh;
-use crate::modes::Accel;
+use crate::modes::{Accel, Integrator};
+use super::sampling::path_seed;
 use crate::records::GpuMaterial;
 use crate::records::constants::{MODEL_GLTF, MODEL_UNLIT};
 use crate::records::{PackedBvh, PackedScene};
@@ -73,7 +74,11 @@ pub struct Tracer<'a> {
     seed: u32,
     draws: u32,
     /// Surfaces of blended triangles the pixel's rays went on behind, at most MAX_BLEND_LAYERS.
-    blend_layers: u32,
+    pub(crate) blend_layers: u32,
+    /// The path integrator's pixel seed for the epoch, and the sample's index (`path_seed`,
+    /// `path_sample`).
+    pub(crate) path_seed: u32,
+    pub(crate) path_sample: u32,
 }
 
 impl<'a> Tracer<'a> {
@@ -91,6 +96,8 @@ impl<'a> Tracer<'a> {
             seed: 0,
             draws: 0,
             blend_layers: 0,
+            path_seed: 0,
+            path_sample: 0,
         })
     }
 
@@ -369,15 +376,24 @@ impl<'a> Tracer<'a> {
         [(x >> 8) as f32, (y >> 8) as f32].map(|n| n * (1.0 / 16_777_216.0))
     }
 
-    /// Traces sample `sample` of `pixel` (the shader's `sample_pixel`): its camera ray, and the
-    /// random numbers of its sampled reflections seeded by both.
+    /// Traces sample `sample` of `pixel` (the shader's `sample_pixel`) with the scene's integrator:
+    /// its camera ray, and the random numbers of its sampled reflections seeded by both (and, for
+    /// the path integrator, by the scene's epoch).
     pub fn trace_sample(&mut self, pixel: UVec2, sample: u32) -> PixelTrace {
         self.seed = sample_seed(pixel, sample);
         self.draws = 0;
         self.blend_layers = 0;
         self.ray_count = 0;
         let position = pixel.as_vec2() + sample_offset(pixel, sample);
-        self.trace_pixel(self.camera_ray(position))
+        let primary = self.camera_ray(position);
+        match self.scene.integrator {
+            Integrator::Whitted => self.trace_pixel(primary),
+            Integrator::Path => {
+                self.path_seed = path_seed(pixel, self.scene.path.globals.epoch);
+                self.path_sample = sample;
+                self.trace_path(primary)
+            }
+        }
     }
 
     /// A reflected branch is traced next; its refracted sibling waits on the stack. A ray that goes
@@ -478,7 +494,7 @@ pub(crate) fn pixel_spread(scene: &PackedScene) -> f32 {
 /// ray's side; `cone_reflected`): across the cone's width the normal turns by curvature × width,
 /// and the reflected rays by twice that (Akenine-Möller et al., "Improved Shader and Texture Level
 /// of Detail Using Ray Cones", 2021).
-fn cone_reflected(cone: Vec2, curvature: f32) -> Vec2 {
+pub(crate) fn cone_reflected(cone: Vec2, curvature: f32) -> Vec2 {
     Vec2::new(cone.x, cone.y + 2.0 * curvature * cone.x)
 }
 

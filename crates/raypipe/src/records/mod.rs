@@ -13,10 +13,12 @@ pub(crate) mod constants;
 #[cfg(feature = "internals")]
 pub mod layouts;
 pub mod packed;
+pub mod path;
 pub mod posed;
 pub mod texels;
 
 pub use packed::{PackedBvh, PackedScene};
+pub use path::{GpuPathGlobals, PathTables};
 pub use posed::{PoseOn, PoseStep, PosedScene, Poses};
 pub use texels::{GpuRecord, MAX_TEXEL_INTEGER, ShadingTexel, TexelFormat, TexturePixels};
 

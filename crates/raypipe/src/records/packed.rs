@@ -11,7 +11,8 @@ use crate::bvh::threaded::{GpuThreadedNode, QuantizationFrame, ThreadedTree, thr
 use crate::bvh::wide::{GpuWideTexel, WideTree, leaf_texels, wide_texels};
 use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
-use crate::modes::Builder;
+use crate::modes::{Builder, Integrator};
+use crate::records::path::PathTables;
 use crate::records::constants::{
     ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, ATTRIBUTE_UV0, ATTRIBUTE_UV1, LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT,
     LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, MODEL_UNLIT, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK,
@@ -114,6 +115,11 @@ pub struct PackedScene {
     pub globals: GpuGlobals,
     /// The bounce loop's depth.
     pub max_depth: u32,
+    /// How light is carried.
+    pub integrator: Integrator,
+    /// What the path integrator reads beside the records: its parameters and the environment's
+    /// sampling table (made for every scene, so that either integrator can trace it).
+    pub path: PathTables,
     /// The spheres, in the BVH's order once built.
     pub spheres: Vec<GpuSphere>,
     /// The triangles, in the BVH's order once built.
@@ -227,6 +233,8 @@ impl PackedScene {
         Ok(Self {
             globals,
             max_depth: s.max_depth,
+            integrator: s.integrator,
+            path: PathTables::new(scene.environment.as_ref()),
             spheres,
             triangles,
             triangle_normals,

@@ -8,7 +8,7 @@ use super::model::{DEFAULT_CREASE_DEGREES, MeshAs, Normals, Placement, SphereCou
 use super::{Camera, Checker, Environment, Light, Material, Plane, RenderSettings, Scene, Sphere, unit_vector};
 use crate::choice::Choice;
 use crate::error::{Element, InputError};
-use crate::modes::Accel;
+use crate::modes::{Accel, Integrator};
 use glam::Vec3;
 use serde::Deserialize;
 use std::collections::{BTreeMap, HashMap};
@@ -51,6 +51,8 @@ struct RenderDef {
     ambient: Option<f32>,
     /// An acceleration mode's name (`Accel`'s).
     accel: Option<Spanned<String>>,
+    /// An integrator's name (`Integrator`'s).
+    integrator: Option<Spanned<String>>,
     /// An equirectangular .hdr or .exr, relative to the scene file.
     environment: Option<Spanned<String>>,
     environment_rotation: Option<Spanned<f32>>,
@@ -196,6 +198,7 @@ fn set_view(scene: &mut Scene, def: &SceneDef) {
             background: r.background.map_or(d.background, vec3),
             ambient: r.ambient.unwrap_or(d.ambient),
             accel: None,
+            integrator: d.integrator,
         };
     }
 
@@ -230,6 +233,16 @@ fn build(def: SceneDef, text: &str, base: &Path) -> Result<Scene, InputError> {
                     format!("accel must be one of {} (got \"{name}\")", Accel::names()),
                 )
             })?);
+        }
+        if let Some(integrator) = &render.integrator {
+            let name = integrator.get_ref();
+            tables.scene.settings.integrator = Integrator::from_name(name).ok_or_else(|| {
+                at_element(
+                    line(integrator.span()),
+                    Element::Render,
+                    format!("integrator must be one of {} (got \"{name}\")", Integrator::names()),
+                )
+            })?;
         }
     }
     let scene = tables.scene;
@@ -499,6 +512,17 @@ mod tests {
         assert_eq!(scene.spheres.len(), 1);
         assert_eq!(scene.materials.len(), 1, "the default material is added on use");
         assert_eq!(scene.settings.accel, None, "no accel: the program's default");
+    }
+
+    #[test]
+    fn render_integrator_names_one_or_is_refused_on_its_line() {
+        use crate::modes::Integrator;
+        assert_eq!(parse("").unwrap().settings.integrator, Integrator::Whitted);
+        let scene = parse("[render]\nintegrator = \"path\"\n").unwrap();
+        assert_eq!(scene.settings.integrator, Integrator::Path);
+        let e = parse("[render]\nwidth = 64\nintegrator = \"bidirectional\"\n").unwrap_err();
+        let text = e.to_string();
+        assert!(text.starts_with("3: render: integrator must be one of"), "{text}");
     }
 
     #[test]

@@ -26,7 +26,7 @@ pub use texture::{Filter, TexelFilter, Texture, Wrap};
 
 use crate::choice::impl_choice;
 use crate::error::{Element, InputError};
-use crate::modes::Accel;
+use crate::modes::{Accel, Integrator};
 use glam::{Quat, Vec2, Vec3, Vec4};
 use material::validate_material;
 
@@ -92,6 +92,9 @@ pub struct RenderSettings {
     /// How the scene asks to be traced (TOML `[render] accel`): a command line's `--accel`
     /// overrides it; with neither, the program's default.
     pub accel: Option<Accel>,
+    /// How light is carried (TOML `[render] integrator`): Whitted's for the paper's scenes, the
+    /// path tracer for glTF files; a command line's `--integrator` overrides it.
+    pub integrator: Integrator,
 }
 
 impl Default for RenderSettings {
@@ -103,6 +106,7 @@ impl Default for RenderSettings {
             background: Vec3::new(0.05, 0.05, 0.1),
             ambient: 0.1,
             accel: None,
+            integrator: Integrator::Whitted,
         }
     }
 }

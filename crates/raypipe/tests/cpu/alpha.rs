@@ -49,6 +49,7 @@ fn quad_over_floor(quad: Material, texels: [[f32; 4]; 2], facing_up: bool) -> Sc
             background: Vec3::ZERO,
             ambient: 0.0,
             accel: None,
+            integrator: Default::default(),
         },
         lights: vec![Light {
             position: Vec3::ZERO,

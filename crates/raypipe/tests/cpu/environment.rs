@@ -51,6 +51,7 @@ fn sphere_scene(material: Material, eye: Vec3, size: u32, environment: Environme
             background: Vec3::new(9.0, 9.0, 9.0),
             ambient: 0.0,
             accel: None,
+            integrator: Default::default(),
         },
         materials: vec![material],
         spheres: vec![Sphere {

@@ -42,6 +42,7 @@ fn wall(texture: Texture, uv: &dyn Fn(Vec3) -> Vec2, distance: f32) -> Scene {
             background: Vec3::ZERO,
             ambient: 0.0,
             accel: None,
+            integrator: Default::default(),
         },
         materials: vec![unlit_textured()],
         textures: vec![texture],

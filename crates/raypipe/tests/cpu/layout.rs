@@ -6,7 +6,7 @@ use raypipe::bvh::morton::MortonBits;
 use raypipe::gpu::builders::lbvh::{BuildVariant, SiblingBoxes, SortRanking};
 use raypipe::gpu::trace::shader::{SceneFeatures, ShaderConfig, compose};
 use raypipe::gpu::trace::upload::{TEXELS_PER_ROW, record_arrays};
-use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Integrator, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::records::layouts::{LAYOUTS, StructLayout};
 use raypipe::scene::{Scene, builtin};
@@ -42,6 +42,45 @@ fn host_layouts() -> Vec<&'static StructLayout> {
     .into_iter()
     .flatten()
     .collect()
+}
+
+/// The path integrator's parameters, declared in its own file (`sampling.wgsl`), which only a path
+/// tracer's source holds.
+#[test]
+fn the_path_parameters_match_their_wgsl_twin() {
+    let scene = PackedScene::new(&builtin::whitted()).unwrap();
+    let source = compose(&ShaderConfig {
+        pipeline: Pipeline::Fragment,
+        memory: MemoryMode::Storage,
+        accel: Accel::Stack,
+        integrator: Integrator::Path,
+        max_depth: 5,
+        bvh_depth: 12,
+        arrays: &record_arrays(&scene, Accel::Stack),
+        texels_per_row: TEXELS_PER_ROW,
+        write_cost: false,
+        features: SceneFeatures::ALL,
+    });
+    let module = parse(&source);
+    for host in raypipe::records::path::LAYOUTS {
+        let (members, span) = module
+            .types
+            .iter()
+            .find_map(|(_, ty)| match (&ty.name, &ty.inner) {
+                (Some(name), naga::TypeInner::Struct { members, span }) if name == host.wgsl_name => {
+                    Some((members, *span))
+                }
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("{} is missing from the path tracer's source", host.wgsl_name));
+        assert_eq!(span as usize, host.size, "{}: sizes differ", host.wgsl_name);
+        let wgsl: Vec<(String, usize)> = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap(), m.offset as usize))
+            .collect();
+        let rust: Vec<(String, usize)> = host.members.iter().map(|(n, o)| (n.to_string(), *o)).collect();
+        assert_eq!(wgsl, rust, "{}: members (name, offset) differ", host.wgsl_name);
+    }
 }
 
 #[test]
@@ -97,12 +136,16 @@ fn every_shader_variant_validates() {
             .iter()
             .flat_map(|p| MemoryMode::ALL.iter().map(move |m| (p, m)))
         {
-            for &accel in Accel::ALL {
+            for (&accel, &integrator) in Accel::ALL
+                .iter()
+                .flat_map(|a| Integrator::ALL.iter().map(move |i| (a, i)))
+            {
                 for max_depth in [0, 5] {
                     let source = compose(&ShaderConfig {
                         pipeline,
                         memory,
                         accel,
+                        integrator,
                         max_depth,
                         bvh_depth: 12,
                         arrays: &record_arrays(scene, accel),
@@ -121,7 +164,7 @@ fn every_shader_variant_validates() {
                         .validate(&module)
                         .unwrap_or_else(|e| {
                             panic!(
-                                "{pipeline:?}, {memory:?}, {accel:?}, depth {max_depth}: {}",
+                                "{pipeline:?}, {memory:?}, {accel:?}, {integrator:?}, depth {max_depth}: {}",
                                 e.emit_to_string(&source)
                             )
                         });
@@ -189,11 +232,15 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
     let count = storage_buffers(&raypipe::gpu::builders::wide_collapse::shader_source());
     assert!(count <= 8, "the wide collapse binds {count} storage buffers");
     let scene = PackedScene::new(&builtin::whitted()).unwrap();
-    for &accel in Accel::ALL {
+    for (&accel, &integrator) in Accel::ALL
+        .iter()
+        .flat_map(|a| Integrator::ALL.iter().map(move |i| (a, i)))
+    {
         let source = compose(&ShaderConfig {
             pipeline: Pipeline::Fragment,
             memory: MemoryMode::Storage,
             accel,
+            integrator,
             max_depth: 5,
             bvh_depth: 12,
             arrays: &record_arrays(&scene, accel),
@@ -204,7 +251,7 @@ fn every_pipeline_binds_at_most_8_storage_buffers() {
         let count = storage_buffers(&source);
         assert!(
             count <= 8,
-            "the {accel:?} fragment shader binds {count} storage buffers"
+            "the {accel:?} {integrator:?} fragment shader binds {count} storage buffers"
         );
     }
 }
@@ -274,6 +321,7 @@ fn shared_numbers() -> Vec<(String, String, Vec<Shared>)> {
         pipeline: Pipeline::Compute,
         memory: MemoryMode::Texture,
         accel: Accel::Threaded,
+        integrator: Integrator::Path,
         max_depth: 5,
         bvh_depth: 1,
         arrays: &record_arrays(&PackedScene::new(&builtin::whitted()).unwrap(), Accel::Threaded),

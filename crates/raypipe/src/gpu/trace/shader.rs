@@ -8,7 +8,7 @@
 use crate::bvh::layout::NONE;
 use crate::constants::ray_stack_size;
 use crate::gpu::preamble::records_source;
-use crate::modes::{Accel, MemoryMode, Pipeline};
+use crate::modes::{Accel, Integrator, MemoryMode, Pipeline};
 use crate::records::TexelFormat;
 use crate::records::constants::{
     MODEL_GLTF, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK, TRIANGLE_SINGLE_SIDED,
@@ -36,6 +36,11 @@ const BRDF: &str = include_str!("../shaders/brdf.wgsl");
 const ENVIRONMENT: &str = include_str!("../shaders/environment.wgsl");
 const SHADE: &str = include_str!("../shaders/shade.wgsl");
 const TRACE: &str = include_str!("../shaders/trace.wgsl");
+const WHITTED: &str = include_str!("../shaders/whitted.wgsl");
+const SAMPLING: &str = include_str!("../shaders/sampling.wgsl");
+const BSDF: &str = include_str!("../shaders/bsdf.wgsl");
+const PATH: &str = include_str!("../shaders/path.wgsl");
+const PIXEL: &str = include_str!("../shaders/pixel.wgsl");
 
 /// The scene's record arrays, each read by the shader through `load_<name>(i)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -124,6 +129,12 @@ pub struct RecordArray {
 /// whatever the memory mode: images are what texture units are for.
 pub(crate) fn texture_pixels_binding(arrays: &[RecordArray]) -> u32 {
     arrays.iter().map(|a| a.binding).max().unwrap_or(0) + 1
+}
+
+/// Where the path integrator's two bindings start (its parameters, then its tables' texels): after
+/// the ray queries' two, which a scene may or may not use.
+pub(crate) fn path_binding(arrays: &[RecordArray]) -> u32 {
+    ray_query_binding(arrays) + 2
 }
 
 /// Where ray queries' two bindings start ([`crate::gpu::builders::rayquery::AccelStructures`]): after the
@@ -223,6 +234,8 @@ pub struct ShaderConfig<'a> {
     pub memory: MemoryMode,
     /// The walk.
     pub accel: Accel,
+    /// How light is carried: the file of the bounce loop.
+    pub integrator: Integrator,
     /// The bounce loop's depth.
     pub max_depth: u32,
     /// Longest root-to-leaf path of the BVH: the traversal stack's size.
@@ -238,7 +251,7 @@ pub struct ShaderConfig<'a> {
 }
 
 /// The tracer's WGSL for `config`: the preamble, the record loaders of its memory mode, the walk,
-/// shading and the entry point.
+/// shading, the integrator's bounce loop and the entry point.
 pub fn compose(config: &ShaderConfig) -> String {
     let mut source = String::new();
     let w = &mut source;
@@ -298,6 +311,12 @@ pub fn compose(config: &ShaderConfig) -> String {
         )
         .unwrap();
     }
+    if config.integrator == Integrator::Path {
+        let first = path_binding(config.arrays);
+        writeln!(w, "const PATH_TEXELS_PER_ROW: u32 = {}u;", config.texels_per_row).unwrap();
+        writeln!(w, "@group(0) @binding({first}) var<uniform> path_globals: PathGlobals;").unwrap();
+        writeln!(w, "@group(0) @binding({}) var path_texels: texture_2d<f32>;", first + 1).unwrap();
+    }
     for array in config.arrays {
         let (name, ty, binding) = (array.kind.name(), array.wgsl_type, array.binding);
         match config.memory {
@@ -355,18 +374,15 @@ pub fn compose(config: &ShaderConfig) -> String {
         Pipeline::Fragment => FULLSCREEN,
         Pipeline::Compute => COMPUTE,
     };
-    for part in [
-        TEXELS,
-        INTERSECT,
-        MAPS,
-        ADMIT,
-        accel,
-        BRDF,
-        ENVIRONMENT,
-        SHADE,
-        TRACE,
-        entry_points,
-    ] {
+    let integrator: &[&str] = match config.integrator {
+        Integrator::Whitted => &[WHITTED],
+        Integrator::Path => &[SAMPLING, BSDF, PATH],
+    };
+    let parts = [TEXELS, INTERSECT, MAPS, ADMIT, accel, BRDF, ENVIRONMENT, SHADE, TRACE]
+        .into_iter()
+        .chain(integrator.iter().copied())
+        .chain([PIXEL, entry_points]);
+    for part in parts {
         source.push('\n');
         source.push_str(part);
     }

@@ -1,13 +1,13 @@
 //! Bringing the scene to the shader: uniform buffers, storage buffers, or textures (rgba32float, or
 //! rgba32uint for records of integers only).
 
-use super::shader::{RecordArray, RecordKind, texture_pixels_binding};
+use super::shader::{RecordArray, RecordKind, path_binding, texture_pixels_binding};
 use crate::bvh::layout::GpuNode;
 use crate::bvh::threaded::GpuThreadedNode;
 use crate::bvh::wide::GpuWideTexel;
 use crate::gpu::builders::shared::SharedBuffers;
 use crate::gpu::{Capacity, GpuContext, GpuError};
-use crate::modes::{Accel, MemoryMode};
+use crate::modes::{Accel, Integrator, MemoryMode};
 use crate::records::{GpuRecord, MAX_TEXEL_INTEGER, PackedScene, TexelFormat, TexturePixels};
 use wgpu::util::DeviceExt;
 
@@ -25,6 +25,16 @@ pub struct SceneResources {
     pub texels_per_row: u32,
     /// Every texture's texels (rgba16float, `texels_per_row` wide), bound after the arrays.
     texture_pixels: wgpu::TextureView,
+    /// With the path integrator: its parameters and tables, bound after the ray queries' place.
+    pub path: Option<PathResources>,
+}
+
+/// The path integrator's parameters (a uniform buffer the renderer rewrites with each epoch) and
+/// tables (rgba32float, `texels_per_row` wide).
+pub struct PathResources {
+    /// The parameters, `PathGlobals`.
+    pub globals: wgpu::Buffer,
+    texels: wgpu::TextureView,
 }
 
 enum Resource {
@@ -53,6 +63,17 @@ impl SceneResources {
             binding: texture_pixels_binding(&self.arrays),
             resource: wgpu::BindingResource::TextureView(&self.texture_pixels),
         });
+        if let Some(path) = &self.path {
+            let first = path_binding(&self.arrays);
+            entries.push(wgpu::BindGroupEntry {
+                binding: first,
+                resource: path.globals.as_entire_binding(),
+            });
+            entries.push(wgpu::BindGroupEntry {
+                binding: first + 1,
+                resource: wgpu::BindingResource::TextureView(&path.texels),
+            });
+        }
         entries
     }
 
@@ -128,6 +149,7 @@ pub fn upload(
         resources: Vec::new(),
         texels_per_row,
         texture_pixels: upload_texture_pixels(ctx, &scene.texture_pixels, texels_per_row)?,
+        path: None,
     };
     for (index, (kind, records)) in scene_records(scene, accel).into_iter().enumerate() {
         let array = record_array(index, kind, records);
@@ -165,7 +187,48 @@ pub fn upload(
         ty: texture_binding(TexelFormat::Float),
         count: None,
     });
+    if scene.integrator == Integrator::Path {
+        let first = path_binding(&out.arrays);
+        out.layout_entries.push(wgpu::BindGroupLayoutEntry {
+            binding: first,
+            visibility: stage,
+            ty: buffer_binding(true),
+            count: None,
+        });
+        out.layout_entries.push(wgpu::BindGroupLayoutEntry {
+            binding: first + 1,
+            visibility: stage,
+            ty: texture_binding(TexelFormat::Float),
+            count: None,
+        });
+        out.path = Some(upload_path_tables(ctx, scene, texels_per_row)?);
+    }
     Ok(out)
+}
+
+/// The path integrator's parameters and its tables' texels (one texel where it has none: a
+/// binding cannot be empty).
+fn upload_path_tables(ctx: &GpuContext, scene: &PackedScene, texels_per_row: u32) -> Result<PathResources, GpuError> {
+    let globals = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("path globals"),
+        contents: bytemuck::bytes_of(&scene.path.globals),
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+    });
+    let table = &scene.path.texels;
+    let rows = texture_rows(ctx, ("path table texel", table.len()), table.len(), texels_per_row)?;
+    let mut texels = table.clone();
+    texels.resize(rows * texels_per_row as usize, [0.0; 4]);
+    let texture = texel_texture(
+        ctx,
+        "path tables",
+        wgpu::TextureFormat::Rgba32Float,
+        (texels_per_row, rows as u32),
+        bytemuck::cast_slice(&texels),
+    );
+    Ok(PathResources {
+        globals,
+        texels: texture.create_view(&Default::default()),
+    })
 }
 
 /// A record array as a uniform or storage buffer, within the adapter's binding size.

@@ -34,7 +34,7 @@ use crate::image::Frame;
 use crate::modes::Count;
 use crate::modes::{Accel, BlasOrder, MemoryMode, Pipeline};
 use crate::records::packed::MovedRecords;
-use crate::records::{GpuCamera, GpuGlobals, PackedScene};
+use crate::records::{GpuCamera, GpuGlobals, GpuPathGlobals, PackedScene};
 use crate::scene::Camera;
 use wgpu::util::DeviceExt;
 
@@ -105,6 +105,11 @@ pub struct Renderer {
     /// for ([`Renderer::rebuild_structures`]).
     structures_stale: bool,
     timer: Option<PassTimestamps>,
+    /// Accumulations started so far: the path integrator's epoch is the scene's plus those before
+    /// the current one.
+    accumulations: u32,
+    /// The scene's path epoch, which the first accumulation takes.
+    path_epoch: u32,
 }
 
 impl Renderer {
@@ -238,6 +243,7 @@ impl Renderer {
                 pipeline,
                 memory,
                 accel,
+                integrator: scene.integrator,
                 max_depth: scene.max_depth,
                 bvh_depth,
                 arrays: &resources.arrays,
@@ -276,6 +282,8 @@ impl Renderer {
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
+                accumulations: 0,
+                path_epoch: scene.path.globals.epoch,
             })
         })
         .await
@@ -369,6 +377,19 @@ impl Renderer {
             ..self.globals.camera
         });
         Ok(())
+    }
+
+    /// With the path integrator, a new accumulation's epoch, written before its first sample: the
+    /// scene's epoch plus the accumulations before it, so that restarted samples draw new numbers.
+    fn write_epoch(&mut self) {
+        if let Some(path) = &self.resources.path {
+            let epoch = self.path_epoch.wrapping_add(self.accumulations);
+            let offset = std::mem::offset_of!(GpuPathGlobals, epoch) as u64;
+            self.ctx
+                .queue
+                .write_buffer(&path.globals, offset, bytemuck::bytes_of(&epoch));
+        }
+        self.accumulations = self.accumulations.wrapping_add(1);
     }
 
     fn write_camera(&mut self, camera: GpuCamera) {

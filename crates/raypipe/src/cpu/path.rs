@@ -1,0 +1,209 @@
+//! The path integrator, one path per sample: the twin of `shaders/path.wgsl`, which says what it
+//! does.
+
+use super::brdf::max3;
+use super::bsdf::{Lobes, path_lobes, punctual_response, reflection_brdf, reflection_pdf, sample_bsdf};
+use super::environment::escaped_radiance;
+use super::intersect::{HitKind, Ray, box_tests, reset_box_tests, v3};
+use super::sampling::{environment_pdf, path_random, power_heuristic, sample_environment};
+use super::shade::{
+    ShadingFrame, Surface, gltf_surface, light_arrival, lit, normal_mapped, offset_origin, surface_at,
+    surface_material,
+};
+use super::trace::{PixelTrace, T_FAR, Tracer, cone_reflected, pixel_spread};
+use crate::bvh::layout::NONE;
+use crate::constants::{MAX_BLEND_LAYERS, MIN_FOOTPRINT_COSINE};
+use crate::records::GpuMaterial;
+use crate::records::constants::{MODEL_GLTF, MODEL_UNLIT};
+use glam::{Vec2, Vec3, Vec4};
+
+/// Bounces before Russian roulette may end a path.
+pub const ROULETTE_START: u32 = 3;
+
+impl Tracer<'_> {
+    /// The current sample's four numbers of `group` (`path_random`).
+    fn path_numbers(&self, group: u32) -> Vec4 {
+        path_random(self.path_seed, self.path_sample, group)
+    }
+
+    /// The punctual lights' and one environment sample's light at a vertex (`path_direct_light`);
+    /// `weighed`: the path goes on, so the environment's light is shared with the BSDF's sample by
+    /// the power heuristic.
+    #[allow(clippy::too_many_arguments)]
+    fn path_direct_light(
+        &mut self,
+        surface: &Surface,
+        frame: ShadingFrame,
+        material: &GpuMaterial,
+        lobes: &Lobes,
+        u: Vec4,
+        weighed: bool,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let s = gltf_surface(material);
+        let mut color = Vec3::ZERO;
+        let origin = offset_origin(surface, frame.normal);
+        for light in &scene.lights {
+            let arrival = light_arrival(light, surface.position);
+            let l = arrival.dir;
+            if frame.shading.dot(l) <= 0.0 || !lit(light, &arrival) {
+                continue;
+            }
+            self.ray_count += 1;
+            let Some(share) = self.shadow_ray(&Ray::new(origin, l), arrival.distance) else {
+                continue;
+            };
+            color += arrival.irradiance * share * punctual_response(material, &s, frame, l);
+        }
+        let g = &scene.path.globals;
+        let environment = scene.globals.scene.environment_map != NONE;
+        if !environment || g.table_width == 0 || !(u.x < g.environment_share) {
+            return color;
+        }
+        let (l, drawn_pdf) = sample_environment(scene, Vec2::new(u.y, u.z));
+        let pdf = drawn_pdf * g.environment_share;
+        let n_dot_l = frame.shading.dot(l);
+        if !(pdf > 0.0) || n_dot_l <= 0.0 || frame.normal.dot(l) <= 0.0 {
+            return color;
+        }
+        let f = reflection_brdf(material, &s, lobes, frame.shading, frame.view, l);
+        if max3(f) <= 0.0 {
+            return color;
+        }
+        self.ray_count += 1;
+        let Some(share) = self.shadow_ray(&Ray::new(origin, l), T_FAR) else {
+            return color;
+        };
+        let weight = if weighed {
+            power_heuristic(pdf, reflection_pdf(&s, lobes, frame.shading, frame.view, l))
+        } else {
+            1.0
+        };
+        color + escaped_radiance(scene, l, 0.0) * share * f * (n_dot_l * weight / pdf)
+    }
+
+    /// One path from `primary` (`trace_pixel` in path.wgsl).
+    pub(crate) fn trace_path(&mut self, primary: Ray) -> PixelTrace {
+        let scene = self.scene;
+        let mut result = PixelTrace {
+            color: Vec3::ZERO,
+            normal: Vec3::ZERO,
+            depth: None,
+            rays: 0,
+            cost: 0,
+        };
+        reset_box_tests();
+        let environment = scene.globals.scene.environment_map != NONE;
+        let mut ray = primary;
+        let mut culls = true;
+        let mut throughput = Vec3::ONE;
+        let mut cone = Vec2::new(0.0, pixel_spread(scene));
+        let mut bsdf_pdf = 0.0;
+        let mut bounce = 0;
+        loop {
+            self.ray_count += 1;
+            let hit = self.closest_hit(&ray, T_FAR, culls);
+            if bounce == 0 && result.depth.is_none() {
+                result.cost = box_tests();
+            }
+            if hit.kind == HitKind::None {
+                let weight = if environment && bsdf_pdf > 0.0 {
+                    power_heuristic(
+                        bsdf_pdf,
+                        scene.path.globals.environment_share * environment_pdf(scene, ray.dir),
+                    )
+                } else {
+                    1.0
+                };
+                result.color += throughput * escaped_radiance(scene, ray.dir, cone.y) * weight;
+                break;
+            }
+            let mut surface = surface_at(scene, &ray, &hit);
+            cone = Vec2::new(cone.x + cone.y * hit.t, cone.y);
+            surface.attributes.footprint = cone.x.abs() / surface.normal.dot(ray.dir).abs().max(MIN_FOOTPRINT_COSINE);
+            let material = surface_material(scene, &surface);
+            surface.shading = normal_mapped(scene, &surface, &material);
+            if bounce == 0 && result.depth.is_none() {
+                result.normal = surface.shading;
+                result.depth = Some(hit.t);
+            }
+            let entering = surface.normal.dot(ray.dir) < 0.0;
+            let flip = |v: Vec3| if entering { v } else { -v };
+            let (normal, shading) = (flip(surface.normal), flip(surface.shading));
+            let curvature = if entering {
+                surface.curvature
+            } else {
+                -surface.curvature
+            };
+            let frame = ShadingFrame {
+                normal,
+                shading,
+                view: -ray.dir,
+            };
+            let volume = material.model == MODEL_GLTF && material.volume != 0;
+            if volume && !entering {
+                let optical_depth = -v3(material.absorption) * hit.t;
+                throughput *= Vec3::new(optical_depth.x.exp(), optical_depth.y.exp(), optical_depth.z.exp());
+            }
+            // A blended surface stops the path with the chance of its alpha; else the path goes
+            // on behind it, at the same bounce.
+            if surface.blend && self.blend_layers < MAX_BLEND_LAYERS {
+                self.blend_layers += 1;
+                let group = 2 * (scene.max_depth + 1) + self.blend_layers;
+                if self.path_numbers(group).x >= material.alpha {
+                    ray = Ray::new(offset_origin(&surface, -normal), ray.dir);
+                    continue;
+                }
+            }
+            if material.model == MODEL_UNLIT {
+                result.color += throughput * v3(material.color);
+                break;
+            }
+            result.color += throughput * v3(material.emission);
+            let s = gltf_surface(&material);
+            let lobes = path_lobes(&material, &s, shading.dot(frame.view).max(0.0));
+            let goes_on = bounce < scene.max_depth;
+            let u = self.path_numbers(2 * bounce + 1);
+            result.color += throughput * self.path_direct_light(&surface, frame, &material, &lobes, u, goes_on);
+            if !goes_on {
+                break;
+            }
+            let u = self.path_numbers(2 * bounce);
+            let sample = sample_bsdf(&material, &s, &lobes, frame, entering, u.truncate());
+            let largest = max3(sample.weight);
+            if !(largest > 0.0) || largest > 3.0e38 {
+                break;
+            }
+            throughput *= sample.weight;
+            bsdf_pdf = sample.pdf;
+            if bounce >= ROULETTE_START {
+                let survival = max3(throughput).min(1.0);
+                if !(u.w < survival) {
+                    break;
+                }
+                throughput /= survival;
+            }
+            let side = if sample.through { -normal } else { normal };
+            ray = Ray::new(offset_origin(&surface, side), sample.dir);
+            // Back faces hide from rays outside: reflected from outside or refracted out of a
+            // volume; a thin wall's transmitted ray sees them, as the Whitted integrator's does.
+            culls = if volume {
+                entering != sample.through
+            } else {
+                !sample.through
+            };
+            cone = cone_reflected(cone, curvature);
+            bounce += 1;
+        }
+        result.color = finite_or_zero(result.color);
+        result.rays = self.ray_count;
+        result
+    }
+}
+
+/// Zero for a NaN or an infinite sum (`finite_or_zero`): the last guard against a sample that
+/// would poison the accumulation.
+fn finite_or_zero(color: Vec3) -> Vec3 {
+    let finite = !color.is_nan() && max3(color.abs()) <= 3.0e38;
+    if finite { color } else { Vec3::ZERO }
+}
