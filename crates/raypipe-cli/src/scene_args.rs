@@ -6,7 +6,7 @@ use anyhow::bail;
 use clap::Args;
 use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE};
 use raypipe::modes::Backend;
-use raypipe::modes::{Accel, Aov, Builder, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Aov, Builder, Integrator, MemoryMode, Pipeline};
 use raypipe::scene::ToneMap;
 use raypipe::scene::animation::ClipChoice;
 use raypipe::scene::is_model_file;
@@ -67,6 +67,10 @@ pub struct SceneArgs {
     /// Maximum bounces after the primary ray (default 5, or the scene's; at most 32).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=raypipe::scene::MAX_DEPTH_LIMIT as i64))]
     pub depth: Option<u32>,
+    /// How light is carried: the paper's Whitted tracer, or a path tracer [default: the scene
+    /// file's `integrator`; path for a glTF file, whitted for the others]
+    #[arg(long, value_parser = choice::<Integrator>())]
+    pub integrator: Option<Integrator>,
     #[arg(long, value_parser = choice::<Backend>())]
     pub backend: Option<Backend>,
     /// The stage that traces on the GPU: the fragment shader of a full-screen triangle (the paper's
@@ -154,18 +158,28 @@ impl SceneArgs {
                 "{}: the scene holds nothing to hit: the image is its background",
                 self.spec
             );
-        } else if scene.lights.is_empty() && scene.environment.is_none() {
-            log::warn!(
-                "{}: the scene has no lights: only its ambient term shades it",
-                self.spec
-            );
         }
         let settings = &mut scene.settings;
+        settings.integrator = self.integrator.unwrap_or(settings.integrator);
         settings.width = self.width.unwrap_or(settings.width);
         settings.height = self.height.unwrap_or(settings.height);
         settings.max_depth = self.depth.unwrap_or(settings.max_depth);
         settings.accel = self.accel.or(settings.accel);
         settings.background = self.background.unwrap_or(settings.background);
+        let lit_by_something = !scene.lights.is_empty() || scene.environment.is_some();
+        let has_primitives = !(scene.spheres.is_empty() && scene.triangles.is_empty() && scene.planes.is_empty());
+        if has_primitives && !lit_by_something {
+            match scene.settings.integrator {
+                Integrator::Whitted => log::warn!(
+                    "{}: the scene has no lights: only its ambient term shades it",
+                    self.spec
+                ),
+                Integrator::Path => log::warn!(
+                    "{}: the scene has no lights: the path integrator sees only its emitters and background",
+                    self.spec
+                ),
+            }
+        }
         Ok(scene)
     }
 }

@@ -1,8 +1,11 @@
 //! A material's scattering as the path integrator draws it: the twin of `shaders/bsdf.wgsl`.
 
+// `!(x > 0.0)` is true for a NaN, as the shader's tests are: the guards keep NaNs out.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::brdf::{
-    GltfSurface, MIN_ALPHA, dielectric_fresnel, ggx_distribution, gltf_brdf, max3, metal_fresnel, sample_visible_normal,
-    smith_g1, smith_g2, tangent_frame,
+    GltfSurface, MIN_ALPHA, dielectric_fresnel, ggx_distribution, gltf_brdf, max3, metal_fresnel,
+    sample_visible_normal, smith_g1, smith_g2, tangent_frame,
 };
 use super::intersect::v3;
 use super::sampling::sample_cosine;
@@ -107,7 +110,14 @@ pub(crate) fn reflection_pdf(s: &GltfSurface, lobes: &Lobes, n: Vec3, v: Vec3, l
 }
 
 /// The BRDF of the lobes a light sample can find, all but mirrors (`reflection_brdf`).
-pub(crate) fn reflection_brdf(material: &GpuMaterial, s: &GltfSurface, lobes: &Lobes, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
+pub(crate) fn reflection_brdf(
+    material: &GpuMaterial,
+    s: &GltfSurface,
+    lobes: &Lobes,
+    n: Vec3,
+    v: Vec3,
+    l: Vec3,
+) -> Vec3 {
     if !is_gltf(material) {
         return v3(material.color) / PI;
     }
@@ -134,7 +144,13 @@ pub(crate) fn punctual_response(material: &GpuMaterial, s: &GltfSurface, frame: 
 }
 
 /// A reflection drawn from the mixture, weighted f cos θ / pdf (`mixture_sample`).
-fn mixture_sample(material: &GpuMaterial, s: &GltfSurface, lobes: &Lobes, frame: ShadingFrame, dir: Vec3) -> BsdfSample {
+fn mixture_sample(
+    material: &GpuMaterial,
+    s: &GltfSurface,
+    lobes: &Lobes,
+    frame: ShadingFrame,
+    dir: Vec3,
+) -> BsdfSample {
     let n_dot_l = frame.shading.dot(dir);
     if n_dot_l <= 0.0 || frame.normal.dot(dir) <= 0.0 {
         return NO_SAMPLE;
@@ -231,7 +247,11 @@ pub(crate) fn sample_bsdf(
     // what the dielectric layer lets pass.
     let alpha = path_alpha(s);
     let n_dot_v = n.dot(v).max(0.0);
-    let h = if lobes.mirror { n } else { visible_normal(n, v, alpha, du) };
+    let h = if lobes.mirror {
+        n
+    } else {
+        visible_normal(n, v, alpha, du)
+    };
     let v_dot_h = v.dot(h);
     let reflected = (2.0 * v_dot_h * h - v).normalize();
     let share = if lobes.mirror {

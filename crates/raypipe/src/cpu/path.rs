@@ -1,14 +1,16 @@
 //! The path integrator, one path per sample: the twin of `shaders/path.wgsl`, which says what it
 //! does.
 
+// `!(x > 0.0)` is true for a NaN, as the shader's tests are: the guards keep NaNs out.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::brdf::max3;
 use super::bsdf::{Lobes, path_lobes, punctual_response, reflection_brdf, reflection_pdf, sample_bsdf};
 use super::environment::escaped_radiance;
 use super::intersect::{HitKind, Ray, box_tests, reset_box_tests, v3};
 use super::sampling::{environment_pdf, path_random, power_heuristic, sample_environment};
 use super::shade::{
-    ShadingFrame, Surface, gltf_surface, light_arrival, lit, normal_mapped, offset_origin, surface_at,
-    surface_material,
+    ShadingFrame, Surface, gltf_surface, light_arrival, lit, normal_mapped, offset_origin, surface_at, surface_material,
 };
 use super::trace::{PixelTrace, T_FAR, Tracer, cone_reflected, pixel_spread};
 use crate::bvh::layout::NONE;

@@ -106,7 +106,11 @@ fn search_table(texels: &[[f32; 4]], first: u32, count: u32, u: f32) -> Vec2 {
     }
     let below = if low > 0 { value(low - 1) } else { 0.0 };
     let above = value(low);
-    let within = if above > below { (u - below) / (above - below) } else { 0.5 };
+    let within = if above > below {
+        (u - below) / (above - below)
+    } else {
+        0.5
+    };
     Vec2::new(low as f32, within.clamp(0.0, 0.999_999_94))
 }
 

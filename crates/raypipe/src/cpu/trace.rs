@@ -7,6 +7,7 @@ use super::admit::{Primitives, RayQuery};
 use super::brdf::sample_specular;
 use super::environment::escaped_radiance;
 use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
+use super::sampling::path_seed;
 use super::shade::{
     ShadingFrame, Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface,
     normal_mapped, offset_origin, reflect, refracted_direction, surface_at, surface_material,
@@ -15,7 +16,6 @@ pub use crate::constants::T_FAR;
 use crate::constants::{MAX_BLEND_LAYERS, MIN_FOOTPRINT_COSINE, MIN_WEIGHT, R2_STEP, ray_stack_size};
 use crate::error::MissingBvh;
 use crate::modes::{Accel, Integrator};
-use super::sampling::path_seed;
 use crate::records::GpuMaterial;
 use crate::records::constants::{MODEL_GLTF, MODEL_UNLIT};
 use crate::records::{PackedBvh, PackedScene};

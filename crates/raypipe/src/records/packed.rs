@@ -12,12 +12,12 @@ use crate::bvh::wide::{GpuWideTexel, WideTree, leaf_texels, wide_texels};
 use crate::bvh::{BuildTimings, Bvh};
 use crate::error::{Element, InputError};
 use crate::modes::{Builder, Integrator};
-use crate::records::path::PathTables;
 use crate::records::constants::{
     ATTRIBUTE_COLOR, ATTRIBUTE_TANGENT, ATTRIBUTE_UV0, ATTRIBUTE_UV1, LIGHT_CONSTANT, LIGHT_DIRECTIONAL, LIGHT_POINT,
     LIGHT_SPOT, MATERIAL_INDEX_MASK, MODEL_GLTF, MODEL_UNLIT, MODEL_WHITTED, TRIANGLE_ALPHA_BLEND, TRIANGLE_ALPHA_MASK,
     TRIANGLE_SINGLE_SIDED, filter_code, wrap_code,
 };
+use crate::records::path::PathTables;
 use crate::records::texels::GpuRecord;
 use crate::scene::{
     AlphaMode, Camera, Light, LightKind, Material, Moved, Pbr, Plane, Scene, Sphere, Texture, TextureMap,

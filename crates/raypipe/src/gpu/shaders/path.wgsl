@@ -53,6 +53,14 @@ fn path_direct_light(surface: Surface, frame: ShadingFrame, material: Material, 
     return color + shadowed(escaped_radiance(l, 0.0)) * f * (n_dot_l * weight / pdf);
 }
 
+// The sample's state before its camera ray: its pixel's seed for the epoch, its index among the
+// pixel's samples, no blended layers yet.
+fn start_sample(pixel: vec2<u32>, sample: u32) {
+    path_seed = hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(path_globals.epoch)));
+    path_sample = sample;
+    blend_layers = 0u;
+}
+
 // Zero for a NaN or an infinite sum: the last guard against a sample that would poison the
 // accumulation.
 fn finite_or_zero(color: vec3<f32>) -> vec3<f32> {

@@ -18,9 +18,7 @@ fn sample_pixel(pixel: vec2<u32>) -> PixelSums {
     ray_count = 0u;
     box_tests = 0u;
     let sample = globals.camera.sample;
-    sample_seed_value = sample_seed(pixel, sample);
-    random_draws = 0u;
-    blend_layers = 0u;
+    start_sample(pixel, sample);
     let traced = trace_pixel(camera_ray(vec2<f32>(pixel) + sample_offset(pixel, sample)));
     let count = select(ray_count, primary_cost, WRITE_COST);
     return summed(pixel, vec4<f32>(traced.color, f32(count)), vec4<f32>(traced.normal, traced.depth));

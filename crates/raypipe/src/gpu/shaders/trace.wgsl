@@ -1,10 +1,10 @@
-// The tracer, one pixel per fragment. Shaders cannot recurse, so the tree of rays is walked
-// depth-first by hand: a reflected branch is traced next, and its refracted sibling waits on an
-// explicit stack of RAY_STACK_SIZE entries (MAX_DEPTH + 1: at most one waits per level; more where
-// rays go on behind blended surfaces). Mirrored by src/cpu/trace.rs.
+// What the integrators' tracers share, one pixel per fragment: the pixel's counters, the camera
+// ray and where in its pixel a sample looks, closest hits and shadow rays, and the ray cones that
+// filter textures. The bounce loops are whitted.wgsl's and path.wgsl's, the accumulation
+// pixel.wgsl's. Mirrored by src/cpu/trace.rs.
 
-// T_FAR, MIN_WEIGHT (the weight below which a branch cannot change an 8-bit pixel) and DEPTH_MISS
-// (the depth where the primary ray hits nothing; the host reads it as +inf) come from the preamble.
+// T_FAR and DEPTH_MISS (the depth where the primary ray hits nothing; the host reads it as +inf)
+// come from the preamble.
 
 // Rays traced for the current pixel: primary, shadow and secondary, counted where they are cast.
 var<private> ray_count: u32;
@@ -13,23 +13,8 @@ var<private> ray_count: u32;
 // (WRITE_COST) writes instead of the ray count.
 var<private> box_tests: u32;
 var<private> primary_cost: u32;
-// The sample's random sequence (sampled glossy reflections): its seed and the draws so far.
-var<private> sample_seed_value: u32;
-var<private> random_draws: u32;
 // Surfaces of blended triangles the pixel's rays went on behind, at most MAX_BLEND_LAYERS.
 var<private> blend_layers: u32;
-
-struct RayTask {
-    origin: vec3<f32>,
-    dir: vec3<f32>,
-    weight: vec3<f32>,
-    depth: u32,
-    // Whether single-sided triangles hide their backs from the ray: camera and reflected rays,
-    // not rays transmitted through a surface (which may be inside a volume).
-    culls: bool,
-    // The ray cone around it: its width where the ray starts, and its spread angle (radians).
-    cone: vec2<f32>,
-}
 
 struct PixelTrace {
     color: vec3<f32>,
@@ -39,25 +24,11 @@ struct PixelTrace {
 }
 
 // A 32-bit integer hash (PCG's output permutation, after Jarzynski and Olano 2020), for the per-pixel
-// scramble of the sample sequence.
+// scrambles of the samples.
 fn hash_u32(value: u32) -> u32 {
     let state = value * 747796405u + 2891336453u;
     let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
     return (word >> 22u) ^ word;
-}
-
-// The seed of a pixel's sample's random sequence.
-fn sample_seed(pixel: vec2<u32>, sample: u32) -> u32 {
-    return hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(sample)));
-}
-
-// The next two uniform numbers in [0, 1) of the sample's sequence: a hash of its seed and the
-// draw's number, integer arithmetic that every device computes alike.
-fn random_pair() -> vec2<f32> {
-    random_draws += 1u;
-    let x = hash_u32(sample_seed_value ^ hash_u32(random_draws));
-    let y = hash_u32(x);
-    return vec2<f32>(vec2<u32>(x, y) >> vec2<u32>(8u)) * (1.0 / 16777216.0);
 }
 
 // Where in its pixel sample `index` looks, in [0, 1)^2. Sample 0 is the centre, so one sample is the
@@ -121,8 +92,4 @@ fn cone_reflected(cone: vec2<f32>, curvature: f32) -> vec2<f32> {
 fn cone_refracted(cone: vec2<f32>, curvature: f32, eta: f32, cos_i: f32, cos_t: f32) -> vec2<f32> {
     let ratio = eta * cos_i / max(cos_t, MIN_FOOTPRINT_COSINE);
     return vec2<f32>(cone.x, ratio * cone.y + (ratio - 1.0) * curvature * cone.x);
-}
-
-fn worth_tracing(weight: vec3<f32>) -> bool {
-    return max(weight.x, max(weight.y, weight.z)) >= MIN_WEIGHT;
 }

@@ -1,3 +1,51 @@
+// The Whitted integrator: shaders cannot recurse, so the tree of rays is walked depth-first by
+// hand: a reflected branch is traced next, and its refracted sibling waits on an explicit stack of
+// RAY_STACK_SIZE entries (MAX_DEPTH + 1: at most one waits per level; more where rays go on behind
+// blended surfaces). Mirrored by src/cpu/trace.rs.
+
+// MIN_WEIGHT, from the preamble, is the weight below which a branch cannot change an 8-bit pixel.
+
+// The sample's random sequence (sampled glossy reflections): its seed and the draws so far.
+var<private> sample_seed_value: u32;
+var<private> random_draws: u32;
+
+struct RayTask {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+    depth: u32,
+    // Whether single-sided triangles hide their backs from the ray: camera and reflected rays,
+    // not rays transmitted through a surface (which may be inside a volume).
+    culls: bool,
+    // The ray cone around it: its width where the ray starts, and its spread angle (radians).
+    cone: vec2<f32>,
+}
+
+// The seed of a pixel's sample's random sequence.
+fn sample_seed(pixel: vec2<u32>, sample: u32) -> u32 {
+    return hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(sample)));
+}
+
+// The next two uniform numbers in [0, 1) of the sample's sequence: a hash of its seed and the
+// draw's number, integer arithmetic that every device computes alike.
+fn random_pair() -> vec2<f32> {
+    random_draws += 1u;
+    let x = hash_u32(sample_seed_value ^ hash_u32(random_draws));
+    let y = hash_u32(x);
+    return vec2<f32>(vec2<u32>(x, y) >> vec2<u32>(8u)) * (1.0 / 16777216.0);
+}
+
+// The sample's state before its camera ray: its random sequence, no blended layers yet.
+fn start_sample(pixel: vec2<u32>, sample: u32) {
+    sample_seed_value = sample_seed(pixel, sample);
+    random_draws = 0u;
+    blend_layers = 0u;
+}
+
+fn worth_tracing(weight: vec3<f32>) -> bool {
+    return max(weight.x, max(weight.y, weight.z)) >= MIN_WEIGHT;
+}
+
 // The rays a hit sends on; a weight that is not worth_tracing means none. `through` goes on behind
 // a blended surface: not a bounce, at the same depth.
 struct Branches {
