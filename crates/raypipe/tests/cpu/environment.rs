@@ -36,7 +36,7 @@ fn ramp_environment() -> Environment {
 
 /// A scene of one sphere of `material` at the origin, radius 1, seen from `eye`, lit by
 /// `environment` alone (no lights, no ambient term).
-fn sphere_scene(material: Material, eye: Vec3, size: u32, environment: Environment) -> Scene {
+pub(crate) fn sphere_scene(material: Material, eye: Vec3, size: u32, environment: Environment) -> Scene {
     let mut scene = Scene {
         camera: Camera {
             eye,
@@ -65,7 +65,7 @@ fn sphere_scene(material: Material, eye: Vec3, size: u32, environment: Environme
     scene
 }
 
-fn render(scene: &Scene, samples: u32) -> Frame {
+pub(crate) fn render(scene: &Scene, samples: u32) -> Frame {
     let mut packed = PackedScene::new(scene).unwrap();
     packed.build_bvh();
     if samples == 1 {
@@ -75,7 +75,7 @@ fn render(scene: &Scene, samples: u32) -> Frame {
 }
 
 /// The camera ray through pixel (x, y)'s centre, by the convention of docs/scene-format.md.
-fn camera_ray(camera: &Camera, size: u32, x: u32, y: u32) -> Vec3 {
+pub(crate) fn camera_ray(camera: &Camera, size: u32, x: u32, y: u32) -> Vec3 {
     let forward = (camera.target - camera.eye).normalize();
     let right = forward.cross(camera.up).normalize();
     let up = right.cross(forward);
@@ -87,7 +87,7 @@ fn camera_ray(camera: &Camera, size: u32, x: u32, y: u32) -> Vec3 {
 
 /// Where the unit sphere at the origin reflects the ray from `eye` along `d`, and how squarely the
 /// ray meets it; `None` where it misses.
-fn mirrored(eye: Vec3, d: Vec3) -> Option<(Vec3, f32)> {
+pub(crate) fn mirrored(eye: Vec3, d: Vec3) -> Option<(Vec3, f32)> {
     let b = eye.dot(d);
     let discriminant = b * b - (eye.length_squared() - 1.0);
     if discriminant < 0.0 {
@@ -97,7 +97,7 @@ fn mirrored(eye: Vec3, d: Vec3) -> Option<(Vec3, f32)> {
     Some((d - 2.0 * d.dot(n) * n, -d.dot(n)))
 }
 
-fn pixel(frame: &Frame, x: u32, y: u32) -> Vec3 {
+pub(crate) fn pixel(frame: &Frame, x: u32, y: u32) -> Vec3 {
     let [r, g, b, _] = frame.color[(y * frame.width + x) as usize];
     Vec3::new(r, g, b)
 }
@@ -159,7 +159,7 @@ fn escaping_rays_read_the_environment_by_the_stated_convention_and_rotation() {
 /// The directional albedo of a white GGX metal (Appendix B: D with α = roughness², Smith's
 /// height-correlated G2, F = 1) seen at cos θ = `mu`, integrated over microfacet normals h:
 /// E = ∫ D(h) G2(v, l) (v·h) / (n·v) dh over the h whose reflection l leaves above the surface.
-fn white_metal_albedo(mu: f64, roughness: f64) -> f64 {
+pub(crate) fn white_metal_albedo(mu: f64, roughness: f64) -> f64 {
     let a2 = roughness.powi(4);
     let lambda = |c: f64| (-1.0 + (1.0 + a2 * (1.0 - c * c) / (c * c)).sqrt()) / 2.0;
     let v = [(1.0 - mu * mu).sqrt(), 0.0, mu];

@@ -14,6 +14,7 @@ mod layers;
 mod layout;
 mod materials;
 mod meshes;
+mod path;
 mod sampling;
 mod tonemap;
 mod watertight;

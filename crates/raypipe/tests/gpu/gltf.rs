@@ -10,7 +10,7 @@ use crate::common::*;
 use raypipe::gpu::{GpuContext, RendererOptions};
 use raypipe::image::Frame;
 use raypipe::image::diff::Tolerance;
-use raypipe::modes::{Accel, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Integrator, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use raypipe::scene::gltf::{Files, parse};
@@ -501,10 +501,12 @@ fn every_khronos_sample_matches_the_cpu(ctx: &GpuContext, models: &std::path::Pa
         };
         scene.settings.width = 48;
         scene.settings.height = 36;
-        // One memory mode a model, alternating, and the other on the other backend: CI's Vulkan
-        // and GL runs together trace every sample in both (each model's shader is a variant of its
-        // own, and compiling two a model on a software adapter took most of the GPU tests' time).
+        // One memory mode and one integrator a model, alternating, and the others on the other
+        // backend: CI's Vulkan and GL runs together trace every sample in both memory modes and
+        // both integrators (each model's shader is a variant of its own, and compiling two a
+        // model on a software adapter took most of the GPU tests' time).
         let memory = [MemoryMode::Storage, MemoryMode::Texture][(index + backend_parity) % 2];
+        scene.settings.integrator = [Integrator::Path, Integrator::Whitted][(index / 2 + backend_parity) % 2];
         let hits = gpu_matches_cpu_in(ctx, &scene, &format!("khronos-{name}"), &[memory]);
         assert!(hits > 0, "{name}: nothing in view");
     }

@@ -6,9 +6,9 @@ use crate::common::*;
 use glam::Vec3;
 use raypipe::cpu::Count;
 use raypipe::gpu::{GpuContext, RendererOptions};
-use raypipe::modes::{Accel, Builder, MemoryMode};
+use raypipe::modes::{Accel, Builder, Integrator, MemoryMode};
 use raypipe::records::{GpuCamera, PackedScene};
-use raypipe::scene::Camera;
+use raypipe::scene::{Camera, Environment, Scene};
 
 fn check(ctx: &GpuContext, spec: &str, width: u32, height: u32) {
     let mut scene = packed(spec, width, height, 5);
@@ -37,6 +37,40 @@ fn check_scene(ctx: &GpuContext, name: &str, scene: &PackedScene) {
 
 fn whitted(ctx: &GpuContext) {
     check(ctx, "whitted", 160, 120);
+}
+
+/// The path integrator draws the CPU's numbers: the paper's scene (mirrors, glass, Lambert) with
+/// every walk against brute force and the CPU; random spheres in the studio environment, whose
+/// light it samples, at four samples a pixel in every pipeline and memory mode.
+fn path_traced_images_agree(ctx: &GpuContext) {
+    let mut paper = packed("whitted", 96, 72, 5);
+    paper.integrator = Integrator::Path;
+    paper.build_bvh();
+    check_scene(ctx, "path-whitted", &paper);
+    let mut scene = Scene::load("random:200").unwrap();
+    scene.settings.width = 64;
+    scene.settings.height = 48;
+    scene.settings.integrator = Integrator::Path;
+    scene.set_environment(Some(Environment::studio()));
+    let mut spheres = PackedScene::new(&scene).unwrap();
+    spheres.build_bvh();
+    let samples = 4;
+    let cpu = raypipe::cpu::render_with(&spheres, Accel::Threaded, Count::Rays, samples, &|| {}).unwrap();
+    for &pipeline in raypipe::modes::Pipeline::ALL {
+        for memory in ctx.memory_modes() {
+            let options = RendererOptions {
+                pipeline,
+                memory,
+                accel: Accel::Threaded,
+                ..Default::default()
+            };
+            let mut gpu = renderer(ctx, &spheres, options);
+            let frame = pollster::block_on(gpu.render_samples(samples, |_| {}, |_| {}))
+                .unwrap()
+                .frame;
+            assert_frames_match(&format!("path-random-{pipeline:?}-{memory:?}"), &frame, &cpu);
+        }
+    }
 }
 
 /// Sixteen jittered samples per pixel: the shader's sequence is the CPU's, bit for bit, so the
@@ -260,6 +294,7 @@ fn pixels_outside_the_projected_box_match_the_cpu(ctx: &GpuContext) {
 pub fn tests() -> Vec<Test> {
     raypipe_test_support::tests![
         gpu whitted,
+        gpu path_traced_images_agree,
         gpu sixteen_samples_agree,
         gpu sphere_8k,
         gpu torus_5k,

@@ -6,6 +6,7 @@ use super::{DEFAULT_CREASE_DEGREES, Floor, MeshAs, Normals, Placement, SphereCou
 use crate::bvh::aabb::Aabb;
 use crate::error::InputError;
 use crate::mesh::Mesh;
+use crate::modes::Integrator;
 use crate::scene::animation::ClipChoice;
 use crate::scene::environment::Environment;
 use crate::scene::gltf::GltfScene;
@@ -87,7 +88,11 @@ pub fn gltf_scene(gltf: &GltfScene, shown: &str, options: &ModelOptions) -> Resu
         ..options.placement().map_err(|e| e.in_origin(shown))?
     };
     let mut scene = Scene {
-        settings: RenderSettings::default(),
+        // A glTF file's materials are physically based: they are traced as light goes.
+        settings: RenderSettings {
+            integrator: Integrator::Path,
+            ..RenderSettings::default()
+        },
         materials: framing_materials(),
         ..Scene::default()
     };
