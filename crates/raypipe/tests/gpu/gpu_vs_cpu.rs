@@ -56,7 +56,7 @@ fn path_traced_images_agree(ctx: &GpuContext) {
     spheres.build_bvh();
     let samples = 4;
     let cpu = raypipe::cpu::render_with(&spheres, Accel::Threaded, Count::Rays, samples, &|| {}).unwrap();
-    for &pipeline in raypipe::modes::Pipeline::ALL {
+    for &pipeline in <raypipe::modes::Pipeline as raypipe::Choice>::ALL {
         for memory in ctx.memory_modes() {
             let options = RendererOptions {
                 pipeline,
