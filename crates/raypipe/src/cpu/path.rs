@@ -4,11 +4,14 @@
 // `!(x > 0.0)` is true for a NaN, as the shader's tests are: the guards keep NaNs out.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::admit::RayQuery;
 use super::brdf::max3;
 use super::bsdf::{Lobes, path_lobes, punctual_response, reflection_brdf, reflection_pdf, sample_bsdf};
 use super::environment::escaped_radiance;
-use super::intersect::{HitKind, Ray, box_tests, reset_box_tests, v3};
-use super::sampling::{environment_pdf, path_random, power_heuristic, sample_environment};
+use super::intersect::{Hit, HitKind, Ray, box_tests, reset_box_tests, v3};
+use super::sampling::{
+    emitter_chance, emitter_pdf, environment_pdf, path_random, power_heuristic, sample_emitter, sample_environment,
+};
 use super::shade::{
     ShadingFrame, Surface, gltf_surface, light_arrival, lit, normal_mapped, offset_origin, surface_at, surface_material,
 };
@@ -21,6 +24,19 @@ use glam::{Vec2, Vec3, Vec4};
 
 /// Bounces before Russian roulette may end a path.
 pub const ROULETTE_START: u32 = 3;
+
+/// Shadow rays to an emitter stop this much short of it, so as not to hit it (relative to the
+/// distance).
+const EMITTER_SHADOW_SHORTENING: f32 = 1e-4;
+
+/// A direction to an area light, the radiance it brings, how far its shadow ray runs, and its
+/// density in solid angle (`LightSample`).
+struct LightSample {
+    dir: Vec3,
+    radiance: Vec3,
+    distance: f32,
+    pdf: f32,
+}
 
 impl Tracer<'_> {
     /// The current sample's four numbers of `group` (`path_random`).
@@ -57,15 +73,27 @@ impl Tracer<'_> {
             };
             color += arrival.irradiance * share * punctual_response(material, &s, frame, l);
         }
-        let g = &scene.path.globals;
+        let share = scene.path.globals.environment_share;
         let environment = scene.globals.scene.environment_map != NONE;
-        if !environment || g.table_width == 0 || !(u.x < g.environment_share) {
+        let drawn = if environment && u.x < share {
+            let (dir, pdf) = sample_environment(scene, Vec2::new(u.y, u.z));
+            Some(LightSample {
+                dir,
+                radiance: escaped_radiance(scene, dir, 0.0),
+                distance: T_FAR,
+                pdf: pdf * share,
+            })
+        } else if !scene.triangles.is_empty() && scene.path.globals.emitter_count > 0 {
+            self.emitter_light(origin, Vec3::new((u.x - share) / (1.0 - share), u.y, u.z), 1.0 - share)
+        } else {
+            None
+        };
+        let Some(drawn) = drawn else {
             return color;
-        }
-        let (l, drawn_pdf) = sample_environment(scene, Vec2::new(u.y, u.z));
-        let pdf = drawn_pdf * g.environment_share;
+        };
+        let l = drawn.dir;
         let n_dot_l = frame.shading.dot(l);
-        if !(pdf > 0.0) || n_dot_l <= 0.0 || frame.normal.dot(l) <= 0.0 {
+        if !(drawn.pdf > 0.0) || n_dot_l <= 0.0 || frame.normal.dot(l) <= 0.0 || max3(drawn.radiance) <= 0.0 {
             return color;
         }
         let f = reflection_brdf(material, &s, lobes, frame.shading, frame.view, l);
@@ -73,15 +101,75 @@ impl Tracer<'_> {
             return color;
         }
         self.ray_count += 1;
-        let Some(share) = self.shadow_ray(&Ray::new(origin, l), T_FAR) else {
+        let Some(share) = self.shadow_ray(&Ray::new(origin, l), drawn.distance) else {
             return color;
         };
         let weight = if weighed {
-            power_heuristic(pdf, reflection_pdf(&s, lobes, frame.shading, frame.view, l))
+            power_heuristic(drawn.pdf, reflection_pdf(&s, lobes, frame.shading, frame.view, l))
         } else {
             1.0
         };
-        color + escaped_radiance(scene, l, 0.0) * share * f * (n_dot_l * weight / pdf)
+        color + drawn.radiance * share * f * (n_dot_l * weight / drawn.pdf)
+    }
+
+    /// The light of a point drawn on an emitter with `u`, seen from `origin` (offset from the
+    /// surface, as the shadow ray and a BSDF sample's ray start), the emitters drawn with `chance`
+    /// (`emitter_light`).
+    fn emitter_light(&self, origin: Vec3, u: Vec3, chance: f32) -> Option<LightSample> {
+        let scene = self.scene;
+        let drawn = sample_emitter(scene, u);
+        let to_light = drawn.point - origin;
+        let distance = to_light.length();
+        if !(distance > 0.0) {
+            return None;
+        }
+        let l = to_light / distance;
+        let towards = Ray::new(origin, l);
+        let query = RayQuery {
+            scene,
+            culls_back_faces: true,
+            shadow_light: None,
+        };
+        let index = scene.spheres.len() as u32 + drawn.index;
+        if !self.primitives(query).stops_ray(index, &towards) {
+            return None;
+        }
+        let hit = Hit {
+            t: distance,
+            kind: HitKind::Primitive,
+            index,
+        };
+        let emitter = surface_at(scene, &towards, &hit);
+        let cos_light = emitter.normal.dot(l).abs();
+        let pdf = chance * emitter_pdf(scene, drawn.index, drawn.chance, distance, cos_light);
+        Some(LightSample {
+            dir: l,
+            radiance: v3(surface_material(scene, &emitter).emission),
+            distance: distance * (1.0 - EMITTER_SHADOW_SHORTENING),
+            pdf,
+        })
+    }
+
+    /// How much of an emitter's light that a BSDF sample of density `bsdf_pdf` found at `hit`
+    /// counts beside the emitter's own sampling (`emission_weight`).
+    fn emission_weight(&self, hit: &Hit, surface: &Surface, ray: &Ray, bsdf_pdf: f32) -> f32 {
+        let scene = self.scene;
+        let spheres = scene.spheres.len() as u32;
+        if !(bsdf_pdf > 0.0)
+            || scene.path.globals.emitter_count == 0
+            || hit.kind != HitKind::Primitive
+            || hit.index < spheres
+        {
+            return 1.0;
+        }
+        let index = hit.index - spheres;
+        let chance = emitter_chance(scene, index);
+        if !(chance > 0.0) {
+            return 1.0;
+        }
+        let share = 1.0 - scene.path.globals.environment_share;
+        let light_pdf = share * emitter_pdf(scene, index, chance, hit.t, surface.normal.dot(ray.dir).abs());
+        power_heuristic(bsdf_pdf, light_pdf)
     }
 
     /// One path from `primary` (`trace_pixel` in path.wgsl).
@@ -109,7 +197,7 @@ impl Tracer<'_> {
                 result.cost = box_tests();
             }
             if hit.kind == HitKind::None {
-                let weight = if environment && bsdf_pdf > 0.0 {
+                let weight = if environment && bsdf_pdf > 0.0 && scene.path.globals.table_width > 0 {
                     power_heuristic(
                         bsdf_pdf,
                         scene.path.globals.environment_share * environment_pdf(scene, ray.dir),
@@ -161,7 +249,10 @@ impl Tracer<'_> {
                 result.color += throughput * v3(material.color);
                 break;
             }
-            result.color += throughput * v3(material.emission);
+            if max3(v3(material.emission)) > 0.0 {
+                let weight = self.emission_weight(&hit, &surface, &ray, bsdf_pdf);
+                result.color += throughput * v3(material.emission) * weight;
+            }
             let s = gltf_surface(&material);
             let lobes = path_lobes(&material, &s, shading.dot(frame.view).max(0.0));
             let goes_on = bounce < scene.max_depth;

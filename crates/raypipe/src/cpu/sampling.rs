@@ -1,8 +1,12 @@
 //! The path integrator's random numbers and the densities it draws directions from: the twin of
 //! `shaders/sampling.wgsl`.
 
+// `!(x > 0.0)` is true for a NaN, as the shader's tests are: the guards keep NaNs out.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::brdf::tangent_frame;
 use super::environment::environment_uv;
+use super::intersect::v3;
 use super::trace::hash_u32;
 use crate::records::PackedScene;
 use glam::{Vec2, Vec3, Vec4};
@@ -70,11 +74,6 @@ pub fn path_random(seed: u32, sample: u32, group: u32) -> Vec4 {
     )
 }
 
-/// A pixel's seed for an epoch: its samples' scrambling.
-pub fn path_seed(pixel: glam::UVec2, epoch: u32) -> u32 {
-    hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(epoch)))
-}
-
 /// A direction about `n` of density cos θ / π (`sample_cosine`; Malley's method).
 pub(crate) fn sample_cosine(n: Vec3, u: Vec2) -> Vec3 {
     let r = u.x.sqrt();
@@ -91,10 +90,16 @@ pub(crate) fn power_heuristic(chosen: f32, other: f32) -> f32 {
     if a > 0.0 { a / (a + b) } else { 0.0 }
 }
 
+/// Where the emitters' texels start: after the environment table's (`emitter_first`).
+fn emitter_first(scene: &PackedScene) -> u32 {
+    let g = &scene.path.globals;
+    g.table_width * g.table_height + if g.table_width > 0 { g.table_height } else { 0 }
+}
+
 /// The first of `count` cumulative values from `first` above `u` (the last is 1), and where `u`
-/// falls between it and the one before, in [0, 1) (`search_table`).
-fn search_table(texels: &[[f32; 4]], first: u32, count: u32, u: f32) -> Vec2 {
-    let value = |i: u32| texels[(first + i) as usize][0];
+/// falls between it and the one before, in [0, 1) (`search_table`); `channel` holds the values.
+fn search_table(texels: &[[f32; 4]], first: u32, count: u32, u: f32, channel: usize) -> Vec2 {
+    let value = |i: u32| texels[(first + i) as usize][channel];
     let (mut low, mut high) = (0, count - 1);
     while low < high {
         let middle = (low + high) / 2;
@@ -130,9 +135,9 @@ pub(crate) fn sample_environment(scene: &PackedScene, u: Vec2) -> (Vec3, f32) {
     let g = &scene.path.globals;
     let (width, height) = (g.table_width, g.table_height);
     let texels = &scene.path.texels;
-    let row = search_table(texels, width * height, height, u.x);
+    let row = search_table(texels, width * height, height, u.x, 0);
     let y = row.x as u32;
-    let column = search_table(texels, y * width, width, u.y);
+    let column = search_table(texels, y * width, width, u.y, 0);
     let uv = Vec2::new((column.x + column.y) / width as f32, (row.x + row.y) / height as f32);
     let dir = environment_direction(scene, uv);
     (dir, environment_pdf(scene, dir))
@@ -151,6 +156,67 @@ pub(crate) fn environment_pdf(scene: &PackedScene, dir: Vec3) -> f32 {
     let x = ((uv.x.max(0.0) * width as f32) as u32).min(width - 1);
     let y = ((uv.y.max(0.0) * height as f32) as u32).min(height - 1);
     scene.path.texels[(y * width + x) as usize][1] / (2.0 * PI * PI * sin_theta)
+}
+
+/// A point on an emitter: the triangle's index among the triangles, and its chance
+/// (`EmitterSample`).
+pub(crate) struct EmitterSample {
+    pub point: Vec3,
+    pub index: u32,
+    pub chance: f32,
+}
+
+/// An emitter drawn by power (u.x), and a point drawn uniformly over it (u.yz)
+/// (`sample_emitter`).
+pub(crate) fn sample_emitter(scene: &PackedScene, u: Vec3) -> EmitterSample {
+    let first = emitter_first(scene);
+    let drawn = search_table(&scene.path.texels, first, scene.path.globals.emitter_count, u.x, 1);
+    let texel = scene.path.texels[(first + drawn.x as u32) as usize];
+    let index = texel[0] as u32;
+    let t = &scene.triangles[index as usize];
+    let root = u.y.sqrt();
+    let point = (1.0 - root) * v3(t.v0) + root * (1.0 - u.z) * v3(t.v1) + root * u.z * v3(t.v2);
+    EmitterSample {
+        point,
+        index,
+        chance: texel[2],
+    }
+}
+
+/// The chance that [`sample_emitter`] draws triangle `index`; 0 for a triangle that emits
+/// nothing (`emitter_chance`).
+pub(crate) fn emitter_chance(scene: &PackedScene, index: u32) -> f32 {
+    let count = scene.path.globals.emitter_count;
+    if count == 0 {
+        return 0.0;
+    }
+    let first = emitter_first(scene) as usize;
+    let list = &scene.path.texels[first..first + count as usize];
+    let (mut low, mut high) = (0, count as usize - 1);
+    while low < high {
+        let middle = (low + high) / 2;
+        if (list[middle][0] as u32) < index {
+            low = middle + 1;
+        } else {
+            high = middle;
+        }
+    }
+    if list[low][0] as u32 == index {
+        list[low][2]
+    } else {
+        0.0
+    }
+}
+
+/// The density in solid angle of [`sample_emitter`]'s point on triangle `index` drawn with
+/// `chance`, `distance` away with the light's surface at cosine `cos_light` (`emitter_pdf`).
+pub(crate) fn emitter_pdf(scene: &PackedScene, index: u32, chance: f32, distance: f32, cos_light: f32) -> f32 {
+    let t = &scene.triangles[index as usize];
+    let area = 0.5 * (v3(t.v1) - v3(t.v0)).cross(v3(t.v2) - v3(t.v0)).length();
+    if !(area > 0.0) || !(cos_light > 0.0) {
+        return 0.0;
+    }
+    chance / area * distance * distance / cos_light
 }
 
 #[cfg(test)]

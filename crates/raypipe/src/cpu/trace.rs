@@ -7,7 +7,6 @@ use super::admit::{Primitives, RayQuery};
 use super::brdf::sample_specular;
 use super::environment::escaped_radiance;
 use super::intersect::{Hit, HitKind, Ray, any_plane, box_tests, closest_plane, reset_box_tests, v3};
-use super::sampling::path_seed;
 use super::shade::{
     ShadingFrame, Surface, ambient_share, direct_light, fresnel_schlick, gltf_direct_light, gltf_surface,
     normal_mapped, offset_origin, reflect, refracted_direction, surface_at, surface_material,
@@ -481,6 +480,12 @@ pub fn sample_offset(pixel: UVec2, index: u32) -> Vec2 {
 /// The seed of a pixel's sample's random sequence (`sample_seed`).
 pub(crate) fn sample_seed(pixel: UVec2, sample: u32) -> u32 {
     hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(sample)))
+}
+
+/// A pixel's seed for an epoch, which scrambles the path integrator's samples (`start_sample` in
+/// path.wgsl).
+pub fn path_seed(pixel: UVec2, epoch: u32) -> u32 {
+    hash_u32(pixel.x ^ hash_u32(pixel.y ^ hash_u32(epoch)))
 }
 
 /// The spread angle of the ray cone through a pixel (`pixel_spread`): the angle one pixel of

@@ -234,7 +234,7 @@ impl PackedScene {
             globals,
             max_depth: s.max_depth,
             integrator: s.integrator,
-            path: PathTables::new(scene.environment.as_ref()),
+            path: PathTables::new(scene.environment.as_ref(), &triangles, &materials),
             spheres,
             triangles,
             triangle_normals,

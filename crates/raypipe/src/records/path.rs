@@ -6,10 +6,17 @@
 //! most [`ENVIRONMENT_TABLE_WIDTH`] texels across: each texel's chance is its luminance times
 //! sin θ (the solid angle a row of an equirectangular map covers), a row is drawn from the rows'
 //! cumulative distribution and a texel from its row's, each by binary search.
+//!
+//! The emitters follow: the triangles whose material emits, in the triangles' order, each with
+//! its chance by power (its emission's luminance times its area when packed) and the cumulative
+//! distribution, for `sample_emitter` to draw one by binary search and `emitter_pdf` to find a
+//! hit triangle's chance.
 
 // `!(x > 0.0)` is true for a NaN, as the shader's tests are: the guards keep NaNs out.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::records::constants::MATERIAL_INDEX_MASK;
+use crate::records::{GpuMaterial, GpuTriangle};
 use crate::scene::Environment;
 use crate::scene::texture::Texture;
 use bytemuck::{Pod, Zeroable};
@@ -30,14 +37,21 @@ pub struct GpuPathGlobals {
     pub table_width: u32,
     /// Its height in texels.
     pub table_height: u32,
-    /// The chance that a vertex's area-light sample is drawn from the environment.
+    /// The chance that a vertex's area-light sample is drawn from the environment; the rest go
+    /// to the emitters.
     pub environment_share: f32,
+    /// Emitting triangles: their list follows the environment table's texels.
+    pub emitter_count: u32,
+    /// Padding to 32 bytes, a std140 uniform block's size (`@size(16)` in WGSL).
+    pub _pad: [u32; 3],
 }
 
 /// The parameters and the texels of the environment table: `table_width` x `table_height`
 /// texels row by row from the top, each the row's cumulative distribution up to and with it (x)
 /// and the texel's density over the unit square of (u, v) (y); then one texel a row, the rows'
-/// cumulative distribution (x). The last value of each distribution is exactly 1.
+/// cumulative distribution (x). The last value of each distribution is exactly 1. Then one texel
+/// an emitter: its triangle's index (x, exact in f32), the emitters' cumulative distribution up to
+/// and with it (y), its chance (z).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PathTables {
     /// The parameters.
@@ -49,16 +63,57 @@ pub struct PathTables {
 impl PathTables {
     /// The tables for a scene lit by `environment`, if any. An environment that is black
     /// everywhere has no table: rays that escape to it find nothing to weigh.
-    pub fn new(environment: Option<&Environment>) -> PathTables {
-        let Some(environment) = environment else {
-            return PathTables::default();
+    pub fn new(environment: Option<&Environment>, triangles: &[GpuTriangle], materials: &[GpuMaterial]) -> PathTables {
+        let mut tables = environment
+            .and_then(|environment| {
+                let mut map = environment.radiance().clone();
+                while map.width > ENVIRONMENT_TABLE_WIDTH {
+                    map = map.halved();
+                }
+                environment_table(&map)
+            })
+            .unwrap_or_default();
+        let emitters = emitter_list(triangles, materials);
+        tables.globals.emitter_count = (emitters.len()) as u32;
+        tables.texels.extend(emitters);
+        // Half the light samples to each where both light the scene: their powers are not in
+        // one unit (a radiance seen from everywhere, and emitted watts).
+        let has_table = tables.globals.table_width > 0;
+        tables.globals.environment_share = match (has_table, tables.globals.emitter_count > 0) {
+            (true, true) => 0.5,
+            (true, false) => 1.0,
+            (false, _) => 0.0,
         };
-        let mut map = environment.radiance().clone();
-        while map.width > ENVIRONMENT_TABLE_WIDTH {
-            map = map.halved();
-        }
-        environment_table(&map).unwrap_or_default()
+        tables
     }
+}
+
+/// The emitting triangles' texels, by power.
+fn emitter_list(triangles: &[GpuTriangle], materials: &[GpuMaterial]) -> Vec<[f32; 4]> {
+    let powers: Vec<(usize, f64)> = triangles
+        .iter()
+        .enumerate()
+        .filter_map(|(i, t)| {
+            let material = &materials[(t.material & MATERIAL_INDEX_MASK) as usize];
+            let [r, g, b] = material.emission;
+            let glow = luminance([r, g, b, 0.0]);
+            let [v0, v1, v2] = [t.v0, t.v1, t.v2].map(|v| glam::DVec3::from_array(v.map(f64::from)));
+            let area = 0.5 * (v1 - v0).cross(v2 - v0).length();
+            let power = glow * area;
+            (power > 0.0 && power.is_finite()).then_some((i, power))
+        })
+        .collect();
+    let total: f64 = powers.iter().map(|(_, p)| p).sum();
+    let mut running = 0.0;
+    powers
+        .iter()
+        .enumerate()
+        .map(|(k, &(i, power))| {
+            running += power;
+            let cumulative = if k + 1 == powers.len() { 1.0 } else { running / total };
+            [i as f32, cumulative as f32, (power / total) as f32, 0.0]
+        })
+        .collect()
 }
 
 /// Rec. 709 luminance.
@@ -105,10 +160,9 @@ fn environment_table(map: &Texture) -> Option<PathTables> {
     }
     Some(PathTables {
         globals: GpuPathGlobals {
-            epoch: 0,
             table_width: width as u32,
             table_height: height as u32,
-            environment_share: 1.0,
+            ..GpuPathGlobals::default()
         },
         texels,
     })
@@ -120,7 +174,7 @@ fn environment_table(map: &Texture) -> Option<PathTables> {
 pub const LAYOUTS: &[super::layouts::StructLayout] = &[super::layouts::struct_layout!(
     GpuPathGlobals,
     "PathGlobals",
-    [epoch, table_width, table_height, environment_share]
+    [epoch, table_width, table_height, environment_share, emitter_count]
 )];
 
 #[cfg(test)]
@@ -133,7 +187,7 @@ mod tests {
     #[test]
     fn the_table_is_a_distribution_over_the_map() {
         let environment = Environment::from_function(64, |d| Vec3::splat(1.0 + 10.0 * d.y.max(0.0).powi(8))).unwrap();
-        let tables = PathTables::new(Some(&environment));
+        let tables = PathTables::new(Some(&environment), &[], &[]);
         let g = tables.globals;
         assert_eq!((g.table_width, g.table_height), (64, 32));
         let cells = (g.table_width * g.table_height) as usize;
@@ -155,10 +209,42 @@ mod tests {
         );
     }
 
+    /// Emitters are listed in the triangles' order with chances by power (luminance times area):
+    /// a triangle twice as bright and twice as big is four times as likely; dark ones are left out.
+    #[test]
+    fn emitters_are_drawn_by_power() {
+        let triangle = |scale: f32, material: u32| GpuTriangle {
+            v0: [0.0, 0.0, 0.0],
+            v1: [scale, 0.0, 0.0],
+            v2: [0.0, scale, 0.0],
+            material,
+            ..GpuTriangle::default()
+        };
+        let glowing = |e: f32| GpuMaterial {
+            emission: [e; 3],
+            ..GpuMaterial::default()
+        };
+        let materials = [glowing(0.0), glowing(1.0), glowing(2.0)];
+        let triangles = [triangle(1.0, 1), triangle(1.0, 0), triangle(2.0f32.sqrt(), 2)];
+        let tables = PathTables::new(None, &triangles, &materials);
+        assert_eq!(tables.globals.emitter_count, 2);
+        assert_eq!(tables.globals.environment_share, 0.0);
+        let [first, second] = [tables.texels[0], tables.texels[1]];
+        assert_eq!((first[0], second[0]), (0.0, 2.0), "triangle indices, in order");
+        assert!(
+            (first[2] - 0.2).abs() < 1e-6 && (second[2] - 0.8).abs() < 1e-6,
+            "{first:?} {second:?}"
+        );
+        assert_eq!(second[1], 1.0);
+        let environment = Environment::uniform(Vec3::ONE);
+        let both = PathTables::new(Some(&environment), &triangles, &materials);
+        assert_eq!(both.globals.environment_share, 0.5);
+    }
+
     #[test]
     fn black_or_missing_environments_have_no_table() {
-        assert_eq!(PathTables::new(None).globals.table_width, 0);
+        assert_eq!(PathTables::new(None, &[], &[]).globals.table_width, 0);
         let black = Environment::uniform(Vec3::ZERO);
-        assert_eq!(PathTables::new(Some(&black)).texels.len(), 0);
+        assert_eq!(PathTables::new(Some(&black), &[], &[]).texels.len(), 0);
     }
 }

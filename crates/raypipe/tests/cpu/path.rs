@@ -166,3 +166,58 @@ fn a_lambertian_plane_under_a_point_light_shows_the_closed_form_irradiance() {
     );
     assert_eq!(PLANE_SIZE % 2, 1, "the centre pixel looks straight down");
 }
+
+/// The same plane under an emitting square of radiance Le and half side a, at height h straight
+/// above the pixel and facing it: the irradiance is 4 Le (a / r) atan(a / r) with r = √(a² + h²)
+/// (four corner rectangles of the textbook form factor), and L = (base / π) E. The square is
+/// single-sided, so the camera above sees the plane through its back. Its light comes from the
+/// emitter samples and the BSDF's, weighed by MIS; dropping either weight, or the emitter
+/// samples, moves the mean by far more than the tolerance.
+#[test]
+fn a_lambertian_plane_under_an_emitting_square_shows_the_closed_form_irradiance() {
+    let base = 0.6;
+    let lambert = Material {
+        color: Vec3::splat(base),
+        pbr: Some(Pbr {
+            metallic: 0.0,
+            roughness: 1.0,
+            specular_factor: 0.0,
+            ..Pbr::default()
+        }),
+        ..Material::default()
+    };
+    let (radiance, a, h) = (3.0f32, 0.5f32, 1.0f32);
+    let emitter = Material {
+        color: Vec3::ZERO,
+        emission: Vec3::splat(radiance),
+        pbr: Some(Pbr::default()),
+        double_sided: false,
+        ..Material::default()
+    };
+    let mut scene = path_traced(plane_scene(lambert, vec![]), 3);
+    scene.materials.push(emitter);
+    let corners = [(-a, -a), (a, -a), (a, a), (-a, a)].map(|(x, y)| Vec3::new(x, y, h));
+    // Facing -z, down to the plane.
+    scene
+        .triangles
+        .extend(crate::common::quad_triangles(corners, 1, false, None));
+    let mut packed = raypipe::records::PackedScene::new(&scene).unwrap();
+    assert_eq!(packed.path.globals.emitter_count, 2, "both triangles are emitters");
+    packed.build_bvh();
+    let frame = raypipe::cpu::render_with(
+        &packed,
+        raypipe::modes::Accel::Threaded,
+        raypipe::cpu::Count::Rays,
+        4096,
+        &|| {},
+    )
+    .unwrap();
+    let r = (a * a + h * h).sqrt() as f64;
+    let irradiance = 4.0 * radiance as f64 * (a as f64 / r) * (a as f64 / r).atan();
+    let expected = (base as f64 / PI * irradiance) as f32;
+    let got = pixel(&frame, PLANE_SIZE / 2, PLANE_SIZE / 2);
+    assert!(
+        (got - Vec3::splat(expected)).abs().max_element() < 0.02 * expected,
+        "{got}, the formula says {expected}"
+    );
+}

@@ -3,15 +3,16 @@
 // Mirrored by src/cpu/sampling.rs.
 
 // The path integrator's parameters: the accumulation's epoch (samples restart at 0 with a new one,
-// which scrambles them anew), the environment's sampling table and the chance that a light sample
-// goes to the environment (src/records/path.rs).
+// which scrambles them anew), the environment's sampling table, the chance that a light sample
+// goes to the environment rather than the emitters, and the emitters' count (src/records/path.rs).
 struct PathGlobals {
     epoch: u32,
     // The table's size in texels; 0 where the scene has no environment to sample.
     table_width: u32,
     table_height: u32,
-    // The chance that the area-light sample of a vertex is drawn from the environment.
     environment_share: f32,
+    // The size pads the block to 32 bytes, as std140 (GL's uniform blocks) rounds it.
+    @size(16) emitter_count: u32,
 }
 
 // The pixel's seed for this epoch, and which of its samples is traced (the Sobol index).
@@ -119,14 +120,22 @@ fn table_texel(index: u32) -> vec4<f32> {
     return textureLoad(path_texels, vec2<u32>(index % PATH_TEXELS_PER_ROW, index / PATH_TEXELS_PER_ROW), 0);
 }
 
+// Where the emitters' texels start: after the environment table's.
+fn emitter_first() -> u32 {
+    let width = path_globals.table_width;
+    let height = path_globals.table_height;
+    return width * height + select(0u, height, width > 0u);
+}
+
 // The first of `count` cumulative values from `first` above u (the last is 1), and where u falls
 // between it and the one before, in [0, 1).
-fn search_table(first: u32, count: u32, u: f32) -> vec2<f32> {
+// `channel` holds the values: x for the environment's, y for the emitters'.
+fn search_table(first: u32, count: u32, u: f32, channel: u32) -> vec2<f32> {
     var low = 0u;
     var high = count - 1u;
     while (low < high) {
         let middle = (low + high) / 2u;
-        if (table_texel(first + middle).x > u) {
+        if (table_texel(first + middle)[channel] > u) {
             high = middle;
         } else {
             low = middle + 1u;
@@ -134,9 +143,9 @@ fn search_table(first: u32, count: u32, u: f32) -> vec2<f32> {
     }
     var below = 0.0;
     if (low > 0u) {
-        below = table_texel(first + low - 1u).x;
+        below = table_texel(first + low - 1u)[channel];
     }
-    let above = table_texel(first + low).x;
+    let above = table_texel(first + low)[channel];
     let within = select(0.5, (u - below) / (above - below), above > below);
     return vec2<f32>(f32(low), clamp(within, 0.0, 0.99999994));
 }
@@ -155,9 +164,9 @@ fn environment_direction(uv: vec2<f32>) -> vec3<f32> {
 fn sample_environment(u: vec2<f32>) -> vec4<f32> {
     let width = path_globals.table_width;
     let height = path_globals.table_height;
-    let row = search_table(width * height, height, u.x);
+    let row = search_table(width * height, height, u.x, 0u);
     let y = u32(row.x);
-    let column = search_table(y * width, width, u.y);
+    let column = search_table(y * width, width, u.y, 0u);
     let uv = vec2<f32>((column.x + column.y) / f32(width), (row.x + row.y) / f32(height));
     let dir = environment_direction(uv);
     return vec4<f32>(dir, environment_pdf(dir));
@@ -176,4 +185,59 @@ fn environment_pdf(dir: vec3<f32>) -> f32 {
     let x = min(u32(max(uv.x, 0.0) * f32(width)), width - 1u);
     let y = min(u32(max(uv.y, 0.0) * f32(height)), height - 1u);
     return table_texel(y * width + x).y / (2.0 * PI * PI * sin_theta);
+}
+
+// A point on an emitter: the triangle's index among the triangles, and its chance.
+struct EmitterSample {
+    point: vec3<f32>,
+    index: u32,
+    chance: f32,
+}
+
+// An emitter drawn by power (u.x), and a point drawn uniformly over it (u.yz).
+fn sample_emitter(u: vec3<f32>) -> EmitterSample {
+    let drawn = search_table(emitter_first(), path_globals.emitter_count, u.x, 1u);
+    let texel = table_texel(emitter_first() + u32(drawn.x));
+    let index = u32(texel.x);
+    let triangle = load_triangle(index);
+    let root = sqrt(u.y);
+    let point = (1.0 - root) * triangle.v0 + root * (1.0 - u.z) * triangle.v1 + root * u.z * triangle.v2;
+    return EmitterSample(point, index, texel.z);
+}
+
+// The chance that sample_emitter draws triangle `index`: its texel's, found by binary search in
+// the list (in the triangles' order); 0 for a triangle that emits nothing.
+fn emitter_chance(index: u32) -> f32 {
+    let count = path_globals.emitter_count;
+    if (count == 0u) {
+        return 0.0;
+    }
+    let first = emitter_first();
+    var low = 0u;
+    var high = count - 1u;
+    while (low < high) {
+        let middle = (low + high) / 2u;
+        if (u32(table_texel(first + middle).x) < index) {
+            low = middle + 1u;
+        } else {
+            high = middle;
+        }
+    }
+    let texel = table_texel(first + low);
+    return select(0.0, texel.z, u32(texel.x) == index);
+}
+
+// A triangle's area.
+fn triangle_area(triangle: Triangle) -> f32 {
+    return 0.5 * length(cross(triangle.v1 - triangle.v0, triangle.v2 - triangle.v0));
+}
+
+// The density in solid angle, seen from `distance` away with the light's surface at cosine
+// `cos_light` to the ray, of sample_emitter's point on triangle `index` drawn with `chance`.
+fn emitter_pdf(index: u32, chance: f32, distance: f32, cos_light: f32) -> f32 {
+    let area = triangle_area(load_triangle(index));
+    if (!(area > 0.0) || !(cos_light > 0.0)) {
+        return 0.0;
+    }
+    return chance / area * distance * distance / cos_light;
 }
