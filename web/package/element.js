@@ -1,7 +1,7 @@
 // <raypipe-viewer>: raypipe as one element of a page, defined when the package's module
 // (raypipe.js) is imported. Its attributes follow model-viewer's where they mean the same (src, environment-image,
 // exposure, tone-mapping, camera-controls, alt, poster, loading), with raypipe's own beside them
-// (accel, backend, render-scale). The canvas inside draws at the element's size on the page times
+// (accel, integrator, backend, render-scale). The canvas inside draws at the element's size on the page times
 // the device pixel ratio times render-scale, and follows it as it changes.
 import { fetchFile } from "./fetch.js";
 import { createViewer } from "./raypipe.js";
@@ -42,7 +42,7 @@ img { position: absolute; inset: 0; width: 100%; height: 100%; object-fit: conta
 export class RaypipeViewerElement extends HTMLElement {
   static observedAttributes = [
     "src", "environment-image", "exposure", "tone-mapping", "camera-controls", "alt", "poster", "loading",
-    "accel", "backend", "render-scale", "frame-budget", "auto-rotate", "camera-orbit", "field-of-view",
+    "accel", "integrator", "backend", "render-scale", "frame-budget", "auto-rotate", "camera-orbit", "field-of-view",
   ];
 
   #viewer = null;
@@ -161,6 +161,8 @@ export class RaypipeViewerElement extends HTMLElement {
   set loading(value) { this.#reflect("loading", value); }
   get accel() { return this.getAttribute("accel"); }
   set accel(value) { this.#reflect("accel", value); }
+  get integrator() { return this.getAttribute("integrator"); }
+  set integrator(value) { this.#reflect("integrator", value); }
   get backend() { return this.getAttribute("backend") ?? "auto"; }
   set backend(value) { this.#reflect("backend", value); }
   /// A number, or "auto"; reading it gives the scale drawn at now.
@@ -235,7 +237,7 @@ export class RaypipeViewerElement extends HTMLElement {
       this.#frame = requestAnimationFrame(() => this.#fit());
     });
     this.#resizes.observe(this);
-    for (const name of ["exposure", "tone-mapping", "camera-controls", "accel"]) this.#apply(name);
+    for (const name of ["exposure", "tone-mapping", "camera-controls", "accel", "integrator"]) this.#apply(name);
     this.#camera();
     this.#rotate();
     this.#govern();
@@ -380,6 +382,9 @@ export class RaypipeViewerElement extends HTMLElement {
         viewer.set({ tonemap });
       } else if (name === "accel" && value !== null) {
         viewer.set({ accel: value });
+      } else if (name === "integrator" && value !== null) {
+        // Without the attribute, the scene's own: path for a glTF file.
+        viewer.set({ integrator: value });
       }
     } catch (error) {
       this.#fail(error.message);

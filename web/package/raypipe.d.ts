@@ -9,6 +9,8 @@ export type Memory = "uniform" | "storage" | "texture";
 export type Pipeline = "fragment" | "compute";
 export type View = "color" | "depth" | "normal" | "cost";
 export type ToneMap = "none" | "neutral" | "aces";
+/** How light is carried: the paper's Whitted tracer, or a path tracer (the default for glTF files). */
+export type Integrator = "whitted" | "path";
 
 /** Settings a running viewer changes (`viewer.set`), by the page's URL names. */
 export interface Settings {
@@ -20,6 +22,7 @@ export interface Settings {
   pipeline?: Pipeline;
   /** Bounces per ray. */
   depth?: number;
+  integrator?: Integrator;
   aov?: View;
   /** Stops: radiance times 2^EV before the tone map. */
   exposure?: number;
@@ -77,6 +80,7 @@ export interface ViewerStatus {
   /** The memory modes this adapter offers. */
   memories: Memory[];
   depth: number;
+  integrator: Integrator;
   aov: View;
   exposure: number;
   tonemap: ToneMap;
@@ -161,7 +165,15 @@ export declare function ready(): Promise<unknown>;
 
 /** The settings' lists and limits, and the file types `load` opens. */
 export declare function choices(): Promise<{
-  choices: { accel: Accel[]; builder: Builder[]; memory: Memory[]; pipeline: Pipeline[]; aov: View[]; tonemap: ToneMap[] };
+  choices: {
+    accel: Accel[];
+    builder: Builder[];
+    memory: Memory[];
+    pipeline: Pipeline[];
+    aov: View[];
+    tonemap: ToneMap[];
+    integrator: Integrator[];
+  };
   accept: string;
   maxDepth: number;
   maxSpp: number;
@@ -202,6 +214,8 @@ export declare class RaypipeViewerElement extends HTMLElement {
   poster: string | null;
   loading: "auto" | "lazy" | "eager";
   accel: Accel | null;
+  /** `null`: the scene's own (path for a glTF file). */
+  integrator: Integrator | null;
   backend: "auto" | "webgpu" | "webgl2";
   /** The drawing buffer's share of the element's device pixels, above 0, at most 1; set `"auto"` to hold `frameBudget` (reading it then gives the scale drawn at). */
   renderScale: number | "auto";

@@ -22,7 +22,7 @@ export function ready() {
   return module;
 }
 
-/// What the settings take: `{ choices: { accel, builder, memory, pipeline, aov, tonemap }, accept,
+/// What the settings take: `{ choices: { accel, builder, memory, pipeline, aov, tonemap, integrator }, accept,
 /// maxDepth, maxSpp }` (lists of names, the file types `load` opens, limits).
 export async function choices() {
   await ready();

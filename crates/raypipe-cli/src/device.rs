@@ -216,6 +216,8 @@ pub fn render_frames(
             for &(frame, t) in times {
                 // The first frame too: a skinning pass starts at the scene's time 0.
                 moving.pose(t)?;
+                // The path integrator draws frame k's numbers, wherever the sequence starts.
+                moving.renderer_mut().set_epoch(frame);
                 let start = Instant::now();
                 let timed = block_on(moving.render_samples(options.samples, |_| {}))?;
                 let wall = start.elapsed().as_secs_f64() * 1e3;
@@ -231,6 +233,7 @@ pub fn render_frames(
             let mut posed = PosedScene::new(scene, options.accel, PoseOn::Cpu)?;
             for &(frame, t) in times {
                 outcome.builds.extend(posed.pose(t)?.build);
+                posed.set_epoch(frame);
                 let start = Instant::now();
                 let frame_image = render_cpu(posed.packed(), options)?;
                 outcome.render_ms.push(start.elapsed().as_secs_f64() * 1e3);

@@ -112,6 +112,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             builder: args.scene.builder,
             memory: args.scene.memory,
             depth: scene.settings.max_depth,
+            integrator: scene.settings.integrator,
             view: args.scene.aov,
             paused: args.paused,
             vsync: !args.no_vsync,

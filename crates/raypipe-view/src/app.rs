@@ -495,6 +495,7 @@ fn mode_key(code: KeyCode) -> Option<ModeKey> {
         KeyCode::KeyV => ModeKey::View,
         KeyCode::BracketLeft => ModeKey::FewerBounces,
         KeyCode::BracketRight => ModeKey::MoreBounces,
+        KeyCode::KeyI => ModeKey::Integrator,
         KeyCode::Space => ModeKey::Pause,
         _ => return None,
     })
@@ -515,6 +516,7 @@ mod tests {
             KeyCode::KeyV,
             KeyCode::BracketLeft,
             KeyCode::BracketRight,
+            KeyCode::KeyI,
             KeyCode::Space,
             KeyCode::KeyW,
             KeyCode::Enter,
@@ -522,6 +524,6 @@ mod tests {
         for code in codes {
             assert_eq!(mode_key(code), ModeKey::from_code(&format!("{code:?}")), "{code:?}");
         }
-        assert_eq!(codes.iter().filter(|&&c| mode_key(c).is_some()).count(), 7);
+        assert_eq!(codes.iter().filter(|&&c| mode_key(c).is_some()).count(), 8);
     }
 }

@@ -25,7 +25,7 @@ use raypipe::image::Frame;
 use raypipe::image::tonemap::DisplayTransform;
 use raypipe::modes::Aov;
 use raypipe::modes::Backend;
-use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Builder, Integrator, MemoryMode, Pipeline};
 use raypipe::scene::{Environment, Scene};
 use std::path::{Path, PathBuf};
 
@@ -40,6 +40,8 @@ pub struct Modes {
     pub memory: MemoryMode,
     /// Bounces after the primary ray.
     pub depth: u32,
+    /// How light is carried: Whitted's or the path tracer.
+    pub integrator: Integrator,
     pub view: Aov,
     /// Whether moving scenes stand still (at the time they reached).
     pub paused: bool,
@@ -49,7 +51,8 @@ pub struct Modes {
     pub display: DisplayTransform,
 }
 
-/// A key that changes a mode, as the window and the page both bind them: B, G, M, V, [ and ], Space.
+/// A key that changes a mode, as the window and the page both bind them: B, G, M, V, [ and ], I,
+/// Space.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ModeKey {
     /// B: the next acceleration mode.
@@ -64,6 +67,8 @@ pub enum ModeKey {
     FewerBounces,
     /// ]: one bounce more.
     MoreBounces,
+    /// I: the other integrator.
+    Integrator,
     /// Space: pause or resume the motion.
     Pause,
 }
@@ -79,6 +84,7 @@ impl ModeKey {
             "KeyV" => Self::View,
             "BracketLeft" => Self::FewerBounces,
             "BracketRight" => Self::MoreBounces,
+            "KeyI" => Self::Integrator,
             "Space" => Self::Pause,
             _ => return None,
         })
@@ -110,6 +116,7 @@ impl Modes {
             ModeKey::View => self.view = next(self.view),
             ModeKey::FewerBounces => self.depth = self.depth.saturating_sub(1),
             ModeKey::MoreBounces => self.depth = (self.depth + 1).min(raypipe::scene::MAX_DEPTH_LIMIT),
+            ModeKey::Integrator => self.integrator = next(self.integrator),
             ModeKey::Pause => self.paused = !self.paused,
         }
         self
@@ -118,15 +125,21 @@ impl Modes {
     /// Whether going from `current` to these modes needs a new tracer (another shader or scene
     /// records); the other views share one, but the cost view needs the shader's cost variant.
     pub fn needs_new_tracer(&self, current: &Modes) -> bool {
-        (self.pipeline, self.accel, self.builder, self.memory, self.depth)
-            != (
-                current.pipeline,
-                current.accel,
-                current.builder,
-                current.memory,
-                current.depth,
-            )
-            || (self.view == Aov::Cost) != (current.view == Aov::Cost)
+        (
+            self.pipeline,
+            self.accel,
+            self.builder,
+            self.memory,
+            self.depth,
+            self.integrator,
+        ) != (
+            current.pipeline,
+            current.accel,
+            current.builder,
+            current.memory,
+            current.depth,
+            current.integrator,
+        ) || (self.view == Aov::Cost) != (current.view == Aov::Cost)
     }
 
     /// Whether the device can trace with these modes at all.

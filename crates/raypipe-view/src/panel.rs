@@ -3,7 +3,7 @@
 use crate::Modes;
 use raypipe::Choice;
 use raypipe::modes::Aov;
-use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Builder, Integrator, MemoryMode, Pipeline};
 use raypipe::scene::ToneMap;
 
 /// What the panel shows.
@@ -37,7 +37,7 @@ pub struct Playback {
 }
 
 pub const KEYS: &str = "drag: orbit · right or middle drag: pan · wheel: dolly · WASD/QE: fly · R: reset\n\
-    G: pipeline · B: acceleration · M: memory · [ ]: depth · V: view · Space: pause · Y: vsync · P: screenshot · H: panel";
+    I: integrator · G: pipeline · B: acceleration · M: memory · [ ]: depth · V: view · Space: pause · Y: vsync · P: screenshot · H: panel";
 
 fn choose<T: Choice>(ui: &mut egui::Ui, label: &str, value: &mut T) {
     choose_from(ui, label, value, T::ALL);
@@ -83,6 +83,7 @@ pub fn draw(ctx: &egui::Context, modes: &Modes, readout: &Readout, playback: Opt
                 None => ui.label("BVH build: none (brute force)"),
             };
             ui.separator();
+            choose::<Integrator>(ui, "integrator", &mut asked.integrator);
             choose::<Pipeline>(ui, "pipeline", &mut asked.pipeline);
             choose_from(ui, "acceleration", &mut asked.accel, readout.accels);
             choose::<Builder>(ui, "BVH builder", &mut asked.builder);

@@ -548,7 +548,8 @@ impl Player {
 
 fn log_modes(modes: &Modes) {
     log::info!(
-        "pipeline {}, acceleration {} (built by {}), memory {}, depth {}, view {}{}",
+        "integrator {}, pipeline {}, acceleration {} (built by {}), memory {}, depth {}, view {}{}",
+        modes.integrator,
         modes.pipeline,
         modes.accel,
         modes.builder,

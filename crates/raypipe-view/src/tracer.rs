@@ -57,6 +57,7 @@ impl Tracer {
         modes.check(ctx)?;
         let mut scene = scene.clone();
         scene.settings.max_depth = modes.depth;
+        scene.settings.integrator = modes.integrator;
         (scene.settings.width, scene.settings.height) = size;
         let options = RendererOptions {
             pipeline: modes.pipeline,

@@ -6,7 +6,7 @@ use raypipe::Choice;
 use raypipe::choice::impl_choice;
 use raypipe::image::tonemap::{DisplayTransform, MAX_EXPOSURE};
 use raypipe::modes::Aov;
-use raypipe::modes::{Accel, Builder, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, Builder, Integrator, MemoryMode, Pipeline};
 use raypipe::scene::MAX_DEPTH_LIMIT;
 use raypipe::scene::ToneMap;
 use raypipe::scene::environment::ENVIRONMENT_EXTENSIONS;
@@ -58,6 +58,7 @@ pub enum Setting {
     Memory(MemoryMode),
     Pipeline(Pipeline),
     Depth(u32),
+    Integrator(Integrator),
     View(Aov),
     Paused(bool),
     /// What a model file opened on the page stands on.
@@ -86,6 +87,7 @@ pub const KEYS: &[&str] = &[
     "memory",
     "pipeline",
     "depth",
+    "integrator",
     "aov",
     "paused",
     "floor",
@@ -150,6 +152,7 @@ impl Setting {
             "memory" => Setting::Memory(choice(key, value)?),
             "pipeline" => Setting::Pipeline(choice(key, value)?),
             "depth" => Setting::Depth(number(0..=MAX_DEPTH_LIMIT)?),
+            "integrator" => Setting::Integrator(choice(key, value)?),
             "aov" => Setting::View(choice(key, value)?),
             "paused" => Setting::Paused(flag()?),
             "floor" => Setting::Floor(if flag()? { Floor::Checker } else { Floor::None }),
@@ -196,6 +199,8 @@ pub struct StartParams {
     pub pipeline: Pipeline,
     /// `None`: the scene's own.
     pub depth: Option<u32>,
+    /// `None`: the scene's own (path for a glTF file, Whitted for the paper's scenes).
+    pub integrator: Option<Integrator>,
     pub view: Aov,
     pub paused: bool,
     /// What a model file stands on.
@@ -225,6 +230,7 @@ impl Default for StartParams {
             memory: None,
             pipeline: Pipeline::Fragment,
             depth: None,
+            integrator: None,
             view: Aov::Color,
             paused: false,
             floor: Floor::Checker,
@@ -265,6 +271,7 @@ impl StartParams {
             Setting::Memory(memory) => self.memory = Some(memory),
             Setting::Pipeline(pipeline) => self.pipeline = pipeline,
             Setting::Depth(depth) => self.depth = Some(depth),
+            Setting::Integrator(integrator) => self.integrator = Some(integrator),
             Setting::View(view) => self.view = view,
             Setting::Paused(paused) => self.paused = paused,
             Setting::Floor(floor) => self.floor = floor,
@@ -296,6 +303,7 @@ pub fn control_choices() -> Vec<(&'static str, Vec<&'static str>)> {
         ("pipeline", names::<Pipeline>()),
         ("aov", names::<Aov>()),
         ("tonemap", names::<ToneMap>()),
+        ("integrator", names::<Integrator>()),
     ]
 }
 
@@ -326,6 +334,7 @@ mod tests {
             ("height", "240"),
             ("backend", "webgl2"),
             ("depth", "3"),
+            ("integrator", "path"),
             ("aov", "normal"),
             ("spp", "1"),
             ("model", "models/bunny.ply"),
@@ -349,6 +358,7 @@ mod tests {
                 memory: Some(MemoryMode::Texture),
                 pipeline: Pipeline::Fragment,
                 depth: Some(3),
+                integrator: Some(Integrator::Path),
                 view: Aov::Normal,
                 paused: false,
                 floor: Floor::None,
@@ -390,7 +400,7 @@ mod tests {
                 "accel=bvh: expected one of brute, stack, stackless, threaded, wide",
                 "width=0: expected a whole number in 1..=8192",
                 "depth=33: expected a whole number in 0..=32",
-                "unknown setting 'colour' (known: scene, model, environment, accel, builder, memory, pipeline, depth, aov, paused, floor, time, speed, spp, exposure, tonemap, width, height, backend)",
+                "unknown setting 'colour' (known: scene, model, environment, accel, builder, memory, pipeline, depth, integrator, aov, paused, floor, time, speed, spp, exposure, tonemap, width, height, backend)",
                 "time=NaN: expected a number of seconds in 0..=86400",
                 "exposure=inf: expected a number of stops in -64..=64",
                 "tonemap=filmic: expected one of none, neutral, aces",
@@ -401,7 +411,7 @@ mod tests {
     #[test]
     fn every_listed_control_value_parses() {
         let lists = control_choices();
-        assert_eq!(lists.len(), 6);
+        assert_eq!(lists.len(), 7);
         for (key, names) in lists {
             assert!(names.len() >= 2, "{key}: {names:?}");
             for name in names {

@@ -33,6 +33,7 @@ pub struct Status {
     /// The memory modes the adapter offers.
     pub memories: Vec<&'static str>,
     pub depth: u32,
+    pub integrator: &'static str,
     pub aov: &'static str,
     pub exposure: f32,
     pub tonemap: &'static str,
@@ -136,6 +137,7 @@ impl Status {
             field("memory", "Memory", Text(self.memory)),
             field("memories", "Memory[]", Texts(&self.memories)),
             field("depth", "number", Number(self.depth.into())),
+            field("integrator", "Integrator", Text(self.integrator)),
             field("aov", "View", Text(self.aov)),
             field("exposure", "number", Number(self.exposure.into())),
             field("tonemap", "ToneMap", Text(self.tonemap)),

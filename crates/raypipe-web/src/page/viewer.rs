@@ -49,6 +49,7 @@ impl Viewer {
             Setting::Memory(memory) => asked.memory = memory,
             Setting::Pipeline(pipeline) => asked.pipeline = pipeline,
             Setting::Depth(depth) => asked.depth = depth,
+            Setting::Integrator(integrator) => asked.integrator = integrator,
             Setting::View(view) => asked.view = view,
             Setting::Paused(paused) => asked.paused = paused,
             Setting::Exposure(ev) => asked.display.exposure = ev,

@@ -87,6 +87,11 @@ impl PosedScene {
         &self.packed
     }
 
+    /// The path integrator's epoch of the records' samples (a frame's number: `Renderer::set_epoch`).
+    pub fn set_epoch(&mut self, epoch: u32) {
+        self.packed.path.globals.epoch = epoch;
+    }
+
     /// The times of the last two poses.
     pub fn poses(&self) -> Poses {
         self.poses

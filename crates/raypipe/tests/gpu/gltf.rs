@@ -20,11 +20,13 @@ use raypipe::scene::model::{ModelOptions, gltf_scene};
 /// centre, where bilinear filtering gives the texel itself.
 const SIZE: u32 = 36;
 
-/// The scene of a builder's file at SIZE x SIZE, lit by ambient light alone at full strength and
-/// with no bounces, so that a pixel's colour is its (dielectric) surface's albedo.
+/// The scene of a builder's file at SIZE x SIZE, lit by the Whitted integrator's ambient light
+/// alone at full strength and with no bounces, so that a pixel's colour is its (dielectric)
+/// surface's albedo.
 fn albedo_scene(builder: &GltfBuilder) -> PackedScene {
     let file = parse(&builder.gltf(), Files::None, &mut Vec::new()).unwrap();
     let mut scene = gltf_scene(&file, "test.gltf", &ModelOptions::default()).unwrap();
+    scene.settings.integrator = Integrator::Whitted;
     scene.settings.width = SIZE;
     scene.settings.height = SIZE;
     scene.settings.ambient = 1.0;
@@ -270,6 +272,10 @@ fn gpu_matches_cpu_in(ctx: &GpuContext, scene: &Scene, name: &str, memory_modes:
     let cpu = render_cpu(&packed, Accel::Threaded);
     for &memory in memory_modes {
         let gpu = render_gpu(ctx, &packed, memory, Accel::Threaded);
+        assert!(
+            gpu.color.iter().flatten().all(|c| c.is_finite()),
+            "{name}-{memory:?}: a pixel that is not finite"
+        );
         assert_frames_match(&format!("{name}-{memory:?}"), &gpu, &cpu);
     }
     cpu.depth().data.iter().filter(|d| d.is_finite()).count()

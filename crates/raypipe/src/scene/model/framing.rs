@@ -10,7 +10,9 @@ use crate::modes::Integrator;
 use crate::scene::animation::ClipChoice;
 use crate::scene::environment::Environment;
 use crate::scene::gltf::GltfScene;
-use crate::scene::{Camera, Checker, Light, LightKind, Material, Plane, RenderSettings, Scene, Similarity, ToneMap};
+use crate::scene::{
+    Camera, Checker, Light, LightKind, Material, Pbr, Plane, RenderSettings, Scene, Similarity, ToneMap,
+};
 use glam::Vec3;
 
 /// What a caller says of a model file it renders alone: triangles or spheres, how many spheres, a
@@ -110,6 +112,10 @@ pub fn gltf_scene(gltf: &GltfScene, shown: &str, options: &ModelOptions) -> Resu
         None => {
             scene.camera = framing.camera();
             scene.planes.extend(framing.floor(options.floor));
+            // The floor belongs to the picture: a glTF surface like the model's, under the same
+            // light.
+            scene.materials[1] = gltf_floor(FLOOR_LIGHT);
+            scene.materials[2] = gltf_floor(FLOOR_DARK);
         }
     }
     scene.lights = gltf.lights.iter().map(|light| place_light(light, &place)).collect();
@@ -176,6 +182,27 @@ fn framing_materials() -> Vec<Material> {
             ..Material::default()
         },
     ]
+}
+
+/// The albedos of a framed glTF's floor checker: a light grey and a darker one, both well inside
+/// what paper and paint reflect (a photographer's grey card is 0.18), so that under the framing
+/// lights neither clips to white.
+pub const FLOOR_LIGHT: f32 = 0.5;
+/// The checker's darker squares.
+pub const FLOOR_DARK: f32 = 0.25;
+
+/// A framed glTF's floor: a rough, white-lit dielectric of `albedo` (glTF's metallic-roughness,
+/// roughness 1).
+fn gltf_floor(albedo: f32) -> Material {
+    Material {
+        color: Vec3::splat(albedo),
+        pbr: Some(Pbr {
+            metallic: 0.0,
+            roughness: 1.0,
+            ..Pbr::default()
+        }),
+        ..Material::default()
+    }
 }
 
 /// The floor's gap below a framed model, in its bounding sphere's radii.

@@ -379,6 +379,16 @@ impl Renderer {
         Ok(())
     }
 
+    /// The path integrator's epoch of the next accumulation (a restart's first sample), and of
+    /// those after it counted on from it: a frame's number, so that frames split across runs draw
+    /// what one run draws ([`PackedScene::path`]'s epoch is what the CPU twin draws with). The
+    /// samples start again.
+    pub fn set_epoch(&mut self, epoch: u32) {
+        self.path_epoch = epoch;
+        self.accumulations = 0;
+        self.restart();
+    }
+
     /// With the path integrator, a new accumulation's epoch, written before its first sample: the
     /// scene's epoch plus the accumulations before it, so that restarted samples draw new numbers.
     fn write_epoch(&mut self) {
