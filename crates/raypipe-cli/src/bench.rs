@@ -15,7 +15,7 @@ use raypipe::gpu::{GpuContext, MovingScene, Renderer, RendererOptions, TreeUpdat
 use raypipe::image::Frame;
 use raypipe::image::diff::{Tolerance, compare};
 use raypipe::modes::Backend;
-use raypipe::modes::{Accel, BlasOrder, Builder, MemoryMode, Pipeline};
+use raypipe::modes::{Accel, BlasOrder, Builder, Integrator, MemoryMode, Pipeline};
 use raypipe::records::PackedScene;
 use raypipe::scene::Scene;
 use raypipe::scene::is_model_file;
@@ -46,6 +46,10 @@ pub struct BenchArgs {
     /// triangle (the paper's) and a compute kernel.
     #[arg(long, value_parser = choice::<Pipeline>(), value_delimiter = ',', default_values_t = Pipeline::ALL.to_vec())]
     pub(crate) pipeline: Vec<Pipeline>,
+    /// How light is carried [default: the scene's own: path for a glTF file, whitted for the
+    /// others]
+    #[arg(long, value_parser = choice::<Integrator>())]
+    pub(crate) integrator: Option<Integrator>,
     #[arg(long, default_value_t = 256)]
     pub(crate) width: u32,
     #[arg(long, default_value_t = 256)]
@@ -174,6 +178,7 @@ fn scene(
     count: usize,
     size: (u32, u32),
     builder: Builder,
+    integrator: Option<Integrator>,
 ) -> anyhow::Result<(Scene, PackedScene)> {
     let mut scene = if is_model_file(Path::new(family)) {
         let options = ModelOptions {
@@ -190,6 +195,7 @@ fn scene(
         );
     };
     (scene.settings.width, scene.settings.height) = size;
+    scene.settings.integrator = integrator.unwrap_or(scene.settings.integrator);
     let mut packed = PackedScene::new(&scene)?;
     packed.build_bvh_with(builder);
     Ok((scene, packed))
@@ -206,7 +212,7 @@ impl Reference {
     /// At 64x48, or the bench's size where that is smaller.
     fn new(ctx: &GpuContext, args: &BenchArgs, as_: MeshAs, count: usize) -> anyhow::Result<Self> {
         let size = (args.width.min(64), args.height.min(48));
-        let (_, scene) = scene(&args.scene, as_, count, size, args.builder)?;
+        let (_, scene) = scene(&args.scene, as_, count, size, args.builder, args.integrator)?;
         let mut renderer = block_on(Renderer::new(
             ctx,
             &scene,
@@ -292,7 +298,14 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     let mut rows = Vec::new();
     let mut refused = Vec::new();
     for &count in &counts {
-        let (loaded, packed) = scene(&args.scene, as_, count, (args.width, args.height), args.builder)?;
+        let (loaded, packed) = scene(
+            &args.scene,
+            as_,
+            count,
+            (args.width, args.height),
+            args.builder,
+            args.integrator,
+        )?;
         let count = packed.primitive_count();
         // Made on first need: a run of brute force alone does not render it.
         let mut reference: Option<Reference> = None;

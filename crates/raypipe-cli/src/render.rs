@@ -24,9 +24,11 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t)]
     device: DeviceChoice,
     /// Primary rays per pixel, at jittered positions inside it (the first at its centre), averaged:
-    /// anti-aliasing. On the GPU each sample is its own draw, added to a float sum.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    spp: u32,
+    /// anti-aliasing, and with the path integrator its light's samples. On the GPU each sample is
+    /// its own draw, added to a float sum [default: 1 with the Whitted integrator, 128 with the path
+    /// integrator]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    spp: Option<u32>,
     /// Print render time and rays per second (all samples' rays).
     #[arg(long)]
     stats: bool,
@@ -102,6 +104,21 @@ pub fn numbered(name: &str, frame: u32) -> Option<String> {
     Some(format!("{before}{frame:0width$}{after}"))
 }
 
+/// Samples per pixel a path-traced image takes where --spp does not say: FLIP against 2048 samples
+/// at most 0.04 for the Khronos samples measured (docs/BENCHMARKS.md, "Path tracing").
+pub const PATH_SAMPLES: u32 = 128;
+
+impl RenderArgs {
+    /// Samples per pixel: --spp, else one for Whitted's images (the paper's) and
+    /// [`PATH_SAMPLES`] for the path integrator's.
+    fn samples(&self, scene: &raypipe::scene::Scene) -> u32 {
+        self.spp.unwrap_or(match scene.settings.integrator {
+            raypipe::modes::Integrator::Whitted => 1,
+            raypipe::modes::Integrator::Path => PATH_SAMPLES,
+        })
+    }
+}
+
 pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let (output, is_exr) = check_output(&args)?;
     let scene = args.scene.load()?;
@@ -115,7 +132,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         progress: std::io::stderr().is_terminal(),
         count: args.scene.aov.count(),
         warm_up: args.stats,
-        samples: args.spp,
+        samples: args.samples(&scene),
     };
     if let Some(frames) = args.frames.clone() {
         // Sequences time steady frames instead of a warm-up.
@@ -166,13 +183,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             output.display(),
             frame.width,
             frame.height,
-            args.spp,
+            options.samples,
             outcome.device
         );
     }
 
     if args.stats {
-        say_stats(&args, options.accel, &packed, build, &outcome)?;
+        say_stats(&args, options.accel, &scene, &packed, build, &outcome)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -230,6 +247,7 @@ fn check_output(args: &RenderArgs) -> anyhow::Result<(PathBuf, bool)> {
 fn say_stats(
     args: &RenderArgs,
     accel: Accel,
+    scene: &raypipe::scene::Scene,
     packed: &PackedScene,
     build: Option<BuildTimings>,
     outcome: &RenderOutcome,
@@ -248,7 +266,7 @@ fn say_stats(
         packed.lights.len(),
         packed.max_depth
     );
-    say_device(args, accel, &outcome.device)?;
+    say_device(args, accel, scene, &outcome.device)?;
     if let (Some(build), Some(bvh)) = (build, &packed.bvh) {
         let collapse = if build.collapse > 0.0 {
             format!(", collapsed into 8-wide nodes in {:.2} ms", build.collapse)
@@ -312,12 +330,13 @@ fn say_memory(triangles: usize) -> anyhow::Result<()> {
 }
 
 /// `--stats`'s line on what traced.
-fn say_device(args: &RenderArgs, accel: Accel, device: &str) -> anyhow::Result<()> {
+fn say_device(args: &RenderArgs, accel: Accel, scene: &raypipe::scene::Scene, device: &str) -> anyhow::Result<()> {
     crate::say!(
-        "device: {device}, pipeline {}, memory {}, accel {accel}, {} samples per pixel",
+        "device: {device}, pipeline {}, memory {}, accel {accel}, integrator {}, {} samples per pixel",
         args.scene.pipeline,
         args.scene.memory,
-        args.spp
+        scene.settings.integrator,
+        args.samples(scene)
     );
     Ok(())
 }
@@ -370,7 +389,7 @@ fn render_sequence(
             scene.spheres.len(),
             scene.triangles.len()
         );
-        say_device(args, options.accel, &outcome.device)?;
+        say_device(args, options.accel, scene, &outcome.device)?;
         // The first frame pays for pipeline compilation on some drivers: medians skip it.
         let steady = if frames > 1 { 1 } else { 0 };
         if !outcome.builds.is_empty() {

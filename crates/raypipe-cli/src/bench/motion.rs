@@ -125,6 +125,7 @@ fn load(args: &BenchArgs) -> anyhow::Result<Scene> {
     );
     scene.settings.width = args.width;
     scene.settings.height = args.height;
+    scene.settings.integrator = args.integrator.unwrap_or(scene.settings.integrator);
     Ok(scene)
 }
 
