@@ -1,12 +1,14 @@
 // Measures the page in headless Chromium: time to the first frame and frames per second on each
 // backend, for docs/BENCHMARKS.md. Build the page first (scripts/build-web.sh target/web).
 //
-//   node web/bench.mjs [--scene S] [--width W] [--height H] [--frames N] [--screenshot F.png]
+//   node web/bench.mjs [--scene S | --model FILE] [--integrator whitted|path] [--width W]
+//                      [--height H] [--frames N] [--screenshot F.png]
 //
 // Each backend loads the page with spp=4096, so that every frame traces a new sample (a still frame
 // with its samples gathered is only shown again); the frames per second are those of N frames
 // presented after the first two (which pay for compiling the tracer), by the page's clock. Prints
-// one JSON line per backend. The screenshot is the WebGPU page's, whole, with 16 samples gathered.
+// one JSON line per backend. --model serves a model file's folder beside the page and opens it
+// (a glTF's own integrator unless --integrator says). The screenshot is the WebGPU page's, whole, with 16 samples gathered.
 import fs from "node:fs";
 import path from "node:path";
 import { fileURLToPath } from "node:url";
@@ -21,26 +23,39 @@ const { values: options } = parseArgs({
     height: { type: "string", default: "240" },
     frames: { type: "string", default: "10" },
     accel: { type: "string", default: "threaded" },
+    model: { type: "string" },
+    integrator: { type: "string" },
     screenshot: { type: "string" },
     site: { type: "string", default: path.join(root, "target/web") },
   },
 });
 
-const server = await serve({ "/": options.site });
+const mounts = { "/": options.site };
+if (options.model) mounts["/bench-model/"] = path.dirname(path.resolve(options.model));
+const server = await serve(mounts);
 const origin = server.origin;
 const browser = await launch();
 const wasmBytes = fs.statSync(path.join(options.site, "raypipe_web_bg.wasm")).size;
 
 for (const backend of ["webgpu", "webgl2"]) {
   const page = await browser.newPage({ viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1 });
+  const model = options.model ? `&model=bench-model/${encodeURIComponent(path.basename(options.model))}` : "";
+  const integrator = options.integrator ? `&integrator=${options.integrator}` : "";
   const query = `scene=${options.scene}&accel=${options.accel}&width=${options.width}&height=${options.height}` +
-    `&backend=${backend}&spp=4096`;
+    `&backend=${backend}&spp=4096${model}${integrator}`;
   const loaded = Date.now();
   await page.goto(`${origin}/index.html?${query}`);
-  await page.waitForFunction(() => window.raypipeStatus?.frames >= 2 || window.raypipeStatus?.error, null, {
-    timeout: 600_000,
-    polling: 50,
-  });
+  // With a model, the frames that count are the model's: the built-in scene shows first.
+  const shown = options.model ? path.basename(options.model) : null;
+  await page.waitForFunction(
+    (shown) => {
+      const status = window.raypipeStatus;
+      if (status?.error) return true;
+      return shown ? status?.scene === shown && status.samples >= 2 : status?.frames >= 2;
+    },
+    shown,
+    { timeout: 600_000, polling: 50 },
+  );
   const firstFrames = Date.now() - loaded;
   // The viewer's live frame count, not the status's (published four times a second).
   const sample = () => page.evaluate(() => ({ ...window.raypipeStatus, frames: window.raypipeViewer.frames, now: performance.now() }));
@@ -55,7 +70,8 @@ for (const backend of ["webgpu", "webgl2"]) {
   console.log(JSON.stringify({
     backend,
     adapter: end.adapter,
-    scene: options.scene,
+    scene: end.scene,
+    integrator: end.integrator,
     accel: end.accel,
     memory: end.memory,
     size: `${end.width}x${end.height}`,

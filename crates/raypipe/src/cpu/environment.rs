@@ -10,11 +10,18 @@ use std::f32::consts::PI;
 
 /// Where direction `d` (unit) reads an equirectangular map of the environment: `d` turned back by
 /// the environment's rotation about +y, then u = 0.5 + atan2(x, -z) / 2π, v = acos(y) / π.
+/// Straight up or down any u is the pole; u = 0.5 there, since atan2(0, ±0) differs between
+/// devices.
 pub(crate) fn environment_uv(scene: &PackedScene, d: Vec3) -> Vec2 {
     let [cos, sin] = scene.globals.scene.environment_turn;
     let x = cos * d.x - sin * d.z;
     let z = sin * d.x + cos * d.z;
-    Vec2::new(0.5 + x.atan2(-z) * (0.5 / PI), d.y.clamp(-1.0, 1.0).acos() * (1.0 / PI))
+    let u = if x == 0.0 && z == 0.0 {
+        0.5
+    } else {
+        0.5 + x.atan2(-z) * (0.5 / PI)
+    };
+    Vec2::new(u, d.y.clamp(-1.0, 1.0).acos() * (1.0 / PI))
 }
 
 /// What a ray leaving the scene along `dir` brings back (`escaped_radiance`): the environment's

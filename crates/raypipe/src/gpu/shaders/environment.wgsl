@@ -3,12 +3,14 @@
 // convention) sampled through texture maps like any other. Mirrored by src/cpu/environment.rs.
 
 // Where direction d (unit) reads an equirectangular map of the environment: d turned back by the
-// environment's rotation about +y, then u = 0.5 + atan2(x, -z) / 2π, v = acos(y) / π.
+// environment's rotation about +y, then u = 0.5 + atan2(x, -z) / 2π, v = acos(y) / π. Straight up
+// or down any u is the pole; u = 0.5 there, since atan2(0, ±0) differs between devices.
 fn environment_uv(d: vec3<f32>) -> vec2<f32> {
     let turn = globals.scene.environment_turn;
     let x = turn.x * d.x - turn.y * d.z;
     let z = turn.y * d.x + turn.x * d.z;
-    return vec2<f32>(0.5 + atan2(x, -z) * (0.5 / PI), acos(clamp(d.y, -1.0, 1.0)) * (1.0 / PI));
+    let u = select(0.5 + atan2(x, -z) * (0.5 / PI), 0.5, x == 0.0 && z == 0.0);
+    return vec2<f32>(u, acos(clamp(d.y, -1.0, 1.0)) * (1.0 / PI));
 }
 
 // What a ray leaving the scene along `dir` brings back: the environment's radiance, or the
