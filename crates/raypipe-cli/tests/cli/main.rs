@@ -1,5 +1,6 @@
 //! The command line's tests that need no GPU (every render here is `--device cpu`): files written
-//! whole, `diff` exiting by its threshold (`commands`), and hostile input and failing outputs
+//! whole, `diff` exiting by its threshold (`commands`), the integrator and samples a render takes
+//! (`integrator`), and hostile input and failing outputs
 //! ending in one short line and exit code 2, never a panic (`hostile`). One binary, so that the
 //! tests link once.
 
@@ -8,3 +9,4 @@ mod common;
 
 mod commands;
 mod hostile;
+mod integrator;
