@@ -113,6 +113,8 @@ const peerName = `three-mesh-bvh ${version("three-mesh-bvh")} (three ${version("
 // every walk traces the same rays.
 const stats = attempt(options.raypipe, () => execFileSync(options.raypipe, [
   "render", sceneFile, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "--depth", "1",
+  // The peer casts camera and shadow rays: Whitted's light, one sample.
+  "--integrator", "whitted", "--spp", "1",
   "--accel", walks[0], "--stats", "-o", path.join(scratch, "reference.png"),
 ], { encoding: "utf8", stdio: ["ignore", "pipe", "pipe"] }));
 const nativeRays = Number(/(\d+) rays/.exec(stats)?.[1]);
@@ -192,7 +194,7 @@ async function measureRaypipe(backend, accel, builder) {
     requestAnimationFrame(watch);
   });
   const memory = backend === "webgl2" ? "texture" : options["webgpu-memory"];
-  const query = `model=/scene/scene.glb&backend=${backend}${memory ? `&memory=${memory}` : ""}&accel=${accel}&builder=${builder}&depth=1` +
+  const query = `model=/scene/scene.glb&backend=${backend}${memory ? `&memory=${memory}` : ""}&accel=${accel}&builder=${builder}&depth=1&integrator=whitted` +
     `&width=${width}&height=${height}&spp=4096`;
   await page.goto(`${server.origin}/index.html?${query}`);
   const until = (condition, arg) => page.waitForFunction(condition, arg, { timeout: TIMEOUT_MS, polling: 50 });

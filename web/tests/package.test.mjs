@@ -273,7 +273,7 @@ test("the declarations type-check a usage file and name the lists the module off
   fs.writeFileSync(path.join(scratch, "usage.ts"), `import { createViewer, choices, type ViewerStatus } from "raypipe";
 const viewer = await createViewer(document.body, { backend: "webgl2", scene: "whitted", spp: 4, input: false });
 viewer.addEventListener("status", (event) => { const s: ViewerStatus = event.detail; console.log(s.fps, s.lost); });
-viewer.set({ accel: "stack", exposure: 1, tonemap: "aces" });
+viewer.set({ accel: "stack", exposure: 1, tonemap: "aces", integrator: "path" });
 await viewer.load("model.glb");
 const png: Blob = await viewer.screenshot();
 const { maxSpp } = await choices();
@@ -282,6 +282,7 @@ viewer.dispose();
 const element = document.querySelector("raypipe-viewer")!;
 element.renderScale = 0.5;
 element.toneMapping = "aces";
+element.integrator = "whitted";
 element.addEventListener("error", (event) => console.log(event.detail.message));
 element.addEventListener("progress", (event) => console.log(event.detail.phase, event.detail.loaded));
 console.log(element.viewer?.status?.width);
@@ -303,7 +304,15 @@ viewer.set({ accel: "fastest" });
   // Every union of names in the declarations is the module's own list.
   const declarations = fs.readFileSync(path.join(scratch, "node_modules/raypipe/raypipe.d.ts"), "utf8");
   const offered = await page.evaluate(async () => (await import("raypipe")).choices());
-  const unions = { accel: "Accel", builder: "Builder", memory: "Memory", pipeline: "Pipeline", aov: "View", tonemap: "ToneMap" };
+  const unions = {
+    accel: "Accel",
+    builder: "Builder",
+    memory: "Memory",
+    pipeline: "Pipeline",
+    aov: "View",
+    tonemap: "ToneMap",
+    integrator: "Integrator",
+  };
   for (const [key, type] of Object.entries(unions)) {
     const line = declarations.match(new RegExp(`export type ${type} = ([^;]+);`));
     assert.ok(line, `raypipe.d.ts has no type ${type}`);

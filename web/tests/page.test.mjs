@@ -117,7 +117,8 @@ function reference(spec, width, height) {
 function fileReference(file, width, height, flags = []) {
   const named = flags.map((flag) => path.basename(flag)).join("");
   const out = path.join(references, `${path.basename(file)}-${width}x${height}${named}.png`);
-  execFileSync(raypipe, ["render", file, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, ...flags, "-q", "-o", out]);
+  // One sample, as the page tests trace (a glTF file's render takes more by default).
+  execFileSync(raypipe, ["render", file, "--device", "cpu", "--width", `${width}`, "--height", `${height}`, "--spp", "1", ...flags, "-q", "-o", out]);
   return out;
 }
 
@@ -312,7 +313,7 @@ for (const backend of ["webgpu", "webgl2"]) {
       assert.ok(Math.abs(held.duration - 2.083) < 0.01, `duration ${held.duration}`);
       await until(page, (s, frames) => s.frames >= frames, "a frame of the model", { arg: held.frames + 2 });
       const reference = path.join(references, `RiggedSimple-t1.25-${size.width}x${size.height}.png`);
-      execFileSync(raypipe, ["render", rigged, "--device", "cpu", "--time", "1.25", "--width", `${size.width}`, "--height", `${size.height}`, "-q", "-o", reference]);
+      execFileSync(raypipe, ["render", rigged, "--device", "cpu", "--time", "1.25", "--width", `${size.width}`, "--height", `${size.height}`, "--spp", "1", "-q", "-o", reference]);
       const still = await screenshot(page, `${backend}-animated-held`);
       assertSimilar(still, reference);
       const stillAgain = await screenshot(page, `${backend}-animated-held-again`);

@@ -385,8 +385,6 @@ fn frames_of_point(
     for (k, &t) in times.iter().enumerate() {
         let eval = evaluate(motion, t);
         let cost = moving.pose(t)?;
-        // Every frame draws the path integrator's first epoch, as the CPU's image does.
-        moving.renderer_mut().set_epoch(0);
         let traced = block_on(moving.render_samples(args.spp, |_| {}))?;
         let (build, collapse) = match block_on(moving.read_build())? {
             Some(timings) => (timings.total() - timings.collapse, timings.collapse),
@@ -401,7 +399,6 @@ fn frames_of_point(
         let trace = traced.gpu_ms.unwrap_or(0.0);
         if let Some(refitting) = &mut refitting {
             refitting.pose(t)?;
-            refitting.renderer_mut().set_epoch(0);
             let refitted = block_on(refitting.render_samples(args.spp, |_| {}))?;
             if k == args.warmup {
                 // The refitted tree must give the fresh one's image.

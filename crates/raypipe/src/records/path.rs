@@ -30,8 +30,8 @@ pub const ENVIRONMENT_TABLE_WIDTH: u32 = 512;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuPathGlobals {
-    /// The accumulation's number: the renderer counts its restarts from 0, so that a restarted
-    /// accumulation draws other numbers than the one before. It seeds the samples' scrambling.
+    /// Which draw of the pixels' sample sequences this is (0 unless set: `render --frames` gives
+    /// frame k epoch k): it seeds the samples' scrambling, so that frames differ.
     pub epoch: u32,
     /// The environment table's width in texels; 0 where there is nothing to sample.
     pub table_width: u32,

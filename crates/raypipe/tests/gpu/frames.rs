@@ -60,8 +60,6 @@ pub fn cpu_frames(scene: &Scene, accel: Accel, count: u32) -> Vec<Frame> {
             let mut packed = PackedScene::new(&scene.at_time(time_of(frame)).unwrap()).unwrap();
             builder.build(&packed.primitive_boxes(), MortonBits::Bits30);
             packed.set_bvh(builder.to_bvh());
-            // The renderer starts each frame's accumulation at the next epoch.
-            packed.path.globals.epoch = frame;
             render_cpu(&packed, accel)
         })
         .collect()

@@ -105,11 +105,10 @@ pub struct Renderer {
     /// for ([`Renderer::rebuild_structures`]).
     structures_stale: bool,
     timer: Option<PassTimestamps>,
-    /// Accumulations started so far: the path integrator's epoch is the scene's plus those before
-    /// the current one.
-    accumulations: u32,
-    /// The scene's path epoch, which the first accumulation takes.
+    /// The path integrator's epoch: the scene's, until [`Renderer::set_epoch`] sets another.
     path_epoch: u32,
+    /// The epoch the shader holds, once written.
+    written_epoch: Option<u32>,
 }
 
 impl Renderer {
@@ -282,8 +281,8 @@ impl Renderer {
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
-                accumulations: 0,
                 path_epoch: scene.path.globals.epoch,
+                written_epoch: None,
             })
         })
         .await
@@ -379,27 +378,27 @@ impl Renderer {
         Ok(())
     }
 
-    /// The path integrator's epoch of the next accumulation (a restart's first sample), and of
-    /// those after it counted on from it: a frame's number, so that frames split across runs draw
-    /// what one run draws ([`PackedScene::path`]'s epoch is what the CPU twin draws with). The
-    /// samples start again.
+    /// The path integrator's epoch from the next accumulation on (a restart's first sample): a
+    /// frame's number, so that a sequence's frames draw other numbers, and frames split across
+    /// runs draw what one run draws ([`PackedScene::path`]'s epoch is what the CPU twin draws
+    /// with). Restarts keep it. The samples start again.
     pub fn set_epoch(&mut self, epoch: u32) {
         self.path_epoch = epoch;
-        self.accumulations = 0;
         self.restart();
     }
 
-    /// With the path integrator, a new accumulation's epoch, written before its first sample: the
-    /// scene's epoch plus the accumulations before it, so that restarted samples draw new numbers.
+    /// With the path integrator, the epoch, written before an accumulation's first sample where
+    /// it changed.
     fn write_epoch(&mut self) {
-        if let Some(path) = &self.resources.path {
-            let epoch = self.path_epoch.wrapping_add(self.accumulations);
+        if let Some(path) = &self.resources.path
+            && self.written_epoch != Some(self.path_epoch)
+        {
             let offset = std::mem::offset_of!(GpuPathGlobals, epoch) as u64;
             self.ctx
                 .queue
-                .write_buffer(&path.globals, offset, bytemuck::bytes_of(&epoch));
+                .write_buffer(&path.globals, offset, bytemuck::bytes_of(&self.path_epoch));
+            self.written_epoch = Some(self.path_epoch);
         }
-        self.accumulations = self.accumulations.wrapping_add(1);
     }
 
     fn write_camera(&mut self, camera: GpuCamera) {
