@@ -119,6 +119,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
             display: args.scene.display_transform(&scene),
         },
         tone_map_chosen: args.scene.tonemap.is_some(),
+        integrator_chosen: args.scene.integrator.is_some(),
         time: match args.scene.time {
             Some(t) => args.scene.scene_time(&scene, t)?,
             None => 0.0,

@@ -145,6 +145,7 @@ impl Viewer {
         ))?;
         player.start_at(self.options.time);
         player.tone_map_chosen = self.options.tone_map_chosen;
+        player.integrator_chosen = self.options.integrator_chosen;
         if self.options.script.is_some() {
             player.clock.step = Some(SCRIPT_STEP);
         }

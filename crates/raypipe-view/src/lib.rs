@@ -194,6 +194,9 @@ pub struct ViewerOptions {
     /// Whether `modes`' tone map was asked for: if not, a file dropped later is shown with its
     /// scene's own (a glTF's Khronos PBR Neutral, say).
     pub tone_map_chosen: bool,
+    /// Whether `modes`' integrator was asked for: if not, a file dropped later is traced with its
+    /// scene's own (path for a glTF file).
+    pub integrator_chosen: bool,
     /// Samples per pixel a still frame gathers, one per frame, before the viewer stops tracing
     /// (progressive anti-aliasing; 1 shows `render`'s unjittered image).
     pub samples: u32,

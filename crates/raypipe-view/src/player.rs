@@ -196,6 +196,9 @@ pub struct Player {
     /// Whether the tone map was chosen (by the host's settings or through `set_modes`): until it
     /// is, each scene opened is shown with its own (`Scene::tone_map`).
     pub tone_map_chosen: bool,
+    /// Whether the integrator was chosen: until it is, each scene opened is traced with its own
+    /// (path for a glTF file, Whitted for the paper's scenes).
+    pub integrator_chosen: bool,
     /// Tracer requests made: a tracer that lands after a later request is dropped.
     requested: u32,
     last_frame: Instant,
@@ -248,6 +251,7 @@ impl Player {
             rate: FrameRate::default(),
             frames: 0,
             tone_map_chosen: false,
+            integrator_chosen: false,
             requested: 0,
             last_frame: Instant::now(),
             last_presented: Instant::now(),
@@ -443,6 +447,9 @@ impl Player {
         if asked.display.tone_map != self.modes.display.tone_map {
             self.tone_map_chosen = true;
         }
+        if asked.integrator != self.modes.integrator {
+            self.integrator_chosen = true;
+        }
         if asked.needs_new_tracer(&self.modes) {
             return Some(self.request(asked, None));
         }
@@ -458,6 +465,9 @@ impl Player {
         let mut modes = self.modes;
         if !self.tone_map_chosen {
             modes.display.tone_map = scene.tone_map;
+        }
+        if !self.integrator_chosen {
+            modes.integrator = scene.settings.integrator;
         }
         self.request(modes, Some((name, scene)))
     }

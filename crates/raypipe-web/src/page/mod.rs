@@ -276,6 +276,7 @@ async fn open(canvas: web_sys::HtmlCanvasElement, params: StartParams, errors: V
         .map_err(|why| format!("{}: {why}", params.scene))?;
     player.message = (!errors.is_empty()).then(|| errors.join("; "));
     player.tone_map_chosen = params.tone_map_chosen;
+    player.integrator_chosen = params.integrator.is_some();
     player.start_at(params.time);
     player.clock.speed = params.speed;
     Ok(Page {
