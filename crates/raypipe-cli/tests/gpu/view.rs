@@ -88,6 +88,10 @@ fn viewed(dir: &Path, scene: &str, extra: &[&str], frames: u32) -> PathBuf {
 fn rendered(dir: &Path, scene: &str, extra: &[&str]) -> PathBuf {
     let out = dir.join(format!("render-{}.png", scene.replace([':', '/'], "-")));
     let mut args = vec!["render", scene, "--width", "160", "--height", "120", "--device", "gpu"];
+    // One sample, as `viewed` gathers (a glTF file's render takes more by default).
+    if !extra.contains(&"--spp") {
+        args.extend(["--spp", "1"]);
+    }
     args.extend_from_slice(extra);
     args.extend(["-o", out.to_str().unwrap()]);
     succeeded(&raypipe(&args), "raypipe render");
