@@ -19,13 +19,24 @@ struct PathGlobals {
 var<private> path_seed: u32;
 var<private> path_sample: u32;
 
+// x's bits in reverse order, by swaps of halves: WebGL2's GLSL ES 3.00 has no bitfieldReverse for
+// WGSL's reverseBits to become.
+fn reverse_bits(value: u32) -> u32 {
+    var x = value;
+    x = ((x >> 1u) & 0x55555555u) | ((x & 0x55555555u) << 1u);
+    x = ((x >> 2u) & 0x33333333u) | ((x & 0x33333333u) << 2u);
+    x = ((x >> 4u) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4u);
+    x = ((x >> 8u) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8u);
+    return (x >> 16u) | (x << 16u);
+}
+
 // The Sobol sequence's dimension `dimension` (0 to 3) at `index`, in 0.32 fixed point: the XOR of
 // the direction numbers of index's set bits. Dimension 0 is the van der Corput sequence; 1 to 3
 // follow Joe and Kuo's primitive polynomials x + 1, x^2 + x + 1 and x^3 + x + 1 (initial numbers
 // m = 1, 3, 1), their direction numbers computed as the bits are read.
 fn sobol(index: u32, dimension: u32) -> u32 {
     if (dimension == 0u) {
-        return reverseBits(index);
+        return reverse_bits(index);
     }
     // The last three direction numbers, newest first.
     var history = vec3<u32>(0u);
@@ -65,7 +76,7 @@ fn laine_karras_permutation(value: u32, seed: u32) -> u32 {
 // Owen scrambling of a 0.32 fixed-point number: each bit flipped by a hash of the bits above it
 // (Burley, "Practical Hash-based Owen Scrambling", 2020).
 fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
-    return reverseBits(laine_karras_permutation(reverseBits(x), seed));
+    return reverse_bits(laine_karras_permutation(reverse_bits(x), seed));
 }
 
 fn fixed_to_unit(x: u32) -> f32 {
