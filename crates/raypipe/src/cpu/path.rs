@@ -175,13 +175,7 @@ impl Tracer<'_> {
     /// One path from `primary` (`trace_pixel` in path.wgsl).
     pub(crate) fn trace_path(&mut self, primary: Ray) -> PixelTrace {
         let scene = self.scene;
-        let mut result = PixelTrace {
-            color: Vec3::ZERO,
-            normal: Vec3::ZERO,
-            depth: None,
-            rays: 0,
-            cost: 0,
-        };
+        let mut result = PixelTrace::default();
         reset_box_tests();
         let environment = scene.globals.scene.environment_map != NONE;
         let mut ray = primary;

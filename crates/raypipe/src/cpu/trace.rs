@@ -43,8 +43,9 @@ struct Branches {
     through: RayTask,
 }
 
-/// What one pixel's trace yields: the fragment shader's two outputs.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What one pixel's trace yields: the fragment shader's two outputs. The default is a trace
+/// before its first ray: no light, no surface, no rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PixelTrace {
     /// Linear radiance.
     pub color: Vec3,
@@ -401,13 +402,7 @@ impl<'a> Tracer<'a> {
         // The shader's RAY_STACK_SIZE in a scene with blended triangles: without them the stack
         // never holds more than max_depth + 1, so the room is the same for every scene.
         let stack_size = ray_stack_size(self.scene.max_depth, true) as usize;
-        let mut result = PixelTrace {
-            color: Vec3::ZERO,
-            normal: Vec3::ZERO,
-            depth: None,
-            rays: 0,
-            cost: 0,
-        };
+        let mut result = PixelTrace::default();
         reset_box_tests();
         let mut task = RayTask {
             origin: primary.origin,

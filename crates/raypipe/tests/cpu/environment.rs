@@ -97,6 +97,22 @@ pub(crate) fn mirrored(eye: Vec3, d: Vec3) -> Option<(Vec3, f32)> {
     Some((d - 2.0 * d.dot(n) * n, -d.dot(n)))
 }
 
+/// The sphere's pixels that meet it at more than a grazing angle, in a `size`-pixel image from
+/// `eye` (as `sphere_scene` frames it).
+pub(crate) fn sphere_pixels(frame: &Frame, eye: Vec3, size: u32) -> Vec<Vec3> {
+    let camera = Camera {
+        eye,
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_degrees: 60.0,
+    };
+    (0..size * size)
+        .map(|i| (i % size, i / size))
+        .filter(|&(x, y)| mirrored(eye, camera_ray(&camera, size, x, y)).is_some_and(|(_, s)| s > 0.1))
+        .map(|(x, y)| pixel(frame, x, y))
+        .collect()
+}
+
 pub(crate) fn pixel(frame: &Frame, x: u32, y: u32) -> Vec3 {
     let [r, g, b, _] = frame.color[(y * frame.width + x) as usize];
     Vec3::new(r, g, b)
@@ -201,23 +217,10 @@ fn a_white_metal_in_a_uniform_environment_reads_its_radiance() {
         ..Material::default()
     };
     let eye = Vec3::new(0.0, 0.0, 3.0);
-    let sphere_pixels = |frame: &Frame| -> Vec<Vec3> {
-        let camera = Camera {
-            eye,
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_degrees: 60.0,
-        };
-        (0..size * size)
-            .map(|i| (i % size, i / size))
-            .filter(|&(x, y)| mirrored(eye, camera_ray(&camera, size, x, y)).is_some_and(|(_, s)| s > 0.1))
-            .map(|(x, y)| pixel(frame, x, y))
-            .collect()
-    };
     let environment = Environment::uniform(Vec3::splat(0.7));
 
     let mirror = render(&sphere_scene(metal(0.0), eye, size, environment.clone()), 1);
-    let pixels = sphere_pixels(&mirror);
+    let pixels = sphere_pixels(&mirror, eye, size);
     assert!(pixels.len() > 150, "{} pixels", pixels.len());
     for p in &pixels {
         assert!((*p - Vec3::splat(0.7)).abs().max_element() < 0.007, "{p}");
@@ -232,7 +235,7 @@ fn a_white_metal_in_a_uniform_environment_reads_its_radiance() {
         "{centre} for {expected}"
     );
     // Over the disc (grazing pixels lose more): within 12 % of 0.7.
-    let pixels = sphere_pixels(&rough);
+    let pixels = sphere_pixels(&rough, eye, size);
     let mean = pixels.iter().sum::<Vec3>() / pixels.len() as f32;
     assert!(
         (mean - Vec3::splat(0.7)).abs().max_element() < 0.12 * 0.7,

@@ -4,11 +4,10 @@
 //! irradiance in closed form), and no ambient term. The GPU matches the CPU in tests/gpu/.
 
 use crate::common::{PLANE_SIZE, centre, plane_scene};
-use crate::environment::{camera_ray, mirrored, pixel, render, sphere_scene};
+use crate::environment::{pixel, render, sphere_pixels, sphere_scene};
 use glam::Vec3;
-use raypipe::image::Frame;
 use raypipe::modes::Integrator;
-use raypipe::scene::{Camera, Environment, Light, LightKind, Material, Pbr, Scene};
+use raypipe::scene::{Environment, Light, LightKind, Material, Pbr, Scene};
 use std::f64::consts::PI;
 
 const RADIANCE: f32 = 0.7;
@@ -17,22 +16,6 @@ fn path_traced(mut scene: Scene, max_depth: u32) -> Scene {
     scene.settings.integrator = Integrator::Path;
     scene.settings.max_depth = max_depth;
     scene
-}
-
-/// The sphere's pixels that meet it at more than a grazing angle, in a `size`-pixel image from
-/// `eye` (as `sphere_scene` frames it).
-fn sphere_pixels(frame: &Frame, eye: Vec3, size: u32) -> Vec<Vec3> {
-    let camera = Camera {
-        eye,
-        target: Vec3::ZERO,
-        up: Vec3::Y,
-        fov_degrees: 60.0,
-    };
-    (0..size * size)
-        .map(|i| (i % size, i / size))
-        .filter(|&(x, y)| mirrored(eye, camera_ray(&camera, size, x, y)).is_some_and(|(_, s)| s > 0.1))
-        .map(|(x, y)| pixel(frame, x, y))
-        .collect()
 }
 
 /// A white Lambertian sphere in a uniform environment reflects all of it: every pixel reads the
@@ -134,13 +117,9 @@ fn a_gltf_sphere_in_a_uniform_environment_reads_its_albedo() {
     }
 }
 
-/// A Lambertian plane (glTF's BRDF with no specular layer: base / π) under a point light of I
-/// candela at height h straight above the pixel: L = (I / h²) (base / π), with nothing else in the
-/// picture: no ambient term, whatever the depth.
-#[test]
-fn a_lambertian_plane_under_a_point_light_shows_the_closed_form_irradiance() {
-    let base = 0.6;
-    let lambert = Material {
+/// glTF's BRDF with no specular layer: a Lambertian surface, base / π.
+fn lambertian(base: f32) -> Material {
+    Material {
         color: Vec3::splat(base),
         pbr: Some(Pbr {
             metallic: 0.0,
@@ -149,7 +128,16 @@ fn a_lambertian_plane_under_a_point_light_shows_the_closed_form_irradiance() {
             ..Pbr::default()
         }),
         ..Material::default()
-    };
+    }
+}
+
+/// A Lambertian plane (glTF's BRDF with no specular layer: base / π) under a point light of I
+/// candela at height h straight above the pixel: L = (I / h²) (base / π), with nothing else in the
+/// picture: no ambient term, whatever the depth.
+#[test]
+fn a_lambertian_plane_under_a_point_light_shows_the_closed_form_irradiance() {
+    let base = 0.6;
+    let lambert = lambertian(base);
     let (candela, height) = (20.0, 2.0);
     let light = Light {
         position: Vec3::new(0.0, 0.0, height),
@@ -176,16 +164,7 @@ fn a_lambertian_plane_under_a_point_light_shows_the_closed_form_irradiance() {
 #[test]
 fn a_lambertian_plane_under_an_emitting_square_shows_the_closed_form_irradiance() {
     let base = 0.6;
-    let lambert = Material {
-        color: Vec3::splat(base),
-        pbr: Some(Pbr {
-            metallic: 0.0,
-            roughness: 1.0,
-            specular_factor: 0.0,
-            ..Pbr::default()
-        }),
-        ..Material::default()
-    };
+    let lambert = lambertian(base);
     let (radiance, a, h) = (3.0f32, 0.5f32, 1.0f32);
     let emitter = Material {
         color: Vec3::ZERO,
