@@ -206,29 +206,21 @@ pub fn upload(
     Ok(out)
 }
 
-/// The path integrator's parameters and its tables' texels (one texel where it has none: a
-/// binding cannot be empty).
+/// The path integrator's parameters and its tables' texels (rgba32float).
 fn upload_path_tables(ctx: &GpuContext, scene: &PackedScene, texels_per_row: u32) -> Result<PathResources, GpuError> {
     let globals = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("path globals"),
         contents: bytemuck::bytes_of(&scene.path.globals),
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
     });
-    let table = &scene.path.texels;
-    let rows = texture_rows(ctx, ("path table texel", table.len()), table.len(), texels_per_row)?;
-    let mut texels = table.clone();
-    texels.resize(rows * texels_per_row as usize, [0.0; 4]);
-    let texture = texel_texture(
+    let texels = texel_view(
         ctx,
-        "path tables",
+        ("path tables", "path table texel"),
+        &scene.path.texels,
         wgpu::TextureFormat::Rgba32Float,
-        (texels_per_row, rows as u32),
-        bytemuck::cast_slice(&texels),
-    );
-    Ok(PathResources {
-        globals,
-        texels: texture.create_view(&Default::default()),
-    })
+        texels_per_row,
+    )?;
+    Ok(PathResources { globals, texels })
 }
 
 /// A record array as a uniform or storage buffer, within the adapter's binding size.
@@ -303,24 +295,36 @@ fn texture_resource(
     Ok((texture_binding(format), Resource::Texture(texture, view)))
 }
 
-/// The textures' texels in one rgba16float texture, `texels_per_row` wide (one texel where the
-/// scene has no texture: a binding cannot be empty).
+/// The textures' texels in one rgba16float texture, `texels_per_row` wide.
 fn upload_texture_pixels(
     ctx: &GpuContext,
     pixels: &TexturePixels,
     texels_per_row: u32,
 ) -> Result<wgpu::TextureView, GpuError> {
-    let rows = texture_rows(ctx, ("texture pixel", pixels.0.len()), pixels.0.len(), texels_per_row)?;
-    let width = if pixels.0.is_empty() { 1 } else { texels_per_row };
-    let mut texels = pixels.0.clone();
-    texels.resize(rows * width as usize, [0; 4]);
-    let texture = texel_texture(
+    texel_view(
         ctx,
-        "texture pixels",
+        ("texture pixels", "texture pixel"),
+        &pixels.0,
         wgpu::TextureFormat::Rgba16Float,
-        (width, rows as u32),
-        bytemuck::cast_slice(&texels),
-    );
+        texels_per_row,
+    )
+}
+
+/// `texels` in a texture of `format`, `texels_per_row` wide, its last row padded with zeros (one
+/// texel where there are none: a binding cannot be empty); the names are the texture's label and,
+/// for the message where the adapter cannot hold them, what one texel is.
+fn texel_view<T: bytemuck::Pod>(
+    ctx: &GpuContext,
+    (label, texel): (&'static str, &'static str),
+    texels: &[T],
+    format: wgpu::TextureFormat,
+    texels_per_row: u32,
+) -> Result<wgpu::TextureView, GpuError> {
+    let rows = texture_rows(ctx, (texel, texels.len()), texels.len(), texels_per_row)?;
+    let width = if texels.is_empty() { 1 } else { texels_per_row };
+    let mut padded = texels.to_vec();
+    padded.resize(rows * width as usize, T::zeroed());
+    let texture = texel_texture(ctx, label, format, (width, rows as u32), bytemuck::cast_slice(&padded));
     Ok(texture.create_view(&Default::default()))
 }
 
