@@ -103,6 +103,17 @@ pub fn each_pipeline_and_memory_mode(
     ctx: &GpuContext,
     scene: &PackedScene,
     prefix: &str,
+    check: impl FnMut(&str, Frame),
+) {
+    each_pipeline_and_memory_mode_at(ctx, scene, 1, prefix, check);
+}
+
+/// [`each_pipeline_and_memory_mode`] at `samples` samples a pixel.
+pub fn each_pipeline_and_memory_mode_at(
+    ctx: &GpuContext,
+    scene: &PackedScene,
+    samples: u32,
+    prefix: &str,
     mut check: impl FnMut(&str, Frame),
 ) {
     for &pipeline in Pipeline::ALL {
@@ -113,10 +124,10 @@ pub fn each_pipeline_and_memory_mode(
                 accel: Accel::Threaded,
                 ..Default::default()
             };
-            check(
-                &format!("{prefix}-{pipeline:?}-{memory:?}"),
-                render_gpu_with(ctx, scene, options),
-            );
+            let frame = pollster::block_on(renderer(ctx, scene, options).render_samples(samples, |_| {}, |_| {}))
+                .unwrap_or_else(|e| panic!("GPU render failed on {}: {e}", ctx.describe()))
+                .frame;
+            check(&format!("{prefix}-{pipeline:?}-{memory:?}"), frame);
         }
     }
 }

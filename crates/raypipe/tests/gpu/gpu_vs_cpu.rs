@@ -56,21 +56,9 @@ fn path_traced_images_agree(ctx: &GpuContext) {
     spheres.build_bvh();
     let samples = 4;
     let cpu = raypipe::cpu::render_with(&spheres, Accel::Threaded, Count::Rays, samples, &|| {}).unwrap();
-    for &pipeline in <raypipe::modes::Pipeline as raypipe::Choice>::ALL {
-        for memory in ctx.memory_modes() {
-            let options = RendererOptions {
-                pipeline,
-                memory,
-                accel: Accel::Threaded,
-                ..Default::default()
-            };
-            let mut gpu = renderer(ctx, &spheres, options);
-            let frame = pollster::block_on(gpu.render_samples(samples, |_| {}, |_| {}))
-                .unwrap()
-                .frame;
-            assert_frames_match(&format!("path-random-{pipeline:?}-{memory:?}"), &frame, &cpu);
-        }
-    }
+    each_pipeline_and_memory_mode_at(ctx, &spheres, samples, "path-random", |name, frame| {
+        assert_frames_match(name, &frame, &cpu);
+    });
 }
 
 /// Sixteen jittered samples per pixel: the shader's sequence is the CPU's, bit for bit, so the
