@@ -118,6 +118,13 @@ fn mixture_sample(material: Material, s: GltfSurface, lobes: Lobes, frame: Shadi
     return BsdfSample(dir, f * n_dot_l / pdf, pdf, false);
 }
 
+// A microfacet normal about n drawn through GGX's visible normals.
+fn visible_normal(n: vec3<f32>, v: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
+    let basis = tangent_frame(n);
+    let local = sample_visible_normal(vec3<f32>(dot(v, basis.t), dot(v, basis.b), max(dot(n, v), 0.0)), alpha, u);
+    return local.x * basis.t + local.y * basis.b + local.z * n;
+}
+
 // The next direction of a path at a surface seen along frame.view, drawn with u (lobe, direction,
 // direction); `entering` whether the path arrives from outside a volume.
 fn sample_bsdf(material: Material, s: GltfSurface, lobes: Lobes, frame: ShadingFrame, entering: bool, u: vec3<f32>) -> BsdfSample {
@@ -130,11 +137,7 @@ fn sample_bsdf(material: Material, s: GltfSurface, lobes: Lobes, frame: ShadingF
     let gltf = HAS_GLTF_MATERIALS && material.model == MODEL_GLTF;
     if (u.x < lobes.diffuse + lobes.specular) {
         if (!lobes.mirror) {
-            let alpha = path_alpha(s);
-            let basis = tangent_frame(n);
-            let local = sample_visible_normal(vec3<f32>(dot(v, basis.t), dot(v, basis.b), max(dot(n, v), 0.0)), alpha,
-                u.yz);
-            let h = local.x * basis.t + local.y * basis.b + local.z * n;
+            let h = visible_normal(n, v, path_alpha(s), u.yz);
             return mixture_sample(material, s, lobes, frame, normalize(2.0 * dot(v, h) * h - v));
         }
         if (dot(frame.normal, mirrored) <= 0.0) {
@@ -173,9 +176,7 @@ fn sample_bsdf(material: Material, s: GltfSurface, lobes: Lobes, frame: ShadingF
     var share = 1.0;
     let n_dot_v = max(dot(n, v), 0.0);
     if (!lobes.mirror) {
-        let basis = tangent_frame(n);
-        let local = sample_visible_normal(vec3<f32>(dot(v, basis.t), dot(v, basis.b), n_dot_v), alpha, u.yz);
-        h = local.x * basis.t + local.y * basis.b + local.z * n;
+        h = visible_normal(n, v, alpha, u.yz);
     }
     let v_dot_h = dot(v, h);
     let reflected = normalize(2.0 * v_dot_h * h - v);

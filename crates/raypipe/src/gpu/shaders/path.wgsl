@@ -171,7 +171,8 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
         let shading = select(-surface.shading, surface.shading, entering);
         let curvature = select(-surface.curvature, surface.curvature, entering);
         let frame = ShadingFrame(normal, shading, -ray.dir);
-        if (HAS_VOLUMES && material.model == MODEL_GLTF && material.volume != 0u && !entering) {
+        let volume = HAS_VOLUMES && material.model == MODEL_GLTF && material.volume != 0u;
+        if (volume && !entering) {
             throughput *= exp(-material.absorption * hit.t);
         }
         // A blended surface stops the path with the chance of its alpha; else the path goes on
@@ -215,7 +216,7 @@ fn trace_pixel(primary: Ray) -> PixelTrace {
         ray = make_ray(offset_origin(surface, side), sample.dir);
         // Back faces hide from rays outside: reflected from outside or refracted out of a volume;
         // a thin wall's transmitted ray sees them, as the Whitted integrator's does.
-        if (HAS_VOLUMES && material.model == MODEL_GLTF && material.volume != 0u) {
+        if (volume) {
             culls = entering != sample.through;
         } else {
             culls = !sample.through;
