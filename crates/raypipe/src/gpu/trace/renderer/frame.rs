@@ -31,9 +31,6 @@ impl Renderer {
             self.structures_stale = false;
         }
         let sample = self.samples();
-        if sample == 0 {
-            self.write_epoch();
-        }
         self.globals.camera.sample = sample;
         let offset = (std::mem::offset_of!(GpuGlobals, camera) + std::mem::offset_of!(GpuCamera, sample)) as u64;
         self.ctx

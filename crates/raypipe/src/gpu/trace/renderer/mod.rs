@@ -105,10 +105,6 @@ pub struct Renderer {
     /// for ([`Renderer::rebuild_structures`]).
     structures_stale: bool,
     timer: Option<PassTimestamps>,
-    /// The path integrator's epoch: the scene's, until [`Renderer::set_epoch`] sets another.
-    path_epoch: u32,
-    /// The epoch the shader holds, once written.
-    written_epoch: Option<u32>,
 }
 
 impl Renderer {
@@ -281,8 +277,6 @@ impl Renderer {
                 timer: ctx
                     .timestamps
                     .then(|| PassTimestamps::new(&ctx.device, "trace pass", 1)),
-                path_epoch: scene.path.globals.epoch,
-                written_epoch: None,
             })
         })
         .await
@@ -378,26 +372,17 @@ impl Renderer {
         Ok(())
     }
 
-    /// The path integrator's epoch from the next accumulation on (a restart's first sample): a
-    /// frame's number, so that a sequence's frames draw other numbers, and frames split across
+    /// The path integrator's epoch from the next sample on (the scene's until this sets another):
+    /// a frame's number, so that a sequence's frames draw other numbers, and frames split across
     /// runs draw what one run draws ([`PackedScene::path`]'s epoch is what the CPU twin draws
-    /// with). Restarts keep it. The samples start again.
+    /// with). Restarts keep it. One uniform write, as a camera's; the samples start again.
     pub fn set_epoch(&mut self, epoch: u32) {
-        self.path_epoch = epoch;
         self.restart();
-    }
-
-    /// With the path integrator, the epoch, written before an accumulation's first sample where
-    /// it changed.
-    fn write_epoch(&mut self) {
-        if let Some(path) = &self.resources.path
-            && self.written_epoch != Some(self.path_epoch)
-        {
+        if let Some(path) = &self.resources.path {
             let offset = std::mem::offset_of!(GpuPathGlobals, epoch) as u64;
             self.ctx
                 .queue
-                .write_buffer(&path.globals, offset, bytemuck::bytes_of(&self.path_epoch));
-            self.written_epoch = Some(self.path_epoch);
+                .write_buffer(&path.globals, offset, bytemuck::bytes_of(&epoch));
         }
     }
 
