@@ -152,13 +152,6 @@ impl SceneArgs {
             );
         }
         self.set_environment(&mut scene)?;
-        // Legal but probably not meant: said once, here, rather than per packed frame.
-        if scene.spheres.is_empty() && scene.triangles.is_empty() && scene.planes.is_empty() {
-            log::warn!(
-                "{}: the scene holds nothing to hit: the image is its background",
-                self.spec
-            );
-        }
         let settings = &mut scene.settings;
         settings.integrator = self.integrator.unwrap_or(settings.integrator);
         settings.width = self.width.unwrap_or(settings.width);
@@ -166,19 +159,18 @@ impl SceneArgs {
         settings.max_depth = self.depth.unwrap_or(settings.max_depth);
         settings.accel = self.accel.or(settings.accel);
         settings.background = self.background.unwrap_or(settings.background);
-        let lit_by_something = !scene.lights.is_empty() || scene.environment.is_some();
-        let has_primitives = !(scene.spheres.is_empty() && scene.triangles.is_empty() && scene.planes.is_empty());
-        if has_primitives && !lit_by_something {
-            match scene.settings.integrator {
-                Integrator::Whitted => log::warn!(
-                    "{}: the scene has no lights: only its ambient term shades it",
-                    self.spec
-                ),
-                Integrator::Path => log::warn!(
-                    "{}: the scene has no lights: the path integrator sees only its emitters and background",
-                    self.spec
-                ),
-            }
+        // Legal but probably not meant: said once, here, rather than per packed frame.
+        if scene.spheres.is_empty() && scene.triangles.is_empty() && scene.planes.is_empty() {
+            log::warn!(
+                "{}: the scene holds nothing to hit: the image is its background",
+                self.spec
+            );
+        } else if scene.lights.is_empty() && scene.environment.is_none() {
+            let lit_by = match scene.settings.integrator {
+                Integrator::Whitted => "only its ambient term shades it",
+                Integrator::Path => "the path integrator sees only its emitters and background",
+            };
+            log::warn!("{}: the scene has no lights: {lit_by}", self.spec);
         }
         Ok(scene)
     }
