@@ -9,6 +9,7 @@ use super::environment::environment_uv;
 use super::intersect::v3;
 use super::trace::hash_u32;
 use crate::records::PackedScene;
+use crate::scene::environment::texel_direction;
 use glam::{Vec2, Vec3, Vec4};
 use std::f32::consts::PI;
 
@@ -121,12 +122,13 @@ fn search_table(texels: &[[f32; 4]], first: u32, count: u32, u: f32, channel: us
 
 /// The unit direction that reads (u, v) of the environment's map: `environment_uv` inverted.
 pub(crate) fn environment_direction(scene: &PackedScene, uv: Vec2) -> Vec3 {
-    let phi = 2.0 * PI * (uv.x - 0.5);
-    let theta = PI * uv.y;
-    let x = theta.sin() * phi.sin();
-    let z = -theta.sin() * phi.cos();
+    let unturned = texel_direction(uv.x, uv.y);
     let [cos, sin] = scene.globals.scene.environment_turn;
-    Vec3::new(cos * x + sin * z, theta.cos(), -sin * x + cos * z)
+    Vec3::new(
+        cos * unturned.x + sin * unturned.z,
+        unturned.y,
+        -sin * unturned.x + cos * unturned.z,
+    )
 }
 
 /// A direction drawn from the environment's table, and its density in solid angle
