@@ -26,7 +26,7 @@ trap 'rm -rf "$out"' EXIT
 size=(--width 160 --height 120 --device "$device")
 # The share of pure white pixels in a PNG, in percent (Pillow, from PyPI).
 white() {
-  python3 -c 'import sys; from PIL import Image; im = Image.open(sys.argv[1]).convert("RGB"); px = list(im.getdata()); print(f"{100 * sum(p == (255, 255, 255) for p in px) / len(px):.2f}")' "$1"
+  python3 -c 'import sys; from PIL import Image; px = Image.open(sys.argv[1]).convert("RGB").tobytes(); n = len(px) // 3; white = sum(px[3 * i:3 * i + 3] == b"\xff\xff\xff" for i in range(n)); print(f"{100 * white / n:.2f}")' "$1"
 }
 for model in "$@"; do
   name=$(basename "${model%.*}")
@@ -38,6 +38,8 @@ for model in "$@"; do
     flip=$("$raypipe" diff --metric flip --threshold 1 "$out/$name-ref.png" "$out/$name-$spp.png" | grep -o 'FLIP mean [0-9.]*' | cut -d' ' -f3)
     printf '%s %s flip %s seconds %.1f\n' "$name" "$spp" "$flip" "$seconds"
   done
-  "$raypipe" render "$model" "${size[@]}" --spp 16 --floor none -o "$out/$name-bare.png" 2>/dev/null
-  printf '%s white %s%% (floor none %s%%)\n' "$name" "$(white "$out/$name-16.png")" "$(white "$out/$name-bare.png")"
+  # The white pixels at the first count, with the floor and without.
+  first=${counts%% *}
+  "$raypipe" render "$model" "${size[@]}" --spp "$first" --floor none -o "$out/$name-bare.png" 2>/dev/null
+  printf '%s white %s%% (floor none %s%%)\n' "$name" "$(white "$out/$name-$first.png")" "$(white "$out/$name-bare.png")"
 done
