@@ -5,7 +5,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::admit::RayQuery;
-use super::brdf::max3;
+use super::brdf::{GltfSurface, max3};
 use super::bsdf::{Lobes, path_lobes, punctual_response, reflection_brdf, reflection_pdf, sample_bsdf};
 use super::environment::escaped_radiance;
 use super::intersect::{Hit, HitKind, Ray, box_tests, reset_box_tests, v3};
@@ -52,13 +52,12 @@ impl Tracer<'_> {
         &mut self,
         surface: &Surface,
         frame: ShadingFrame,
-        material: &GpuMaterial,
+        (material, s): (&GpuMaterial, &GltfSurface),
         lobes: &Lobes,
         u: Vec4,
         weighed: bool,
     ) -> Vec3 {
         let scene = self.scene;
-        let s = gltf_surface(material);
         let mut color = Vec3::ZERO;
         let origin = offset_origin(surface, frame.normal);
         for light in &scene.lights {
@@ -71,7 +70,7 @@ impl Tracer<'_> {
             let Some(share) = self.shadow_ray(&Ray::new(origin, l), arrival.distance) else {
                 continue;
             };
-            color += arrival.irradiance * share * punctual_response(material, &s, frame, l);
+            color += arrival.irradiance * share * punctual_response(material, s, frame, l);
         }
         let share = scene.path.globals.environment_share;
         let environment = scene.globals.scene.environment_map != NONE;
@@ -96,7 +95,7 @@ impl Tracer<'_> {
         if !(drawn.pdf > 0.0) || n_dot_l <= 0.0 || frame.normal.dot(l) <= 0.0 || max3(drawn.radiance) <= 0.0 {
             return color;
         }
-        let f = reflection_brdf(material, &s, lobes, frame.shading, frame.view, l);
+        let f = reflection_brdf(material, s, lobes, frame.shading, frame.view, l);
         if max3(f) <= 0.0 {
             return color;
         }
@@ -105,7 +104,7 @@ impl Tracer<'_> {
             return color;
         };
         let weight = if weighed {
-            power_heuristic(drawn.pdf, reflection_pdf(&s, lobes, frame.shading, frame.view, l))
+            power_heuristic(drawn.pdf, reflection_pdf(s, lobes, frame.shading, frame.view, l))
         } else {
             1.0
         };
@@ -251,7 +250,7 @@ impl Tracer<'_> {
             let lobes = path_lobes(&material, &s, shading.dot(frame.view).max(0.0));
             let goes_on = bounce < scene.max_depth;
             let u = self.path_numbers(2 * bounce + 1);
-            result.color += throughput * self.path_direct_light(&surface, frame, &material, &lobes, u, goes_on);
+            result.color += throughput * self.path_direct_light(&surface, frame, (&material, &s), &lobes, u, goes_on);
             if !goes_on {
                 break;
             }
