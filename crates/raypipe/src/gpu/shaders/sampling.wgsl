@@ -128,7 +128,7 @@ fn power_heuristic(chosen: f32, other: f32) -> f32 {
 // the texel's density over the unit square of (u, v) (y); then one texel per row with the
 // cumulative distribution of the rows (x).
 fn table_texel(index: u32) -> vec4<f32> {
-    return textureLoad(path_texels, vec2<u32>(index % PATH_TEXELS_PER_ROW, index / PATH_TEXELS_PER_ROW), 0);
+    return textureLoad(path_texels, texel_coord(index), 0);
 }
 
 // Where the emitters' texels start: after the environment table's.

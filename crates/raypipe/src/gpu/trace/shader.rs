@@ -313,7 +313,6 @@ pub fn compose(config: &ShaderConfig) -> String {
     }
     if config.integrator == Integrator::Path {
         let first = path_binding(config.arrays);
-        writeln!(w, "const PATH_TEXELS_PER_ROW: u32 = {}u;", config.texels_per_row).unwrap();
         writeln!(w, "@group(0) @binding({first}) var<uniform> path_globals: PathGlobals;").unwrap();
         writeln!(w, "@group(0) @binding({}) var path_texels: texture_2d<f32>;", first + 1).unwrap();
     }
